@@ -1,0 +1,48 @@
+//! The library's one error type. Every variant names what was wrong so the
+//! binary can print it as a single line and exit with code 2.
+
+use std::path::PathBuf;
+
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    /// A value supplied by the user is out of its allowed domain.
+    #[error("{what}: {why}")]
+    InvalidInput { what: String, why: String },
+
+    /// A file could not be read or written.
+    #[error("{path}: {source}")]
+    Io {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+
+    /// A file was read but its content is malformed.
+    #[error("{path}: {why}")]
+    Malformed { path: PathBuf, why: String },
+}
+
+impl Error {
+    pub fn invalid(what: impl Into<String>, why: impl Into<String>) -> Self {
+        Error::InvalidInput {
+            what: what.into(),
+            why: why.into(),
+        }
+    }
+
+    pub fn malformed(path: impl Into<PathBuf>, why: impl Into<String>) -> Self {
+        Error::Malformed {
+            path: path.into(),
+            why: why.into(),
+        }
+    }
+
+    pub fn io(path: impl Into<PathBuf>, source: std::io::Error) -> Self {
+        Error::Io {
+            path: path.into(),
+            source,
+        }
+    }
+}
+
+pub type Result<T, E = Error> = std::result::Result<T, E>;

@@ -1,0 +1,11 @@
+//! `irid`: exact thin-film iridescence by the transfer-matrix method, baked
+//! into OpenEXR lookup tables and sampled by a lightweight tracer.
+//!
+//! Modules follow the data flow: [`optics`] (materials, stacks, solver) →
+//! [`color`] (spectra to colour) → [`lut`] (bake, file, sample, validate) →
+//! [`render`] (the tracer).
+
+pub mod error;
+pub mod optics;
+
+pub use error::{Error, Result};
