@@ -7,9 +7,11 @@
 //! sRGB has IEC 61966-2-1 primaries and a perfect reflector at (1, 1, 1).
 
 pub mod cie_tables;
+mod film;
 mod sampling;
 mod space;
 
+pub use film::{stack_colours, FilmColour};
 pub use sampling::{Sampling, SpectralIntegrator};
 pub use space::{
     delta_e2000, delta_e2000_rgb, linear_srgb_to_xyz, linear_to_srgb8, white_xyz, xyz_to_lab,
