@@ -23,6 +23,8 @@ struct Cli {
 enum Command {
     /// Reflectance and transmittance of a stack over wavelengths and angles.
     Eval(cli::eval::Args),
+    /// Reflected and transmitted colour of a stack under D65, per angle.
+    Color(cli::color::Args),
 }
 
 fn main() -> ExitCode {
@@ -37,6 +39,7 @@ fn main() -> ExitCode {
     };
     let result = match cli.command {
         Command::Eval(args) => cli::eval::run(args),
+        Command::Color(args) => cli::color::run(args),
     };
     match result {
         Ok(code) => code,
