@@ -1,11 +1,11 @@
 #!/usr/bin/env python3
 """Cross-checks `irid color` against colour-science.
 
-For a few stacks (soap films, a dispersive coating on glass, an absorbing film,
-a bare interface), takes the reflectance and transmittance spectra from
-`irid eval --json` at 1 nm over 360-830 nm, integrates them with
-`colour.sd_to_XYZ` (CIE 1931 2 degree observer, CIE D65) and converts to linear
-sRGB with colour-science's sRGB matrix. Compares with `irid color --sampling
+For a few stacks (soap films, a dispersive coating on glass, an absorbing
+film, built-in TiO2 on gold, a bare interface), takes the reflectance and
+transmittance spectra from `irid eval --json` at 1 nm over 360-830 nm,
+integrates them with `colour.sd_to_XYZ` (CIE 1931 2 degree observer, CIE D65)
+and converts to linear sRGB with colour-science's sRGB matrix. Compares with `irid color --sampling
 exact --json` on the same stacks and angles: |d linear sRGB| <= 2e-3 and
 |d XYZ| <= 2e-3.
 
@@ -62,6 +62,13 @@ substrate = { n = 1.52 }
 [[layers]]
 n = [2.0, 0.4]
 thickness_nm = 35.0
+""",
+    "tio2-on-gold": """
+ambient = { n = 1.0 }
+substrate = { material = "gold" }
+[[layers]]
+material = "TiO2"
+thickness_nm = 140.0
 """,
     "bare-glass": """
 ambient = { n = 1.0 }
