@@ -5,9 +5,9 @@ For a few stacks (soap films, a dispersive coating on glass, an absorbing
 film, built-in TiO2 on gold, a bare interface), takes the reflectance and
 transmittance spectra from `irid eval --json` at 1 nm over 360-830 nm,
 integrates them with `colour.sd_to_XYZ` (CIE 1931 2 degree observer, CIE D65)
-and converts to linear sRGB with colour-science's sRGB matrix. Compares with `irid color --sampling
-exact --json` on the same stacks and angles: |d linear sRGB| <= 2e-3 and
-|d XYZ| <= 2e-3.
+and converts to linear sRGB with colour-science's sRGB matrix. Compares with
+`irid color --sampling exact --json` on the same stacks and angles:
+|d linear sRGB| <= 2e-3 and |d XYZ| <= 2e-3.
 
 The two sides differ on purpose in details that must not matter at that
 tolerance: colour-science interpolates D65 (5 nm) with its own method and
