@@ -14,6 +14,9 @@ tolerance: colour-science interpolates D65 (5 nm) with its own method and
 extrapolates it beyond 780 nm; its sRGB matrix uses the rounded white
 xy = (0.3127, 0.3290) while irid derives it from the tables' D65 white.
 
+Also regenerates src/color/cie_tables.rs with tools/gen_cie_tables.py and
+checks it is byte-identical to the committed file (nobody edited it by hand).
+
 Env: IRID_BIN (default target/release/irid). Exits non-zero on failure.
 """
 
@@ -84,6 +87,18 @@ def run_json(cmd):
     return json.loads(proc.stdout)
 
 
+def tables_are_generated():
+    repo = Path(__file__).resolve().parent.parent
+    committed = repo / "src/color/cie_tables.rs"
+    with tempfile.TemporaryDirectory() as tmp:
+        fresh = Path(tmp) / "cie_tables.rs"
+        subprocess.run([sys.executable, str(repo / "tools/gen_cie_tables.py"), str(fresh)],
+                       check=True, capture_output=True)
+        if fresh.read_bytes() != committed.read_bytes():
+            sys.exit(f"FAIL: {committed} differs from what tools/gen_cie_tables.py writes")
+    print(f"  {committed.relative_to(repo)} matches tools/gen_cie_tables.py output")
+
+
 def main():
     irid = os.environ.get("IRID_BIN", "target/release/irid")
     cmfs = colour.MSDS_CMFS["CIE 1931 2 Degree Standard Observer"]
@@ -132,6 +147,7 @@ def main():
           f"angles x R,T) vs colour-science {colour.__version__} sd_to_XYZ")
     print(f"  max |d linear sRGB| = {worst_rgb:.2e}, max |d XYZ| = {worst_xyz:.2e} "
           f"(tolerance {TOLERANCE:g}; worst at {worst_where})")
+    tables_are_generated()
     if failures:
         print("FAIL:\n  " + "\n  ".join(failures[:10]))
         sys.exit(1)
