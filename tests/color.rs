@@ -26,6 +26,12 @@ fn perfect_reflector_is_d65_white() {
     assert!(close(xyz, [0.9505, 1.0, 1.0888], 5e-5), "{xyz:?}");
     assert!((xyz[1] - 1.0).abs() < 1e-14, "{xyz:?}");
     assert!(close(xyz, white_xyz(), 1e-14));
+    // numpy: np.interp of the 5 nm D65 to 1 nm, times the CMFs, summed.
+    assert!(close(
+        xyz,
+        [0.9504707022400521, 1.0, 1.0888284599770484],
+        1e-12
+    ));
     let lab = xyz_to_lab(xyz);
     assert!(close(lab, [100.0, 0.0, 0.0], 1e-12), "{lab:?}");
     for s in all_samplings() {
@@ -80,6 +86,21 @@ fn strategies_sample_where_they_say() {
     assert!(g[1] > 4.0 * g[0].abs() && g[1] > 4.0 * g[2].abs(), "{g:?}");
     let xyz = exact.xyz(&band);
     assert!(close(xyz_to_linear_srgb(xyz), g, 1e-15));
+}
+
+#[test]
+fn lab_of_the_srgb_primaries() {
+    // colour-science 0.4.7: normalised_primary_matrix(IEC primaries, xy of the
+    // tables' white (0.950471, 1, 1.088828)), then XYZ_to_Lab with that white.
+    for (rgb, want) in [
+        ([1.0, 0.0, 0.0], [53.2409, 80.0925, 67.2032]),
+        ([0.0, 1.0, 0.0], [87.7347, -86.1828, 83.1792]),
+        ([0.0, 0.0, 1.0], [32.2970, 79.1874, -107.8602]),
+        ([0.2, 0.5, 0.1], [69.9883, -38.2150, 43.0482]),
+    ] {
+        let lab = xyz_to_lab(linear_srgb_to_xyz(rgb));
+        assert!(close(lab, want, 1e-4), "{rgb:?}: {lab:?}");
+    }
 }
 
 /// Sharma, G., Wu, W., Dalal, E. N. (2005). The CIEDE2000 color-difference
