@@ -201,6 +201,9 @@ fn bad_input_exits_2_with_one_line() {
         &["badcsv.toml", "layers[1].table", "bad.csv", "line 2"],
     );
     fails(&["eval", "no/such/stack.toml"], &["no/such/stack.toml"]);
+    let missing = irid(&["eval", "no/such/stack.toml"]);
+    let err = String::from_utf8_lossy(&missing.stderr);
+    assert_eq!(err.matches("os error").count(), 1, "said once: {err}");
     fails(
         &[
             "eval",
