@@ -70,11 +70,14 @@ pub fn bake_with_progress(spec: &BakeSpec, progress: &(dyn Fn(f64) + Sync)) -> R
                 ),
             ));
         }
+        let clock = std::time::Instant::now();
         let values = prep.eval(&fine, progress)?;
+        let eval_s = clock.elapsed().as_secs_f64();
         let check = measure(&coarse, &fine, &values, prep.channels, spec.half);
+        let measure_s = clock.elapsed().as_secs_f64() - eval_s;
         if std::env::var_os("IRID_DEBUG").is_some() {
             eprintln!(
-                "grid {:?} check {:.3e} worst at {:?}",
+                "grid {:?} check {:.3e} worst at {:?} eval {eval_s:.3}s measure {measure_s:.3}s",
                 coarse
                     .axes
                     .iter()

@@ -168,6 +168,10 @@ impl VaryingLayer {
     }
 
     /// Power R and T for both polarizations at the layer's phase factor φ.
+    ///
+    /// Written without complex division: with D = 1 − r'_A r_B φ²,
+    /// R = |r_A D + t_A t'_A r_B φ²|² / |D|² and T = |t_A t_B|² |φ|² / |D|²
+    /// (times the Poynting factor), one real division per polarization.
     #[inline]
     pub fn response(&self, phase: C64) -> Response {
         if self.grazing {
@@ -178,12 +182,24 @@ impl VaryingLayer {
                 tp: 0.0,
             };
         }
-        let a = self.amplitudes(phase);
+        let p2 = phase * phase;
+        let phase_sq = phase.norm_sqr();
+        let one = C64::new(1.0, 0.0);
+        let mut out = [(0.0, 0.0); 2];
+        for (pol, o) in out.iter_mut().enumerate() {
+            let den = one - self.y[pol] * p2;
+            let num = self.r_above[pol] * den + self.x[pol] * p2;
+            let inv = 1.0 / den.norm_sqr();
+            *o = (
+                num.norm_sqr() * inv,
+                self.z[pol].norm_sqr() * self.t_power[pol] * phase_sq * inv,
+            );
+        }
         Response {
-            rs: a.rs.norm_sqr(),
-            rp: a.rp.norm_sqr(),
-            ts: a.ts.norm_sqr() * self.t_power[0],
-            tp: a.tp.norm_sqr() * self.t_power[1],
+            rs: out[0].0,
+            rp: out[1].0,
+            ts: out[0].1,
+            tp: out[1].1,
         }
     }
 }
