@@ -1,14 +1,16 @@
 //! Solver speed: unpolarized R and T of stacks of 1, 2, 10 and 100 layers at
-//! one wavelength and angle (both polarizations), and the batched entry point.
-//! The stacks are the ones `tools/time_tmm.py` times in Python `tmm`.
+//! one wavelength and angle (both polarizations), and the batched entry point
+//! over a wavelength × angle grid. The stacks are the ones
+//! `tools/time_tmm.py` times in Python `tmm`.
 
-use criterion::{black_box, criterion_group, criterion_main, Criterion};
+use criterion::{black_box, criterion_group, criterion_main, Criterion, Throughput};
 use num_complex::Complex64 as C64;
 
-use irid::optics::solve;
+use irid::optics::{solve, solve_batch, Response};
 
-/// Ambient air, `layers` alternating lossless/absorbing films, a gold-like
-/// substrate: the same stacks as `tools/time_tmm.py`.
+/// Ambient air, `layers` films alternating lossless (n = 1.5) and absorbing
+/// (n = 2.3 + 0.05i) with thicknesses 100, 107, 114, ... nm, on a gold-like
+/// substrate (0.27 + 2.9i): the same stacks as `tools/time_tmm.py`.
 fn bench_stack(layers: usize) -> (Vec<C64>, Vec<f64>) {
     let mut n = vec![C64::new(1.0, 0.0)];
     let mut d = Vec::new();
@@ -43,5 +45,24 @@ fn single(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, single);
+fn batched(c: &mut Criterion) {
+    // 2 layers over 81 wavelengths × 32 angles, indices constant per
+    // wavelength as in the single-sample bench; time per sample via throughput.
+    let (n, d) = bench_stack(2);
+    let wavelengths: Vec<f64> = (0..81).map(|i| 380.0 + 5.0 * i as f64).collect();
+    let cos: Vec<f64> = (0..32).map(|i| (i as f64 + 0.5) / 32.0).collect();
+    let indices: Vec<C64> = wavelengths.iter().flat_map(|_| n.iter().copied()).collect();
+    let mut out = vec![Response::default(); wavelengths.len() * cos.len()];
+    let mut g = c.benchmark_group("solve_batch");
+    g.throughput(Throughput::Elements(out.len() as u64));
+    g.bench_function("2 layers, 81 wavelengths x 32 angles", |b| {
+        b.iter(|| {
+            solve_batch(black_box(&indices), &d, &wavelengths, &cos, &mut out);
+            out[out.len() - 1].r()
+        })
+    });
+    g.finish();
+}
+
+criterion_group!(benches, single, batched);
 criterion_main!(benches);

@@ -56,7 +56,7 @@ pub struct Amplitudes {
 #[inline]
 fn sqrt_upper(z: C64) -> C64 {
     let (x, y) = (z.re, z.im);
-    let t = (0.5 * (z.norm() + x.abs())).sqrt();
+    let t = (0.5 * (z.norm_sqr().sqrt() + x.abs())).sqrt();
     if t == 0.0 {
         return C64::new(0.0, 0.0);
     }
