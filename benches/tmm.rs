@@ -6,7 +6,7 @@
 use criterion::{black_box, criterion_group, criterion_main, Criterion, Throughput};
 use num_complex::Complex64 as C64;
 
-use irid::optics::{solve, solve_batch, Response};
+use irid::optics::{solve, solve_batch, Response, Stack, StackGrid};
 
 /// Ambient air, `layers` films alternating lossless (n = 1.5) and absorbing
 /// (n = 2.3 + 0.05i) with thicknesses 100, 107, 114, ... nm, on a gold-like
@@ -64,5 +64,37 @@ fn batched(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, single, batched);
+fn dispersive(c: &mut Criterion) {
+    // luts/two-layer.toml (a constant film, TiO2 by Sellmeier, gold by
+    // table): evaluating each sample through `Stack::response` (materials
+    // looked up and buffers allocated per sample) against building a
+    // `StackGrid` once and sweeping it.
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("luts/two-layer.toml");
+    let stack = Stack::load(&path).unwrap();
+    let wavelengths: Vec<f64> = (0..81).map(|i| 380.0 + 5.0 * i as f64).collect();
+    let cos: Vec<f64> = (0..32).map(|i| (i as f64 + 0.5) / 32.0).collect();
+    let mut out = vec![Response::default(); wavelengths.len() * cos.len()];
+    let mut g = c.benchmark_group("two-layer.toml, 81 wavelengths x 32 angles");
+    g.throughput(Throughput::Elements(out.len() as u64));
+    g.bench_function("Stack::response per sample", |b| {
+        b.iter(|| {
+            for (i, &wl) in wavelengths.iter().enumerate() {
+                for (j, &cj) in cos.iter().enumerate() {
+                    out[i * cos.len() + j] = stack.response(wl, cj).unwrap();
+                }
+            }
+            out[0].r()
+        })
+    });
+    g.bench_function("StackGrid::new + solve", |b| {
+        b.iter(|| {
+            let grid = StackGrid::new(black_box(&stack), &wavelengths).unwrap();
+            grid.solve(&cos, &mut out);
+            out[0].r()
+        })
+    });
+    g.finish();
+}
+
+criterion_group!(benches, single, batched, dispersive);
 criterion_main!(benches);
