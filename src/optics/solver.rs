@@ -130,8 +130,10 @@ fn grazing(indices: &[C64]) -> Response {
 ///
 /// `indices` holds the ambient, the N layers from the top down, and the
 /// substrate (N + 2 entries); `thicknesses_nm` the N layer thicknesses.
-/// The ambient must be lossless (its imaginary part is ignored) and
-/// `cos_theta0` in [0, 1] (larger values are taken as 1). Nothing is allocated.
+/// The ambient must be lossless (its imaginary part is ignored), every
+/// index finite, nonzero and below 10¹⁰⁰ in modulus (materials are held to
+/// [`MAX_INDEX`](super::material::MAX_INDEX)), and `cos_theta0` in [0, 1]
+/// (larger values are taken as 1). Nothing is allocated.
 #[inline]
 pub fn solve(
     indices: &[C64],
