@@ -3,6 +3,8 @@
 //! over a wavelength × angle grid. The stacks are the ones
 //! `tools/time_tmm.py` times in Python `tmm`.
 
+use std::time::{Duration, Instant};
+
 use criterion::{black_box, criterion_group, criterion_main, Criterion, Throughput};
 use num_complex::Complex64 as C64;
 
@@ -39,6 +41,38 @@ fn single(c: &mut Criterion) {
                     black_box(0.8),
                 );
                 (r.r(), r.t())
+            })
+        });
+    }
+    g.finish();
+}
+
+/// The same single-sample solves, timed as the fastest of many short runs
+/// (256 solves each): on this shared 2-core machine, other work preempts a
+/// run now and then, and the minimum is the closest estimate of the cost on
+/// an otherwise idle core. `tools/time_tmm.py` times Python tmm the same way.
+fn single_least_disturbed(c: &mut Criterion) {
+    let mut g = c.benchmark_group("solve_min");
+    for layers in [1usize, 2, 10, 100] {
+        let (n, d) = bench_stack(layers);
+        g.bench_function(format!("{layers} layers"), |b| {
+            b.iter_custom(|iters| {
+                const RUN: u64 = 256;
+                let mut best = Duration::MAX;
+                for _ in 0..iters.div_ceil(RUN) {
+                    let start = Instant::now();
+                    for _ in 0..RUN {
+                        let r = solve(
+                            black_box(&n),
+                            black_box(&d),
+                            black_box(550.0),
+                            black_box(0.8),
+                        );
+                        black_box((r.r(), r.t()));
+                    }
+                    best = best.min(start.elapsed());
+                }
+                best * (iters as u32) / (RUN as u32)
             })
         });
     }
@@ -96,5 +130,5 @@ fn dispersive(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, single, batched, dispersive);
+criterion_group!(benches, single, single_least_disturbed, batched, dispersive);
 criterion_main!(benches);
