@@ -440,3 +440,57 @@ pub fn solve_batch(
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn square_root_branch() {
+        let c = C64::new;
+        // Against the principal root, reflected into the upper half plane.
+        for z in [
+            c(2.0, 0.0),
+            c(2.0, 3.0),
+            c(2.0, -3.0),
+            c(-2.0, 3.0),
+            c(-2.0, -3.0),
+            c(-5.0, 1e-300),
+            c(1e-12, -1e-14),
+        ] {
+            let p = z.sqrt();
+            let want = if p.im < 0.0 || (p.im == 0.0 && p.re < 0.0) {
+                -p
+            } else {
+                p
+            };
+            let got = sqrt_upper(z);
+            assert!(
+                (got - want).norm() <= 1e-15 * want.norm(),
+                "{z}: {got} vs {want}"
+            );
+            assert!((got * got - z).norm() <= 1e-15 * z.norm(), "{z}");
+        }
+        // An evanescent wave whose n² − β² carries a −0.0 imaginary part
+        // must still decay: +i, never −i.
+        assert_eq!(sqrt_upper(c(-4.0, -0.0)), c(0.0, 2.0));
+        assert_eq!(sqrt_upper(c(-4.0, 0.0)), c(0.0, 2.0));
+        assert_eq!(sqrt_upper(c(0.0, 0.0)), c(0.0, 0.0));
+        assert_eq!(sqrt_upper(c(4.0, -0.0)), c(2.0, 0.0));
+        // Gain (k < 0): Im q ≥ 0 puts Re q < 0, which is fine inside a finite layer.
+        let q = normal_index(c(1.5, -0.1), 0.5);
+        assert!(q.im > 0.0 && q.re < 0.0, "{q}");
+    }
+
+    #[test]
+    fn batch_shapes_and_grazing() {
+        let n = [C64::new(1.0, 0.0), C64::new(1.4, 0.0), C64::new(1.5, 0.0)];
+        let d = [100.0];
+        let mut out = [Response::default(); 6];
+        let n2: Vec<C64> = n.iter().chain(&n).copied().collect();
+        solve_batch(&n2, &d, &[500.0, 600.0], &[1.0, 0.5, 0.0], &mut out);
+        assert_eq!(out[2], out[5]);
+        assert_eq!(out[2].r(), 1.0);
+        assert_eq!(out[4], solve(&n, &d, 600.0, 0.5));
+    }
+}
