@@ -780,3 +780,31 @@ fn runs_of_near_critical_layers() {
         }
     }
 }
+
+#[test]
+fn extreme_but_accepted_inputs_stay_finite() {
+    // The edges of what materials and stacks accept: |n|, |k| up to 1e6 and
+    // down to 1e-6, thickness 0 to 1e12 nm, wavelength 1e-3 to 1e9 nm, any
+    // angle short of grazing.
+    let mut rng = Pcg64::seed_from_u64(10);
+    let pick = |rng: &mut Pcg64, v: &[f64]| v[rng.random_range(0..v.len())];
+    let values = [1e-6, 0.3, 1.0, 1.5, 40.0, 1e6];
+    for _ in 0..20_000 {
+        let layers = rng.random_range(0..6);
+        let mut n = vec![c(pick(&mut rng, &values), 0.0)];
+        let mut d = vec![];
+        for _ in 0..layers {
+            let k = pick(&mut rng, &[0.0, 1e-6, 1.0, 1e6, -1e-3, -0.5]);
+            n.push(c(pick(&mut rng, &values), k));
+            d.push(pick(&mut rng, &[0.0, 1e-300, 1.0, 500.0, 1e6, 1e12]));
+        }
+        n.push(c(
+            pick(&mut rng, &values),
+            pick(&mut rng, &[0.0, 1e-6, 3.0, 1e6]),
+        ));
+        let wl = pick(&mut rng, &[1e-3, 550.0, 1e9]);
+        let cos = pick(&mut rng, &[1.0, 0.5, 1e-3, 1e-9]);
+        let r = solve(&n, &d, wl, cos);
+        assert_finite(&r, &format!("{n:?} {d:?} {wl} {cos}"));
+    }
+}

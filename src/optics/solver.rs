@@ -130,7 +130,9 @@ fn grazing(indices: &[C64]) -> Response {
 ///
 /// `indices` holds the ambient, the N layers from the top down, and the
 /// substrate (N + 2 entries); `thicknesses_nm` the N layer thicknesses.
-/// The ambient must be lossless (its imaginary part is ignored), every
+/// The ambient must be lossless (its imaginary part is ignored), the
+/// substrate without gain (its power flux is taken on the decaying branch),
+/// every
 /// index finite, nonzero and below 10¹⁰⁰ in modulus (materials are held to
 /// [`MAX_INDEX`](super::material::MAX_INDEX)), and `cos_theta0` in [0, 1]
 /// (larger values are taken as 1). Nothing is allocated.
@@ -195,15 +197,17 @@ pub fn solve_amplitudes(
 /// referred to that interface and r, t the interface's own coefficients,
 /// Γ' = (r + Γ)/(1 + rΓ) and the transmitted amplitude gains t/(1 + rΓ).
 /// Writing r = (a − b)/(a + b) and t = c/(a + b) turns both into one shared
-/// complex reciprocal: Γ' = ((a − b) + (a + b)Γ)/D, t/(1 + rΓ) = c/D with
-/// D = (a + b) + (a − b)Γ. For s, a = q_above, b = q_below, c = 2a; for p,
-/// a = n_b² q_a, b = n_a² q_b, c = 2 n_a n_b q_a.
+/// complex reciprocal: with x = a(1 + Γ) and y = b(1 − Γ), Γ' = (x − y)/(x + y)
+/// and t/(1 + rΓ) = c/(x + y). For s, a = q_above, b = q_below, c = 2a; for
+/// p, a = n_b² q_a, b = n_a² q_b, c = 2 n_a n_b q_a. Grouping by (1 ± Γ)
+/// rather than by (a ± b) matters when |a| ≪ |b| and Γ = 1: then a + b and
+/// a − b round to ±b and D = 2a would come out as 0.
 ///
 /// A layer at (or near) its own critical angle, q → 0, is where the two
 /// waves of the Γ description merge: its interfaces reflect with r → ±1 and
 /// Γ loses digits as ε/|q| (0/0 at q = 0 exactly). Such layers, and runs of
 /// them, are crossed in field form instead; see [`NearCritical`].
-#[inline]
+#[inline(always)]
 fn recurse(
     indices: &[C64],
     thicknesses_nm: &[f64],
@@ -247,8 +251,15 @@ fn recurse(
                 tp *= scale;
             } else {
                 let phase = k0 * d * q_below;
-                let (sin, cos) = phase.re.sin_cos();
-                let one_way = C64::new(cos, sin) * (-phase.im).exp();
+                let decay = (-phase.im).exp();
+                // Past e^{-745} nothing comes back up through this layer;
+                // skipping the trigonometry also avoids sin(huge) there.
+                let one_way = if decay == 0.0 {
+                    zero
+                } else {
+                    let (sin, cos) = phase.re.sin_cos();
+                    C64::new(cos * decay, sin * decay)
+                };
                 let round_trip = one_way * one_way;
                 gamma_s *= round_trip;
                 gamma_p *= round_trip;
@@ -259,16 +270,16 @@ fn recurse(
         let above_near_critical = j > 0 && near_critical(q_above, nsq_above);
         match (fields, above_near_critical) {
             (None, false) => {
-                let (sum, diff) = (q_above + q_below, q_above - q_below);
-                let inv_s = (sum + diff * gamma_s).inv();
-                gamma_s = (diff + sum * gamma_s) * inv_s;
+                let x = q_above * (one + gamma_s);
+                let y = q_below * (one - gamma_s);
+                let inv_s = (x + y).inv();
+                gamma_s = (x - y) * inv_s;
                 ts *= 2.0 * q_above * inv_s;
 
-                let a = nsq_below * q_above;
-                let b = nsq_above * q_below;
-                let (sum, diff) = (a + b, a - b);
-                let inv_p = (sum + diff * gamma_p).inv();
-                gamma_p = (diff + sum * gamma_p) * inv_p;
+                let x = nsq_below * q_above * (one + gamma_p);
+                let y = nsq_above * q_below * (one - gamma_p);
+                let inv_p = (x + y).inv();
+                gamma_p = (x - y) * inv_p;
                 tp *= 2.0 * n_above * n_below * q_above * inv_p;
             }
             (None, true) => {
