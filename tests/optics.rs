@@ -316,9 +316,11 @@ fn zero_thickness_and_index_matched_layers_are_invisible() {
             d[at - 1] = below - extra.min(below);
             d.insert(at - 1, extra.min(below));
         } else {
-            // Above the substrate: a layer of substrate material adds a
-            // phase to t only, and |t|² does not see it unless the substrate absorbs.
-            d.insert(at - 1, 0.0);
+            // Above the substrate: a layer of substrate material moves the
+            // point where T is measured down by its thickness, which only a
+            // lossy substrate notices.
+            let lossless = s.indices[at].im == 0.0;
+            d.insert(at - 1, if lossless { extra } else { 0.0 });
         }
         let matched = solve(&n, &d, wl, cos);
         for (got, what) in [(zero, "zero-thickness"), (matched, "index-matched")] {
