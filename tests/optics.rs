@@ -810,3 +810,69 @@ fn extreme_but_accepted_inputs_stay_finite() {
         assert_finite(&r, &format!("{n:?} {d:?} {wl} {cos}"));
     }
 }
+
+#[test]
+fn split_at_a_buried_layer_recomposes() {
+    // The baker's decomposition: A = ambient..layer L (L seen as
+    // semi-infinite), A' = A seen from inside L, B = L..substrate, then
+    // Airy's sum over L's multiple reflections,
+    //   r = r_A + t_A t'_A r_B φ² / (1 − r'_A r_B φ²),
+    //   t = t_A t_B φ / (1 − r'_A r_B φ²),  φ = e^{i k0 q_L d},
+    // must give the whole stack's r and t. Sub-stacks whose top medium is an
+    // absorbing or gain layer go through solve_amplitudes_beta.
+    use irid::optics::{solve_amplitudes, solve_amplitudes_beta};
+    let mut rng = Pcg64::seed_from_u64(11);
+    for i in 0..2000 {
+        let s = random_stack(&mut rng, 1..8, Kind::WithGain, 500.0);
+        let (n, d) = (&s.indices, &s.thicknesses_nm);
+        let wl = rng.random_range(380.0..780.0);
+        let cos: f64 = rng.random_range(0.1..1.0);
+        let beta_sq = n[0].re * n[0].re * (1.0 - cos) * (1.0 + cos);
+        let l = rng.random_range(1..n.len() - 1); // the buried layer's medium index
+        let whole = solve_amplitudes(n, d, wl, cos);
+        // The top medium of A is the (lossless) ambient: both entry points agree.
+        let a = solve_amplitudes(&n[..=l], &d[..l - 1], wl, cos);
+        let a_beta = solve_amplitudes_beta(&n[..=l], &d[..l - 1], wl, beta_sq);
+        for (x, y) in [
+            (a.rs, a_beta.rs),
+            (a.rp, a_beta.rp),
+            (a.ts, a_beta.ts),
+            (a.tp, a_beta.tp),
+        ] {
+            assert!(
+                (x - y).norm() <= 1e-12 * y.norm().max(1.0),
+                "stack {i}: {a:?} vs {a_beta:?}"
+            );
+        }
+        let mut up_n: Vec<C64> = n[..=l].to_vec();
+        up_n.reverse();
+        let mut up_d: Vec<f64> = d[..l - 1].to_vec();
+        up_d.reverse();
+        let a_up = solve_amplitudes_beta(&up_n, &up_d, wl, beta_sq);
+        let b = solve_amplitudes_beta(&n[l..], &d[l..], wl, beta_sq);
+        let q_l = irid::optics::normal_index(n[l], beta_sq);
+        let phi = (C64::new(0.0, std::f64::consts::TAU / wl * d[l - 1]) * q_l).exp();
+        for (pol, (ra, ta, ra_up, ta_up, rb, tb, r, t)) in [
+            (
+                "s",
+                (a.rs, a.ts, a_up.rs, a_up.ts, b.rs, b.ts, whole.rs, whole.ts),
+            ),
+            (
+                "p",
+                (a.rp, a.tp, a_up.rp, a_up.tp, b.rp, b.tp, whole.rp, whole.tp),
+            ),
+        ] {
+            let den = 1.0 - ra_up * rb * phi * phi;
+            let r_split = ra + ta * ta_up * rb * phi * phi / den;
+            let t_split = ta * tb * phi / den;
+            assert!(
+                (r_split - r).norm() <= 1e-10 * r.norm().max(1.0),
+                "stack {i} {pol}: r {r_split} vs {r}"
+            );
+            assert!(
+                (t_split - t).norm() <= 1e-10 * t.norm().max(1.0),
+                "stack {i} {pol}: t {t_split} vs {t}"
+            );
+        }
+    }
+}

@@ -214,9 +214,50 @@ fn recurse(
     wavelength_nm: f64,
     cos_theta0: f64,
 ) -> (Amplitudes, C64) {
-    debug_assert_eq!(indices.len(), thicknesses_nm.len() + 2);
     let n0 = indices[0].re;
-    let beta_sq = n0 * n0 * sin_sq(cos_theta0);
+    let top = [
+        C64::new(n0, 0.0),
+        C64::new(n0 * n0, 0.0),
+        C64::new(n0 * cos_theta0, 0.0),
+    ];
+    recurse_beta(
+        indices,
+        thicknesses_nm,
+        wavelength_nm,
+        n0 * n0 * sin_sq(cos_theta0),
+        top,
+    )
+}
+
+/// r and t of a stack whose top medium may absorb or gain, given the
+/// conserved β² = (n sin θ)² instead of an angle: what a sub-stack below (or
+/// above) a buried layer sees, the top medium being that layer's. Every q,
+/// the top medium's included, is on the branch Im q ≥ 0. r is referenced to
+/// the top interface, t (the ratio of forward amplitudes) to the bottom one.
+/// A top medium with q = 0 exactly (lossless, at its critical angle) has no
+/// forward wave to refer r and t to; the result is then not finite.
+pub fn solve_amplitudes_beta(
+    indices: &[C64],
+    thicknesses_nm: &[f64],
+    wavelength_nm: f64,
+    beta_sq: f64,
+) -> Amplitudes {
+    let n_top = indices[0];
+    let nsq_top = n_top * n_top;
+    let top = [n_top, nsq_top, sqrt_upper(nsq_top - beta_sq)];
+    recurse_beta(indices, thicknesses_nm, wavelength_nm, beta_sq, top).0
+}
+
+/// The recursion for a given β², the top medium given as (n, n², q).
+#[inline(always)]
+fn recurse_beta(
+    indices: &[C64],
+    thicknesses_nm: &[f64],
+    wavelength_nm: f64,
+    beta_sq: f64,
+    top: [C64; 3],
+) -> (Amplitudes, C64) {
+    debug_assert_eq!(indices.len(), thicknesses_nm.len() + 2);
     let k0 = std::f64::consts::TAU / wavelength_nm;
 
     let last = indices.len() - 1;
@@ -232,11 +273,7 @@ fn recurse(
 
     for j in (0..last).rev() {
         let (n_above, nsq_above, q_above) = if j == 0 {
-            (
-                C64::new(n0, 0.0),
-                C64::new(n0 * n0, 0.0),
-                C64::new(n0 * cos_theta0, 0.0),
-            )
+            (top[0], top[1], top[2])
         } else {
             let n = indices[j];
             let nsq = n * n;
