@@ -14,7 +14,7 @@ use super::{BakeSpec, Kind, Resolution, MAX_AXIS_NODES, MAX_NODES};
 use crate::color::SpectralIntegrator;
 use crate::error::{Error, Result};
 use crate::optics::twoport::{Scratch, VaryingLayer};
-use crate::optics::{Layer, Response, Stack};
+use crate::optics::{solve, Layer, Response, Stack};
 
 /// The phase factor along a uniform thickness axis is advanced by one
 /// complex multiplication per node and recomputed exactly this often: the
@@ -214,13 +214,14 @@ impl Prepared {
         };
         if !grid.spectral {
             out.par_chunks_mut(row_len).enumerate().for_each_init(
-                Scratch::default,
-                |scratch, (c, row)| {
+                || (Scratch::default(), self.thicknesses_nm.clone()),
+                |(scratch, thick), (c, row)| {
                     for (w, idx) in self.indices.iter().enumerate() {
                         let cos = c_axis.nodes[c];
-                        let v = self.split(idx, self.wavelengths_nm[w], cos, scratch);
+                        let wl = self.wavelengths_nm[w];
+                        let v = self.split(idx, wl, cos, scratch);
                         let [wr, wg, wb] = self.weights[w];
-                        sweep(&v, t_axis, |j, resp| {
+                        self.sweep(&v, idx, wl, cos, t_axis, thick, |j, resp| {
                             let (r, t) = (resp.r(), resp.t());
                             let o = &mut row[j * 6..j * 6 + 6];
                             o[0] += wr * r;
@@ -238,12 +239,13 @@ impl Prepared {
             let indices = indices_at(&self.stack, &w_axis.nodes)?;
             let nc = c_axis.nodes.len();
             out.par_chunks_mut(row_len).enumerate().for_each_init(
-                Scratch::default,
-                |scratch, (row_index, row)| {
+                || (Scratch::default(), self.thicknesses_nm.clone()),
+                |(scratch, thick), (row_index, row)| {
                     let (w, c) = (row_index / nc, row_index % nc);
                     let wl = w_axis.nodes[w];
-                    let v = self.split(&indices[w], wl, c_axis.nodes[c], scratch);
-                    sweep(&v, t_axis, |j, resp| {
+                    let cos = c_axis.nodes[c];
+                    let v = self.split(&indices[w], wl, cos, scratch);
+                    self.sweep(&v, &indices[w], wl, cos, t_axis, thick, |j, resp| {
                         row[2 * j] = resp.r();
                         row[2 * j + 1] = resp.t();
                     });
@@ -252,6 +254,29 @@ impl Prepared {
             );
         }
         Ok(out)
+    }
+
+    /// [`sweep`], or the solver node by node where the split is degenerate
+    /// (the varying layer at its own critical angle).
+    #[allow(clippy::too_many_arguments)]
+    #[inline]
+    fn sweep(
+        &self,
+        v: &VaryingLayer,
+        idx: &[C64],
+        wavelength_nm: f64,
+        cos: f64,
+        t_axis: &AxisGrid,
+        thick: &mut [f64],
+        mut f: impl FnMut(usize, Response),
+    ) {
+        if !v.is_degenerate() {
+            return sweep(v, t_axis, f);
+        }
+        for (j, &t) in t_axis.nodes.iter().enumerate() {
+            thick[self.layer - 1] = t;
+            f(j, solve(idx, thick, wavelength_nm, cos));
+        }
     }
 
     #[inline]
@@ -700,5 +725,33 @@ mod tests {
             });
             assert!(worst < 1e-12, "n = {n}{k:+}i: {worst:e}");
         }
+    }
+
+    /// An air gap seen from glass has its critical angle at the substrate's,
+    /// which is a node of the graded angle axis: the split is degenerate
+    /// there and the baker must fall back to the solver, not write NaN.
+    #[test]
+    fn frustrated_tir_gap_at_its_critical_angle() {
+        let stack = Stack {
+            ambient: crate::optics::Material::constant(1.5, 0.0),
+            layers: vec![Layer {
+                material: crate::optics::Material::constant(1.0, 0.0),
+                thickness_nm: 100.0,
+            }],
+            substrate: crate::optics::Material::constant(1.0, 0.0),
+        };
+        let mut spec = BakeSpec::new(stack);
+        spec.thickness_nm = (0.0, 400.0);
+        spec.cos_theta = (0.0, 1.0);
+        spec.sampling = crate::color::Sampling::Uniform(16);
+        spec.resolution = Resolution::Nodes {
+            thickness: 21,
+            angle: 17,
+            wavelength: 1,
+        };
+        let lut = bake(&spec).unwrap();
+        let cc = (1.0f64 - (1.0 / 1.5f64).powi(2)).sqrt();
+        assert!(lut.header().axes[1].nodes.contains(&cc));
+        assert!(lut.data().iter().all(|v| v.is_finite()));
     }
 }
