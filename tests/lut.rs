@@ -248,6 +248,28 @@ fn cache_key_follows_the_spec() {
     }
 }
 
+#[test]
+fn cache_bakes_once_and_rebakes_stale_tables() {
+    let dir = scratch_dir("cache");
+    let stack = Stack::load(&luts_dir().join("absorbing-film.toml")).unwrap();
+    let spec = quick_spec(stack, (0.0, 200.0), 5e-3);
+    let first = irid::lut::cached(&spec, &dir).unwrap();
+    let path = dir.join(format!("{}.exr", spec.cache_key()));
+    let written = std::fs::metadata(&path).unwrap().modified().unwrap();
+    let again = irid::lut::cached(&spec, &dir).unwrap();
+    assert_eq!(again.data(), first.data());
+    assert_eq!(
+        std::fs::metadata(&path).unwrap().modified().unwrap(),
+        written
+    );
+    // A corrupt cache entry is rebaked, not an error.
+    std::fs::write(&path, b"not an exr").unwrap();
+    let rebaked = irid::lut::cached(&spec, &dir).unwrap();
+    assert_eq!(rebaked.data(), first.data());
+    assert!(Lut::load(&path).is_ok());
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 /// Rewrites the `irid` header of a table file in place of the original,
 /// through the exr crate, keeping the pixels.
 fn rewrite_header(src: &Path, dst: &Path, edit: impl Fn(&mut serde_json::Value)) {

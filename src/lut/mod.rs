@@ -191,6 +191,24 @@ impl BakeSpec {
     }
 }
 
+/// The table for `spec` from a cache directory: `DIR/<cache key>.exr` when
+/// it exists, loads, and was baked from the same spec; otherwise baked now
+/// and written there (atomically, so concurrent renderers never read half a
+/// table). A stale or unreadable cache file is replaced, never an error.
+pub fn cached(spec: &BakeSpec, dir: &std::path::Path) -> Result<Lut> {
+    let key = spec.cache_key();
+    let path = dir.join(format!("{key}.exr"));
+    if let Ok(lut) = Lut::load(&path) {
+        if lut.header().cache_key == key {
+            return Ok(lut);
+        }
+    }
+    let lut = bake(spec)?;
+    std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+    lut.write(&path)?;
+    Ok(lut)
+}
+
 /// cos 89°, the default smallest cos θ. At exactly grazing incidence every
 /// stack reflects fully, but a free-standing film (same medium on both
 /// sides) of vanishing thickness reflects nothing: R jumps at the corner
