@@ -249,6 +249,27 @@ fn cache_key_follows_the_spec() {
 }
 
 #[test]
+fn without_a_range_one_thickness_row() {
+    // The stack's own thickness, and a stack with no layers at all.
+    let stack = Stack::load(&luts_dir().join("oil-on-water.toml")).unwrap();
+    let mut spec = BakeSpec::new(stack.clone());
+    spec.sampling = Sampling::Uniform(31);
+    let lut = bake(&spec).unwrap();
+    assert_eq!(lut.header().axes[0].nodes, vec![300.0]);
+    let mut bare = stack;
+    bare.layers.clear();
+    let mut spec = BakeSpec::new(bare.clone());
+    spec.sampling = Sampling::Uniform(31);
+    let lut = bake(&spec).unwrap();
+    assert_eq!(lut.header().layer, 0);
+    assert_eq!(lut.header().axes[0].nodes.len(), 1);
+    let stats = validate(&lut, 500, 2).unwrap();
+    assert!(worst(&stats.max_abs) <= lut.header().error.bake_check.max_abs_all.max(1e-6));
+    // Any thickness reads the one row.
+    assert_eq!(lut.sample_rgb(0.0, 0.5), lut.sample_rgb(1e4, 0.5));
+}
+
+#[test]
 fn cache_bakes_once_and_rebakes_stale_tables() {
     let dir = scratch_dir("cache");
     let stack = Stack::load(&luts_dir().join("absorbing-film.toml")).unwrap();
