@@ -10,6 +10,7 @@ use super::header::{
     FORMAT_VERSION, THICKNESS_AXIS, WAVELENGTH_AXIS,
 };
 use super::sample::{channel_names, Lut};
+use super::validate::validate;
 use super::{BakeSpec, Kind, Resolution, MAX_AXIS_NODES, MAX_NODES};
 use crate::color::SpectralIntegrator;
 use crate::error::{Error, Result};
@@ -27,6 +28,10 @@ pub fn bake(spec: &BakeSpec) -> Result<Lut> {
     bake_with_progress(spec, &|_| {})
 }
 
+/// The seed of the validation a bake records (and `irid validate` uses by
+/// default), so the two report the same points.
+pub const VALIDATION_SEED: u64 = 1;
+
 /// Refinement rounds before `--max-error` gives up.
 const MAX_ROUNDS: usize = 24;
 /// Upper bound on (fine-grid nodes × wavelengths) evaluated in one round,
@@ -42,7 +47,10 @@ const MAX_WORK: usize = 1 << 30;
 /// subdivided once more, which gives the error of the table at every edge
 /// midpoint and cell centre; with `--max-error` each segment whose error
 /// exceeds its share is refined by the factor the h² error law predicts,
-/// and the search repeats until the whole table meets the target.
+/// and the search repeats until the whole table meets the target. Then the
+/// table is validated against the solver at `spec.validation_points` random
+/// points; if any exceeds the target, the search resumes with a tighter
+/// goal. The validation figures go into the header.
 pub fn bake_with_progress(spec: &BakeSpec, progress: &(dyn Fn(f64) + Sync)) -> Result<Lut> {
     spec.validate()?;
     let prep = Prepared::new(spec)?;
@@ -95,8 +103,37 @@ pub fn bake_with_progress(spec: &BakeSpec, progress: &(dyn Fn(f64) + Sync)) -> R
             _ => {
                 let data = even_subgrid(&fine, &values, prep.channels, spec.half);
                 let header = header(spec, &prep, &coarse, &check, target);
-                return Lut::from_parts(header, data)
-                    .map_err(|why| Error::invalid("baked table", why));
+                let mut lut = Lut::from_parts(header, data)
+                    .map_err(|why| Error::invalid("baked table", why))?;
+                if spec.validation_points == 0 {
+                    return Ok(lut);
+                }
+                let stats = validate(&lut, spec.validation_points, VALIDATION_SEED)?;
+                let worst = stats.max_abs.iter().fold(0.0f64, |a, &b| a.max(b));
+                match target {
+                    // Midpoints are where interpolation error peaks for a
+                    // smooth response, but a feature narrower than the grid
+                    // (a resonance near grazing incidence) can peak between
+                    // them: refine the segments around the worst point.
+                    Some(t) if worst > t || worst.is_nan() => {
+                        for (a, segments) in axes.iter_mut().enumerate() {
+                            let x = stats.worst_point[a];
+                            if let Some(k) = segments
+                                .iter()
+                                .position(|s| s.intervals > 0 && x >= s.start && x <= s.end)
+                            {
+                                let seg = segments[k];
+                                let finer = refine(&seg, 2 * seg.intervals);
+                                segments.splice(k..=k, finer);
+                            }
+                        }
+                        continue;
+                    }
+                    _ => {
+                        lut.set_validation(stats);
+                        return Ok(lut);
+                    }
+                }
             }
         };
         let dims = coarse
@@ -121,19 +158,7 @@ pub fn bake_with_progress(spec: &BakeSpec, progress: &(dyn Fn(f64) + Sync)) -> R
                 // film's lasing pole) the h² law does not hold yet.
                 let factor = ((err / share).sqrt() * 1.1).min(4.0);
                 let m = ((seg.intervals as f64 * factor).ceil() as usize).max(seg.intervals + 1);
-                if seg.grading == Grading::Uniform {
-                    // Halve it too, so refinement concentrates where the
-                    // error is (a film near zero thickness at grazing).
-                    let mid = 0.5 * (seg.start + seg.end);
-                    let half_m = m.div_ceil(2);
-                    next.push(uniform(seg.start, mid, half_m));
-                    next.push(uniform(mid, seg.end, half_m));
-                } else {
-                    next.push(Segment {
-                        intervals: m,
-                        ..*seg
-                    });
-                }
+                next.extend(refine(seg, m));
             }
             *segments = next;
         }
@@ -412,6 +437,20 @@ fn doubled(segments: &[Segment]) -> Vec<Segment> {
             ..*s
         })
         .collect()
+}
+
+/// A segment with `intervals` intervals in place of its own. A uniform one
+/// is also halved, so that refinement concentrates where the error is (a
+/// film near zero thickness at grazing incidence); a graded one keeps its
+/// grading.
+fn refine(seg: &Segment, intervals: usize) -> Vec<Segment> {
+    if seg.grading == Grading::Uniform {
+        let mid = 0.5 * (seg.start + seg.end);
+        let half = intervals.div_ceil(2);
+        vec![uniform(seg.start, mid, half), uniform(mid, seg.end, half)]
+    } else {
+        vec![Segment { intervals, ..*seg }]
+    }
 }
 
 fn uniform(start: f64, end: f64, intervals: usize) -> Segment {

@@ -12,7 +12,7 @@ mod sample;
 mod validate;
 
 pub use axis::Axis;
-pub use bake::{bake, bake_with_progress};
+pub use bake::{bake, bake_with_progress, VALIDATION_SEED};
 pub use header::{BakeCheck, ColorInfo, ErrorInfo, Header, FORMAT_NAME, FORMAT_VERSION};
 pub use sample::{FilmRgb, Lut};
 pub use validate::{validate, ErrorStats, RegionStats};
@@ -93,6 +93,9 @@ pub struct BakeSpec {
     pub resolution: Resolution,
     /// Store f16 instead of f32 (the error figures include the rounding).
     pub half: bool,
+    /// Random points at which the finished table is compared with the
+    /// solver (0: none). With an error target they must meet it too.
+    pub validation_points: usize,
 }
 
 impl BakeSpec {
@@ -111,6 +114,7 @@ impl BakeSpec {
             wavelength_nm: (380.0, 780.0),
             resolution: Resolution::MaxError(1e-3),
             half: false,
+            validation_points: 20_000,
         }
     }
 
