@@ -7,6 +7,7 @@ pub mod material;
 pub mod solver;
 pub mod spec;
 pub mod stack;
+pub mod twoport;
 
 pub use material::{Dispersion, IndexTable, Material};
 pub use solver::{
