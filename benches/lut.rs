@@ -24,6 +24,7 @@ fn spec(kind: Kind, nodes: (usize, usize, usize)) -> BakeSpec {
     spec.thickness_nm = (0.0, 1000.0);
     spec.kind = kind;
     spec.sampling = Sampling::Uniform(31);
+    spec.validation_points = 0;
     spec.resolution = Resolution::Nodes {
         thickness: nodes.0,
         angle: nodes.1,
@@ -56,6 +57,21 @@ fn sampler(c: &mut Criterion) {
         b.iter(|| {
             let mut acc = 0.0f32;
             for p in &pts {
+                let s = rgb.sample_rgb(black_box(p[0]), black_box(p[1]));
+                acc += s.reflectance[1] + s.transmittance[2];
+            }
+            acc
+        })
+    });
+    // A renderer's access pattern: neighbouring pixels, nearby thickness
+    // and angle (a slow sweep across the table).
+    let coherent: Vec<[f32; 2]> = (0..4096)
+        .map(|i| [i as f32 * 0.2, 0.3 + i as f32 * 1e-4])
+        .collect();
+    g.bench_function("sample_rgb 453x127 coherent", |b| {
+        b.iter(|| {
+            let mut acc = 0.0f32;
+            for p in &coherent {
                 let s = rgb.sample_rgb(black_box(p[0]), black_box(p[1]));
                 acc += s.reflectance[1] + s.transmittance[2];
             }

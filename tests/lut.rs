@@ -214,6 +214,23 @@ fn write_read_round_trip_is_bit_exact() {
             .collect();
         assert!(left.is_empty());
     }
+    // A spectral table too, with its wavelength blocks folded into y.
+    let stack = Stack::load(&luts_dir().join("oil-on-water.toml")).unwrap();
+    let mut spec = quick_spec(stack, (100.0, 300.0), 1.0);
+    spec.kind = Kind::Spectral;
+    spec.half = true;
+    spec.validation_points = 0;
+    spec.resolution = Resolution::Nodes {
+        thickness: 9,
+        angle: 5,
+        wavelength: 7,
+    };
+    let lut = bake(&spec).unwrap();
+    let path = dir.join("spectral.exr");
+    lut.write(&path).unwrap();
+    let back = Lut::load(&path).unwrap();
+    assert_eq!(back.header(), lut.header());
+    assert_eq!(back.data(), lut.data());
     // f16 tables are about half the size of f32 ones and their recorded
     // error includes the rounding.
     let f32_size = std::fs::metadata(dir.join("t-false.exr")).unwrap().len();
