@@ -7,7 +7,9 @@ use std::time::Instant;
 
 use anyhow::{anyhow, bail, Context, Result};
 use irid::color::Sampling;
-use irid::lut::{bake_with_progress, BakeSpec, Kind, Resolution, DEFAULT_COS_MIN};
+use irid::lut::{
+    bake_with_progress, validate, BakeSpec, Kind, Resolution, DEFAULT_COS_MIN, VALIDATION_SEED,
+};
 use irid::optics::Stack;
 
 use super::args::parse_range;
@@ -91,7 +93,7 @@ pub fn run(args: Args) -> Result<ExitCode> {
         bar
     });
     let started = Instant::now();
-    let lut = bake_with_progress(&spec, &|f| {
+    let mut lut = bake_with_progress(&spec, &|f| {
         if let Some(bar) = &bar {
             bar.set_position((f * 1000.0) as u64);
         }
@@ -118,6 +120,11 @@ pub fn run(args: Args) -> Result<ExitCode> {
         "bake check: max abs error {:.3e} over {} off-grid points",
         h.error.bake_check.max_abs_all, h.error.bake_check.points
     );
+    if h.error.validation.is_none() && args.validate_points > 0 {
+        let stats = validate(&lut, args.validate_points, VALIDATION_SEED)?;
+        lut.set_validation(stats);
+    }
+    let h = lut.header();
     if let Some(stats) = &h.error.validation {
         println!(
             "validation: {} random points (seed {}) against the solver:",

@@ -49,8 +49,9 @@ const MAX_WORK: usize = 1 << 30;
 /// exceeds its share is refined by the factor the h² error law predicts,
 /// and the search repeats until the whole table meets the target. Then the
 /// table is validated against the solver at `spec.validation_points` random
-/// points; if any exceeds the target, the search resumes with a tighter
-/// goal. The validation figures go into the header.
+/// points; around any point above the target the search refines further.
+/// The validation figures go into the header. A fixed resolution is baked
+/// as asked, without validation (see [`super::validate`]).
 pub fn bake_with_progress(spec: &BakeSpec, progress: &(dyn Fn(f64) + Sync)) -> Result<Lut> {
     spec.validate()?;
     let prep = Prepared::new(spec)?;
@@ -105,7 +106,7 @@ pub fn bake_with_progress(spec: &BakeSpec, progress: &(dyn Fn(f64) + Sync)) -> R
                 let header = header(spec, &prep, &coarse, &check, target);
                 let mut lut = Lut::from_parts(header, data)
                     .map_err(|why| Error::invalid("baked table", why))?;
-                if spec.validation_points == 0 {
+                if spec.validation_points == 0 || target.is_none() {
                     return Ok(lut);
                 }
                 let stats = validate(&lut, spec.validation_points, VALIDATION_SEED)?;

@@ -93,8 +93,9 @@ pub struct BakeSpec {
     pub resolution: Resolution,
     /// Store f16 instead of f32 (the error figures include the rounding).
     pub half: bool,
-    /// Random points at which the finished table is compared with the
-    /// solver (0: none). With an error target they must meet it too.
+    /// With an error target: random points at which the finished table is
+    /// compared with the solver and must meet the target too (0: none). A
+    /// fixed resolution ignores it.
     pub validation_points: usize,
 }
 
