@@ -7,5 +7,6 @@
 
 pub mod error;
 pub mod optics;
+pub mod render;
 
 pub use error::{Error, Result};
