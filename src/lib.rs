@@ -5,6 +5,7 @@
 //! [`color`] (spectra to colour) → [`lut`] (bake, file, sample, validate) →
 //! [`render`] (the tracer).
 
+pub mod color;
 pub mod error;
 pub mod optics;
 pub mod render;

@@ -23,6 +23,8 @@ struct Cli {
 enum Command {
     /// Reflectance and transmittance of a stack over wavelengths and angles.
     Eval(cli::eval::Args),
+    /// Reflected and transmitted colour of a stack under D65, per angle.
+    Color(cli::color::Args),
 }
 
 fn main() -> ExitCode {
@@ -37,9 +39,13 @@ fn main() -> ExitCode {
     };
     let result = match cli.command {
         Command::Eval(args) => cli::eval::run(args),
+        Command::Color(args) => cli::color::run(args),
     };
     match result {
         Ok(code) => code,
+        // A closed pipe (`irid eval ... | head`) means the reader has all
+        // it wants: stop quietly, as other Unix tools do.
+        Err(e) if is_broken_pipe(&e) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("irid: {}", one_line(&e));
             ExitCode::from(2)
@@ -47,11 +53,28 @@ fn main() -> ExitCode {
     }
 }
 
-/// The error and its causes joined on one line.
+fn is_broken_pipe(e: &anyhow::Error) -> bool {
+    e.chain().any(|cause| {
+        cause
+            .downcast_ref::<std::io::Error>()
+            .is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe)
+    })
+}
+
+/// The error and its causes joined on one line. A cause that the message
+/// so far already ends with (an error whose text includes its source) is
+/// not repeated.
 fn one_line(e: &anyhow::Error) -> String {
-    e.chain()
-        .map(|c| c.to_string())
-        .collect::<Vec<_>>()
-        .join(": ")
-        .replace('\n', " ")
+    let mut line = String::new();
+    for cause in e.chain() {
+        let text = cause.to_string();
+        if line.ends_with(&text) {
+            continue;
+        }
+        if !line.is_empty() {
+            line.push_str(": ");
+        }
+        line.push_str(&text);
+    }
+    line.replace('\n', " ")
 }

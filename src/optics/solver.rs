@@ -46,19 +46,34 @@ pub struct Amplitudes {
     pub tp: C64,
 }
 
-/// q = n cos θ = sqrt(n² − β²) on the branch Im q ≥ 0 (Re q > 0 when Im q = 0).
+/// sqrt(z) on the branch Im ≥ 0 (Re > 0 when Im = 0).
 ///
-/// The sign is fixed after the square root: the principal root returns
-/// Im < 0 for gain media, and a −0.0 imaginary part of n² − β² would put an
-/// evanescent wave on the growing branch.
+/// Written out rather than `Complex::sqrt`, which goes through polar form
+/// (atan2, sin, cos) and dominated the solver's time. The root is the
+/// principal one, reflected when z lies below the real axis; a −0.0
+/// imaginary part counts as above, so that a real negative z (an evanescent
+/// wave) always gets +i|z|^½, the decaying branch.
+#[inline]
+fn sqrt_upper(z: C64) -> C64 {
+    let (x, y) = (z.re, z.im);
+    let t = (0.5 * (z.norm_sqr().sqrt() + x.abs())).sqrt();
+    if t == 0.0 {
+        return C64::new(0.0, 0.0);
+    }
+    let u = 0.5 * y.abs() / t;
+    // Principal root: (t, y/2t) for x ≥ 0, (|y|/2t, ±t) for x < 0.
+    let (re, im) = if x >= 0.0 { (t, u) } else { (u, t) };
+    if y < 0.0 {
+        C64::new(-re, im)
+    } else {
+        C64::new(re, im)
+    }
+}
+
+/// q = n cos θ = sqrt(n² − β²) on the branch Im q ≥ 0 (Re q > 0 when Im q = 0).
 #[inline]
 pub fn normal_index(n: C64, beta_sq: f64) -> C64 {
-    let q = (n * n - beta_sq).sqrt();
-    if q.im < 0.0 || (q.im == 0.0 && q.re < 0.0) {
-        -q
-    } else {
-        q
-    }
+    sqrt_upper(n * n - beta_sq)
 }
 
 /// Fresnel coefficients of one interface from medium `i` into medium `f`
@@ -88,21 +103,37 @@ pub fn fresnel(n_i: C64, q_i: C64, n_f: C64, q_f: C64) -> Fresnel {
     }
 }
 
-/// At exact grazing incidence (cos θ0 = 0) no power enters the stack,
-/// whatever the stack: every interface reflects with r = −1.
-const GRAZING: Response = Response {
-    rs: 1.0,
-    rp: 1.0,
-    ts: 0.0,
-    tp: 0.0,
-};
+/// At exact grazing incidence (cos θ0 = 0) no power enters the stack:
+/// every interface reflects with r = −1. The one exception is a stack with no
+/// interface at all (every medium equal to the ambient), which transmits.
+#[inline(never)]
+fn grazing(indices: &[C64]) -> Response {
+    let n0 = C64::new(indices[0].re, 0.0);
+    if indices[1..].iter().all(|&n| n == n0) {
+        Response {
+            rs: 0.0,
+            rp: 0.0,
+            ts: 1.0,
+            tp: 1.0,
+        }
+    } else {
+        Response {
+            rs: 1.0,
+            rp: 1.0,
+            ts: 0.0,
+            tp: 0.0,
+        }
+    }
+}
 
 /// Solves one stack at one wavelength and one angle.
 ///
 /// `indices` holds the ambient, the N layers from the top down, and the
 /// substrate (N + 2 entries); `thicknesses_nm` the N layer thicknesses.
-/// The ambient must be lossless (its imaginary part is ignored) and
-/// `cos_theta0` in [0, 1]. Nothing is allocated.
+/// The ambient must be lossless (its imaginary part is ignored), every
+/// index finite, nonzero and below 10¹⁰⁰ in modulus (materials are held to
+/// [`MAX_INDEX`](super::material::MAX_INDEX)), and `cos_theta0` in [0, 1]
+/// (larger values are taken as 1). Nothing is allocated.
 #[inline]
 pub fn solve(
     indices: &[C64],
@@ -111,10 +142,11 @@ pub fn solve(
     cos_theta0: f64,
 ) -> Response {
     if cos_theta0 <= 0.0 {
-        return GRAZING;
+        return grazing(indices);
     }
-    let amp = solve_amplitudes(indices, thicknesses_nm, wavelength_nm, cos_theta0);
-    power(indices, cos_theta0, &amp)
+    let cos_theta0 = cos_theta0.min(1.0);
+    let (amp, q_sub) = recurse(indices, thicknesses_nm, wavelength_nm, cos_theta0);
+    to_power(indices, cos_theta0, &amp, q_sub)
 }
 
 /// Converts amplitude coefficients to power: R = |r|²; T from the Poynting
@@ -122,17 +154,29 @@ pub fn solve(
 #[inline]
 pub fn power(indices: &[C64], cos_theta0: f64, amp: &Amplitudes) -> Response {
     let n0 = indices[0].re;
+    let beta_sq = n0 * n0 * sin_sq(cos_theta0);
+    let q_sub = normal_index(indices[indices.len() - 1], beta_sq);
+    to_power(indices, cos_theta0, amp, q_sub)
+}
+
+#[inline]
+fn to_power(indices: &[C64], cos_theta0: f64, amp: &Amplitudes, q_sub: C64) -> Response {
+    let q0 = indices[0].re * cos_theta0;
     let n_sub = indices[indices.len() - 1];
-    let beta_sq = n0 * n0 * (1.0 - cos_theta0 * cos_theta0);
-    let q_sub = normal_index(n_sub, beta_sq);
-    let q0 = n0 * cos_theta0;
-    let cos_sub = q_sub / n_sub;
+    // Re(n conj(q/n)) = Re(q̄ n / n̄) = Re(q̄ n²) / |n|².
+    let p_flux = (q_sub.conj() * n_sub * n_sub).re / n_sub.norm_sqr();
     Response {
         rs: amp.rs.norm_sqr(),
         rp: amp.rp.norm_sqr(),
         ts: amp.ts.norm_sqr() * q_sub.re / q0,
-        tp: amp.tp.norm_sqr() * (n_sub * cos_sub.conj()).re / q0,
+        tp: amp.tp.norm_sqr() * p_flux / q0,
     }
+}
+
+/// sin² θ from cos θ without the cancellation of 1 − cos² near normal incidence.
+#[inline]
+fn sin_sq(cos_theta: f64) -> f64 {
+    (1.0 - cos_theta) * (1.0 + cos_theta)
 }
 
 /// The complex r and t of the stack, both polarizations; see [`solve`].
@@ -142,51 +186,257 @@ pub fn solve_amplitudes(
     wavelength_nm: f64,
     cos_theta0: f64,
 ) -> Amplitudes {
+    recurse(indices, thicknesses_nm, wavelength_nm, cos_theta0).0
+}
+
+/// The recursion proper; also returns q of the substrate for the power flux.
+///
+/// At each interface, with Γ the reflection coefficient of everything below
+/// referred to that interface and r, t the interface's own coefficients,
+/// Γ' = (r + Γ)/(1 + rΓ) and the transmitted amplitude gains t/(1 + rΓ).
+/// Writing r = (a − b)/(a + b) and t = c/(a + b) turns both into one shared
+/// complex reciprocal: Γ' = ((a − b) + (a + b)Γ)/D, t/(1 + rΓ) = c/D with
+/// D = (a + b) + (a − b)Γ. For s, a = q_above, b = q_below, c = 2a; for p,
+/// a = n_b² q_a, b = n_a² q_b, c = 2 n_a n_b q_a.
+///
+/// A layer at (or near) its own critical angle, q → 0, is where the two
+/// waves of the Γ description merge: its interfaces reflect with r → ±1 and
+/// Γ loses digits as ε/|q| (0/0 at q = 0 exactly). Such layers, and runs of
+/// them, are crossed in field form instead; see [`NearCritical`].
+#[inline]
+fn recurse(
+    indices: &[C64],
+    thicknesses_nm: &[f64],
+    wavelength_nm: f64,
+    cos_theta0: f64,
+) -> (Amplitudes, C64) {
     debug_assert_eq!(indices.len(), thicknesses_nm.len() + 2);
     let n0 = indices[0].re;
-    let beta_sq = n0 * n0 * (1.0 - cos_theta0 * cos_theta0);
+    let beta_sq = n0 * n0 * sin_sq(cos_theta0);
     let k0 = std::f64::consts::TAU / wavelength_nm;
 
     let last = indices.len() - 1;
     let mut n_below = indices[last];
-    let mut q_below = normal_index(indices[last], beta_sq);
-    // Reflection coefficients looking down into the medium below the
-    // current interface, referenced to that interface.
-    let mut gamma_s = C64::new(0.0, 0.0);
-    let mut gamma_p = C64::new(0.0, 0.0);
-    let mut ts = C64::new(1.0, 0.0);
-    let mut tp = C64::new(1.0, 0.0);
+    let mut nsq_below = n_below * n_below;
+    let q_sub = sqrt_upper(nsq_below - beta_sq);
+    let mut q_below = q_sub;
+    let zero = C64::new(0.0, 0.0);
+    let one = C64::new(1.0, 0.0);
+    let (mut gamma_s, mut gamma_p, mut ts, mut tp) = (zero, zero, one, one);
+    // Some while the medium below is a near-critical layer.
+    let mut fields: Option<NearCritical> = None;
 
     for j in (0..last).rev() {
-        let n_above = if j == 0 {
-            C64::new(n0, 0.0)
+        let (n_above, nsq_above, q_above) = if j == 0 {
+            (
+                C64::new(n0, 0.0),
+                C64::new(n0 * n0, 0.0),
+                C64::new(n0 * cos_theta0, 0.0),
+            )
         } else {
-            indices[j]
+            let n = indices[j];
+            let nsq = n * n;
+            (n, nsq, sqrt_upper(nsq - beta_sq))
         };
-        let q_above = normal_index(n_above, beta_sq);
         if j + 1 < last {
-            // The medium below is a finite layer: carry Γ up through it.
-            let one_way = (C64::new(0.0, k0 * thicknesses_nm[j]) * q_below).exp();
-            let round_trip = one_way * one_way;
-            gamma_s *= round_trip;
-            gamma_p *= round_trip;
-            ts *= one_way;
-            tp *= one_way;
+            // The medium below is a finite layer: carry the state up through it.
+            let d = thicknesses_nm[j];
+            if let Some(f) = &mut fields {
+                let scale = f.cross_layer(k0 * d, nsq_below, q_below);
+                ts *= scale;
+                tp *= scale;
+            } else {
+                let phase = k0 * d * q_below;
+                let (sin, cos) = phase.re.sin_cos();
+                let one_way = C64::new(cos, sin) * (-phase.im).exp();
+                let round_trip = one_way * one_way;
+                gamma_s *= round_trip;
+                gamma_p *= round_trip;
+                ts *= one_way;
+                tp *= one_way;
+            }
         }
-        let f = fresnel(n_above, q_above, n_below, q_below);
-        let ds = (1.0 + f.rs * gamma_s).inv();
-        let dp = (1.0 + f.rp * gamma_p).inv();
-        gamma_s = (f.rs + gamma_s) * ds;
-        gamma_p = (f.rp + gamma_p) * dp;
-        ts *= f.ts * ds;
-        tp *= f.tp * dp;
+        let above_near_critical = j > 0 && near_critical(q_above, nsq_above);
+        match (fields, above_near_critical) {
+            (None, false) => {
+                let (sum, diff) = (q_above + q_below, q_above - q_below);
+                let inv_s = (sum + diff * gamma_s).inv();
+                gamma_s = (diff + sum * gamma_s) * inv_s;
+                ts *= 2.0 * q_above * inv_s;
+
+                let a = nsq_below * q_above;
+                let b = nsq_above * q_below;
+                let (sum, diff) = (a + b, a - b);
+                let inv_p = (sum + diff * gamma_p).inv();
+                gamma_p = (diff + sum * gamma_p) * inv_p;
+                tp *= 2.0 * n_above * n_below * q_above * inv_p;
+            }
+            (None, true) => {
+                fields = Some(NearCritical::from_gamma(
+                    gamma_s,
+                    gamma_p,
+                    q_below,
+                    q_below / nsq_below,
+                ));
+                tp *= n_above / n_below;
+            }
+            (Some(_), true) => tp *= n_above / n_below,
+            (Some(f), false) => {
+                let (g_s, t_s) = f.s.to_gamma(q_above);
+                let (g_p, t_p) = f.p.to_gamma(q_above / nsq_above);
+                gamma_s = g_s;
+                gamma_p = g_p;
+                ts *= t_s;
+                tp *= t_p * n_above / n_below;
+                fields = None;
+            }
+        }
         n_below = n_above;
+        nsq_below = nsq_above;
         q_below = q_above;
     }
-    Amplitudes {
-        rs: gamma_s,
-        rp: gamma_p,
-        ts,
-        tp,
+    (
+        Amplitudes {
+            rs: gamma_s,
+            rp: gamma_p,
+            ts,
+            tp,
+        },
+        q_sub,
+    )
+}
+
+/// |q|² < 10⁻⁴ |n|²: within this the Γ recursion would lose more than
+/// about two digits to the merging of the layer's two waves.
+#[inline]
+fn near_critical(q: C64, nsq: C64) -> bool {
+    let q2 = q.norm_sqr();
+    q2 * q2 < 1e-8 * nsq.norm_sqr()
+}
+
+/// The tangential fields (u, v) at the bottom of a run of near-critical
+/// layers, in units of the forward amplitude of the ordinary medium below
+/// the run. For s, u = E_t and v = H_t with admittance η = q; for p, by
+/// duality, u = H_t and v = E_t with η = q/n² (and amplitudes n·E).
+/// Both obey the same layer matrix
+/// [u, v]_top = [[cos δ, −i sin δ/η], [−i η sin δ, cos δ]] [u, v]_bottom,
+/// δ = k0 q d, which is even in q and has no trouble at q = 0.
+#[derive(Clone, Copy)]
+struct NearCritical {
+    s: Fields,
+    p: Fields,
+}
+
+#[derive(Clone, Copy)]
+struct Fields {
+    u: C64,
+    v: C64,
+}
+
+impl Fields {
+    /// Leaves the run into an ordinary medium of admittance η: returns Γ
+    /// there and the amplitude ratio (below the run / above it).
+    /// Γ = (ηu − v)/(ηu + v), and u = B⁺(1 + Γ) gives B_below/B_above = 2η/(ηu + v).
+    #[inline]
+    fn to_gamma(self, eta: C64) -> (C64, C64) {
+        let inv = (eta * self.u + self.v).inv();
+        ((eta * self.u - self.v) * inv, 2.0 * eta * inv)
+    }
+}
+
+impl NearCritical {
+    #[inline]
+    fn from_gamma(gamma_s: C64, gamma_p: C64, eta_s: C64, eta_p: C64) -> Self {
+        let one = C64::new(1.0, 0.0);
+        NearCritical {
+            s: Fields {
+                u: one + gamma_s,
+                v: eta_s * (one - gamma_s),
+            },
+            p: Fields {
+                u: one + gamma_p,
+                v: eta_p * (one - gamma_p),
+            },
+        }
+    }
+
+    /// Applies one layer's matrix (k0 d, and the layer's n², q) to both
+    /// polarizations. Thick lossy layers would overflow cos and sin, so when
+    /// Im δ is large everything is multiplied by e^{iδ} (|e^{iδ}| < 1); the
+    /// returned factor is what the transmitted amplitude must be multiplied
+    /// by to undo that (1 otherwise).
+    #[inline(never)]
+    fn cross_layer(&mut self, k0_d: f64, nsq: C64, q: C64) -> C64 {
+        let i = C64::new(0.0, 1.0);
+        let one = C64::new(1.0, 0.0);
+        let delta = k0_d * q;
+        let (cos_d, sin_d, sinc_d, scale) = if delta.im > 30.0 {
+            let e = (i * delta).exp();
+            let e2 = e * e;
+            let sin_d = i * (one - e2) * 0.5;
+            (0.5 * (one + e2), sin_d, sin_d / delta, e)
+        } else {
+            let sinc_d = if delta.norm_sqr() < 1e-6 {
+                let d2 = delta * delta;
+                one - d2 / 6.0 + d2 * d2 / 120.0
+            } else {
+                delta.sin() / delta
+            };
+            (delta.cos(), delta.sin(), sinc_d, one)
+        };
+        // sin δ / η: k0 d sinc δ for s (η = q), n² k0 d sinc δ for p (η = q/n²).
+        let sin_over_q = k0_d * sinc_d;
+        for (f, eta, sin_over_eta) in [
+            (&mut self.s, q, sin_over_q),
+            (&mut self.p, q / nsq, sin_over_q * nsq),
+        ] {
+            let (u, v) = (f.u, f.v);
+            f.u = cos_d * u - i * sin_over_eta * v;
+            f.v = -i * eta * sin_d * u + cos_d * v;
+        }
+        scale
+    }
+}
+
+/// One stack over many wavelengths and angles: R and T at every
+/// (wavelength, cos θ0) pair, written wavelength-major into `out`
+/// (`out[i * cos_theta0.len() + j]` for wavelength i, angle j).
+///
+/// `indices` holds, for each wavelength in turn, that wavelength's N + 2
+/// indices (ambient, layers, substrate), as [`StackGrid`](super::StackGrid)
+/// stores them. Nothing is allocated; the materials were evaluated once by
+/// whoever filled `indices`.
+///
+/// # Panics
+/// If the slice lengths disagree.
+pub fn solve_batch(
+    indices: &[C64],
+    thicknesses_nm: &[f64],
+    wavelengths_nm: &[f64],
+    cos_theta0: &[f64],
+    out: &mut [Response],
+) {
+    let media = thicknesses_nm.len() + 2;
+    assert_eq!(
+        indices.len(),
+        media * wavelengths_nm.len(),
+        "indices: N + 2 per wavelength"
+    );
+    assert_eq!(
+        out.len(),
+        wavelengths_nm.len() * cos_theta0.len(),
+        "out: wavelengths × angles"
+    );
+    if cos_theta0.is_empty() {
+        return;
+    }
+    for ((row_n, &wl), row_out) in indices
+        .chunks_exact(media)
+        .zip(wavelengths_nm)
+        .zip(out.chunks_exact_mut(cos_theta0.len()))
+    {
+        for (o, &c) in row_out.iter_mut().zip(cos_theta0) {
+            *o = solve(row_n, thicknesses_nm, wl, c);
+        }
     }
 }

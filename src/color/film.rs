@@ -1,0 +1,63 @@
+//! The colour of a whole stack: its reflectance and transmittance spectra at
+//! each angle, reduced by one sampling strategy.
+
+use serde::Serialize;
+
+use super::SpectralIntegrator;
+use crate::error::{Error, Result};
+use crate::optics::{Response, Stack, StackGrid};
+
+/// A stack's reflected and transmitted colour under D65 at one angle.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct FilmColour {
+    pub angle_deg: f64,
+    /// Linear sRGB.
+    pub reflectance_rgb: [f64; 3],
+    pub transmittance_rgb: [f64; 3],
+    /// CIE XYZ, Y = 1 for a perfect reflector.
+    pub reflectance_xyz: [f64; 3],
+    pub transmittance_xyz: [f64; 3],
+}
+
+/// Colours of `stack` at each incidence angle (degrees, in [0, 90)), with
+/// unpolarized light from the ambient side.
+pub fn stack_colours(
+    stack: &Stack,
+    integrator: &SpectralIntegrator,
+    angles_deg: &[f64],
+) -> Result<Vec<FilmColour>> {
+    if let Some(a) = angles_deg.iter().find(|a| !(**a >= 0.0 && **a < 90.0)) {
+        return Err(Error::invalid(
+            "angle",
+            format!("{a} is outside [0, 90) degrees"),
+        ));
+    }
+    let grid = StackGrid::new(stack, integrator.wavelengths_nm())?;
+    let cos_theta0: Vec<f64> = angles_deg.iter().map(|a| a.to_radians().cos()).collect();
+    let samples = integrator.wavelengths_nm().len();
+    // Wavelength-major: the response at wavelength i, angle j is [i × angles + j].
+    let mut responses = vec![Response::default(); samples * angles_deg.len()];
+    grid.solve(&cos_theta0, &mut responses);
+    let (mut r, mut t) = (vec![0.0; samples], vec![0.0; samples]);
+    Ok(angles_deg
+        .iter()
+        .enumerate()
+        .map(|(j, &angle_deg)| {
+            for (i, resp) in responses
+                .iter()
+                .skip(j)
+                .step_by(angles_deg.len())
+                .enumerate()
+            {
+                (r[i], t[i]) = (resp.r(), resp.t());
+            }
+            FilmColour {
+                angle_deg,
+                reflectance_rgb: integrator.rgb(&r),
+                transmittance_rgb: integrator.rgb(&t),
+                reflectance_xyz: integrator.xyz(&r),
+                transmittance_xyz: integrator.xyz(&t),
+            }
+        })
+        .collect())
+}
