@@ -9,10 +9,6 @@ use super::geometry::{reflect, refract, Ray};
 use super::material::{dielectric_reflectance, Material};
 use super::scene::{Light, Scene};
 
-/// Paths whose weight falls below this contribute nothing visible (even the
-/// sun, at ~50, ends below one 8-bit step) and are not traced further.
-const MIN_WEIGHT: f32 = 1e-4;
-
 pub struct Tracer<'a> {
     pub scene: &'a Scene,
     /// One shader per entry of `scene.films`.
@@ -111,8 +107,12 @@ impl Tracer<'_> {
         weight: Vec3,
         recurse: bool,
     ) -> Vec3 {
+        // Every branch is followed to the fixed depth whatever its weight
+        // (Whitted's rule): pruning light paths would make the ray tree, and
+        // so the cost, depend on the film's colours, which would confound
+        // the comparison of film and plain shading.
         let w = weight * r;
-        if w.max_element() < MIN_WEIGHT {
+        if w.max_element() <= 0.0 {
             return Vec3::ZERO;
         }
         let dir = reflect(ray.dir, n);
@@ -136,7 +136,7 @@ impl Tracer<'_> {
         recurse: bool,
     ) -> Vec3 {
         let w = weight * t;
-        if w.max_element() < MIN_WEIGHT {
+        if w.max_element() <= 0.0 {
             return Vec3::ZERO;
         }
         let Some(dir) = refract(ray.dir, n, eta) else {
