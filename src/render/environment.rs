@@ -5,6 +5,7 @@ use std::path::Path;
 
 use glam::Vec3;
 
+use super::thickness::fast_floor;
 use crate::error::{Error, Result};
 
 #[derive(Clone, Debug)]
@@ -65,8 +66,7 @@ impl Sky {
             // horizon, where its squares would alias.
             let dist = self.ground_depth / -dir.y;
             let p = dist * dir;
-            let cell = (p.x / self.checker_size).floor() + (p.z / self.checker_size).floor();
-            let checker = if cell.rem_euclid(2.0) < 1.0 {
+            let checker = if checker_even(p.x / self.checker_size, p.z / self.checker_size) {
                 self.ground
             } else {
                 self.ground_checker
@@ -149,6 +149,14 @@ impl EquirectMap {
         let bottom = px(xi(0), yi(1)).lerp(px(xi(1), yi(1)), fx);
         top.lerp(bottom, fy)
     }
+}
+
+/// Whether (x, z) lies on an even square of a unit checkerboard.
+#[inline]
+pub(crate) fn checker_even(x: f32, z: f32) -> bool {
+    // Far-away points overflow i32 on the ground plane near the horizon;
+    // saturating casts keep them on some square.
+    (fast_floor(x).wrapping_add(fast_floor(z))) & 1 == 0
 }
 
 #[cfg(test)]

@@ -280,41 +280,41 @@ enum ObjectSection {
         material: String,
         major_radius: f32,
         minor_radius: f32,
-        #[serde(default = "one")]
-        scale: f32,
         #[serde(default)]
-        rotate_deg: [f32; 3],
-        #[serde(default)]
-        translate: [f32; 3],
+        transform: TransformSection,
     },
     Gem {
         material: String,
         /// Girdle radius.
         radius: f32,
-        #[serde(default = "one")]
-        scale: f32,
         #[serde(default)]
-        rotate_deg: [f32; 3],
-        #[serde(default)]
-        translate: [f32; 3],
+        transform: TransformSection,
     },
     Obj {
         material: String,
         path: String,
-        #[serde(default = "one")]
-        scale: f32,
         #[serde(default)]
-        rotate_deg: [f32; 3],
-        #[serde(default)]
-        translate: [f32; 3],
+        transform: TransformSection,
     },
 }
 
 /// Uniform scale, then rotation (XYZ Euler angles), then translation.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields, default)]
 struct TransformSection {
     scale: f32,
     rotate_deg: [f32; 3],
     translate: [f32; 3],
+}
+
+impl Default for TransformSection {
+    fn default() -> Self {
+        TransformSection {
+            scale: 1.0,
+            rotate_deg: [0.0; 3],
+            translate: [0.0; 3],
+        }
+    }
 }
 
 fn finite3(origin: &str, what: &str, v: [f32; 3]) -> Result<Vec3> {
@@ -626,15 +626,8 @@ fn build(file: SceneFile, base: &Path, origin: &str) -> Result<Scene> {
                 material,
                 major_radius,
                 minor_radius,
-                scale,
-                rotate_deg,
-                translate,
+                transform,
             } => {
-                let transform = &TransformSection {
-                    scale: *scale,
-                    rotate_deg: *rotate_deg,
-                    translate: *translate,
-                };
                 let r = positive(origin, &what("major_radius"), *major_radius)?;
                 let m = positive(origin, &what("minor_radius"), *minor_radius)?;
                 (
@@ -645,15 +638,13 @@ fn build(file: SceneFile, base: &Path, origin: &str) -> Result<Scene> {
             ObjectSection::Gem {
                 material,
                 radius,
-                scale,
-                rotate_deg,
-                translate,
+                transform,
             } => {
                 let r = positive(origin, &what("radius"), *radius)?;
                 let t = TransformSection {
-                    scale: *scale * r,
-                    rotate_deg: *rotate_deg,
-                    translate: *translate,
+                    scale: transform.scale * r,
+                    rotate_deg: transform.rotate_deg,
+                    translate: transform.translate,
                 };
                 (
                     mesh_shape(mesh::brilliant_gem(), &t, origin, &what(""))?,
@@ -663,15 +654,8 @@ fn build(file: SceneFile, base: &Path, origin: &str) -> Result<Scene> {
             ObjectSection::Obj {
                 material,
                 path,
-                scale,
-                rotate_deg,
-                translate,
+                transform,
             } => {
-                let transform = &TransformSection {
-                    scale: *scale,
-                    rotate_deg: *rotate_deg,
-                    translate: *translate,
-                };
                 let data = mesh::load_obj(&base.join(path))
                     .map_err(|e| context(origin, &what("path"), e))?;
                 (mesh_shape(data, transform, origin, &what(""))?, material)
@@ -745,4 +729,110 @@ fn mesh_shape(
     Mesh::transformed(&mut positions, &mut normals, scale, rotation, translate);
     let mesh = Mesh::new(&positions, &indices, normals).map_err(|e| context(origin, what, e))?;
     Ok(Shape::Mesh(Arc::new(mesh)))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn builtin_scenes_load_with_the_films_they_need() {
+        for name in builtin_names() {
+            let scene = Scene::builtin(name).unwrap().unwrap();
+            assert!(!scene.films.is_empty(), "{name} has no film");
+            for f in &scene.films {
+                let (lo, hi) = f.thickness_range_nm;
+                assert!(lo <= hi && hi <= 1500.0, "{name}: {lo}..{hi}");
+            }
+        }
+        let gem = Scene::builtin("blue-gem").unwrap().unwrap();
+        assert!(
+            gem.films[0].back_side,
+            "light inside the gem meets the reversed stack"
+        );
+        let ring = Scene::builtin("gain-ring").unwrap().unwrap();
+        assert!(!ring.films[0].back_side, "nothing passes into gold");
+        assert!(ring.films[0].stack.layers[0].material.has_gain());
+        let two = Scene::builtin("two-layer-noise").unwrap().unwrap();
+        assert_eq!((two.settings.width, two.settings.height), (500, 500));
+        assert_eq!(
+            (two.films[0].stack.layers.len(), two.films[0].layer),
+            (2, 1)
+        );
+        assert!(Scene::builtin("no-such-scene").is_none());
+    }
+
+    const MINIMAL: &str = r#"
+        [camera]
+        position = [0.0, 0.0, 5.0]
+        look_at = [0.0, 0.0, 0.0]
+        fov_deg = 40.0
+        [materials.m]
+        kind = "dielectric"
+        ior = 1.5
+        [[objects]]
+        shape = "sphere"
+        material = "m"
+        center = [0.0, 0.0, 0.0]
+        radius = 1.0
+    "#;
+
+    fn parse(text: &str) -> Result<Scene> {
+        Scene::from_toml_str(text, Path::new("."), "test.toml")
+    }
+
+    #[test]
+    fn defaults_and_typos() {
+        let s = parse(MINIMAL).unwrap();
+        assert_eq!(
+            (s.settings.width, s.settings.height, s.settings.spp),
+            (640, 480, 1)
+        );
+        assert!(matches!(s.environment, Environment::Sky(_)));
+        // A misspelt field is an error naming the line, not silently ignored.
+        let e = parse(&MINIMAL.replace("radius = 1.0", "radius = 1.0\nradus = 2.0"))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("test.toml") && e.contains("radus") && e.contains("line"),
+            "{e}"
+        );
+        let e = parse(&MINIMAL.replace("fov_deg = 40.0", "fov_deg = 200.0"))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("camera.fov_deg"), "{e}");
+        let e = parse(&MINIMAL.replace("look_at = [0.0, 0.0, 0.0]", "look_at = [0.0, 0.0, 5.0]"))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("camera"), "{e}");
+    }
+
+    #[test]
+    fn film_fields_are_checked() {
+        let film = MINIMAL.replace(
+            "kind = \"dielectric\"\n        ior = 1.5",
+            "kind = \"film\"\n        stack = { ambient = { n = 1.0 }, substrate = { n = 1.5 }, layers = [{ n = 2.0, thickness_nm = 100.0 }] }",
+        );
+        let s = parse(&film).unwrap();
+        assert_eq!(s.films[0].thickness_range_nm, (100.0, 100.0));
+        let bad_layer = film.replace("stack =", "layer = 2\n        stack =");
+        let e = parse(&bad_layer).unwrap_err().to_string();
+        assert!(e.contains("materials.m.layer"), "{e}");
+        let both = film.replace("stack =", "thickness_nm = 50.0\n        thickness = { min_nm = 1.0, max_nm = 2.0, scale = 1.0 }\n        stack =");
+        assert!(parse(&both).unwrap_err().to_string().contains("not both"));
+        let reversed = film.replace(
+            "stack =",
+            "thickness = { min_nm = 300.0, max_nm = 200.0, scale = 1.0 }\n        stack =",
+        );
+        assert!(parse(&reversed)
+            .unwrap_err()
+            .to_string()
+            .contains("max_nm < min_nm"));
+        let unknown = film.replace("n = 2.0,", "material = \"unobtainium\",");
+        let e = parse(&unknown).unwrap_err().to_string();
+        assert!(
+            e.contains("materials.m.stack") && e.contains("unobtainium"),
+            "{e}"
+        );
+    }
 }

@@ -83,13 +83,13 @@ impl Perlin {
     /// Signed noise, 0 on the integer lattice; its range is within about ±1.
     #[inline]
     pub fn signed(&self, p: Vec3) -> f32 {
-        let f = p.floor();
-        let (x, y, z) = (p.x - f.x, p.y - f.y, p.z - f.z);
-        // Lattice coordinates wrap every 256 cells; `as i32 & 255` keeps
-        // negative coordinates on the same lattice.
-        let xi = (f.x as i32 & 255) as usize;
-        let yi = (f.y as i32 & 255) as usize;
-        let zi = (f.z as i32 & 255) as usize;
+        let (fx, fy, fz) = (fast_floor(p.x), fast_floor(p.y), fast_floor(p.z));
+        let (x, y, z) = (p.x - fx as f32, p.y - fy as f32, p.z - fz as f32);
+        // Lattice coordinates wrap every 256 cells; `& 255` keeps negative
+        // coordinates on the same lattice.
+        let xi = (fx & 255) as usize;
+        let yi = (fy & 255) as usize;
+        let zi = (fz & 255) as usize;
         let (u, v, w) = (fade(x), fade(y), fade(z));
         let pm = &self.perm;
         let a = pm[xi] as usize + yi;
@@ -134,6 +134,14 @@ impl Perlin {
     }
 }
 
+/// floor() as an integer without a libm call (x86-64's baseline has no
+/// SSE4.1 rounding instruction, so `f32::floor` is a function call).
+#[inline]
+pub(crate) fn fast_floor(x: f32) -> i32 {
+    let i = x as i32;
+    i - i32::from(x < i as f32)
+}
+
 #[inline]
 fn fade(t: f32) -> f32 {
     t * t * t * (t * (t * 6.0 - 15.0) + 10.0)
@@ -144,19 +152,33 @@ fn lerp(t: f32, a: f32, b: f32) -> f32 {
     a + t * (b - a)
 }
 
-/// Dot product with one of the 12 cube-edge gradients (Perlin 2002).
+/// Perlin's 12 cube-edge gradients, padded to 16 by repeating four of
+/// them (as in his reference code's `h & 15` switch).
+const GRADIENTS: [[f32; 3]; 16] = [
+    [1.0, 1.0, 0.0],
+    [-1.0, 1.0, 0.0],
+    [1.0, -1.0, 0.0],
+    [-1.0, -1.0, 0.0],
+    [1.0, 0.0, 1.0],
+    [-1.0, 0.0, 1.0],
+    [1.0, 0.0, -1.0],
+    [-1.0, 0.0, -1.0],
+    [0.0, 1.0, 1.0],
+    [0.0, -1.0, 1.0],
+    [0.0, 1.0, -1.0],
+    [0.0, -1.0, -1.0],
+    [1.0, 1.0, 0.0],
+    [0.0, -1.0, 1.0],
+    [-1.0, 1.0, 0.0],
+    [0.0, -1.0, -1.0],
+];
+
+/// Dot product with the gradient a hash selects: a table lookup rather than
+/// Perlin's branches, which mispredict on random hashes.
 #[inline]
 fn grad(hash: u8, x: f32, y: f32, z: f32) -> f32 {
-    let h = hash & 15;
-    let u = if h < 8 { x } else { y };
-    let v = if h < 4 {
-        y
-    } else if h == 12 || h == 14 {
-        x
-    } else {
-        z
-    };
-    (if h & 1 == 0 { u } else { -u }) + (if h & 2 == 0 { v } else { -v })
+    let g = GRADIENTS[usize::from(hash & 15)];
+    g[0] * x + g[1] * y + g[2] * z
 }
 
 #[cfg(test)]
@@ -199,6 +221,15 @@ mod tests {
             "noise should use its range: {lo}..{hi}"
         );
         assert!((sum / n as f64).abs() < 0.03, "mean {}", sum / n as f64);
+    }
+
+    #[test]
+    fn fast_floor_matches_floor() {
+        for x in [
+            -2.5f32, -2.0, -1e-7, 0.0, 0.3, 1.0, 7.9999, -1000.25, 123456.7,
+        ] {
+            assert_eq!(fast_floor(x), x.floor() as i32, "{x}");
+        }
     }
 
     #[test]

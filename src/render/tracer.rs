@@ -4,6 +4,7 @@
 
 use glam::Vec3;
 
+use super::environment::checker_even;
 use super::film::{FilmShading, Side};
 use super::geometry::{reflect, refract, Ray};
 use super::material::{dielectric_reflectance, Material};
@@ -52,8 +53,7 @@ impl Tracer<'_> {
             Material::Diffuse { albedo, checker } => {
                 let albedo = match checker {
                     Some(c) => {
-                        let cell = (p.x / c.size).floor() + (p.z / c.size).floor();
-                        if cell.rem_euclid(2.0) < 1.0 {
+                        if checker_even(p.x / c.size, p.z / c.size) {
                             *albedo
                         } else {
                             c.albedo
