@@ -7,6 +7,7 @@
 
 pub mod color;
 pub mod error;
+pub mod lut;
 pub mod optics;
 pub mod render;
 

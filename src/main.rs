@@ -25,6 +25,12 @@ enum Command {
     Eval(cli::eval::Args),
     /// Reflected and transmitted colour of a stack under D65, per angle.
     Color(cli::color::Args),
+    /// Bake a stack's response into an OpenEXR lookup table.
+    Bake(cli::bake::Args),
+    /// Print a lookup table's header.
+    Info(cli::info::Args),
+    /// Measure a lookup table's error against the solver.
+    Validate(cli::validate::Args),
 }
 
 fn main() -> ExitCode {
@@ -40,6 +46,9 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Eval(args) => cli::eval::run(args),
         Command::Color(args) => cli::color::run(args),
+        Command::Bake(args) => cli::bake::run(args),
+        Command::Info(args) => cli::info::run(args),
+        Command::Validate(args) => cli::validate::run(args),
     };
     match result {
         Ok(code) => code,

@@ -151,6 +151,7 @@ impl Material {
                 }
             }
             Dispersion::Table(t) => {
+                t.check()?;
                 if let Some(i) = (0..t.n.len()).find(|&i| !index_ok(t.n[i], t.k[i])) {
                     return bad(format!(
                         "table row {} ({} nm): index {}{:+}i must have 0 ≤ n ≤ {MAX_INDEX:e}, |k| ≤ {MAX_INDEX:e}, and not be 0",
@@ -204,7 +205,20 @@ impl IndexTable {
         n: Vec<f64>,
         k: Vec<f64>,
     ) -> Result<Self> {
-        let source = source.into();
+        let table = IndexTable {
+            source: source.into(),
+            wavelength_nm,
+            n,
+            k,
+        };
+        table.check()?;
+        Ok(table)
+    }
+
+    /// The checks of [`IndexTable::new`], for a table built or read otherwise
+    /// (a stack embedded in a file header, say).
+    pub fn check(&self) -> Result<()> {
+        let (source, wavelength_nm, n, k) = (&self.source, &self.wavelength_nm, &self.n, &self.k);
         let bad = |why: String| Err(Error::invalid(format!("table {source}"), why));
         if wavelength_nm.len() != n.len() || n.len() != k.len() {
             return bad("columns of unequal length".into());
@@ -233,12 +247,7 @@ impl IndexTable {
                 wavelength_nm[i]
             ));
         }
-        Ok(IndexTable {
-            source,
-            wavelength_nm,
-            n,
-            k,
-        })
+        Ok(())
     }
 
     /// Reads a CSV in the layout refractiveindex.info exports: wavelength in
