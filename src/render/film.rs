@@ -1,13 +1,10 @@
 //! The one interface through which the tracer shades thin films. Two
-//! implementations: one samples baked tables and [`DirectFilm`] evaluates the transfer matrix at every hit (the reference),
+//! implementations: [`super::lut_film::LutFilm`] samples baked tables and
+//! [`DirectFilm`] evaluates the transfer matrix at every hit (the reference),
 //! so the two modes share every other line of the renderer.
 
 /// Linear-sRGB reflectance and transmittance of a film at one point.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct FilmRgb {
-    pub reflectance: [f32; 3],
-    pub transmittance: [f32; 3],
-}
+pub use crate::lut::FilmRgb;
 
 use std::cell::RefCell;
 
