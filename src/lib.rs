@@ -9,5 +9,6 @@ pub mod color;
 pub mod error;
 pub mod lut;
 pub mod optics;
+pub mod render;
 
 pub use error::{Error, Result};

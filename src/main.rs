@@ -31,6 +31,10 @@ enum Command {
     Info(cli::info::Args),
     /// Measure a lookup table's error against the solver.
     Validate(cli::validate::Args),
+    /// Render a scene (a file or a built-in name) with baked or direct film shading.
+    Render(cli::render::Args),
+    /// Bake, render every built-in scene into out/, and report times and colour error.
+    Demo(cli::demo::Args),
 }
 
 fn main() -> ExitCode {
@@ -49,6 +53,8 @@ fn main() -> ExitCode {
         Command::Bake(args) => cli::bake::run(args),
         Command::Info(args) => cli::info::run(args),
         Command::Validate(args) => cli::validate::run(args),
+        Command::Render(args) => cli::render::run(args),
+        Command::Demo(args) => cli::demo::run(args),
     };
     match result {
         Ok(code) => code,

@@ -4,6 +4,8 @@
 pub mod args;
 pub mod bake;
 pub mod color;
+pub mod demo;
 pub mod eval;
 pub mod info;
+pub mod render;
 pub mod validate;
