@@ -5,6 +5,7 @@
 //! [`color`] (spectra to colour) → [`lut`] (bake, file, sample, validate) →
 //! [`render`] (the tracer).
 
+pub mod analytic;
 pub mod error;
 pub mod optics;
 
