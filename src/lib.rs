@@ -6,6 +6,7 @@
 //! [`render`] (the tracer).
 
 pub mod analytic;
+pub mod bench;
 pub mod error;
 pub mod optics;
 

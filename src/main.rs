@@ -23,6 +23,8 @@ struct Cli {
 enum Command {
     /// Reflectance and transmittance of a stack over wavelengths and angles.
     Eval(cli::eval::Args),
+    /// Speed against error of every method; `--grid` times one stack for the peers.
+    Bench(cli::bench::Args),
 }
 
 fn main() -> ExitCode {
@@ -37,6 +39,7 @@ fn main() -> ExitCode {
     };
     let result = match cli.command {
         Command::Eval(args) => cli::eval::run(args),
+        Command::Bench(args) => cli::bench::run(args),
     };
     match result {
         Ok(code) => code,

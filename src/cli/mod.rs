@@ -2,4 +2,5 @@
 
 #[allow(dead_code)] // until every subcommand that uses them has landed
 pub mod args;
+pub mod bench;
 pub mod eval;
