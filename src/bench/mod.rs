@@ -5,4 +5,6 @@
 
 pub mod grid;
 pub mod machine;
+pub mod plot;
+pub mod report;
 pub mod stacks;

@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use anyhow::{Context, Result};
-use irid::bench::{grid, stacks};
+use irid::bench::{grid, report, stacks};
 
 use super::args::{check_angles, parse_list};
 
@@ -118,26 +118,11 @@ fn run_grid(args: &Args) -> Result<()> {
     Ok(())
 }
 
-/// Writes through a temporary file in the same directory, then renames, so
-/// an interrupted run never leaves a half-written file behind.
+/// R then T as little-endian f64, written atomically.
 fn write_raw(path: &Path, r: &[f64], t: &[f64]) -> Result<()> {
     let mut bytes = Vec::with_capacity(16 * r.len());
     for v in r.iter().chain(t) {
         bytes.extend_from_slice(&v.to_le_bytes());
     }
-    write_atomic(path, &bytes)
-}
-
-pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
-    let dir = path
-        .parent()
-        .filter(|p| !p.as_os_str().is_empty())
-        .unwrap_or(Path::new("."));
-    let name = path
-        .file_name()
-        .with_context(|| format!("{}: not a file path", path.display()))?;
-    let tmp = dir.join(format!(".{}.tmp", name.to_string_lossy()));
-    std::fs::write(&tmp, bytes).with_context(|| format!("{}", tmp.display()))?;
-    std::fs::rename(&tmp, path).with_context(|| format!("{}", path.display()))?;
-    Ok(())
+    Ok(report::write_atomic(path, &bytes)?)
 }
