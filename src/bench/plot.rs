@@ -24,7 +24,7 @@ pub struct PlotPoint {
     /// Selects the colour: methods of one family share it.
     pub family: usize,
     pub ns_per_eval: f64,
-    pub mean_delta_e: f64,
+    pub mean_de2000: f64,
 }
 
 const FAMILY_COLOURS: [RGBColor; 4] = [
@@ -60,7 +60,7 @@ pub fn speed_vs_error_png(
     if points.is_empty() {
         return Err(Error::invalid("plot", "no points to draw"));
     }
-    let (w, h) = (1100u32, 720u32);
+    let (w, h) = (1200u32, 760u32);
     let mut buf = vec![0u8; (w * h * 3) as usize];
     draw(&mut buf, (w, h), points, families, floor, caption)
         .map_err(|e| Error::invalid("plot", e.to_string()))?;
@@ -82,7 +82,7 @@ fn draw(
 ) -> std::result::Result<(), Box<dyn std::error::Error>> {
     let root = BitMapBackend::with_buffer(buf, size).into_drawing_area();
     root.fill(&WHITE)?;
-    let y_of = |p: &PlotPoint| p.mean_delta_e.max(floor);
+    let y_of = |p: &PlotPoint| p.mean_de2000.max(floor);
     let (mut x_lo, mut x_hi, mut y_hi) = (f64::INFINITY, 0.0f64, floor);
     for p in points {
         x_lo = x_lo.min(p.ns_per_eval);
@@ -90,12 +90,14 @@ fn draw(
         y_hi = y_hi.max(y_of(p));
     }
     // Half a decade of margin on each side so labels stay inside.
-    let x_range = (x_lo / 3.0)..(x_hi * 6.0);
+    let x_range = (x_lo / 2.0)..(x_hi * 3.0);
     let y_range = (floor / 3.0)..(y_hi * 3.0);
     let font = |px: u32| (FONT_NAME, px).into_font();
+    let legend_width = 250;
     let mut chart = ChartBuilder::on(&root)
-        .caption(caption, font(22))
+        .caption(caption, font(20))
         .margin(18)
+        .margin_right(legend_width)
         .x_label_area_size(50)
         .y_label_area_size(80)
         .build_cartesian_2d(x_range.log_scale(), y_range.log_scale())?;
@@ -108,20 +110,60 @@ fn draw(
         .x_label_formatter(&|v| format_tick(*v))
         .y_label_formatter(&|v| format_tick(*v))
         .draw()?;
-    chart.draw_series(points.iter().map(|p| {
-        let colour = FAMILY_COLOURS[p.family % FAMILY_COLOURS.len()];
-        EmptyElement::at((p.ns_per_eval, y_of(p)))
-            + Circle::new((0, 0), 5, colour.filled())
-            + Text::new(p.label.clone(), (8, -7), font(13).color(&colour))
-    }))?;
-    // The legend: one entry per family, in its colour.
+    let colour_of = |family: usize| FAMILY_COLOURS[family % FAMILY_COLOURS.len()];
+    chart.draw_series(
+        points
+            .iter()
+            .map(|p| Circle::new((p.ns_per_eval, y_of(p)), 5, colour_of(p.family).filled())),
+    )?;
+    // Labels: the first of a few positions around the point whose box
+    // overlaps no label already placed and stays inside the picture.
+    let (label_px, char_px) = (13u32, 7);
+    let mut placed: Vec<(i32, i32, i32, i32)> = Vec::new();
+    for p in points {
+        let (px, py) = chart.backend_coord(&(p.ns_per_eval, y_of(p)));
+        let w = char_px * p.label.chars().count() as i32;
+        let h = label_px as i32 + 2;
+        let candidates = [
+            (8, -h / 2),
+            (8, -h - 2),
+            (8, 4),
+            (-w - 8, -h / 2),
+            (-w - 8, -h - 2),
+            (-w - 8, 4),
+            (8, -2 * h - 4),
+            (8, h + 6),
+            (-w - 8, -2 * h - 4),
+            (-w - 8, h + 6),
+        ];
+        let inside =
+            |x: i32, y: i32| x >= 0 && y >= 0 && x + w <= size.0 as i32 && y + h <= size.1 as i32;
+        let free = |x: i32, y: i32| {
+            placed
+                .iter()
+                .all(|&(ax, ay, aw, ah)| x + w <= ax || ax + aw <= x || y + h <= ay || ay + ah <= y)
+        };
+        let (dx, dy) = candidates
+            .iter()
+            .copied()
+            .find(|&(dx, dy)| inside(px + dx, py + dy) && free(px + dx, py + dy))
+            .unwrap_or(candidates[0]);
+        placed.push((px + dx, py + dy, w, h));
+        root.draw(&Text::new(
+            p.label.clone(),
+            (px + dx, py + dy),
+            font(label_px).color(&colour_of(p.family)),
+        ))?;
+    }
+    // The legend, right of the plot: one entry per family, in its colour.
     for (i, name) in families.iter().enumerate() {
-        let colour = FAMILY_COLOURS[i % FAMILY_COLOURS.len()];
-        let y = 70 + 22 * i as i32;
-        root.draw(&Circle::new((size.0 as i32 - 230, y), 5, colour.filled()))?;
+        let colour = colour_of(i);
+        let x = size.0 as i32 - legend_width + 30;
+        let y = 80 + 24 * i as i32;
+        root.draw(&Circle::new((x, y), 5, colour.filled()))?;
         root.draw(&Text::new(
             name.to_string(),
-            (size.0 as i32 - 218, y - 8),
+            (x + 12, y - 8),
             font(15).color(&colour),
         ))?;
     }
@@ -154,18 +196,18 @@ mod tests {
                 label: "exact (at floor)".into(),
                 family: 0,
                 ns_per_eval: 20_000.0,
-                mean_delta_e: 0.0,
+                mean_de2000: 0.0,
             },
             PlotPoint {
                 label: "LUT 64x32".into(),
                 family: 1,
                 ns_per_eval: 12.0,
-                mean_delta_e: 0.8,
+                mean_de2000: 0.8,
             },
         ];
         speed_vs_error_png(&path, &points, &["direct", "LUT"], 1e-3, "test").unwrap();
         let img = image::open(&path).unwrap().to_rgb8();
-        assert_eq!(img.dimensions(), (1100, 720));
+        assert_eq!(img.dimensions(), (1200, 760));
         // Something other than white was drawn: axes, points, text.
         let ink = img.pixels().filter(|p| p.0 != [255, 255, 255]).count();
         assert!(ink > 5_000, "{ink}");
