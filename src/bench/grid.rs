@@ -146,7 +146,7 @@ mod tests {
 
     #[test]
     fn grid_matches_pointwise_solve_in_any_thread_count() {
-        let b = find("two-layer").unwrap();
+        let b = find("two-layer").unwrap().unwrap();
         let grid = Grid {
             wavelengths_nm: vec![400.0, 550.0, 700.0],
             angles_deg: vec![0.0, 45.0],

@@ -1,9 +1,14 @@
-//! The fixed stacks every benchmark run measures, chosen to cover what the
-//! methods differ on: one lossless film (where the analytic model is at its
-//! best), an absorbing film and a gain film (which it cannot represent), a
+//! The fixed stacks every benchmark run measures: the example stack files
+//! shipped in `luts/` (embedded, so the binary runs from anywhere), each with
+//! the layer whose thickness varies. Together they cover what the methods
+//! differ on: one lossless film (where the analytic model is at its best), an
+//! absorbing film and a gain film on gold (which it cannot represent), a
 //! two-layer stack, and a 10-layer mirror seen from both sides.
 
-use crate::optics::{Layer, Material, Stack};
+use std::path::Path;
+
+use crate::error::Result;
+use crate::optics::Stack;
 
 #[derive(Clone, Debug)]
 pub struct BenchStack {
@@ -16,101 +21,133 @@ pub struct BenchStack {
     pub thickness_range_nm: (f64, f64),
 }
 
-fn layer(material: Material, thickness_nm: f64) -> Layer {
-    Layer {
-        material,
-        thickness_nm,
-    }
+struct Def {
+    name: &'static str,
+    description: &'static str,
+    file: &'static str,
+    toml: &'static str,
+    reversed: bool,
+    varying_layer: usize,
+    thickness_range_nm: (f64, f64),
 }
 
-fn named(name: &str, n: f64, k: f64) -> Material {
-    Material {
-        name: name.to_string(),
-        ..Material::constant(n, k)
-    }
-}
+const DEFS: [Def; 6] = [
+    Def {
+        name: "soap",
+        description: "luts/soap-film.toml: soap film n=1.33 in air, 0-1000 nm",
+        file: "luts/soap-film.toml",
+        toml: include_str!("../../luts/soap-film.toml"),
+        reversed: false,
+        varying_layer: 0,
+        thickness_range_nm: (0.0, 1000.0),
+    },
+    Def {
+        name: "absorbing",
+        description: "luts/absorbing-film.toml: film n=1.5+0.15i on fused silica, 0-1000 nm",
+        file: "luts/absorbing-film.toml",
+        toml: include_str!("../../luts/absorbing-film.toml"),
+        reversed: false,
+        varying_layer: 0,
+        thickness_range_nm: (0.0, 1000.0),
+    },
+    Def {
+        name: "gain-on-gold",
+        description: "luts/gain-on-gold.toml: gain film n=1.5-0.05i on gold, 0-1000 nm",
+        file: "luts/gain-on-gold.toml",
+        toml: include_str!("../../luts/gain-on-gold.toml"),
+        reversed: false,
+        varying_layer: 0,
+        thickness_range_nm: (0.0, 1000.0),
+    },
+    Def {
+        name: "two-layer",
+        description: "luts/two-layer.toml: absorbing film (0-500 nm) over 80 nm TiO2 on gold",
+        file: "luts/two-layer.toml",
+        toml: include_str!("../../luts/two-layer.toml"),
+        reversed: false,
+        varying_layer: 0,
+        thickness_range_nm: (0.0, 500.0),
+    },
+    Def {
+        name: "mirror-front",
+        description:
+            "luts/mirror-10.toml: 10-layer TiO2/silica mirror from air; top TiO2 layer 0-200 nm",
+        file: "luts/mirror-10.toml",
+        toml: include_str!("../../luts/mirror-10.toml"),
+        reversed: false,
+        varying_layer: 0,
+        thickness_range_nm: (0.0, 200.0),
+    },
+    Def {
+        name: "mirror-back",
+        description:
+            "the same mirror seen from inside the silica substrate; the same TiO2 layer 0-200 nm",
+        file: "luts/mirror-10.toml",
+        toml: include_str!("../../luts/mirror-10.toml"),
+        reversed: true,
+        varying_layer: 9,
+        thickness_range_nm: (0.0, 200.0),
+    },
+];
 
-/// A quarter-wave TiO2/SiO2 Bragg mirror centred on 550 nm, 10 layers.
-fn mirror() -> Stack {
-    let (n_hi, n_lo) = (2.40, 1.46);
-    let layers = (0..10)
-        .map(|i| {
-            if i % 2 == 0 {
-                layer(named("TiO2", n_hi, 0.0), 550.0 / (4.0 * n_hi))
-            } else {
-                layer(named("SiO2", n_lo, 0.0), 550.0 / (4.0 * n_lo))
-            }
+impl Def {
+    fn build(&self) -> Result<BenchStack> {
+        let stack = Stack::from_toml_str(self.toml, Path::new("luts"), self.file)?;
+        let stack = if self.reversed {
+            stack.reversed()
+        } else {
+            stack
+        };
+        stack.validate()?;
+        Ok(BenchStack {
+            name: self.name,
+            description: self.description,
+            stack,
+            varying_layer: self.varying_layer,
+            thickness_range_nm: self.thickness_range_nm,
         })
-        .collect();
-    Stack {
-        ambient: named("air", 1.0, 0.0),
-        layers,
-        substrate: named("glass", 1.52, 0.0),
     }
 }
 
-pub fn fixed_stacks() -> Vec<BenchStack> {
-    let air = || named("air", 1.0, 0.0);
-    let single = |film: Material, substrate: Material| Stack {
-        ambient: air(),
-        layers: vec![layer(film, 500.0)],
-        substrate,
-    };
-    let mirror_front = mirror();
-    let mirror_back = mirror_front.reversed();
-    vec![
-        BenchStack {
-            name: "soap",
-            description: "soap film n=1.33 in air, 0-1000 nm",
-            stack: single(named("soap", 1.33, 0.0), air()),
-            varying_layer: 0,
-            thickness_range_nm: (0.0, 1000.0),
-        },
-        BenchStack {
-            name: "absorbing",
-            description: "absorbing film n=1.5+0.15i in air, 0-1000 nm",
-            stack: single(named("absorber", 1.5, 0.15), air()),
-            varying_layer: 0,
-            thickness_range_nm: (0.0, 1000.0),
-        },
-        BenchStack {
-            name: "two-layer",
-            description: "TiO2 (n=2.4, 0-500 nm) over MgF2 (n=1.38, 100 nm) on glass",
-            stack: Stack {
-                ambient: air(),
-                layers: vec![
-                    layer(named("TiO2", 2.4, 0.0), 250.0),
-                    layer(named("MgF2", 1.38, 0.0), 100.0),
-                ],
-                substrate: named("glass", 1.52, 0.0),
-            },
-            varying_layer: 0,
-            thickness_range_nm: (0.0, 500.0),
-        },
-        BenchStack {
-            name: "mirror-front",
-            description:
-                "10-layer TiO2/SiO2 quarter-wave mirror on glass, from air; top layer 0-200 nm",
-            stack: mirror_front,
-            varying_layer: 0,
-            thickness_range_nm: (0.0, 200.0),
-        },
-        BenchStack {
-            name: "mirror-back",
-            description: "the same mirror seen from inside the glass; first layer 0-200 nm",
-            stack: mirror_back,
-            varying_layer: 0,
-            thickness_range_nm: (0.0, 200.0),
-        },
-    ]
+pub fn fixed_stacks() -> Result<Vec<BenchStack>> {
+    DEFS.iter().map(Def::build).collect()
+}
+
+/// (name, description) of every fixed stack, in run order.
+pub fn descriptions() -> Vec<(&'static str, &'static str)> {
+    DEFS.iter().map(|d| (d.name, d.description)).collect()
 }
 
 pub fn names() -> Vec<&'static str> {
-    fixed_stacks().iter().map(|s| s.name).collect()
+    DEFS.iter().map(|d| d.name).collect()
 }
 
-pub fn find(name: &str) -> Option<BenchStack> {
-    fixed_stacks()
-        .into_iter()
-        .find(|s| s.name.eq_ignore_ascii_case(name))
+pub fn find(name: &str) -> Result<Option<BenchStack>> {
+    DEFS.iter()
+        .find(|d| d.name.eq_ignore_ascii_case(name))
+        .map(Def::build)
+        .transpose()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_stack_resolves_over_the_exact_range() {
+        let stacks = fixed_stacks().unwrap();
+        assert_eq!(stacks.len(), names().len());
+        let mut n = Vec::new();
+        for b in &stacks {
+            assert!(b.varying_layer < b.stack.layers.len(), "{}", b.name);
+            for w in [360.0, 550.0, 830.0] {
+                b.stack.indices_at(w, &mut n).unwrap();
+            }
+        }
+        let back = find("mirror-back").unwrap().unwrap();
+        let front = find("mirror-front").unwrap().unwrap();
+        // The same physical layer varies on both sides.
+        assert_eq!(back.stack.layers[9], front.stack.layers[0]);
+        assert!(find("nope").unwrap().is_none());
+    }
 }

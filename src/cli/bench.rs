@@ -43,7 +43,7 @@ pub fn run(args: Args) -> Result<ExitCode> {
 }
 
 fn run_grid(args: &Args) -> Result<()> {
-    let bench = stacks::find(&args.grid).with_context(|| {
+    let bench = stacks::find(&args.grid)?.with_context(|| {
         format!(
             "--grid '{}': unknown stack (known: {})",
             args.grid,

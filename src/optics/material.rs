@@ -1,6 +1,8 @@
 //! Refractive-index models: a material's complex index as a function of
 //! vacuum wavelength. k > 0 absorbs, k < 0 is gain.
 
+use std::path::Path;
+
 use num_complex::Complex64 as C64;
 use serde::{Deserialize, Serialize};
 
@@ -32,8 +34,12 @@ pub enum Dispersion {
         b: f64,
         c: f64,
     },
-    /// n²(λ) = 1 + Σ Bᵢ λ² / (λ² − Cᵢ) with λ and √Cᵢ in micrometres; k = 0.
+    /// n²(λ) = A + Σ Bᵢ λ² / (λ² − Cᵢ) with λ in micrometres and Cᵢ in µm²;
+    /// k = 0. A is 1 in the classic form; some fits (DeVore's TiO2) carry a
+    /// constant of their own.
     Sellmeier {
+        #[serde(default = "one")]
+        a: f64,
         b: Vec<f64>,
         c: Vec<f64>,
     },
@@ -47,7 +53,13 @@ pub struct Material {
     pub dispersion: Dispersion,
 }
 
+fn one() -> f64 {
+    1.0
+}
+
 impl Material {
+    /// A wavelength-independent index; see [`Material::check`] for the
+    /// values it accepts.
     pub fn constant(n: f64, k: f64) -> Self {
         Material {
             name: if k == 0.0 {
@@ -67,12 +79,19 @@ impl Material {
             Dispersion::Constant { n, k } => Ok(C64::new(*n, *k)),
             Dispersion::Cauchy { a, b, c } => {
                 let l2 = um * um;
-                Ok(C64::new(a + b / l2 + c / (l2 * l2), 0.0))
+                let n = a + b / l2 + c / (l2 * l2);
+                if !(n > 0.0 && n.is_finite()) {
+                    return Err(Error::invalid(
+                        format!("material {}", self.name),
+                        format!("Cauchy n = {n} at {wavelength_nm} nm is not a positive index"),
+                    ));
+                }
+                Ok(C64::new(n, 0.0))
             }
-            Dispersion::Sellmeier { b, c } => {
+            Dispersion::Sellmeier { a, b, c } => {
                 let l2 = um * um;
-                let n2 = 1.0 + b.iter().zip(c).map(|(b, c)| b * l2 / (l2 - c)).sum::<f64>();
-                if n2 <= 0.0 {
+                let n2 = a + b.iter().zip(c).map(|(b, c)| b * l2 / (l2 - c)).sum::<f64>();
+                if !(n2 > 0.0 && n2.is_finite()) {
                     return Err(Error::invalid(
                         format!("material {}", self.name),
                         format!("Sellmeier n² = {n2} ≤ 0 at {wavelength_nm} nm (near a pole)"),
@@ -85,20 +104,66 @@ impl Material {
                     format!("material {}", self.name),
                     format!(
                         "wavelength {wavelength_nm} nm is outside its table ({}–{} nm)",
-                        t.wavelength_nm[0],
-                        t.wavelength_nm[t.wavelength_nm.len() - 1]
+                        self.range_nm().0,
+                        self.range_nm().1
                     ),
                 )
             }),
         }
     }
 
+    /// Checks the model's parameters: finite numbers, n ≥ 0 and n + ik ≠ 0
+    /// (the solver divides by n²), Sellmeier lists of equal length.
+    pub fn check(&self) -> Result<()> {
+        let bad = |why: String| Err(Error::invalid(format!("material {}", self.name), why));
+        let index_ok =
+            |n: f64, k: f64| n.is_finite() && k.is_finite() && n >= 0.0 && (n, k) != (0.0, 0.0);
+        match &self.dispersion {
+            Dispersion::Constant { n, k } => {
+                if !index_ok(*n, *k) {
+                    return bad(format!(
+                        "index {n}{k:+}i must be finite with n ≥ 0 and not 0"
+                    ));
+                }
+            }
+            Dispersion::Cauchy { a, b, c } => {
+                if ![a, b, c].iter().all(|v| v.is_finite()) {
+                    return bad("Cauchy coefficients must be finite".into());
+                }
+            }
+            Dispersion::Sellmeier { a, b, c } => {
+                if b.is_empty() || b.len() != c.len() {
+                    return bad(format!(
+                        "Sellmeier needs as many b as c terms, at least one (got {} and {})",
+                        b.len(),
+                        c.len()
+                    ));
+                }
+                if !(a.is_finite() && b.iter().chain(c).all(|v| v.is_finite())) {
+                    return bad("Sellmeier coefficients must be finite".into());
+                }
+            }
+            Dispersion::Table(t) => {
+                if let Some(i) = (0..t.n.len()).find(|&i| !index_ok(t.n[i], t.k[i])) {
+                    return bad(format!(
+                        "table row {} ({} nm): index {}{:+}i must be finite with n ≥ 0 and not 0",
+                        i + 1,
+                        t.wavelength_nm[i],
+                        t.n[i],
+                        t.k[i]
+                    ));
+                }
+            }
+        }
+        Ok(())
+    }
+
     /// The wavelength range over which the material is defined.
     pub fn range_nm(&self) -> (f64, f64) {
         match &self.dispersion {
             Dispersion::Table(t) => (
-                t.wavelength_nm[0],
-                t.wavelength_nm[t.wavelength_nm.len() - 1],
+                t.wavelength_nm.first().copied().unwrap_or(f64::NAN),
+                t.wavelength_nm.last().copied().unwrap_or(f64::NAN),
             ),
             _ => (0.0, f64::INFINITY),
         }
@@ -124,10 +189,149 @@ impl Material {
 }
 
 impl IndexTable {
+    /// A table from columns, checked: at least two rows, equal lengths,
+    /// finite values, strictly increasing positive wavelengths.
+    pub fn new(
+        source: impl Into<String>,
+        wavelength_nm: Vec<f64>,
+        n: Vec<f64>,
+        k: Vec<f64>,
+    ) -> Result<Self> {
+        let source = source.into();
+        let bad = |why: String| Err(Error::invalid(format!("table {source}"), why));
+        if wavelength_nm.len() != n.len() || n.len() != k.len() {
+            return bad("columns of unequal length".into());
+        }
+        if wavelength_nm.len() < 2 {
+            return bad(format!(
+                "needs at least 2 rows, got {}",
+                wavelength_nm.len()
+            ));
+        }
+        if let Some(i) = wavelength_nm
+            .iter()
+            .position(|w| !(w.is_finite() && *w > 0.0))
+        {
+            return bad(format!(
+                "row {}: wavelength {} is not positive",
+                i + 1,
+                wavelength_nm[i]
+            ));
+        }
+        if let Some(i) = wavelength_nm.windows(2).position(|w| w[1] <= w[0]) {
+            return bad(format!(
+                "row {}: wavelengths must increase strictly ({} after {})",
+                i + 2,
+                wavelength_nm[i + 1],
+                wavelength_nm[i]
+            ));
+        }
+        Ok(IndexTable {
+            source,
+            wavelength_nm,
+            n,
+            k,
+        })
+    }
+
+    /// Reads a CSV in the layout refractiveindex.info exports: wavelength in
+    /// micrometres, then n, then k (optional, 0 when absent), separated by
+    /// commas or white space. Lines that do not start with a number (headers,
+    /// `#` comments) are skipped, except that a header whose second column is
+    /// `k` starts a block of (wavelength, k) rows: the site's export of a
+    /// material with both n and k puts them in two such blocks. Two blocks
+    /// on different wavelength grids are merged on the union of both grids,
+    /// each interpolated linearly, over the range they share.
+    pub fn load_csv(path: &Path) -> Result<Self> {
+        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+        Self::parse_csv(&text, &path.display().to_string())
+    }
+
+    /// [`IndexTable::load_csv`] on text already read; `origin` names it in errors.
+    pub fn parse_csv(text: &str, origin: &str) -> Result<Self> {
+        let bad =
+            |line: usize, why: String| Err(Error::malformed(origin, format!("line {line}: {why}")));
+        // (wavelength µm, n, k) rows, and (wavelength µm, k) rows of a k block.
+        let mut nk: Vec<(f64, f64, f64)> = Vec::new();
+        let mut k_block: Vec<(f64, f64)> = Vec::new();
+        let mut in_k_block = false;
+        for (i, raw) in text.lines().enumerate() {
+            let line = raw.trim();
+            let fields: Vec<&str> = line
+                .split(|c: char| c == ',' || c == ';' || c.is_whitespace())
+                .filter(|f| !f.is_empty())
+                .collect();
+            let starts_numeric = fields.first().is_some_and(|f| {
+                f.starts_with(|c: char| c.is_ascii_digit() || c == '.' || c == '-' || c == '+')
+            });
+            if !starts_numeric {
+                if fields.len() >= 2 && !line.starts_with('#') {
+                    in_k_block = fields[1].eq_ignore_ascii_case("k");
+                }
+                continue;
+            }
+            let mut values = Vec::with_capacity(3);
+            for f in &fields {
+                match f.parse::<f64>() {
+                    Ok(v) if v.is_finite() => values.push(v),
+                    _ => return bad(i + 1, format!("'{f}' is not a finite number")),
+                }
+            }
+            match (in_k_block, values.len()) {
+                (true, 2) => k_block.push((values[0], values[1])),
+                (false, 2) => nk.push((values[0], values[1], 0.0)),
+                (false, 3) => nk.push((values[0], values[1], values[2])),
+                (_, count) => {
+                    return bad(
+                        i + 1,
+                        format!(
+                            "expected {} columns, got {count}",
+                            if in_k_block {
+                                "2 (wavelength, k)"
+                            } else {
+                                "2 or 3 (wavelength µm, n[, k])"
+                            }
+                        ),
+                    )
+                }
+            }
+        }
+        let to_nm = |um: f64| um * 1e3;
+        let table = if k_block.is_empty() {
+            Self::new(
+                origin,
+                nk.iter().map(|r| to_nm(r.0)).collect(),
+                nk.iter().map(|r| r.1).collect(),
+                nk.iter().map(|r| r.2).collect(),
+            )
+        } else {
+            let n_only = Self::new(
+                origin,
+                nk.iter().map(|r| to_nm(r.0)).collect(),
+                nk.iter().map(|r| r.1).collect(),
+                vec![0.0; nk.len()],
+            )?;
+            let k_only = Self::new(
+                origin,
+                k_block.iter().map(|r| to_nm(r.0)).collect(),
+                k_block.iter().map(|r| r.1).collect(),
+                vec![0.0; k_block.len()],
+            )?;
+            merge_n_k(origin, &n_only, &k_only)
+        }
+        .map_err(|e| Error::malformed(origin, e.to_string()))?;
+        Ok(table)
+    }
+
     /// Linear interpolation; `None` outside the tabulated range.
     pub fn index_at(&self, wavelength_nm: f64) -> Option<C64> {
         let w = &self.wavelength_nm;
-        if !(wavelength_nm >= w[0] && wavelength_nm <= w[w.len() - 1]) {
+        // A table deserialized from a file may be empty: no panic, just None.
+        if w.len() < 2
+            || self.n.len() != w.len()
+            || self.k.len() != w.len()
+            || !(wavelength_nm >= w[0] && wavelength_nm <= w[w.len() - 1])
+        {
             return None;
         }
         let hi = w
@@ -140,4 +344,29 @@ impl IndexTable {
             self.k[lo] + t * (self.k[hi] - self.k[lo]),
         ))
     }
+}
+
+/// Joins an n table and a k table (both in their `n` column) on the union of
+/// their wavelength grids, over the range both cover.
+fn merge_n_k(origin: &str, n: &IndexTable, k: &IndexTable) -> Result<IndexTable> {
+    let lo = n.wavelength_nm[0].max(k.wavelength_nm[0]);
+    let hi =
+        n.wavelength_nm[n.wavelength_nm.len() - 1].min(k.wavelength_nm[k.wavelength_nm.len() - 1]);
+    let mut grid: Vec<f64> = n
+        .wavelength_nm
+        .iter()
+        .chain(&k.wavelength_nm)
+        .copied()
+        .filter(|w| (lo..=hi).contains(w))
+        .collect();
+    grid.sort_by(f64::total_cmp);
+    grid.dedup();
+    let column = |t: &IndexTable| -> Vec<f64> {
+        grid.iter()
+            .filter_map(|&w| t.index_at(w))
+            .map(|z| z.re)
+            .collect()
+    };
+    let (n_col, k_col) = (column(n), column(k));
+    IndexTable::new(origin, grid.clone(), n_col, k_col)
 }

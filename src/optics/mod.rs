@@ -1,9 +1,14 @@
 //! Optics: materials, stacks and the transfer-matrix solver.
 
+pub mod library;
+#[rustfmt::skip]
+mod library_data;
 pub mod material;
 pub mod solver;
+pub mod spec;
 pub mod stack;
 
 pub use material::{Dispersion, IndexTable, Material};
-pub use solver::{normal_index, solve, solve_amplitudes, Amplitudes, Response};
-pub use stack::{Layer, Stack};
+pub use solver::{normal_index, solve, solve_amplitudes, solve_batch, Amplitudes, Response};
+pub use spec::{MediumSpec, StackSpec};
+pub use stack::{Layer, Stack, StackGrid};

@@ -46,19 +46,34 @@ pub struct Amplitudes {
     pub tp: C64,
 }
 
-/// q = n cos θ = sqrt(n² − β²) on the branch Im q ≥ 0 (Re q > 0 when Im q = 0).
+/// sqrt(z) on the branch Im ≥ 0 (Re > 0 when Im = 0).
 ///
-/// The sign is fixed after the square root: the principal root returns
-/// Im < 0 for gain media, and a −0.0 imaginary part of n² − β² would put an
-/// evanescent wave on the growing branch.
+/// Written out rather than `Complex::sqrt`, which goes through polar form
+/// (atan2, sin, cos) and dominated the solver's time. The root is the
+/// principal one, reflected when z lies below the real axis; a −0.0
+/// imaginary part counts as above, so that a real negative z (an evanescent
+/// wave) always gets +i|z|^½, the decaying branch.
+#[inline]
+fn sqrt_upper(z: C64) -> C64 {
+    let (x, y) = (z.re, z.im);
+    let t = (0.5 * (z.norm() + x.abs())).sqrt();
+    if t == 0.0 {
+        return C64::new(0.0, 0.0);
+    }
+    let u = 0.5 * y.abs() / t;
+    // Principal root: (t, y/2t) for x ≥ 0, (|y|/2t, ±t) for x < 0.
+    let (re, im) = if x >= 0.0 { (t, u) } else { (u, t) };
+    if y < 0.0 {
+        C64::new(-re, im)
+    } else {
+        C64::new(re, im)
+    }
+}
+
+/// q = n cos θ = sqrt(n² − β²) on the branch Im q ≥ 0 (Re q > 0 when Im q = 0).
 #[inline]
 pub fn normal_index(n: C64, beta_sq: f64) -> C64 {
-    let q = (n * n - beta_sq).sqrt();
-    if q.im < 0.0 || (q.im == 0.0 && q.re < 0.0) {
-        -q
-    } else {
-        q
-    }
+    sqrt_upper(n * n - beta_sq)
 }
 
 /// Fresnel coefficients of one interface from medium `i` into medium `f`
@@ -88,21 +103,35 @@ pub fn fresnel(n_i: C64, q_i: C64, n_f: C64, q_f: C64) -> Fresnel {
     }
 }
 
-/// At exact grazing incidence (cos θ0 = 0) no power enters the stack,
-/// whatever the stack: every interface reflects with r = −1.
-const GRAZING: Response = Response {
-    rs: 1.0,
-    rp: 1.0,
-    ts: 0.0,
-    tp: 0.0,
-};
+/// At exact grazing incidence (cos θ0 = 0) no power enters the stack:
+/// every interface reflects with r = −1. The one exception is a stack with no
+/// interface at all (every medium equal to the ambient), which transmits.
+#[inline(never)]
+fn grazing(indices: &[C64]) -> Response {
+    let n0 = C64::new(indices[0].re, 0.0);
+    if indices[1..].iter().all(|&n| n == n0) {
+        Response {
+            rs: 0.0,
+            rp: 0.0,
+            ts: 1.0,
+            tp: 1.0,
+        }
+    } else {
+        Response {
+            rs: 1.0,
+            rp: 1.0,
+            ts: 0.0,
+            tp: 0.0,
+        }
+    }
+}
 
 /// Solves one stack at one wavelength and one angle.
 ///
 /// `indices` holds the ambient, the N layers from the top down, and the
 /// substrate (N + 2 entries); `thicknesses_nm` the N layer thicknesses.
 /// The ambient must be lossless (its imaginary part is ignored) and
-/// `cos_theta0` in [0, 1]. Nothing is allocated.
+/// `cos_theta0` in [0, 1] (larger values are taken as 1). Nothing is allocated.
 #[inline]
 pub fn solve(
     indices: &[C64],
@@ -111,10 +140,11 @@ pub fn solve(
     cos_theta0: f64,
 ) -> Response {
     if cos_theta0 <= 0.0 {
-        return GRAZING;
+        return grazing(indices);
     }
-    let amp = solve_amplitudes(indices, thicknesses_nm, wavelength_nm, cos_theta0);
-    power(indices, cos_theta0, &amp)
+    let cos_theta0 = cos_theta0.min(1.0);
+    let (amp, q_sub) = recurse(indices, thicknesses_nm, wavelength_nm, cos_theta0);
+    to_power(indices, cos_theta0, &amp, q_sub)
 }
 
 /// Converts amplitude coefficients to power: R = |r|²; T from the Poynting
@@ -122,17 +152,29 @@ pub fn solve(
 #[inline]
 pub fn power(indices: &[C64], cos_theta0: f64, amp: &Amplitudes) -> Response {
     let n0 = indices[0].re;
+    let beta_sq = n0 * n0 * sin_sq(cos_theta0);
+    let q_sub = normal_index(indices[indices.len() - 1], beta_sq);
+    to_power(indices, cos_theta0, amp, q_sub)
+}
+
+#[inline]
+fn to_power(indices: &[C64], cos_theta0: f64, amp: &Amplitudes, q_sub: C64) -> Response {
+    let q0 = indices[0].re * cos_theta0;
     let n_sub = indices[indices.len() - 1];
-    let beta_sq = n0 * n0 * (1.0 - cos_theta0 * cos_theta0);
-    let q_sub = normal_index(n_sub, beta_sq);
-    let q0 = n0 * cos_theta0;
-    let cos_sub = q_sub / n_sub;
+    // Re(n conj(q/n)) = Re(q̄ n / n̄) = Re(q̄ n²) / |n|².
+    let p_flux = (q_sub.conj() * n_sub * n_sub).re / n_sub.norm_sqr();
     Response {
         rs: amp.rs.norm_sqr(),
         rp: amp.rp.norm_sqr(),
         ts: amp.ts.norm_sqr() * q_sub.re / q0,
-        tp: amp.tp.norm_sqr() * (n_sub * cos_sub.conj()).re / q0,
+        tp: amp.tp.norm_sqr() * p_flux / q0,
     }
+}
+
+/// sin² θ from cos θ without the cancellation of 1 − cos² near normal incidence.
+#[inline]
+fn sin_sq(cos_theta: f64) -> f64 {
+    (1.0 - cos_theta) * (1.0 + cos_theta)
 }
 
 /// The complex r and t of the stack, both polarizations; see [`solve`].
@@ -142,51 +184,128 @@ pub fn solve_amplitudes(
     wavelength_nm: f64,
     cos_theta0: f64,
 ) -> Amplitudes {
+    recurse(indices, thicknesses_nm, wavelength_nm, cos_theta0).0
+}
+
+/// The recursion proper; also returns q of the substrate for the power flux.
+///
+/// At each interface, with Γ the reflection coefficient of everything below
+/// referred to that interface and r, t the interface's own coefficients,
+/// Γ' = (r + Γ)/(1 + rΓ) and the transmitted amplitude gains t/(1 + rΓ).
+/// Writing r = (a − b)/(a + b) and t = c/(a + b) turns both into one shared
+/// complex reciprocal: Γ' = ((a − b) + (a + b)Γ)/D, t/(1 + rΓ) = c/D with
+/// D = (a + b) + (a − b)Γ. For s, a = q_above, b = q_below, c = 2a; for p,
+/// a = n_b² q_a, b = n_a² q_b, c = 2 n_a n_b q_a.
+#[inline]
+fn recurse(
+    indices: &[C64],
+    thicknesses_nm: &[f64],
+    wavelength_nm: f64,
+    cos_theta0: f64,
+) -> (Amplitudes, C64) {
     debug_assert_eq!(indices.len(), thicknesses_nm.len() + 2);
     let n0 = indices[0].re;
-    let beta_sq = n0 * n0 * (1.0 - cos_theta0 * cos_theta0);
+    let beta_sq = n0 * n0 * sin_sq(cos_theta0);
     let k0 = std::f64::consts::TAU / wavelength_nm;
 
     let last = indices.len() - 1;
     let mut n_below = indices[last];
-    let mut q_below = normal_index(indices[last], beta_sq);
-    // Reflection coefficients looking down into the medium below the
-    // current interface, referenced to that interface.
-    let mut gamma_s = C64::new(0.0, 0.0);
-    let mut gamma_p = C64::new(0.0, 0.0);
-    let mut ts = C64::new(1.0, 0.0);
-    let mut tp = C64::new(1.0, 0.0);
+    let mut nsq_below = n_below * n_below;
+    let q_sub = sqrt_upper(nsq_below - beta_sq);
+    let mut q_below = q_sub;
+    let zero = C64::new(0.0, 0.0);
+    let one = C64::new(1.0, 0.0);
+    let (mut gamma_s, mut gamma_p, mut ts, mut tp) = (zero, zero, one, one);
 
     for j in (0..last).rev() {
-        let n_above = if j == 0 {
-            C64::new(n0, 0.0)
+        let (n_above, nsq_above, q_above) = if j == 0 {
+            (
+                C64::new(n0, 0.0),
+                C64::new(n0 * n0, 0.0),
+                C64::new(n0 * cos_theta0, 0.0),
+            )
         } else {
-            indices[j]
+            let n = indices[j];
+            let nsq = n * n;
+            (n, nsq, sqrt_upper(nsq - beta_sq))
         };
-        let q_above = normal_index(n_above, beta_sq);
         if j + 1 < last {
             // The medium below is a finite layer: carry Γ up through it.
-            let one_way = (C64::new(0.0, k0 * thicknesses_nm[j]) * q_below).exp();
+            let phase = k0 * thicknesses_nm[j] * q_below;
+            let (sin, cos) = phase.re.sin_cos();
+            let one_way = C64::new(cos, sin) * (-phase.im).exp();
             let round_trip = one_way * one_way;
             gamma_s *= round_trip;
             gamma_p *= round_trip;
             ts *= one_way;
             tp *= one_way;
         }
-        let f = fresnel(n_above, q_above, n_below, q_below);
-        let ds = (1.0 + f.rs * gamma_s).inv();
-        let dp = (1.0 + f.rp * gamma_p).inv();
-        gamma_s = (f.rs + gamma_s) * ds;
-        gamma_p = (f.rp + gamma_p) * dp;
-        ts *= f.ts * ds;
-        tp *= f.tp * dp;
+        let (sum, diff) = (q_above + q_below, q_above - q_below);
+        let inv_s = (sum + diff * gamma_s).inv();
+        gamma_s = (diff + sum * gamma_s) * inv_s;
+        ts *= 2.0 * q_above * inv_s;
+
+        let a = nsq_below * q_above;
+        let b = nsq_above * q_below;
+        let (sum, diff) = (a + b, a - b);
+        let inv_p = (sum + diff * gamma_p).inv();
+        gamma_p = (diff + sum * gamma_p) * inv_p;
+        tp *= 2.0 * n_above * n_below * q_above * inv_p;
+
         n_below = n_above;
+        nsq_below = nsq_above;
         q_below = q_above;
     }
-    Amplitudes {
-        rs: gamma_s,
-        rp: gamma_p,
-        ts,
-        tp,
+    (
+        Amplitudes {
+            rs: gamma_s,
+            rp: gamma_p,
+            ts,
+            tp,
+        },
+        q_sub,
+    )
+}
+
+/// One stack over many wavelengths and angles: R and T at every
+/// (wavelength, cos θ0) pair, written wavelength-major into `out`
+/// (`out[i * cos_theta0.len() + j]` for wavelength i, angle j).
+///
+/// `indices` holds, for each wavelength in turn, that wavelength's N + 2
+/// indices (ambient, layers, substrate), as [`StackGrid`](super::StackGrid)
+/// stores them. Nothing is allocated; the materials were evaluated once by
+/// whoever filled `indices`.
+///
+/// # Panics
+/// If the slice lengths disagree.
+pub fn solve_batch(
+    indices: &[C64],
+    thicknesses_nm: &[f64],
+    wavelengths_nm: &[f64],
+    cos_theta0: &[f64],
+    out: &mut [Response],
+) {
+    let media = thicknesses_nm.len() + 2;
+    assert_eq!(
+        indices.len(),
+        media * wavelengths_nm.len(),
+        "indices: N + 2 per wavelength"
+    );
+    assert_eq!(
+        out.len(),
+        wavelengths_nm.len() * cos_theta0.len(),
+        "out: wavelengths × angles"
+    );
+    if cos_theta0.is_empty() {
+        return;
+    }
+    for ((row_n, &wl), row_out) in indices
+        .chunks_exact(media)
+        .zip(wavelengths_nm)
+        .zip(out.chunks_exact_mut(cos_theta0.len()))
+    {
+        for (o, &c) in row_out.iter_mut().zip(cos_theta0) {
+            *o = solve(row_n, thicknesses_nm, wl, c);
+        }
     }
 }

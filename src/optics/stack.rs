@@ -24,6 +24,14 @@ pub struct Stack {
 impl Stack {
     /// Checks the physical constraints the solver relies on.
     pub fn validate(&self) -> Result<()> {
+        let check = |field: String, m: &Material| {
+            m.check().map_err(|e| Error::invalid(field, e.to_string()))
+        };
+        check("ambient".into(), &self.ambient)?;
+        check("substrate".into(), &self.substrate)?;
+        for (i, layer) in self.layers.iter().enumerate() {
+            check(format!("layers[{}]", i + 1), &layer.material)?;
+        }
         if !self.ambient.is_lossless() {
             return Err(Error::invalid(
                 "ambient",
@@ -43,7 +51,11 @@ impl Stack {
             if !(layer.thickness_nm.is_finite() && layer.thickness_nm >= 0.0) {
                 return Err(Error::invalid(
                     format!("layers[{}].thickness_nm", i + 1),
-                    format!("must be finite and ≥ 0, got {}", layer.thickness_nm),
+                    if layer.thickness_nm.is_nan() {
+                        "must be a number ≥ 0".to_string()
+                    } else {
+                        format!("must be finite and ≥ 0, got {}", layer.thickness_nm)
+                    },
                 ));
             }
         }
@@ -88,5 +100,81 @@ impl Stack {
             wavelength_nm,
             cos_theta0,
         ))
+    }
+}
+
+/// A stack's indices evaluated once over a list of wavelengths, ready for
+/// [`solver::solve_batch`]: the per-stack work (dispersion formulas, table
+/// look-ups, validation) done once, so that sweeping angles and thicknesses
+/// allocates nothing and evaluates no material.
+#[derive(Clone, Debug, PartialEq)]
+pub struct StackGrid {
+    wavelengths_nm: Vec<f64>,
+    /// Wavelength-major: the N + 2 indices of wavelength i at [i(N+2), (i+1)(N+2)).
+    indices: Vec<C64>,
+    thicknesses_nm: Vec<f64>,
+}
+
+impl StackGrid {
+    /// Validates the stack and evaluates every medium at every wavelength;
+    /// fails (naming the material) if a wavelength lies outside a table.
+    pub fn new(stack: &Stack, wavelengths_nm: &[f64]) -> Result<StackGrid> {
+        stack.validate()?;
+        let media = stack.layers.len() + 2;
+        let mut indices = Vec::with_capacity(media * wavelengths_nm.len());
+        let mut row = Vec::with_capacity(media);
+        for &wl in wavelengths_nm {
+            if !(wl.is_finite() && wl > 0.0) {
+                return Err(Error::invalid(
+                    "wavelength",
+                    format!("{wl} nm is not a positive wavelength"),
+                ));
+            }
+            stack.indices_at(wl, &mut row)?;
+            indices.extend_from_slice(&row);
+        }
+        Ok(StackGrid {
+            wavelengths_nm: wavelengths_nm.to_vec(),
+            indices,
+            thicknesses_nm: stack.thicknesses_nm(),
+        })
+    }
+
+    pub fn wavelengths_nm(&self) -> &[f64] {
+        &self.wavelengths_nm
+    }
+
+    pub fn thicknesses_nm(&self) -> &[f64] {
+        &self.thicknesses_nm
+    }
+
+    /// All indices, wavelength-major (N + 2 per wavelength).
+    pub fn indices(&self) -> &[C64] {
+        &self.indices
+    }
+
+    /// The N + 2 indices at the `i`-th wavelength.
+    pub fn indices_at(&self, i: usize) -> &[C64] {
+        let media = self.thicknesses_nm.len() + 2;
+        &self.indices[i * media..(i + 1) * media]
+    }
+
+    /// Changes one layer's thickness (the baker's varying layer); the value
+    /// must be finite and ≥ 0, as [`Stack::validate`] requires.
+    pub fn set_thickness_nm(&mut self, layer: usize, thickness_nm: f64) {
+        debug_assert!(thickness_nm.is_finite() && thickness_nm >= 0.0);
+        self.thicknesses_nm[layer] = thickness_nm;
+    }
+
+    /// R and T at every (wavelength, cos θ0) pair, wavelength-major, into
+    /// `out` (length wavelengths × angles). Allocates nothing.
+    pub fn solve(&self, cos_theta0: &[f64], out: &mut [Response]) {
+        solver::solve_batch(
+            &self.indices,
+            &self.thicknesses_nm,
+            &self.wavelengths_nm,
+            cos_theta0,
+            out,
+        );
     }
 }

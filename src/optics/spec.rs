@@ -1,0 +1,293 @@
+//! The stack file: a TOML description of a stack, as written by people.
+//!
+//! ```toml
+//! ambient   = { n = 1.0 }                 # real shorthand
+//! substrate = { material = "gold" }       # built-in, dispersive
+//! [[layers]]
+//! n = [1.5, 0.15]                         # [n, k], k > 0 absorbs, k < 0 gains
+//! thickness_nm = 300.0
+//! [[layers]]
+//! material = "TiO2"
+//! thickness_nm = 80.0
+//! ```
+//!
+//! Every medium takes exactly one of `n = 1.33` or `n = [n, k]`,
+//! `material = "name"` (see [`library`](super::library)),
+//! `cauchy = [A, B]` or `[A, B, C]` (n = A + B/λ² + C/λ⁴, λ in µm),
+//! `sellmeier = { b = [...], c = [...] }` with an optional `a = 1.0`
+//! (n² = a + Σ bᵢλ²/(λ² − cᵢ), λ in µm, cᵢ in µm²), or
+//! `table = "file.csv"` (refractiveindex.info CSV layout, relative to the
+//! stack file). An optional `name` labels it in messages and headers.
+//! Layers, listed from the top (ambient side) down, also need
+//! `thickness_nm`. Errors name the field: layers are numbered from 1.
+
+use std::fmt;
+use std::path::{Path, PathBuf};
+
+use serde::de::{self, Deserializer, SeqAccess, Visitor};
+use serde::{Deserialize, Serialize, Serializer};
+
+use super::library;
+use super::material::{Dispersion, IndexTable, Material};
+use super::stack::{Layer, Stack};
+use crate::error::{Error, Result};
+
+/// A stack as written in a file; [`StackSpec::resolve`] turns it into a
+/// [`Stack`]. A scene file can embed one inline.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct StackSpec {
+    pub ambient: MediumSpec,
+    #[serde(default)]
+    pub layers: Vec<MediumSpec>,
+    pub substrate: MediumSpec,
+}
+
+/// One medium: exactly one index form, and a thickness for finite layers.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MediumSpec {
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub name: Option<String>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub n: Option<IndexSpec>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub material: Option<String>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub cauchy: Option<Vec<f64>>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sellmeier: Option<SellmeierSpec>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub table: Option<PathBuf>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub thickness_nm: Option<f64>,
+}
+
+/// `n = 1.5` or `n = [1.5, 0.1]`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct IndexSpec {
+    pub n: f64,
+    pub k: f64,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SellmeierSpec {
+    #[serde(default = "one")]
+    pub a: f64,
+    pub b: Vec<f64>,
+    pub c: Vec<f64>,
+}
+
+fn one() -> f64 {
+    1.0
+}
+
+impl StackSpec {
+    /// Builds the stack, loading table files relative to `base_dir`, and
+    /// checks it ([`Stack::validate`]). Errors name the field at fault.
+    pub fn resolve(&self, base_dir: &Path) -> Result<Stack> {
+        let ambient = self.ambient.resolve("ambient", base_dir, false)?;
+        let substrate = self.substrate.resolve("substrate", base_dir, false)?;
+        let layers = self
+            .layers
+            .iter()
+            .enumerate()
+            .map(|(i, spec)| {
+                let field = format!("layers[{}]", i + 1);
+                let material = spec.resolve(&field, base_dir, true)?;
+                let thickness_nm = spec.thickness_nm.unwrap_or(f64::NAN);
+                Ok(Layer {
+                    material,
+                    thickness_nm,
+                })
+            })
+            .collect::<Result<Vec<_>>>()?;
+        let stack = Stack {
+            ambient,
+            layers,
+            substrate,
+        };
+        stack.validate()?;
+        Ok(stack)
+    }
+}
+
+impl MediumSpec {
+    fn resolve(&self, field: &str, base_dir: &Path, finite: bool) -> Result<Material> {
+        let forms: Vec<&str> = [
+            ("n", self.n.is_some()),
+            ("material", self.material.is_some()),
+            ("cauchy", self.cauchy.is_some()),
+            ("sellmeier", self.sellmeier.is_some()),
+            ("table", self.table.is_some()),
+        ]
+        .iter()
+        .filter(|f| f.1)
+        .map(|f| f.0)
+        .collect();
+        if forms.len() != 1 {
+            return Err(Error::invalid(
+                field,
+                format!(
+                    "give exactly one of n, material, cauchy, sellmeier, table (got {})",
+                    if forms.is_empty() {
+                        "none".to_string()
+                    } else {
+                        forms.join(" and ")
+                    }
+                ),
+            ));
+        }
+        match (finite, self.thickness_nm) {
+            (true, None) => {
+                return Err(Error::invalid(
+                    format!("{field}.thickness_nm"),
+                    "missing (every layer needs a thickness)",
+                ))
+            }
+            (false, Some(_)) => {
+                return Err(Error::invalid(
+                    format!("{field}.thickness_nm"),
+                    "not allowed: the ambient and substrate are semi-infinite",
+                ))
+            }
+            _ => {}
+        }
+        let sub = |name: &str| format!("{field}.{name}");
+        let mut material = if let Some(IndexSpec { n, k }) = self.n {
+            Material::constant(n, k)
+        } else if let Some(name) = &self.material {
+            library::builtin(name).ok_or_else(|| {
+                Error::invalid(
+                    sub("material"),
+                    format!(
+                        "unknown material '{name}' (built-in: {})",
+                        library::names().join(", ")
+                    ),
+                )
+            })?
+        } else if let Some(coefficients) = &self.cauchy {
+            let (a, b, c) = match coefficients.as_slice() {
+                [a, b] => (*a, *b, 0.0),
+                [a, b, c] => (*a, *b, *c),
+                _ => {
+                    return Err(Error::invalid(
+                        sub("cauchy"),
+                        format!(
+                            "expected [A, B] or [A, B, C], got {} numbers",
+                            coefficients.len()
+                        ),
+                    ))
+                }
+            };
+            Material {
+                name: format!("cauchy({a}, {b}, {c})"),
+                dispersion: Dispersion::Cauchy { a, b, c },
+            }
+        } else if let Some(s) = &self.sellmeier {
+            Material {
+                name: "sellmeier".to_string(),
+                dispersion: Dispersion::Sellmeier {
+                    a: s.a,
+                    b: s.b.clone(),
+                    c: s.c.clone(),
+                },
+            }
+        } else if let Some(path) = &self.table {
+            let full = base_dir.join(path);
+            let table = IndexTable::load_csv(&full)
+                .map_err(|e| Error::invalid(sub("table"), e.to_string()))?;
+            Material {
+                name: path.display().to_string(),
+                dispersion: Dispersion::Table(table),
+            }
+        } else {
+            unreachable!("exactly one form was checked above")
+        };
+        if let Some(name) = &self.name {
+            material.name = name.clone();
+        }
+        Ok(material)
+    }
+}
+
+impl Stack {
+    /// Reads a stack file; table paths inside it are relative to its folder.
+    pub fn load(path: &Path) -> Result<Stack> {
+        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+        let base_dir = path.parent().unwrap_or(Path::new(""));
+        Stack::from_toml_str(&text, base_dir, &path.display().to_string())
+    }
+
+    /// Parses and resolves stack-file text; `origin` names it in errors.
+    pub fn from_toml_str(text: &str, base_dir: &Path, origin: &str) -> Result<Stack> {
+        let spec: StackSpec = toml::from_str(text).map_err(|e| {
+            let at = e
+                .span()
+                .map(|span| {
+                    let before = &text[..span.start.min(text.len())];
+                    let line = before.matches('\n').count() + 1;
+                    let column = before.len() - before.rfind('\n').map_or(0, |i| i + 1) + 1;
+                    format!("line {line}, column {column}: ")
+                })
+                .unwrap_or_default();
+            Error::malformed(origin, format!("{at}{}", e.message().trim()))
+        })?;
+        spec.resolve(base_dir)
+            .map_err(|e| Error::malformed(origin, e.to_string()))
+    }
+}
+
+impl Serialize for IndexSpec {
+    fn serialize<S: Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
+        if self.k == 0.0 {
+            s.serialize_f64(self.n)
+        } else {
+            [self.n, self.k].serialize(s)
+        }
+    }
+}
+
+impl<'de> Deserialize<'de> for IndexSpec {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
+        struct IndexVisitor;
+        impl<'de> Visitor<'de> for IndexVisitor {
+            type Value = IndexSpec;
+            fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+                f.write_str("a number n or a pair [n, k]")
+            }
+            fn visit_f64<E: de::Error>(self, n: f64) -> std::result::Result<IndexSpec, E> {
+                Ok(IndexSpec { n, k: 0.0 })
+            }
+            fn visit_i64<E: de::Error>(self, n: i64) -> std::result::Result<IndexSpec, E> {
+                Ok(IndexSpec {
+                    n: n as f64,
+                    k: 0.0,
+                })
+            }
+            fn visit_u64<E: de::Error>(self, n: u64) -> std::result::Result<IndexSpec, E> {
+                Ok(IndexSpec {
+                    n: n as f64,
+                    k: 0.0,
+                })
+            }
+            fn visit_seq<A: SeqAccess<'de>>(
+                self,
+                mut seq: A,
+            ) -> std::result::Result<IndexSpec, A::Error> {
+                let n: f64 = seq
+                    .next_element()?
+                    .ok_or_else(|| de::Error::invalid_length(0, &self))?;
+                let k: f64 = seq
+                    .next_element()?
+                    .ok_or_else(|| de::Error::invalid_length(1, &self))?;
+                if seq.next_element::<f64>()?.is_some() {
+                    return Err(de::Error::invalid_length(3, &self));
+                }
+                Ok(IndexSpec { n, k })
+            }
+        }
+        d.deserialize_any(IndexVisitor)
+    }
+}
