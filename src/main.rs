@@ -50,11 +50,20 @@ fn main() -> ExitCode {
     }
 }
 
-/// The error and its causes joined on one line.
+/// The error and its causes joined on one line. A cause that the message
+/// so far already ends with (an error whose text includes its source) is
+/// not repeated.
 fn one_line(e: &anyhow::Error) -> String {
-    e.chain()
-        .map(|c| c.to_string())
-        .collect::<Vec<_>>()
-        .join(": ")
-        .replace('\n', " ")
+    let mut line = String::new();
+    for cause in e.chain() {
+        let text = cause.to_string();
+        if line.ends_with(&text) {
+            continue;
+        }
+        if !line.is_empty() {
+            line.push_str(": ");
+        }
+        line.push_str(&text);
+    }
+    line.replace('\n', " ")
 }

@@ -19,10 +19,10 @@ pub struct Args {
     #[arg(required = true)]
     pub stacks: Vec<PathBuf>,
     /// Vacuum wavelengths in nm: `a,b,c` or inclusive `start:end:step`.
-    #[arg(long, default_value = "380:780:10")]
+    #[arg(long, default_value = "380:780:10", allow_hyphen_values = true)]
     pub wavelengths: String,
     /// Angles of incidence in the ambient, degrees in [0, 90): same forms.
-    #[arg(long, default_value = "0,30,60")]
+    #[arg(long, default_value = "0,30,60", allow_hyphen_values = true)]
     pub angles: String,
     /// Print JSON (an array of objects) instead of a table.
     #[arg(long)]

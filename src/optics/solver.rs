@@ -196,6 +196,11 @@ pub fn solve_amplitudes(
 /// complex reciprocal: Γ' = ((a − b) + (a + b)Γ)/D, t/(1 + rΓ) = c/D with
 /// D = (a + b) + (a − b)Γ. For s, a = q_above, b = q_below, c = 2a; for p,
 /// a = n_b² q_a, b = n_a² q_b, c = 2 n_a n_b q_a.
+///
+/// A layer at (or near) its own critical angle, q → 0, is where the two
+/// waves of the Γ description merge: its interfaces reflect with r → ±1 and
+/// Γ loses digits as ε/|q| (0/0 at q = 0 exactly). Such layers, and runs of
+/// them, are crossed in field form instead; see [`NearCritical`].
 #[inline]
 fn recurse(
     indices: &[C64],
@@ -216,6 +221,8 @@ fn recurse(
     let zero = C64::new(0.0, 0.0);
     let one = C64::new(1.0, 0.0);
     let (mut gamma_s, mut gamma_p, mut ts, mut tp) = (zero, zero, one, one);
+    // Some while the medium below is a near-critical layer.
+    let mut fields: Option<NearCritical> = None;
 
     for j in (0..last).rev() {
         let (n_above, nsq_above, q_above) = if j == 0 {
@@ -230,28 +237,58 @@ fn recurse(
             (n, nsq, sqrt_upper(nsq - beta_sq))
         };
         if j + 1 < last {
-            // The medium below is a finite layer: carry Γ up through it.
-            let phase = k0 * thicknesses_nm[j] * q_below;
-            let (sin, cos) = phase.re.sin_cos();
-            let one_way = C64::new(cos, sin) * (-phase.im).exp();
-            let round_trip = one_way * one_way;
-            gamma_s *= round_trip;
-            gamma_p *= round_trip;
-            ts *= one_way;
-            tp *= one_way;
+            // The medium below is a finite layer: carry the state up through it.
+            let d = thicknesses_nm[j];
+            if let Some(f) = &mut fields {
+                let scale = f.cross_layer(k0 * d, nsq_below, q_below);
+                ts *= scale;
+                tp *= scale;
+            } else {
+                let phase = k0 * d * q_below;
+                let (sin, cos) = phase.re.sin_cos();
+                let one_way = C64::new(cos, sin) * (-phase.im).exp();
+                let round_trip = one_way * one_way;
+                gamma_s *= round_trip;
+                gamma_p *= round_trip;
+                ts *= one_way;
+                tp *= one_way;
+            }
         }
-        let (sum, diff) = (q_above + q_below, q_above - q_below);
-        let inv_s = (sum + diff * gamma_s).inv();
-        gamma_s = (diff + sum * gamma_s) * inv_s;
-        ts *= 2.0 * q_above * inv_s;
+        let above_near_critical = j > 0 && near_critical(q_above, nsq_above);
+        match (fields, above_near_critical) {
+            (None, false) => {
+                let (sum, diff) = (q_above + q_below, q_above - q_below);
+                let inv_s = (sum + diff * gamma_s).inv();
+                gamma_s = (diff + sum * gamma_s) * inv_s;
+                ts *= 2.0 * q_above * inv_s;
 
-        let a = nsq_below * q_above;
-        let b = nsq_above * q_below;
-        let (sum, diff) = (a + b, a - b);
-        let inv_p = (sum + diff * gamma_p).inv();
-        gamma_p = (diff + sum * gamma_p) * inv_p;
-        tp *= 2.0 * n_above * n_below * q_above * inv_p;
-
+                let a = nsq_below * q_above;
+                let b = nsq_above * q_below;
+                let (sum, diff) = (a + b, a - b);
+                let inv_p = (sum + diff * gamma_p).inv();
+                gamma_p = (diff + sum * gamma_p) * inv_p;
+                tp *= 2.0 * n_above * n_below * q_above * inv_p;
+            }
+            (None, true) => {
+                fields = Some(NearCritical::from_gamma(
+                    gamma_s,
+                    gamma_p,
+                    q_below,
+                    q_below / nsq_below,
+                ));
+                tp *= n_above / n_below;
+            }
+            (Some(_), true) => tp *= n_above / n_below,
+            (Some(f), false) => {
+                let (g_s, t_s) = f.s.to_gamma(q_above);
+                let (g_p, t_p) = f.p.to_gamma(q_above / nsq_above);
+                gamma_s = g_s;
+                gamma_p = g_p;
+                ts *= t_s;
+                tp *= t_p * n_above / n_below;
+                fields = None;
+            }
+        }
         n_below = n_above;
         nsq_below = nsq_above;
         q_below = q_above;
@@ -265,6 +302,98 @@ fn recurse(
         },
         q_sub,
     )
+}
+
+/// |q|² < 10⁻⁴ |n|²: within this the Γ recursion would lose more than
+/// about two digits to the merging of the layer's two waves.
+#[inline]
+fn near_critical(q: C64, nsq: C64) -> bool {
+    let q2 = q.norm_sqr();
+    q2 * q2 < 1e-8 * nsq.norm_sqr()
+}
+
+/// The tangential fields (u, v) at the bottom of a run of near-critical
+/// layers, in units of the forward amplitude of the ordinary medium below
+/// the run. For s, u = E_t and v = H_t with admittance η = q; for p, by
+/// duality, u = H_t and v = E_t with η = q/n² (and amplitudes n·E).
+/// Both obey the same layer matrix
+/// [u, v]_top = [[cos δ, −i sin δ/η], [−i η sin δ, cos δ]] [u, v]_bottom,
+/// δ = k0 q d, which is even in q and has no trouble at q = 0.
+#[derive(Clone, Copy)]
+struct NearCritical {
+    s: Fields,
+    p: Fields,
+}
+
+#[derive(Clone, Copy)]
+struct Fields {
+    u: C64,
+    v: C64,
+}
+
+impl Fields {
+    /// Leaves the run into an ordinary medium of admittance η: returns Γ
+    /// there and the amplitude ratio (below the run / above it).
+    /// Γ = (ηu − v)/(ηu + v), and u = B⁺(1 + Γ) gives B_below/B_above = 2η/(ηu + v).
+    #[inline]
+    fn to_gamma(self, eta: C64) -> (C64, C64) {
+        let inv = (eta * self.u + self.v).inv();
+        ((eta * self.u - self.v) * inv, 2.0 * eta * inv)
+    }
+}
+
+impl NearCritical {
+    #[inline]
+    fn from_gamma(gamma_s: C64, gamma_p: C64, eta_s: C64, eta_p: C64) -> Self {
+        let one = C64::new(1.0, 0.0);
+        NearCritical {
+            s: Fields {
+                u: one + gamma_s,
+                v: eta_s * (one - gamma_s),
+            },
+            p: Fields {
+                u: one + gamma_p,
+                v: eta_p * (one - gamma_p),
+            },
+        }
+    }
+
+    /// Applies one layer's matrix (k0 d, and the layer's n², q) to both
+    /// polarizations. Thick lossy layers would overflow cos and sin, so when
+    /// Im δ is large everything is multiplied by e^{iδ} (|e^{iδ}| < 1); the
+    /// returned factor is what the transmitted amplitude must be multiplied
+    /// by to undo that (1 otherwise).
+    #[inline(never)]
+    fn cross_layer(&mut self, k0_d: f64, nsq: C64, q: C64) -> C64 {
+        let i = C64::new(0.0, 1.0);
+        let one = C64::new(1.0, 0.0);
+        let delta = k0_d * q;
+        let (cos_d, sin_d, sinc_d, scale) = if delta.im > 30.0 {
+            let e = (i * delta).exp();
+            let e2 = e * e;
+            let sin_d = i * (one - e2) * 0.5;
+            (0.5 * (one + e2), sin_d, sin_d / delta, e)
+        } else {
+            let sinc_d = if delta.norm_sqr() < 1e-6 {
+                let d2 = delta * delta;
+                one - d2 / 6.0 + d2 * d2 / 120.0
+            } else {
+                delta.sin() / delta
+            };
+            (delta.cos(), delta.sin(), sinc_d, one)
+        };
+        // sin δ / η: k0 d sinc δ for s (η = q), n² k0 d sinc δ for p (η = q/n²).
+        let sin_over_q = k0_d * sinc_d;
+        for (f, eta, sin_over_eta) in [
+            (&mut self.s, q, sin_over_q),
+            (&mut self.p, q / nsq, sin_over_q * nsq),
+        ] {
+            let (u, v) = (f.u, f.v);
+            f.u = cos_d * u - i * sin_over_eta * v;
+            f.v = -i * eta * sin_d * u + cos_d * v;
+        }
+        scale
+    }
 }
 
 /// One stack over many wavelengths and angles: R and T at every

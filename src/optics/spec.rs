@@ -232,7 +232,10 @@ impl Stack {
                     format!("line {line}, column {column}: ")
                 })
                 .unwrap_or_default();
-            Error::malformed(origin, format!("{at}{}", e.message().trim()))
+            Error::malformed(
+                origin,
+                format!("{at}{}", e.message().trim().replace('\n', "; ")),
+            )
         })?;
         spec.resolve(base_dir)
             .map_err(|e| Error::malformed(origin, e.to_string()))
