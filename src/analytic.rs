@@ -125,6 +125,9 @@ impl AnalyticFilm {
         const TERMS: usize = 3;
         let mut rgb = [0.0; 3];
         let mut done = [false; 3];
+        // The path difference depends on the film only, so the spectral
+        // integrals are shared by every channel and both polarizations.
+        let mut sens = None;
         for c in 0..3 {
             if done[c] {
                 continue;
@@ -134,11 +137,12 @@ impl AnalyticFilm {
                 // Total reflection at the top: no light reaches the film.
                 None => return [1.0; 3],
             };
+            let sens = sens.get_or_insert_with(|| sensitivities::<TERMS>(terms.opd_nm));
             let mut xyz = [0.0; 3];
             let mut dc = 0.0;
             for pol in &terms.pol {
                 dc += 0.5 * pol.c0;
-                add_oscillation(&mut xyz, pol, terms.opd_nm, TERMS, 0.5);
+                add_oscillation(&mut xyz, pol, sens, 0.5);
             }
             // Channels with the same substrate index share one evaluation.
             for c2 in c..3 {
@@ -164,6 +168,7 @@ impl AnalyticFilm {
         let phi12 = if n2 < n1 { std::f64::consts::PI } else { 0.0 };
         let phi21 = std::f64::consts::PI - phi12;
         let opd_nm = 2.0 * n2 * thickness_nm * cos_theta2;
+        let sens = sensitivities::<TERMS>(opd_nm);
         let mut rgb = [0.0; 3];
         for (c, out) in rgb.iter_mut().enumerate() {
             // glTF derives a real index from F0 (measured against air), so a
@@ -180,7 +185,7 @@ impl AnalyticFilm {
                 phasor: C64::from_polar(1.0, phi21 + phi23),
             };
             let mut xyz = [0.0; 3];
-            add_oscillation(&mut xyz, &pol, opd_nm, TERMS, 1.0);
+            add_oscillation(&mut xyz, &pol, &sens, 1.0);
             *out = (pol.c0 + dot(&XYZ_TO_LINEAR_SRGB[c], &xyz)).max(0.0);
         }
         rgb
@@ -248,14 +253,19 @@ fn airy_terms(
     })
 }
 
-/// Adds `weight` × Σₘ 2 Cₘ ∫ cos(m(δ + φ)) s̄(λ) dλ to `xyz`.
-fn add_oscillation(xyz: &mut [f64; 3], pol: &PolTerms, opd_nm: f64, terms: usize, weight: f64) {
+/// [`sensitivity`] at m·OPD for m = 1..=M.
+fn sensitivities<const M: usize>(opd_nm: f64) -> [[C64; 3]; M] {
+    std::array::from_fn(|i| sensitivity((i + 1) as f64 * opd_nm))
+}
+
+/// Adds `weight` × Σₘ 2 Cₘ ∫ cos(m(δ + φ)) s̄(λ) dλ to `xyz`, given the
+/// spectral integrals `sens[m − 1]` of e^{imδ}.
+fn add_oscillation(xyz: &mut [f64; 3], pol: &PolTerms, sens: &[[C64; 3]], weight: f64) {
     let mut cm = pol.c1;
     let mut phasor_m = C64::new(1.0, 0.0);
-    for m in 1..=terms {
+    for s in sens {
         cm *= pol.rho;
         phasor_m *= pol.phasor;
-        let s = sensitivity(m as f64 * opd_nm);
         for j in 0..3 {
             xyz[j] += weight * 2.0 * cm * (phasor_m * s[j]).re;
         }
