@@ -9,6 +9,7 @@ pub mod analytic;
 pub mod bench;
 pub mod color;
 pub mod error;
+pub mod lut;
 pub mod optics;
 
 pub use error::{Error, Result};

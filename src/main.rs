@@ -25,6 +25,14 @@ enum Command {
     Eval(cli::eval::Args),
     /// Speed against error of every method; `--grid` times one stack for the peers.
     Bench(cli::bench::Args),
+    /// Reflected and transmitted colour of a stack under D65, per angle.
+    Color(cli::color::Args),
+    /// Bake a stack's response into an OpenEXR lookup table.
+    Bake(cli::bake::Args),
+    /// Print a lookup table's header.
+    Info(cli::info::Args),
+    /// Measure a lookup table's error against the solver.
+    Validate(cli::validate::Args),
 }
 
 fn main() -> ExitCode {
@@ -40,14 +48,29 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Eval(args) => cli::eval::run(args),
         Command::Bench(args) => cli::bench::run(args),
+        Command::Color(args) => cli::color::run(args),
+        Command::Bake(args) => cli::bake::run(args),
+        Command::Info(args) => cli::info::run(args),
+        Command::Validate(args) => cli::validate::run(args),
     };
     match result {
         Ok(code) => code,
+        // A closed pipe (`irid eval ... | head`) means the reader has all
+        // it wants: stop quietly, as other Unix tools do.
+        Err(e) if is_broken_pipe(&e) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("irid: {}", one_line(&e));
             ExitCode::from(2)
         }
     }
+}
+
+fn is_broken_pipe(e: &anyhow::Error) -> bool {
+    e.chain().any(|cause| {
+        cause
+            .downcast_ref::<std::io::Error>()
+            .is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe)
+    })
 }
 
 /// The error and its causes joined on one line. A cause that the message

@@ -26,6 +26,12 @@ fn perfect_reflector_is_d65_white() {
     assert!(close(xyz, [0.9505, 1.0, 1.0888], 5e-5), "{xyz:?}");
     assert!((xyz[1] - 1.0).abs() < 1e-14, "{xyz:?}");
     assert!(close(xyz, white_xyz(), 1e-14));
+    // numpy: np.interp of the 5 nm D65 to 1 nm, times the CMFs, summed.
+    assert!(close(
+        xyz,
+        [0.9504707022400521, 1.0, 1.0888284599770484],
+        1e-12
+    ));
     let lab = xyz_to_lab(xyz);
     assert!(close(lab, [100.0, 0.0, 0.0], 1e-12), "{lab:?}");
     for s in all_samplings() {
@@ -80,6 +86,21 @@ fn strategies_sample_where_they_say() {
     assert!(g[1] > 4.0 * g[0].abs() && g[1] > 4.0 * g[2].abs(), "{g:?}");
     let xyz = exact.xyz(&band);
     assert!(close(xyz_to_linear_srgb(xyz), g, 1e-15));
+}
+
+#[test]
+fn lab_of_the_srgb_primaries() {
+    // colour-science 0.4.7: normalised_primary_matrix(IEC primaries, xy of the
+    // tables' white (0.950471, 1, 1.088828)), then XYZ_to_Lab with that white.
+    for (rgb, want) in [
+        ([1.0, 0.0, 0.0], [53.2409, 80.0925, 67.2032]),
+        ([0.0, 1.0, 0.0], [87.7347, -86.1828, 83.1792]),
+        ([0.0, 0.0, 1.0], [32.2970, 79.1874, -107.8602]),
+        ([0.2, 0.5, 0.1], [69.9883, -38.2150, 43.0482]),
+    ] {
+        let lab = xyz_to_lab(linear_srgb_to_xyz(rgb));
+        assert!(close(lab, want, 1e-4), "{rgb:?}: {lab:?}");
+    }
 }
 
 /// Sharma, G., Wu, W., Dalal, E. N. (2005). The CIEDE2000 color-difference
@@ -272,4 +293,151 @@ fn sampling_error_on_a_soap_film() {
     // average by more than even nine integrated samples do.
     let (_, r3, _) = results[0];
     assert!(r3.mean > results[1].1.mean, "rgb3 {r3:?}");
+}
+
+/// A stack file in the temp dir, removed on drop.
+struct TempStack(std::path::PathBuf);
+
+impl TempStack {
+    fn new(name: &str, text: &str) -> TempStack {
+        let path =
+            std::env::temp_dir().join(format!("irid-color-{}-{name}.toml", std::process::id()));
+        std::fs::write(&path, text).unwrap();
+        TempStack(path)
+    }
+}
+
+impl Drop for TempStack {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_file(&self.0);
+    }
+}
+
+const SOAP_500NM: &str = "ambient = { n = 1.0 }\nsubstrate = { n = 1.0 }\n\
+                          [[layers]]\nn = 1.33\nthickness_nm = 500.0\n";
+
+fn irid(args: &[&str]) -> std::process::Output {
+    std::process::Command::new(env!("CARGO_BIN_EXE_irid"))
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+#[test]
+fn cli_json_matches_the_library() {
+    let stack = TempStack::new("json", SOAP_500NM);
+    let path = stack.0.to_str().unwrap();
+    let out = irid(&[
+        "color",
+        path,
+        "--angles",
+        "0:80:40",
+        "--sampling",
+        "uniform:81",
+        "--json",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let rows = json.as_array().unwrap();
+    assert_eq!(rows.len(), 3);
+    let want = stack_colours(
+        &soap_film(500.0),
+        &SpectralIntegrator::new(Sampling::Uniform(81)),
+        &[0.0, 40.0, 80.0],
+    )
+    .unwrap();
+    for (row, want) in rows.iter().zip(&want) {
+        let obj = row.as_object().unwrap();
+        let mut keys: Vec<&str> = obj.keys().map(String::as_str).collect();
+        keys.sort_unstable();
+        assert_eq!(
+            keys,
+            [
+                "angle_deg",
+                "reflectance_rgb",
+                "reflectance_xyz",
+                "transmittance_rgb",
+                "transmittance_xyz"
+            ]
+        );
+        assert_eq!(obj["angle_deg"].as_f64().unwrap(), want.angle_deg);
+        // serde_json's default float parsing may be off by an ulp.
+        let triple = |k: &str| -> [f64; 3] {
+            let v = obj[k].as_array().unwrap();
+            std::array::from_fn(|i| v[i].as_f64().unwrap())
+        };
+        assert!(close(
+            triple("reflectance_rgb"),
+            want.reflectance_rgb,
+            1e-15
+        ));
+        assert!(close(
+            triple("transmittance_rgb"),
+            want.transmittance_rgb,
+            1e-15
+        ));
+        assert!(close(
+            triple("reflectance_xyz"),
+            want.reflectance_xyz,
+            1e-15
+        ));
+        assert!(close(
+            triple("transmittance_xyz"),
+            want.transmittance_xyz,
+            1e-15
+        ));
+    }
+}
+
+#[test]
+fn cli_human_output_has_a_hex_swatch_per_angle() {
+    let stack = TempStack::new("human", "ambient = { n = 1.0 }\nsubstrate = { n = 1.5 }\n");
+    let out = irid(&["color", stack.0.to_str().unwrap(), "--angles", "0,30"]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8(out.stdout).unwrap();
+    // Bare glass at normal incidence: R = 0.04 → sRGB 56 = #38, T = 0.96 → 250 = #fa.
+    let lines: Vec<&str> = text.lines().collect();
+    assert_eq!(lines.len(), 4, "{text}");
+    assert!(
+        lines[2].contains("#383838") && lines[2].contains("#fafafa"),
+        "{text}"
+    );
+    assert!(lines[3].trim_start().starts_with("30.00°"), "{text}");
+}
+
+#[test]
+fn cli_bad_input_is_one_line_and_exit_2() {
+    let stack = TempStack::new("bad", SOAP_500NM);
+    let path = stack.0.to_str().unwrap();
+    for (args, needle) in [
+        (vec!["--sampling", "rgb4"], "--sampling 'rgb4'"),
+        (vec!["--sampling", "uniform:1"], "N must be between 2"),
+        (vec!["--sampling", "uniform:x"], "not a whole number"),
+        (vec!["--angles", "0,90"], "outside [0, 90)"),
+        (vec!["--angles=-5:10:5"], "outside [0, 90)"),
+        (vec!["--angles", "10:0:5"], "--angles"),
+    ] {
+        let mut full = vec!["color", path];
+        full.extend(&args);
+        let out = irid(&full);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {err}");
+        assert_eq!(err.lines().count(), 1, "{args:?}: {err}");
+        assert!(
+            err.starts_with("irid: ") && err.contains(needle),
+            "{args:?}: {err}"
+        );
+        assert!(out.stdout.is_empty());
+    }
+    let out = irid(&["color", "/nonexistent/stack.toml"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("/nonexistent/stack.toml"));
 }

@@ -222,6 +222,10 @@ fn bad_input_exits_2_with_one_line() {
         &["--wavelengths", "abc"],
     );
     fails(&["eval", ok, "--wavelengths", "-5"], &["--wavelengths"]);
+    fails(
+        &["eval", ok, "--wavelengths", "1e-300"],
+        &["--wavelengths", "outside"],
+    );
     fails(&["eval", ok, "--angles", "0,90"], &["--angles", "90"]);
     fails(&["eval", ok, "--angles", "1:2:0"], &["--angles", "step"]);
     // A good stack before a bad one: still nothing printed.

@@ -316,9 +316,11 @@ fn zero_thickness_and_index_matched_layers_are_invisible() {
             d[at - 1] = below - extra.min(below);
             d.insert(at - 1, extra.min(below));
         } else {
-            // Above the substrate: a layer of substrate material adds a
-            // phase to t only, and |t|² does not see it unless the substrate absorbs.
-            d.insert(at - 1, 0.0);
+            // Above the substrate: a layer of substrate material moves the
+            // point where T is measured down by its thickness, which only a
+            // lossy substrate notices.
+            let lossless = s.indices[at].im == 0.0;
+            d.insert(at - 1, if lossless { extra } else { 0.0 });
         }
         let matched = solve(&n, &d, wl, cos);
         for (got, what) in [(zero, "zero-thickness"), (matched, "index-matched")] {
@@ -777,6 +779,100 @@ fn runs_of_near_critical_layers() {
         assert_close(r.rp + r.tp, 1.0, 1e-12, "Rp + Tp");
         if thickness_nm >= 1e6 {
             assert!(r.ts < 1e-40 && r.tp < 1e-40, "{r:?}");
+        }
+    }
+}
+
+#[test]
+fn extreme_but_accepted_inputs_stay_finite() {
+    // The edges of what materials and stacks accept: |n|, |k| up to 1e6 and
+    // down to 1e-6, thickness 0 to 1e12 nm, wavelength 1e-3 to 1e9 nm, any
+    // angle short of grazing.
+    let mut rng = Pcg64::seed_from_u64(10);
+    let pick = |rng: &mut Pcg64, v: &[f64]| v[rng.random_range(0..v.len())];
+    let values = [1e-6, 0.3, 1.0, 1.5, 40.0, 1e6];
+    for _ in 0..20_000 {
+        let layers = rng.random_range(0..6);
+        let mut n = vec![c(pick(&mut rng, &values), 0.0)];
+        let mut d = vec![];
+        for _ in 0..layers {
+            let k = pick(&mut rng, &[0.0, 1e-6, 1.0, 1e6, -1e-3, -0.5]);
+            n.push(c(pick(&mut rng, &values), k));
+            d.push(pick(&mut rng, &[0.0, 1e-300, 1.0, 500.0, 1e6, 1e12]));
+        }
+        n.push(c(
+            pick(&mut rng, &values),
+            pick(&mut rng, &[0.0, 1e-6, 3.0, 1e6]),
+        ));
+        let wl = pick(&mut rng, &[1e-3, 550.0, 1e9]);
+        let cos = pick(&mut rng, &[1.0, 0.5, 1e-3, 1e-9]);
+        let r = solve(&n, &d, wl, cos);
+        assert_finite(&r, &format!("{n:?} {d:?} {wl} {cos}"));
+    }
+}
+
+#[test]
+fn split_at_a_buried_layer_recomposes() {
+    // The baker's decomposition: A = ambient..layer L (L seen as
+    // semi-infinite), A' = A seen from inside L, B = L..substrate, then
+    // Airy's sum over L's multiple reflections,
+    //   r = r_A + t_A t'_A r_B φ² / (1 − r'_A r_B φ²),
+    //   t = t_A t_B φ / (1 − r'_A r_B φ²),  φ = e^{i k0 q_L d},
+    // must give the whole stack's r and t. Sub-stacks whose top medium is an
+    // absorbing or gain layer go through solve_amplitudes_beta.
+    use irid::optics::{solve_amplitudes, solve_amplitudes_beta};
+    let mut rng = Pcg64::seed_from_u64(11);
+    for i in 0..2000 {
+        let s = random_stack(&mut rng, 1..8, Kind::WithGain, 500.0);
+        let (n, d) = (&s.indices, &s.thicknesses_nm);
+        let wl = rng.random_range(380.0..780.0);
+        let cos: f64 = rng.random_range(0.1..1.0);
+        let beta_sq = n[0].re * n[0].re * (1.0 - cos) * (1.0 + cos);
+        let l = rng.random_range(1..n.len() - 1); // the buried layer's medium index
+        let whole = solve_amplitudes(n, d, wl, cos);
+        // The top medium of A is the (lossless) ambient: both entry points agree.
+        let a = solve_amplitudes(&n[..=l], &d[..l - 1], wl, cos);
+        let a_beta = solve_amplitudes_beta(&n[..=l], &d[..l - 1], wl, beta_sq);
+        for (x, y) in [
+            (a.rs, a_beta.rs),
+            (a.rp, a_beta.rp),
+            (a.ts, a_beta.ts),
+            (a.tp, a_beta.tp),
+        ] {
+            assert!(
+                (x - y).norm() <= 1e-12 * y.norm().max(1.0),
+                "stack {i}: {a:?} vs {a_beta:?}"
+            );
+        }
+        let mut up_n: Vec<C64> = n[..=l].to_vec();
+        up_n.reverse();
+        let mut up_d: Vec<f64> = d[..l - 1].to_vec();
+        up_d.reverse();
+        let a_up = solve_amplitudes_beta(&up_n, &up_d, wl, beta_sq);
+        let b = solve_amplitudes_beta(&n[l..], &d[l..], wl, beta_sq);
+        let q_l = irid::optics::normal_index(n[l], beta_sq);
+        let phi = (C64::new(0.0, std::f64::consts::TAU / wl * d[l - 1]) * q_l).exp();
+        for (pol, (ra, ta, ra_up, ta_up, rb, tb, r, t)) in [
+            (
+                "s",
+                (a.rs, a.ts, a_up.rs, a_up.ts, b.rs, b.ts, whole.rs, whole.ts),
+            ),
+            (
+                "p",
+                (a.rp, a.tp, a_up.rp, a_up.tp, b.rp, b.tp, whole.rp, whole.tp),
+            ),
+        ] {
+            let den = 1.0 - ra_up * rb * phi * phi;
+            let r_split = ra + ta * ta_up * rb * phi * phi / den;
+            let t_split = ta * tb * phi / den;
+            assert!(
+                (r_split - r).norm() <= 1e-10 * r.norm().max(1.0),
+                "stack {i} {pol}: r {r_split} vs {r}"
+            );
+            assert!(
+                (t_split - t).norm() <= 1e-10 * t.norm().max(1.0),
+                "stack {i} {pol}: t {t_split} vs {t}"
+            );
         }
     }
 }

@@ -161,8 +161,12 @@ fn errors_name_the_file_and_the_field() {
             layer("n = [1.4, 0.1, 3]\nthickness_nm = 5"),
             &["test.toml", "line 4"],
         ),
-        (layer("n = 0\nthickness_nm = 5"), &["layers[1]", "not 0"]),
-        (layer("n = -1.5\nthickness_nm = 5"), &["layers[1]", "n ≥ 0"]),
+        (layer("n = 0\nthickness_nm = 5"), &["layers[1]", "not be 0"]),
+        (layer("n = -1.5\nthickness_nm = 5"), &["layers[1]", "0 ≤ n"]),
+        (
+            layer("n = [1.5, 1e7]\nthickness_nm = 5"),
+            &["layers[1]", "|k| ≤ 1e6"],
+        ),
         (
             layer("cauchy = [1.5]\nthickness_nm = 5"),
             &["layers[1].cauchy", "[A, B]"],
@@ -277,4 +281,34 @@ fn shipped_example_stacks_load() {
     let mirror = Stack::load(&dir.join("mirror-10.toml")).unwrap();
     assert_eq!(mirror.layers.len(), 10);
     assert!(mirror.response(550.0, 1.0).unwrap().r() > 0.98);
+}
+
+#[test]
+fn a_stack_read_back_from_json_is_checked_not_trusted() {
+    // The LUT header embeds the stack as JSON; a damaged one must fail
+    // validation with a message, not panic in the solver.
+    let stack =
+        Stack::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join("luts/two-layer.toml")).unwrap();
+    let json = serde_json::to_string(&stack).unwrap();
+    let back: Stack = serde_json::from_str(&json).unwrap();
+    assert_eq!(back, stack);
+    back.validate().unwrap();
+    let mut damaged = back.clone();
+    if let Dispersion::Table(t) = &mut damaged.substrate.dispersion {
+        t.k.pop();
+    }
+    let err = damaged.validate().unwrap_err().to_string();
+    assert!(
+        err.contains("substrate") && err.contains("unequal"),
+        "{err}"
+    );
+    assert!(damaged.response(500.0, 1.0).is_err());
+    let mut empty = back;
+    if let Dispersion::Table(t) = &mut empty.substrate.dispersion {
+        t.wavelength_nm.clear();
+        t.n.clear();
+        t.k.clear();
+    }
+    assert!(empty.validate().is_err());
+    assert!(empty.response(500.0, 1.0).is_err());
 }

@@ -8,7 +8,7 @@ use std::process::ExitCode;
 use anyhow::{Context, Result};
 use serde::Serialize;
 
-use irid::optics::{Response, Stack, StackGrid};
+use irid::optics::{Response, Stack, StackGrid, WAVELENGTH_RANGE_NM};
 
 use super::args::{check_angles, parse_list};
 
@@ -50,8 +50,9 @@ struct Row {
 
 pub fn run(args: Args) -> Result<ExitCode> {
     let wavelengths_nm = parse_list("--wavelengths", &args.wavelengths)?;
-    if let Some(w) = wavelengths_nm.iter().find(|w| **w <= 0.0) {
-        anyhow::bail!("--wavelengths: {w} nm is not a positive wavelength");
+    let (lo, hi) = WAVELENGTH_RANGE_NM;
+    if let Some(w) = wavelengths_nm.iter().find(|w| !(lo..=hi).contains(*w)) {
+        anyhow::bail!("--wavelengths: {w} nm is outside {lo:e}–{hi:e} nm");
     }
     let angles_deg = parse_list("--angles", &args.angles)?;
     check_angles("--angles", &angles_deg)?;
@@ -96,11 +97,9 @@ pub fn run(args: Args) -> Result<ExitCode> {
         }
     }
     let mut out = std::io::stdout().lock();
-    match out.write_all(text.as_bytes()).and_then(|_| out.flush()) {
-        // A closed pipe (`irid eval ... | head`) is not an error.
-        Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => {}
-        other => other.context("writing to stdout")?,
-    }
+    out.write_all(text.as_bytes())
+        .and_then(|_| out.flush())
+        .context("writing to stdout")?;
     Ok(ExitCode::SUCCESS)
 }
 

@@ -5,7 +5,7 @@ use serde::Serialize;
 
 use super::SpectralIntegrator;
 use crate::error::{Error, Result};
-use crate::optics::{solve, Stack};
+use crate::optics::{Response, Stack, StackGrid};
 
 /// A stack's reflected and transmitted colour under D65 at one angle.
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -26,29 +26,29 @@ pub fn stack_colours(
     integrator: &SpectralIntegrator,
     angles_deg: &[f64],
 ) -> Result<Vec<FilmColour>> {
-    stack.validate()?;
     if let Some(a) = angles_deg.iter().find(|a| !(**a >= 0.0 && **a < 90.0)) {
         return Err(Error::invalid(
             "angle",
             format!("{a} is outside [0, 90) degrees"),
         ));
     }
-    let wavelengths = integrator.wavelengths_nm();
-    // Indices depend on wavelength only: look them up once, not per angle.
-    let mut indices = Vec::with_capacity(wavelengths.len());
-    for &l in wavelengths {
-        let mut n = Vec::new();
-        stack.indices_at(l, &mut n)?;
-        indices.push(n);
-    }
-    let thicknesses_nm = stack.thicknesses_nm();
-    let (mut r, mut t) = (vec![0.0; wavelengths.len()], vec![0.0; wavelengths.len()]);
+    let grid = StackGrid::new(stack, integrator.wavelengths_nm())?;
+    let cos_theta0: Vec<f64> = angles_deg.iter().map(|a| a.to_radians().cos()).collect();
+    let samples = integrator.wavelengths_nm().len();
+    // Wavelength-major: the response at wavelength i, angle j is [i × angles + j].
+    let mut responses = vec![Response::default(); samples * angles_deg.len()];
+    grid.solve(&cos_theta0, &mut responses);
+    let (mut r, mut t) = (vec![0.0; samples], vec![0.0; samples]);
     Ok(angles_deg
         .iter()
-        .map(|&angle_deg| {
-            let cos_theta0 = angle_deg.to_radians().cos();
-            for (i, (&l, n)) in wavelengths.iter().zip(&indices).enumerate() {
-                let resp = solve(n, &thicknesses_nm, l, cos_theta0);
+        .enumerate()
+        .map(|(j, &angle_deg)| {
+            for (i, resp) in responses
+                .iter()
+                .skip(j)
+                .step_by(angles_deg.len())
+                .enumerate()
+            {
                 (r[i], t[i]) = (resp.r(), resp.t());
             }
             FilmColour {

@@ -57,6 +57,11 @@ fn one() -> f64 {
     1.0
 }
 
+/// Largest |n| or |k| accepted: far beyond any material (metals in the far
+/// infrared reach about 100), and small enough that the solver's n² and
+/// |n|² stay far inside the range of f64.
+pub const MAX_INDEX: f64 = 1e6;
+
 impl Material {
     /// A wavelength-independent index; see [`Material::check`] for the
     /// values it accepts.
@@ -80,7 +85,7 @@ impl Material {
             Dispersion::Cauchy { a, b, c } => {
                 let l2 = um * um;
                 let n = a + b / l2 + c / (l2 * l2);
-                if !(n > 0.0 && n.is_finite()) {
+                if !(n > 0.0 && n <= MAX_INDEX) {
                     return Err(Error::invalid(
                         format!("material {}", self.name),
                         format!("Cauchy n = {n} at {wavelength_nm} nm is not a positive index"),
@@ -91,7 +96,7 @@ impl Material {
             Dispersion::Sellmeier { a, b, c } => {
                 let l2 = um * um;
                 let n2 = a + b.iter().zip(c).map(|(b, c)| b * l2 / (l2 - c)).sum::<f64>();
-                if !(n2 > 0.0 && n2.is_finite()) {
+                if !(n2 > 0.0 && n2 <= MAX_INDEX * MAX_INDEX) {
                     return Err(Error::invalid(
                         format!("material {}", self.name),
                         format!("Sellmeier n² = {n2} ≤ 0 at {wavelength_nm} nm (near a pole)"),
@@ -112,17 +117,19 @@ impl Material {
         }
     }
 
-    /// Checks the model's parameters: finite numbers, n ≥ 0 and n + ik ≠ 0
-    /// (the solver divides by n²), Sellmeier lists of equal length.
+    /// Checks the model's parameters: finite numbers, 0 ≤ n ≤ [`MAX_INDEX`],
+    /// |k| ≤ [`MAX_INDEX`], n + ik ≠ 0 (the solver divides by n²), Sellmeier
+    /// lists of equal length.
     pub fn check(&self) -> Result<()> {
         let bad = |why: String| Err(Error::invalid(format!("material {}", self.name), why));
-        let index_ok =
-            |n: f64, k: f64| n.is_finite() && k.is_finite() && n >= 0.0 && (n, k) != (0.0, 0.0);
+        let index_ok = |n: f64, k: f64| {
+            (0.0..=MAX_INDEX).contains(&n) && k.abs() <= MAX_INDEX && (n, k) != (0.0, 0.0)
+        };
         match &self.dispersion {
             Dispersion::Constant { n, k } => {
                 if !index_ok(*n, *k) {
                     return bad(format!(
-                        "index {n}{k:+}i must be finite with n ≥ 0 and not 0"
+                        "index {n}{k:+}i must have 0 ≤ n ≤ {MAX_INDEX:e}, |k| ≤ {MAX_INDEX:e}, and not be 0"
                     ));
                 }
             }
@@ -144,9 +151,10 @@ impl Material {
                 }
             }
             Dispersion::Table(t) => {
+                t.check()?;
                 if let Some(i) = (0..t.n.len()).find(|&i| !index_ok(t.n[i], t.k[i])) {
                     return bad(format!(
-                        "table row {} ({} nm): index {}{:+}i must be finite with n ≥ 0 and not 0",
+                        "table row {} ({} nm): index {}{:+}i must have 0 ≤ n ≤ {MAX_INDEX:e}, |k| ≤ {MAX_INDEX:e}, and not be 0",
                         i + 1,
                         t.wavelength_nm[i],
                         t.n[i],
@@ -197,7 +205,20 @@ impl IndexTable {
         n: Vec<f64>,
         k: Vec<f64>,
     ) -> Result<Self> {
-        let source = source.into();
+        let table = IndexTable {
+            source: source.into(),
+            wavelength_nm,
+            n,
+            k,
+        };
+        table.check()?;
+        Ok(table)
+    }
+
+    /// The checks of [`IndexTable::new`], for a table built or read otherwise
+    /// (a stack embedded in a file header, say).
+    pub fn check(&self) -> Result<()> {
+        let (source, wavelength_nm, n, k) = (&self.source, &self.wavelength_nm, &self.n, &self.k);
         let bad = |why: String| Err(Error::invalid(format!("table {source}"), why));
         if wavelength_nm.len() != n.len() || n.len() != k.len() {
             return bad("columns of unequal length".into());
@@ -226,12 +247,7 @@ impl IndexTable {
                 wavelength_nm[i]
             ));
         }
-        Ok(IndexTable {
-            source,
-            wavelength_nm,
-            n,
-            k,
-        })
+        Ok(())
     }
 
     /// Reads a CSV in the layout refractiveindex.info exports: wavelength in

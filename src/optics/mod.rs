@@ -7,8 +7,11 @@ pub mod material;
 pub mod solver;
 pub mod spec;
 pub mod stack;
+pub mod twoport;
 
 pub use material::{Dispersion, IndexTable, Material};
-pub use solver::{normal_index, solve, solve_amplitudes, solve_batch, Amplitudes, Response};
+pub use solver::{
+    normal_index, solve, solve_amplitudes, solve_amplitudes_beta, solve_batch, Amplitudes, Response,
+};
 pub use spec::{MediumSpec, StackSpec};
-pub use stack::{Layer, Stack, StackGrid};
+pub use stack::{Layer, Stack, StackGrid, MAX_THICKNESS_NM, WAVELENGTH_RANGE_NM};

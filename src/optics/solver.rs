@@ -56,7 +56,7 @@ pub struct Amplitudes {
 #[inline]
 fn sqrt_upper(z: C64) -> C64 {
     let (x, y) = (z.re, z.im);
-    let t = (0.5 * (z.norm() + x.abs())).sqrt();
+    let t = (0.5 * (z.norm_sqr().sqrt() + x.abs())).sqrt();
     if t == 0.0 {
         return C64::new(0.0, 0.0);
     }
@@ -130,8 +130,12 @@ fn grazing(indices: &[C64]) -> Response {
 ///
 /// `indices` holds the ambient, the N layers from the top down, and the
 /// substrate (N + 2 entries); `thicknesses_nm` the N layer thicknesses.
-/// The ambient must be lossless (its imaginary part is ignored) and
-/// `cos_theta0` in [0, 1] (larger values are taken as 1). Nothing is allocated.
+/// The ambient must be lossless (its imaginary part is ignored), the
+/// substrate without gain (its power flux is taken on the decaying branch),
+/// every
+/// index finite, nonzero and below 10¹⁰⁰ in modulus (materials are held to
+/// [`MAX_INDEX`](super::material::MAX_INDEX)), and `cos_theta0` in [0, 1]
+/// (larger values are taken as 1). Nothing is allocated.
 #[inline]
 pub fn solve(
     indices: &[C64],
@@ -193,24 +197,67 @@ pub fn solve_amplitudes(
 /// referred to that interface and r, t the interface's own coefficients,
 /// Γ' = (r + Γ)/(1 + rΓ) and the transmitted amplitude gains t/(1 + rΓ).
 /// Writing r = (a − b)/(a + b) and t = c/(a + b) turns both into one shared
-/// complex reciprocal: Γ' = ((a − b) + (a + b)Γ)/D, t/(1 + rΓ) = c/D with
-/// D = (a + b) + (a − b)Γ. For s, a = q_above, b = q_below, c = 2a; for p,
-/// a = n_b² q_a, b = n_a² q_b, c = 2 n_a n_b q_a.
+/// complex reciprocal: with x = a(1 + Γ) and y = b(1 − Γ), Γ' = (x − y)/(x + y)
+/// and t/(1 + rΓ) = c/(x + y). For s, a = q_above, b = q_below, c = 2a; for
+/// p, a = n_b² q_a, b = n_a² q_b, c = 2 n_a n_b q_a. Grouping by (1 ± Γ)
+/// rather than by (a ± b) matters when |a| ≪ |b| and Γ = 1: then a + b and
+/// a − b round to ±b and D = 2a would come out as 0.
 ///
 /// A layer at (or near) its own critical angle, q → 0, is where the two
 /// waves of the Γ description merge: its interfaces reflect with r → ±1 and
 /// Γ loses digits as ε/|q| (0/0 at q = 0 exactly). Such layers, and runs of
 /// them, are crossed in field form instead; see [`NearCritical`].
-#[inline]
+#[inline(always)]
 fn recurse(
     indices: &[C64],
     thicknesses_nm: &[f64],
     wavelength_nm: f64,
     cos_theta0: f64,
 ) -> (Amplitudes, C64) {
-    debug_assert_eq!(indices.len(), thicknesses_nm.len() + 2);
     let n0 = indices[0].re;
-    let beta_sq = n0 * n0 * sin_sq(cos_theta0);
+    let top = [
+        C64::new(n0, 0.0),
+        C64::new(n0 * n0, 0.0),
+        C64::new(n0 * cos_theta0, 0.0),
+    ];
+    recurse_beta(
+        indices,
+        thicknesses_nm,
+        wavelength_nm,
+        n0 * n0 * sin_sq(cos_theta0),
+        top,
+    )
+}
+
+/// r and t of a stack whose top medium may absorb or gain, given the
+/// conserved β² = (n sin θ)² instead of an angle: what a sub-stack below (or
+/// above) a buried layer sees, the top medium being that layer's. Every q,
+/// the top medium's included, is on the branch Im q ≥ 0. r is referenced to
+/// the top interface, t (the ratio of forward amplitudes) to the bottom one.
+/// A top medium with q = 0 exactly (lossless, at its critical angle) has no
+/// forward wave to refer r and t to; the result is then not finite.
+pub fn solve_amplitudes_beta(
+    indices: &[C64],
+    thicknesses_nm: &[f64],
+    wavelength_nm: f64,
+    beta_sq: f64,
+) -> Amplitudes {
+    let n_top = indices[0];
+    let nsq_top = n_top * n_top;
+    let top = [n_top, nsq_top, sqrt_upper(nsq_top - beta_sq)];
+    recurse_beta(indices, thicknesses_nm, wavelength_nm, beta_sq, top).0
+}
+
+/// The recursion for a given β², the top medium given as (n, n², q).
+#[inline(always)]
+fn recurse_beta(
+    indices: &[C64],
+    thicknesses_nm: &[f64],
+    wavelength_nm: f64,
+    beta_sq: f64,
+    top: [C64; 3],
+) -> (Amplitudes, C64) {
+    debug_assert_eq!(indices.len(), thicknesses_nm.len() + 2);
     let k0 = std::f64::consts::TAU / wavelength_nm;
 
     let last = indices.len() - 1;
@@ -226,11 +273,7 @@ fn recurse(
 
     for j in (0..last).rev() {
         let (n_above, nsq_above, q_above) = if j == 0 {
-            (
-                C64::new(n0, 0.0),
-                C64::new(n0 * n0, 0.0),
-                C64::new(n0 * cos_theta0, 0.0),
-            )
+            (top[0], top[1], top[2])
         } else {
             let n = indices[j];
             let nsq = n * n;
@@ -245,8 +288,15 @@ fn recurse(
                 tp *= scale;
             } else {
                 let phase = k0 * d * q_below;
-                let (sin, cos) = phase.re.sin_cos();
-                let one_way = C64::new(cos, sin) * (-phase.im).exp();
+                let decay = (-phase.im).exp();
+                // Past e^{-745} nothing comes back up through this layer;
+                // skipping the trigonometry also avoids sin(huge) there.
+                let one_way = if decay == 0.0 {
+                    zero
+                } else {
+                    let (sin, cos) = phase.re.sin_cos();
+                    C64::new(cos * decay, sin * decay)
+                };
                 let round_trip = one_way * one_way;
                 gamma_s *= round_trip;
                 gamma_p *= round_trip;
@@ -257,16 +307,16 @@ fn recurse(
         let above_near_critical = j > 0 && near_critical(q_above, nsq_above);
         match (fields, above_near_critical) {
             (None, false) => {
-                let (sum, diff) = (q_above + q_below, q_above - q_below);
-                let inv_s = (sum + diff * gamma_s).inv();
-                gamma_s = (diff + sum * gamma_s) * inv_s;
+                let x = q_above * (one + gamma_s);
+                let y = q_below * (one - gamma_s);
+                let inv_s = (x + y).inv();
+                gamma_s = (x - y) * inv_s;
                 ts *= 2.0 * q_above * inv_s;
 
-                let a = nsq_below * q_above;
-                let b = nsq_above * q_below;
-                let (sum, diff) = (a + b, a - b);
-                let inv_p = (sum + diff * gamma_p).inv();
-                gamma_p = (diff + sum * gamma_p) * inv_p;
+                let x = nsq_below * q_above * (one + gamma_p);
+                let y = nsq_above * q_below * (one - gamma_p);
+                let inv_p = (x + y).inv();
+                gamma_p = (x - y) * inv_p;
                 tp *= 2.0 * n_above * n_below * q_above * inv_p;
             }
             (None, true) => {
@@ -436,5 +486,59 @@ pub fn solve_batch(
         for (o, &c) in row_out.iter_mut().zip(cos_theta0) {
             *o = solve(row_n, thicknesses_nm, wl, c);
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn square_root_branch() {
+        let c = C64::new;
+        // Against the principal root, reflected into the upper half plane.
+        for z in [
+            c(2.0, 0.0),
+            c(2.0, 3.0),
+            c(2.0, -3.0),
+            c(-2.0, 3.0),
+            c(-2.0, -3.0),
+            c(-5.0, 1e-300),
+            c(1e-12, -1e-14),
+        ] {
+            let p = z.sqrt();
+            let want = if p.im < 0.0 || (p.im == 0.0 && p.re < 0.0) {
+                -p
+            } else {
+                p
+            };
+            let got = sqrt_upper(z);
+            assert!(
+                (got - want).norm() <= 1e-15 * want.norm(),
+                "{z}: {got} vs {want}"
+            );
+            assert!((got * got - z).norm() <= 1e-15 * z.norm(), "{z}");
+        }
+        // An evanescent wave whose n² − β² carries a −0.0 imaginary part
+        // must still decay: +i, never −i.
+        assert_eq!(sqrt_upper(c(-4.0, -0.0)), c(0.0, 2.0));
+        assert_eq!(sqrt_upper(c(-4.0, 0.0)), c(0.0, 2.0));
+        assert_eq!(sqrt_upper(c(0.0, 0.0)), c(0.0, 0.0));
+        assert_eq!(sqrt_upper(c(4.0, -0.0)), c(2.0, 0.0));
+        // Gain (k < 0): Im q ≥ 0 puts Re q < 0, which is fine inside a finite layer.
+        let q = normal_index(c(1.5, -0.1), 0.5);
+        assert!(q.im > 0.0 && q.re < 0.0, "{q}");
+    }
+
+    #[test]
+    fn batch_shapes_and_grazing() {
+        let n = [C64::new(1.0, 0.0), C64::new(1.4, 0.0), C64::new(1.5, 0.0)];
+        let d = [100.0];
+        let mut out = [Response::default(); 6];
+        let n2: Vec<C64> = n.iter().chain(&n).copied().collect();
+        solve_batch(&n2, &d, &[500.0, 600.0], &[1.0, 0.5, 0.0], &mut out);
+        assert_eq!(out[2], out[5]);
+        assert_eq!(out[2].r(), 1.0);
+        assert_eq!(out[4], solve(&n, &d, 600.0, 0.5));
     }
 }

@@ -8,6 +8,25 @@ use super::material::Material;
 use super::solver::{self, Response};
 use crate::error::{Error, Result};
 
+/// The thickest layer accepted: a kilometre is no longer a film, and the bound
+/// keeps k0 × thickness far from overflow at any accepted wavelength.
+pub const MAX_THICKNESS_NM: f64 = 1e12;
+
+/// Accepted vacuum wavelengths: 1 pm to 1 m, far beyond optics either way.
+pub const WAVELENGTH_RANGE_NM: (f64, f64) = (1e-3, 1e9);
+
+fn check_wavelength(wavelength_nm: f64) -> Result<()> {
+    let (lo, hi) = WAVELENGTH_RANGE_NM;
+    if (lo..=hi).contains(&wavelength_nm) {
+        Ok(())
+    } else {
+        Err(Error::invalid(
+            "wavelength",
+            format!("{wavelength_nm} nm is outside {lo:e}–{hi:e} nm"),
+        ))
+    }
+}
+
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Layer {
     pub material: Material,
@@ -48,13 +67,16 @@ impl Stack {
             ));
         }
         for (i, layer) in self.layers.iter().enumerate() {
-            if !(layer.thickness_nm.is_finite() && layer.thickness_nm >= 0.0) {
+            if !(0.0..=MAX_THICKNESS_NM).contains(&layer.thickness_nm) {
                 return Err(Error::invalid(
                     format!("layers[{}].thickness_nm", i + 1),
                     if layer.thickness_nm.is_nan() {
                         "must be a number ≥ 0".to_string()
                     } else {
-                        format!("must be finite and ≥ 0, got {}", layer.thickness_nm)
+                        format!(
+                            "must be finite, ≥ 0 and ≤ {MAX_THICKNESS_NM:e}, got {}",
+                            layer.thickness_nm
+                        )
                     },
                 ));
             }
@@ -65,6 +87,7 @@ impl Stack {
     /// Writes the indices of ambient, layers and substrate at one wavelength
     /// into `out` (cleared first), N + 2 entries.
     pub fn indices_at(&self, wavelength_nm: f64, out: &mut Vec<C64>) -> Result<()> {
+        check_wavelength(wavelength_nm)?;
         out.clear();
         let ambient = self.ambient.index_at(wavelength_nm)?;
         out.push(C64::new(ambient.re, 0.0));
@@ -124,12 +147,6 @@ impl StackGrid {
         let mut indices = Vec::with_capacity(media * wavelengths_nm.len());
         let mut row = Vec::with_capacity(media);
         for &wl in wavelengths_nm {
-            if !(wl.is_finite() && wl > 0.0) {
-                return Err(Error::invalid(
-                    "wavelength",
-                    format!("{wl} nm is not a positive wavelength"),
-                ));
-            }
             stack.indices_at(wl, &mut row)?;
             indices.extend_from_slice(&row);
         }
@@ -160,9 +177,9 @@ impl StackGrid {
     }
 
     /// Changes one layer's thickness (the baker's varying layer); the value
-    /// must be finite and ≥ 0, as [`Stack::validate`] requires.
+    /// must lie in [0, [`MAX_THICKNESS_NM`]], as [`Stack::validate`] requires.
     pub fn set_thickness_nm(&mut self, layer: usize, thickness_nm: f64) {
-        debug_assert!(thickness_nm.is_finite() && thickness_nm >= 0.0);
+        debug_assert!((0.0..=MAX_THICKNESS_NM).contains(&thickness_nm));
         self.thicknesses_nm[layer] = thickness_nm;
     }
 

@@ -1,0 +1,164 @@
+//! `irid bake STACK.toml -o OUT.exr`: a lookup table of the stack's response.
+
+use std::io::IsTerminal;
+use std::path::PathBuf;
+use std::process::ExitCode;
+use std::time::Instant;
+
+use anyhow::{anyhow, bail, Context, Result};
+use irid::color::Sampling;
+use irid::lut::{bake_with_progress, validate, BakeSpec, Kind, Resolution, DEFAULT_COS_MIN};
+use irid::optics::Stack;
+
+use super::args::parse_range;
+
+#[derive(clap::Args)]
+pub struct Args {
+    /// Stack file (TOML).
+    pub stack: PathBuf,
+    /// Output table (OpenEXR); written atomically.
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// Thickness range MIN:MAX in nm of the varying layer [default: its
+    /// thickness in the stack file, a single node].
+    #[arg(long)]
+    pub thickness: Option<String>,
+    /// The varying layer, counted from 1 at the ambient side.
+    #[arg(long, default_value_t = 1)]
+    pub layer: usize,
+    /// cos θ range COS_MIN:COS_MAX in the ambient [default: cos 89°:1].
+    #[arg(long)]
+    pub angles: Option<String>,
+    /// rgb (linear sRGB under D65) or spectral (R and T per wavelength).
+    #[arg(long, default_value = "rgb")]
+    pub kind: String,
+    /// Spectral integration of the rgb kind: exact (1 nm), uniform:N, rgb3.
+    #[arg(long, default_value = "exact")]
+    pub sampling: String,
+    /// Wavelength range MIN:MAX in nm of the spectral kind.
+    #[arg(long, default_value = "380:780")]
+    pub wavelengths: String,
+    /// Fixed node counts T,A[,W] (thickness, angle, wavelength) instead of
+    /// an error target.
+    #[arg(long, conflicts_with = "max_error")]
+    pub resolution: Option<String>,
+    /// Largest absolute error allowed in any channel, measured at every edge
+    /// midpoint and cell centre of the grid [default: 1e-3].
+    #[arg(long)]
+    pub max_error: Option<f64>,
+    /// Store f16 samples instead of f32.
+    #[arg(long)]
+    pub half: bool,
+    /// Random points of the validation recorded in the header (0: none).
+    #[arg(long, default_value_t = 20_000)]
+    pub validate_points: usize,
+}
+
+pub fn run(args: Args) -> Result<ExitCode> {
+    let stack = Stack::load(&args.stack)?;
+    let mut spec = BakeSpec::new(stack);
+    spec.layer = args.layer;
+    if let Some(layer) = spec.stack.layers.get(args.layer.wrapping_sub(1)) {
+        spec.thickness_nm = (layer.thickness_nm, layer.thickness_nm);
+    }
+    if let Some(t) = &args.thickness {
+        spec.thickness_nm = parse_range("--thickness", t)?;
+    }
+    spec.cos_theta = match &args.angles {
+        Some(a) => parse_range("--angles", a)?,
+        None => (DEFAULT_COS_MIN, 1.0),
+    };
+    spec.kind = args.kind.parse::<Kind>().map_err(|e| anyhow!("--{e}"))?;
+    spec.sampling = args
+        .sampling
+        .parse::<Sampling>()
+        .map_err(|e| anyhow!("--{e}"))?;
+    spec.wavelength_nm = parse_range("--wavelengths", &args.wavelengths)?;
+    spec.half = args.half;
+    spec.resolution = match (&args.resolution, args.max_error) {
+        (Some(r), _) => parse_resolution(r, spec.kind)?,
+        (None, e) => Resolution::MaxError(e.unwrap_or(1e-3)),
+    };
+
+    let bar = std::io::stderr().is_terminal().then(|| {
+        let bar = indicatif::ProgressBar::new(1000);
+        bar.set_style(
+            indicatif::ProgressStyle::with_template("baking {bar:40} {percent:>3}% {elapsed}")
+                .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+        );
+        bar
+    });
+    let started = Instant::now();
+    let mut lut = bake_with_progress(&spec, &|f| {
+        if let Some(bar) = &bar {
+            bar.set_position((f * 1000.0) as u64);
+        }
+    })?;
+    let baked = started.elapsed();
+    if let Some(bar) = &bar {
+        bar.finish_and_clear();
+    }
+    let h = lut.header();
+    let sizes: Vec<String> = h.axes.iter().map(|a| a.nodes.len().to_string()).collect();
+    println!(
+        "baked {} {} table, {} nodes ({}), in {:.3} s",
+        h.kind,
+        h.precision,
+        sizes.join("×"),
+        h.axes
+            .iter()
+            .map(|a| a.name.as_str())
+            .collect::<Vec<_>>()
+            .join(" × "),
+        baked.as_secs_f64()
+    );
+    println!(
+        "bake check: max abs error {:.3e} over {} off-grid points",
+        h.error.bake_check.max_abs_all, h.error.bake_check.points
+    );
+    if args.validate_points > 0 {
+        let started = Instant::now();
+        let stats = validate(&lut, args.validate_points, 1)?;
+        println!(
+            "validation: {} random points against the solver in {:.3} s",
+            stats.points,
+            started.elapsed().as_secs_f64()
+        );
+        super::validate::print_stats(&stats);
+        lut.set_validation(stats);
+    }
+    lut.write(&args.output)?;
+    let bytes = std::fs::metadata(&args.output)
+        .with_context(|| args.output.display().to_string())?
+        .len();
+    println!("wrote {} ({} bytes)", args.output.display(), bytes);
+    Ok(ExitCode::SUCCESS)
+}
+
+fn parse_resolution(spec: &str, kind: Kind) -> Result<Resolution> {
+    let counts: Vec<usize> = spec
+        .split(',')
+        .map(|s| {
+            s.trim().parse::<usize>().map_err(|_| {
+                anyhow!(
+                    "--resolution '{spec}': '{}' is not a whole number",
+                    s.trim()
+                )
+            })
+        })
+        .collect::<Result<_>>()?;
+    match (kind, &counts[..]) {
+        (Kind::Rgb, &[t, a]) => Ok(Resolution::Nodes {
+            thickness: t,
+            angle: a,
+            wavelength: 1,
+        }),
+        (Kind::Spectral, &[t, a, w]) => Ok(Resolution::Nodes {
+            thickness: t,
+            angle: a,
+            wavelength: w,
+        }),
+        (Kind::Rgb, _) => bail!("--resolution '{spec}': an rgb table takes T,A"),
+        (Kind::Spectral, _) => bail!("--resolution '{spec}': a spectral table takes T,A,W"),
+    }
+}

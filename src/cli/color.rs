@@ -1,0 +1,81 @@
+//! `irid color`: a stack's reflected and transmitted colour under D65, per angle.
+
+use std::io::{IsTerminal, Write};
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use anyhow::{anyhow, Result};
+use irid::color::{linear_to_srgb8, stack_colours, Sampling, SpectralIntegrator};
+use irid::optics::Stack;
+
+use super::args::{check_angles, parse_list};
+
+#[derive(clap::Args)]
+pub struct Args {
+    /// Stack file (TOML).
+    pub stack: PathBuf,
+    /// Incidence angles in degrees, in [0, 90): `a,b,c` or `start:end:step`.
+    #[arg(long, default_value = "0:80:10")]
+    pub angles: String,
+    /// Wavelength sampling: exact (1 nm, 360-830 nm), uniform:N (380-780 nm), rgb3.
+    #[arg(long, default_value = "exact")]
+    pub sampling: String,
+    /// One JSON array of {angle_deg, reflectance_rgb, transmittance_rgb,
+    /// reflectance_xyz, transmittance_xyz} (linear sRGB; XYZ with Y = 1 for white).
+    #[arg(long)]
+    pub json: bool,
+}
+
+pub fn run(args: Args) -> Result<ExitCode> {
+    let sampling: Sampling = args.sampling.parse().map_err(|e| anyhow!("--{e}"))?;
+    let angles_deg = parse_list("--angles", &args.angles)?;
+    check_angles("--angles", &angles_deg)?;
+    let stack = Stack::load(&args.stack)?;
+    let integrator = SpectralIntegrator::new(sampling);
+    let colours = stack_colours(&stack, &integrator, &angles_deg)
+        .map_err(|e| anyhow!("{}: {e}", args.stack.display()))?;
+
+    let stdout = std::io::stdout();
+    let mut out = stdout.lock();
+    if args.json {
+        serde_json::to_writer_pretty(&mut out, &colours)?;
+        writeln!(out)?;
+        return Ok(ExitCode::SUCCESS);
+    }
+    // A block of the colour itself when a terminal is there to show it.
+    let swatches = stdout.is_terminal();
+    let swatch = |rgb: [f64; 3]| {
+        let [r, g, b] = linear_to_srgb8(rgb);
+        let hex = format!("#{r:02x}{g:02x}{b:02x}");
+        if swatches {
+            format!("\x1b[48;2;{r};{g};{b}m    \x1b[0m {hex}")
+        } else {
+            hex
+        }
+    };
+    let triple = |v: [f64; 3]| format!("({:.4}, {:.4}, {:.4})", v[0], v[1], v[2]);
+    writeln!(
+        out,
+        "{}: D65, CIE 1931 2°, sampling {sampling}; linear sRGB with the sRGB-encoded hex",
+        args.stack.display()
+    )?;
+    // Visible width of a swatch, a space and a padded triple.
+    let width = if swatches { 40 } else { 35 };
+    writeln!(
+        out,
+        "{:>7}  {:<width$}  transmittance",
+        "angle", "reflectance"
+    )?;
+    for c in &colours {
+        writeln!(
+            out,
+            "{:>6.2}°  {} {:<27}  {} {}",
+            c.angle_deg,
+            swatch(c.reflectance_rgb),
+            triple(c.reflectance_rgb),
+            swatch(c.transmittance_rgb),
+            triple(c.transmittance_rgb),
+        )?;
+    }
+    Ok(ExitCode::SUCCESS)
+}

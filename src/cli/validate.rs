@@ -1,0 +1,78 @@
+//! `irid validate LUT.exr`: the table against the solver at random points.
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use anyhow::Result;
+use irid::lut::{validate, ErrorStats, Lut};
+
+#[derive(clap::Args)]
+pub struct Args {
+    /// A table written by `irid bake`.
+    pub lut: PathBuf,
+    /// Random off-grid points to evaluate directly.
+    #[arg(long, default_value_t = 20_000)]
+    pub points: usize,
+    /// Seed of the point stream (PCG64).
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Exit with code 1 when any channel's largest absolute error exceeds this.
+    #[arg(long)]
+    pub max_error: Option<f64>,
+    /// Print one JSON object instead of a table.
+    #[arg(long)]
+    pub json: bool,
+}
+
+pub fn run(args: Args) -> Result<ExitCode> {
+    if let Some(e) = args.max_error {
+        anyhow::ensure!(e >= 0.0, "--max-error {e}: must be ≥ 0");
+    }
+    let lut = Lut::load(&args.lut)?;
+    let stats = validate(&lut, args.points, args.seed)?;
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&stats)?);
+    } else {
+        println!(
+            "{}: {} random points (seed {})",
+            args.lut.display(),
+            stats.points,
+            stats.seed
+        );
+        print_stats(&stats);
+    }
+    let worst = stats.max_abs.iter().cloned().fold(0.0, f64::max);
+    match args.max_error {
+        Some(e) if worst > e || stats.max_abs.iter().any(|v| v.is_nan()) => {
+            eprintln!("irid: max abs error {worst:.3e} exceeds --max-error {e:e}");
+            Ok(ExitCode::from(1))
+        }
+        _ => Ok(ExitCode::SUCCESS),
+    }
+}
+
+/// The validation figures as an indented table.
+pub fn print_stats(s: &ErrorStats) {
+    println!(
+        "  {:<16} {:>10} {:>10} {:>10}",
+        "channel", "max abs", "mean abs", "p99 abs"
+    );
+    for (k, name) in s.channels.iter().enumerate() {
+        println!(
+            "  {:<16} {:>10.3e} {:>10.3e} {:>10.3e}",
+            name, s.max_abs[k], s.mean_abs[k], s.p99_abs[k]
+        );
+    }
+    if let (Some(max), Some(mean)) = (s.max_de2000, s.mean_de2000) {
+        println!(
+            "  CIEDE2000        reflectance max {:.4} mean {:.4}; transmittance max {:.4} mean {:.4}",
+            max[0], mean[0], max[1], mean[1]
+        );
+    }
+    for r in &s.regions {
+        println!(
+            "  region {:<9} {:>6} points  max abs {:.3e}  mean {:.3e}  ({})",
+            r.name, r.points, r.max_abs, r.mean_abs, r.description
+        );
+    }
+}

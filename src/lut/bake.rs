@@ -1,0 +1,678 @@
+//! The baker: exact responses on a grid via the split-stack form, and the
+//! segment-refining search that meets an error target.
+
+use num_complex::Complex64 as C64;
+use rayon::prelude::*;
+
+use super::axis::{segment_nodes, share_intervals, Axis, Grading, Segment};
+use super::header::{
+    BakeCheck, Channel, ColorInfo, ErrorInfo, Header, BAKE_CHECK_METRIC, COS_AXIS, FORMAT_NAME,
+    FORMAT_VERSION, THICKNESS_AXIS, WAVELENGTH_AXIS,
+};
+use super::sample::{channel_names, Lut};
+use super::{BakeSpec, Kind, Resolution, MAX_AXIS_NODES, MAX_NODES};
+use crate::color::SpectralIntegrator;
+use crate::error::{Error, Result};
+use crate::optics::twoport::{Scratch, VaryingLayer};
+use crate::optics::{Layer, Response, Stack};
+
+/// The phase factor along a uniform thickness axis is advanced by one
+/// complex multiplication per node and recomputed exactly this often, which
+/// keeps the accumulated rounding below 1e-14.
+const PHASE_RESYNC: usize = 16;
+
+/// Bakes a table (no progress output; see [`bake_with_progress`]).
+pub fn bake(spec: &BakeSpec) -> Result<Lut> {
+    bake_with_progress(spec, &|_| {})
+}
+
+/// Refinement rounds before `--max-error` gives up.
+const MAX_ROUNDS: usize = 24;
+/// Upper bound on (fine-grid nodes × wavelengths) evaluated in one round,
+/// about ten seconds of work: a target that needs more is reported, not
+/// ground out.
+const MAX_WORK: usize = 1 << 30;
+
+/// Bakes a table, calling `progress` with the fraction of the current grid
+/// evaluation done (it restarts at 0 for each grid the error search tries).
+///
+/// Every axis is a list of segments, each uniform (or graded towards a
+/// critical angle). The baker evaluates the grid with every segment
+/// subdivided once more, which gives the error of the table at every edge
+/// midpoint and cell centre; with `--max-error` each segment whose error
+/// exceeds its share is refined by the factor the h² error law predicts,
+/// and the search repeats until the whole table meets the target.
+pub fn bake_with_progress(spec: &BakeSpec, progress: &(dyn Fn(f64) + Sync)) -> Result<Lut> {
+    spec.validate()?;
+    let prep = Prepared::new(spec)?;
+    let mut axes = initial_axes(spec, &prep);
+    let target = match spec.resolution {
+        Resolution::MaxError(e) => Some(e),
+        Resolution::Nodes { .. } => None,
+    };
+    let wavelength_work = prep.wavelengths_nm.len().max(1);
+    let mut round = 0;
+    loop {
+        round += 1;
+        let coarse = Grid::new(&axes, spec.kind);
+        let fine = Grid::new(&axes.clone().map(|a| doubled(&a)), spec.kind);
+        if fine.total().saturating_mul(wavelength_work) > MAX_WORK
+            || fine.axes.iter().any(|a| a.nodes.len() > 2 * MAX_AXIS_NODES)
+            || coarse.total() > MAX_NODES
+            || round > MAX_ROUNDS
+        {
+            return Err(Error::invalid(
+                "max-error",
+                format!(
+                    "{} is not reached within the size limits (the last grid tried has {} nodes)",
+                    target.unwrap_or(0.0),
+                    coarse.total()
+                ),
+            ));
+        }
+        let clock = std::time::Instant::now();
+        let values = prep.eval(&fine, progress)?;
+        let eval_s = clock.elapsed().as_secs_f64();
+        let check = measure(&coarse, &fine, &values, prep.channels, spec.half);
+        let measure_s = clock.elapsed().as_secs_f64() - eval_s;
+        if std::env::var_os("IRID_DEBUG").is_some() {
+            eprintln!(
+                "grid {:?} check {:.3e} worst at {:?} eval {eval_s:.3}s measure {measure_s:.3}s",
+                coarse
+                    .axes
+                    .iter()
+                    .map(|a| a.nodes.len())
+                    .collect::<Vec<_>>(),
+                check.max_all,
+                (0..3)
+                    .map(|a| fine.axes[a].nodes[check.worst_at[a]])
+                    .collect::<Vec<_>>()
+            );
+        }
+        let e = match target {
+            Some(e) if check.max_all > e => e,
+            _ => {
+                let data = even_subgrid(&fine, &values, prep.channels, spec.half);
+                let header = header(spec, &prep, &coarse, &check, target);
+                return Lut::from_parts(header, data)
+                    .map_err(|why| Error::invalid("baked table", why));
+            }
+        };
+        let dims = coarse
+            .axes
+            .iter()
+            .filter(|a| a.nodes.len() > 1)
+            .count()
+            .max(1);
+        let share = e / dims as f64;
+        let mut refined = false;
+        for (a, segments) in axes.iter_mut().enumerate() {
+            let mut next = Vec::with_capacity(segments.len() + 4);
+            for (k, seg) in segments.iter().enumerate() {
+                let err = check.segment_max[a][k];
+                if seg.intervals == 0 || err <= share {
+                    next.push(*seg);
+                    continue;
+                }
+                refined = true;
+                // Interpolation error falls as h²; aim 10% past the share,
+                // but at most 4× per round: near a singularity (a gain
+                // film's lasing pole) the h² law does not hold yet.
+                let factor = ((err / share).sqrt() * 1.1).min(4.0);
+                let m = ((seg.intervals as f64 * factor).ceil() as usize).max(seg.intervals + 1);
+                if seg.grading == Grading::Uniform {
+                    // Halve it too, so refinement concentrates where the
+                    // error is (a film near zero thickness at grazing).
+                    let mid = 0.5 * (seg.start + seg.end);
+                    let half_m = m.div_ceil(2);
+                    next.push(uniform(seg.start, mid, half_m));
+                    next.push(uniform(mid, seg.end, half_m));
+                } else {
+                    next.push(Segment {
+                        intervals: m,
+                        ..*seg
+                    });
+                }
+            }
+            *segments = next;
+        }
+        if !refined {
+            // Only cell centres fail: split the segments around the worst one.
+            for (a, segments) in axes.iter_mut().enumerate() {
+                let i = check.worst_at[a];
+                if i % 2 == 1 {
+                    let k = coarse.axes[a].segment_of_interval[(i - 1) / 2];
+                    segments[k].intervals *= 2;
+                }
+            }
+        }
+    }
+}
+
+/// The stack and everything about it that is fixed for the whole bake.
+struct Prepared {
+    /// The stack actually evaluated: a layerless stack gets a zero-thickness
+    /// layer of the ambient medium, which changes nothing optically.
+    stack: Stack,
+    layer: usize,
+    thicknesses_nm: Vec<f64>,
+    channels: usize,
+    /// rgb kind: the integration wavelengths, their stack indices and the
+    /// linear-sRGB weight of each wavelength.
+    wavelengths_nm: Vec<f64>,
+    indices: Vec<Vec<C64>>,
+    weights: Vec<[f64; 3]>,
+    /// The substrate's critical cos θ (where its q has a branch point),
+    /// when it is lossless and optically thinner than the ambient.
+    critical_cos: Option<f64>,
+}
+
+impl Prepared {
+    fn new(spec: &BakeSpec) -> Result<Prepared> {
+        let mut stack = spec.stack.clone();
+        let layer = if stack.layers.is_empty() {
+            stack.layers.push(Layer {
+                material: stack.ambient.clone(),
+                thickness_nm: 0.0,
+            });
+            1
+        } else {
+            spec.layer
+        };
+        let thicknesses_nm = stack.thicknesses_nm();
+        let (wavelengths_nm, weights) = match spec.kind {
+            Kind::Rgb => rgb_weights(&SpectralIntegrator::new(spec.sampling)),
+            Kind::Spectral => (Vec::new(), Vec::new()),
+        };
+        let indices = indices_at(&stack, &wavelengths_nm)?;
+        let critical_cos = critical_cos(&stack, spec.kind, spec.wavelength_nm);
+        Ok(Prepared {
+            stack,
+            layer,
+            thicknesses_nm,
+            channels: channel_names(spec.kind).len(),
+            wavelengths_nm,
+            indices,
+            weights,
+            critical_cos,
+        })
+    }
+
+    /// Exact values on a grid, layout `[w][c][t][channel]`.
+    fn eval(&self, grid: &Grid, progress: &(dyn Fn(f64) + Sync)) -> Result<Vec<f64>> {
+        let [t_axis, c_axis, w_axis] = &grid.axes;
+        let row_len = t_axis.nodes.len() * self.channels;
+        let rows = c_axis.nodes.len() * w_axis.nodes.len();
+        let mut out = vec![0.0; rows * row_len];
+        let done = std::sync::atomic::AtomicUsize::new(0);
+        let tick = || {
+            let d = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+            if d.is_multiple_of(16) || d == rows {
+                progress(d as f64 / rows as f64);
+            }
+        };
+        if !grid.spectral {
+            out.par_chunks_mut(row_len).enumerate().for_each_init(
+                Scratch::default,
+                |scratch, (c, row)| {
+                    for (w, idx) in self.indices.iter().enumerate() {
+                        let cos = c_axis.nodes[c];
+                        let v = self.split(idx, self.wavelengths_nm[w], cos, scratch);
+                        let [wr, wg, wb] = self.weights[w];
+                        sweep(&v, t_axis, |j, resp| {
+                            let (r, t) = (resp.r(), resp.t());
+                            let o = &mut row[j * 6..j * 6 + 6];
+                            o[0] += wr * r;
+                            o[1] += wg * r;
+                            o[2] += wb * r;
+                            o[3] += wr * t;
+                            o[4] += wg * t;
+                            o[5] += wb * t;
+                        });
+                    }
+                    tick();
+                },
+            );
+        } else {
+            let indices = indices_at(&self.stack, &w_axis.nodes)?;
+            let nc = c_axis.nodes.len();
+            out.par_chunks_mut(row_len).enumerate().for_each_init(
+                Scratch::default,
+                |scratch, (row_index, row)| {
+                    let (w, c) = (row_index / nc, row_index % nc);
+                    let wl = w_axis.nodes[w];
+                    let v = self.split(&indices[w], wl, c_axis.nodes[c], scratch);
+                    sweep(&v, t_axis, |j, resp| {
+                        row[2 * j] = resp.r();
+                        row[2 * j + 1] = resp.t();
+                    });
+                    tick();
+                },
+            );
+        }
+        Ok(out)
+    }
+
+    #[inline]
+    fn split(&self, idx: &[C64], wl: f64, cos: f64, scratch: &mut Scratch) -> VaryingLayer {
+        VaryingLayer::new(idx, &self.thicknesses_nm, self.layer, wl, cos, scratch)
+    }
+}
+
+/// The substrate's critical cos θ (where its normal index has a square-root
+/// branch point), when it is lossless and optically thinner than the
+/// ambient, at 550 nm for rgb tables or mid-range for spectral ones.
+pub(crate) fn critical_cos(stack: &Stack, kind: Kind, wavelength_nm: (f64, f64)) -> Option<f64> {
+    let reference_nm = match kind {
+        Kind::Rgb => 550.0,
+        Kind::Spectral => 0.5 * (wavelength_nm.0 + wavelength_nm.1),
+    };
+    match (
+        stack.ambient.index_at(reference_nm),
+        stack.substrate.index_at(reference_nm),
+    ) {
+        (Ok(n0), Ok(ns)) if ns.im == 0.0 && ns.re < n0.re => {
+            Some((1.0 - (ns.re / n0.re).powi(2)).sqrt())
+        }
+        _ => None,
+    }
+}
+
+fn indices_at(stack: &Stack, wavelengths_nm: &[f64]) -> Result<Vec<Vec<C64>>> {
+    wavelengths_nm
+        .iter()
+        .map(|&wl| {
+            let mut v = Vec::new();
+            stack.indices_at(wl, &mut v)?;
+            Ok(v)
+        })
+        .collect()
+}
+
+/// The integrator is linear in the spectrum, so its response to a unit
+/// impulse at each wavelength is that wavelength's weight: the bake then
+/// accumulates weight × R per node instead of storing whole spectra.
+pub(crate) fn rgb_weights(integrator: &SpectralIntegrator) -> (Vec<f64>, Vec<[f64; 3]>) {
+    let wavelengths = integrator.wavelengths_nm().to_vec();
+    let mut impulse = vec![0.0; wavelengths.len()];
+    let weights = (0..wavelengths.len())
+        .map(|i| {
+            impulse[i] = 1.0;
+            let w = integrator.rgb(&impulse);
+            impulse[i] = 0.0;
+            w
+        })
+        .collect();
+    (wavelengths, weights)
+}
+
+/// Calls `f` with the response at every thickness node. Within a uniform
+/// segment the phase advances by one complex multiplication per node.
+#[inline]
+fn sweep(v: &VaryingLayer, t_axis: &AxisGrid, mut f: impl FnMut(usize, Response)) {
+    let mut j = 0;
+    for (k, seg) in t_axis.segments.iter().enumerate() {
+        let first = usize::from(k > 0);
+        let step = if seg.intervals == 0 {
+            0.0
+        } else {
+            (seg.end - seg.start) / seg.intervals as f64
+        };
+        let delta = v.phase(step);
+        let mut phase = C64::new(1.0, 0.0);
+        for i in first..=seg.intervals {
+            if (i - first) % PHASE_RESYNC == 0 {
+                phase = v.phase(t_axis.nodes[j]);
+            }
+            f(j, v.response(phase));
+            phase *= delta;
+            j += 1;
+        }
+    }
+}
+
+/// The nodes of one axis and the segment each interval belongs to.
+#[derive(Clone, Debug)]
+struct AxisGrid {
+    segments: Vec<Segment>,
+    nodes: Vec<f64>,
+    segment_of_interval: Vec<usize>,
+}
+
+impl AxisGrid {
+    fn new(segments: &[Segment]) -> AxisGrid {
+        let segment_of_interval = segments
+            .iter()
+            .enumerate()
+            .flat_map(|(k, s)| std::iter::repeat_n(k, s.intervals))
+            .collect();
+        AxisGrid {
+            segments: segments.to_vec(),
+            nodes: segment_nodes(segments),
+            segment_of_interval,
+        }
+    }
+}
+
+/// Node positions of one grid: thickness, cos θ, wavelength (a single
+/// unused node for the rgb kind).
+struct Grid {
+    axes: [AxisGrid; 3],
+    spectral: bool,
+}
+
+impl Grid {
+    fn new(axes: &[Vec<Segment>; 3], kind: Kind) -> Grid {
+        Grid {
+            axes: [
+                AxisGrid::new(&axes[0]),
+                AxisGrid::new(&axes[1]),
+                AxisGrid::new(&axes[2]),
+            ],
+            spectral: kind == Kind::Spectral,
+        }
+    }
+
+    fn total(&self) -> usize {
+        self.axes.iter().map(|a| a.nodes.len()).product()
+    }
+}
+
+fn doubled(segments: &[Segment]) -> Vec<Segment> {
+    segments
+        .iter()
+        .map(|s| Segment {
+            intervals: 2 * s.intervals,
+            ..*s
+        })
+        .collect()
+}
+
+fn uniform(start: f64, end: f64, intervals: usize) -> Segment {
+    Segment {
+        start,
+        end,
+        grading: Grading::Uniform,
+        intervals: if end > start { intervals.max(1) } else { 0 },
+    }
+}
+
+/// `count` equal uniform segments of `per` intervals each over a range.
+fn split_uniform(start: f64, end: f64, count: usize, per: usize) -> Vec<Segment> {
+    if end <= start {
+        return vec![uniform(start, start, 0)];
+    }
+    (0..count)
+        .map(|k| {
+            let a = start + (end - start) * k as f64 / count as f64;
+            let b = if k + 1 == count {
+                end
+            } else {
+                start + (end - start) * (k + 1) as f64 / count as f64
+            };
+            uniform(a, b, per)
+        })
+        .collect()
+}
+
+/// The starting grid. A fixed `--resolution` is one uniform segment per
+/// axis (graded around a critical angle). For an error target the axes
+/// start coarse and split into segments that refine independently:
+/// thickness in pieces of about 50 nm (the response of a film is hardest
+/// near zero thickness at grazing incidence, where it changes on a scale
+/// proportional to cos θ), cos θ in quarters, wavelength as one piece.
+fn initial_axes(spec: &BakeSpec, prep: &Prepared) -> [Vec<Segment>; 3] {
+    let (t0, t1) = spec.thickness_nm;
+    let (c0, c1) = spec.cos_theta;
+    let (w0, w1) = match spec.kind {
+        Kind::Rgb => (0.0, 0.0),
+        Kind::Spectral => spec.wavelength_nm,
+    };
+    let critical = prep
+        .critical_cos
+        .filter(|&cc| cc > c0 + 1e-6 && cc < c1 - 1e-6);
+    let graded = |c_int: usize| {
+        let cc = critical.unwrap_or(c0);
+        let mut segments = vec![
+            Segment {
+                start: c0,
+                end: cc,
+                grading: Grading::TowardEnd,
+                intervals: 0,
+            },
+            Segment {
+                start: cc,
+                end: c1,
+                grading: Grading::TowardStart,
+                intervals: 0,
+            },
+        ];
+        share_intervals(&mut segments, c_int.max(2));
+        segments
+    };
+    match spec.resolution {
+        Resolution::Nodes {
+            thickness,
+            angle,
+            wavelength,
+        } => [
+            vec![uniform(t0, t1, thickness - 1)],
+            match critical {
+                Some(_) if angle >= 3 => graded(angle - 1),
+                _ => vec![uniform(c0, c1, angle - 1)],
+            },
+            vec![uniform(w0, w1, wavelength.saturating_sub(1))],
+        ],
+        Resolution::MaxError(_) => {
+            let pieces = (((t1 - t0) / 50.0).round() as usize).clamp(1, 32);
+            [
+                split_uniform(t0, t1, pieces, 4),
+                match critical {
+                    Some(_) => graded(16),
+                    None => split_uniform(c0, c1, 4, 4),
+                },
+                vec![uniform(w0, w1, ((w1 - w0) / 20.0).ceil() as usize)],
+            ]
+        }
+    }
+}
+
+/// Rounds a value as it will be stored.
+#[inline]
+fn stored(v: f64, half: bool) -> f32 {
+    if half {
+        half::f16::from_f64(v).to_f32()
+    } else {
+        v as f32
+    }
+}
+
+struct Check {
+    /// Per channel, over every fine point.
+    max_channel: Vec<f64>,
+    max_all: f64,
+    /// Per axis and segment: the largest error (over channels) at fine
+    /// points that are midpoints along that axis inside that segment.
+    segment_max: [Vec<f64>; 3],
+    points: usize,
+    /// Fine indices of the worst point.
+    worst_at: [usize; 3],
+}
+
+/// Compares exact values at every fine node with the multilinear
+/// interpolation of the stored (rounded) coarse values, which are the fine
+/// values at even indices.
+fn measure(coarse: &Grid, fine: &Grid, values: &[f64], channels: usize, half: bool) -> Check {
+    let dims = fine.axes.clone().map(|a| a.nodes.len());
+    // Interpolation weight of the right-hand coarse neighbour at each odd
+    // fine index (1/2 on uniform segments, not on graded ones).
+    let weights: Vec<Vec<f64>> = fine
+        .axes
+        .iter()
+        .map(|a| {
+            (0..a.nodes.len())
+                .map(|i| {
+                    if i % 2 == 1 {
+                        (a.nodes[i] - a.nodes[i - 1]) / (a.nodes[i + 1] - a.nodes[i - 1])
+                    } else {
+                        0.0
+                    }
+                })
+                .collect()
+        })
+        .collect();
+    let strides = [channels, dims[0] * channels, dims[0] * dims[1] * channels];
+    let mut check = Check {
+        max_channel: vec![0.0; channels],
+        max_all: 0.0,
+        segment_max: coarse.axes.clone().map(|a| vec![0.0; a.segments.len()]),
+        points: 0,
+        worst_at: [0; 3],
+    };
+    let mut corners = [(0usize, 1.0f64); 8];
+    for w in 0..dims[2] {
+        for c in 0..dims[1] {
+            for t in 0..dims[0] {
+                let at_idx = [t, c, w];
+                let at = t * strides[0] + c * strides[1] + w * strides[2];
+                // Corners of the coarse cell: each odd axis contributes its
+                // two neighbours.
+                corners[0] = (at, 1.0);
+                let mut count = 1;
+                for a in 0..3 {
+                    let i = at_idx[a];
+                    if i % 2 == 1 {
+                        let wt = weights[a][i];
+                        for k in 0..count {
+                            let (base, cw) = corners[k];
+                            corners[k] = (base - strides[a], cw * (1.0 - wt));
+                            corners[count + k] = (base + strides[a], cw * wt);
+                        }
+                        count *= 2;
+                    }
+                }
+                let mut worst = 0.0f64;
+                for ch in 0..channels {
+                    let interp: f64 = corners[..count]
+                        .iter()
+                        .map(|&(base, wt)| wt * f64::from(stored(values[base + ch], half)))
+                        .sum();
+                    let err = (interp - values[at + ch]).abs();
+                    check.max_channel[ch] = check.max_channel[ch].max(err);
+                    worst = worst.max(err);
+                }
+                if worst > check.max_all {
+                    check.max_all = worst;
+                    check.worst_at = at_idx;
+                }
+                // Edge midpoints measure one axis's spacing alone; cell
+                // centres mix them and only break ties (see the caller).
+                let odd: Vec<usize> = (0..3).filter(|&a| at_idx[a] % 2 == 1).collect();
+                if let [a] = odd[..] {
+                    let k = coarse.axes[a].segment_of_interval[(at_idx[a] - 1) / 2];
+                    let m = &mut check.segment_max[a][k];
+                    *m = m.max(worst);
+                }
+                check.points += 1;
+            }
+        }
+    }
+    check
+}
+
+/// The coarse table: fine values at even indices, rounded as stored.
+fn even_subgrid(fine: &Grid, values: &[f64], channels: usize, half: bool) -> Vec<f32> {
+    let dims = fine.axes.clone().map(|a| a.nodes.len());
+    let mut out = Vec::with_capacity(values.len() / 4);
+    for w in (0..dims[2]).step_by(2) {
+        for c in (0..dims[1]).step_by(2) {
+            for t in (0..dims[0]).step_by(2) {
+                let at = ((w * dims[1] + c) * dims[0] + t) * channels;
+                out.extend(values[at..at + channels].iter().map(|&v| stored(v, half)));
+            }
+        }
+    }
+    out
+}
+
+fn header(
+    spec: &BakeSpec,
+    prep: &Prepared,
+    coarse: &Grid,
+    check: &Check,
+    target: Option<f64>,
+) -> Header {
+    let channel_meaning = |name: &str| -> String {
+        let (quantity, rest) = name.split_once('.').unwrap_or((name, ""));
+        let what = if quantity == "reflectance" {
+            "unpolarized reflectance"
+        } else {
+            "unpolarized transmittance (power into the substrate)"
+        };
+        match rest {
+            "" => format!("{what} at the node's wavelength"),
+            c => format!("{what}, linear sRGB {c} under D65 (a perfect reflector is 1)"),
+        }
+    };
+    let mut axes = vec![
+        Axis {
+            name: THICKNESS_AXIS.into(),
+            unit: "nm".into(),
+            nodes: coarse.axes[0].nodes.clone(),
+        },
+        Axis {
+            name: COS_AXIS.into(),
+            unit: "1".into(),
+            nodes: coarse.axes[1].nodes.clone(),
+        },
+    ];
+    if spec.kind == Kind::Spectral {
+        axes.push(Axis {
+            name: WAVELENGTH_AXIS.into(),
+            unit: "nm".into(),
+            nodes: coarse.axes[2].nodes.clone(),
+        });
+    }
+    let names = channel_names(spec.kind);
+    Header {
+        format: FORMAT_NAME.into(),
+        version: FORMAT_VERSION,
+        kind: spec.kind,
+        x_axis: THICKNESS_AXIS.into(),
+        y_axis: COS_AXIS.into(),
+        y_blocks: (spec.kind == Kind::Spectral).then(|| WAVELENGTH_AXIS.into()),
+        axes,
+        channels: names
+            .iter()
+            .map(|n| Channel {
+                name: (*n).into(),
+                meaning: channel_meaning(n),
+            })
+            .collect(),
+        precision: if spec.half { "f16" } else { "f32" }.into(),
+        stack: spec.stack.clone(),
+        layer: if spec.stack.layers.is_empty() {
+            0
+        } else {
+            prep.layer
+        },
+        color: ColorInfo {
+            illuminant: "CIE D65".into(),
+            observer: "CIE 1931 2°".into(),
+            space: "linear sRGB (ITU-R BT.709 primaries, D65 white)".into(),
+            sampling: spec.sampling.to_string(),
+        },
+        error: ErrorInfo {
+            target_max_abs: target,
+            bake_check: BakeCheck {
+                metric: BAKE_CHECK_METRIC.into(),
+                points: check.points,
+                max_abs: check.max_channel.clone(),
+                max_abs_all: check.max_all,
+            },
+            validation: None,
+        },
+        tool: format!("irid {}", env!("CARGO_PKG_VERSION")),
+        cache_key: spec.cache_key(),
+    }
+}

@@ -1,0 +1,190 @@
+//! Tables on disk: a single-part scanline OpenEXR image (ZIP, lossless),
+//! one channel per stored quantity, and the JSON header in a text
+//! attribute named `irid`. See `docs/lut-format.md`.
+
+use std::path::{Path, PathBuf};
+
+use exr::prelude::{
+    read, AnyChannel, AnyChannels, AttributeValue, Encoding, FlatSamples, Image, Layer,
+    LayerAttributes, ReadChannels, ReadLayers, SmallVec, Text, WritableImage,
+};
+
+use super::header::{Header, FORMAT_NAME};
+use super::sample::{channel_names, Lut};
+use crate::error::{Error, Result};
+
+/// The header attribute's name.
+pub const ATTRIBUTE: &str = "irid";
+
+impl Lut {
+    /// Writes the table atomically: to a temporary file in the same
+    /// directory, then renamed over `path`, so an interrupted write never
+    /// leaves a partial table behind.
+    pub fn write(&self, path: &Path) -> Result<()> {
+        let header = self.header();
+        let channels = channel_names(header.kind);
+        let width = header.axes[0].nodes.len();
+        let height = self.data().len() / (width * channels.len());
+        let half = header.precision == "f16";
+        let json = serde_json::to_string(header)
+            .map_err(|e| Error::invalid("table header", e.to_string()))?;
+        let mut list: SmallVec<[AnyChannel<FlatSamples>; 4]> = SmallVec::new();
+        for (k, name) in channels.iter().enumerate() {
+            let plane = self.data().iter().skip(k).step_by(channels.len()).copied();
+            let samples = if half {
+                FlatSamples::F16(plane.map(half::f16::from_f32).collect())
+            } else {
+                FlatSamples::F32(plane.collect())
+            };
+            list.push(AnyChannel::new(*name, samples));
+        }
+        let mut attributes = LayerAttributes::default();
+        attributes.other.insert(
+            Text::from(ATTRIBUTE),
+            AttributeValue::Text(Text::from(ascii_json(&json).as_str())),
+        );
+        let layer = Layer::new(
+            (width, height),
+            attributes,
+            Encoding::SMALL_LOSSLESS,
+            AnyChannels::sort(list),
+        );
+        let image = Image::from_layer(layer);
+
+        let tmp = temp_path(path);
+        let written = image.write().to_file(&tmp);
+        if let Err(e) = written {
+            let _ = std::fs::remove_file(&tmp);
+            return Err(match e {
+                exr::error::Error::Io(io) => Error::io(path, io),
+                other => Error::malformed(path, format!("cannot write OpenEXR: {other}")),
+            });
+        }
+        std::fs::rename(&tmp, path).map_err(|e| {
+            let _ = std::fs::remove_file(&tmp);
+            Error::io(path, e)
+        })
+    }
+
+    /// Reads and checks a table: the `irid` header's format name and
+    /// version, axes, channel names and node counts against the pixels.
+    /// Any mismatch is an error naming the file, never a panic.
+    pub fn load(path: &Path) -> Result<Lut> {
+        let bad = |why: String| Error::malformed(path, why);
+        if let Err(e) = std::fs::metadata(path) {
+            return Err(Error::io(path, e));
+        }
+        let image = read()
+            .no_deep_data()
+            .largest_resolution_level()
+            .all_channels()
+            .first_valid_layer()
+            .all_attributes()
+            .from_file(path)
+            .map_err(|e| bad(format!("not a readable OpenEXR file: {e}")))?;
+        let layer = &image.layer_data;
+        let text = layer
+            .attributes
+            .other
+            .get(&Text::from(ATTRIBUTE))
+            .or_else(|| image.attributes.other.get(&Text::from(ATTRIBUTE)))
+            .ok_or_else(|| {
+                bad(format!(
+                    "no '{ATTRIBUTE}' header attribute: not an irid table"
+                ))
+            })?;
+        let AttributeValue::Text(text) = text else {
+            return Err(bad(format!("the '{ATTRIBUTE}' attribute is not text")));
+        };
+        let json: String = text.bytes().iter().map(|&b| b as char).collect();
+        let value: serde_json::Value = serde_json::from_str(&json)
+            .map_err(|e| bad(format!("'{ATTRIBUTE}' header is not JSON: {e}")))?;
+        if value.get("format").and_then(|f| f.as_str()) != Some(FORMAT_NAME) {
+            return Err(bad(format!("header 'format' is not \"{FORMAT_NAME}\"")));
+        }
+        let version = value.get("version").and_then(|v| v.as_u64());
+        if version != Some(u64::from(super::FORMAT_VERSION)) {
+            return Err(bad(format!(
+                "format version {} (this irid reads version {})",
+                version.map_or("missing".into(), |v| v.to_string()),
+                super::FORMAT_VERSION
+            )));
+        }
+        let header: Header =
+            serde_json::from_value(value).map_err(|e| bad(format!("'{ATTRIBUTE}' header: {e}")))?;
+        let names = channel_names(header.kind);
+        let size = layer.size;
+        let mut planes = Vec::with_capacity(names.len());
+        for name in names {
+            let channel = layer
+                .channel_data
+                .list
+                .iter()
+                .find(|c| c.name == **name)
+                .ok_or_else(|| bad(format!("missing channel '{name}'")))?;
+            let want = if header.precision == "f16" {
+                matches!(channel.sample_data, FlatSamples::F16(_))
+            } else {
+                matches!(channel.sample_data, FlatSamples::F32(_))
+            };
+            if !want {
+                return Err(bad(format!(
+                    "channel '{name}' sample type differs from header precision {}",
+                    header.precision
+                )));
+            }
+            planes.push(channel.sample_data.values_as_f32().collect::<Vec<f32>>());
+        }
+        if layer.channel_data.list.len() != names.len() {
+            return Err(bad(format!(
+                "{} channels, a {} table has exactly {names:?}",
+                layer.channel_data.list.len(),
+                header.kind
+            )));
+        }
+        let pixels = size.0 * size.1;
+        let width = header.axes.first().map_or(0, |a| a.nodes.len());
+        if size.0 != width {
+            return Err(bad(format!(
+                "image is {} pixels wide but the thickness axis has {width} nodes",
+                size.0
+            )));
+        }
+        let mut data = vec![0.0f32; pixels * names.len()];
+        for (k, plane) in planes.iter().enumerate() {
+            for (p, &v) in plane.iter().enumerate() {
+                data[p * names.len() + k] = v;
+            }
+        }
+        Lut::from_parts(header, data).map_err(bad)
+    }
+}
+
+/// EXR text is bytes; JSON allows any character as a \u escape, so the
+/// header is stored as plain ASCII that every reader decodes the same way.
+fn ascii_json(json: &str) -> String {
+    let mut out = String::with_capacity(json.len());
+    for c in json.chars() {
+        if c.is_ascii() {
+            out.push(c);
+        } else {
+            let mut buf = [0u16; 2];
+            for unit in c.encode_utf16(&mut buf) {
+                out.push_str(&format!("\\u{unit:04x}"));
+            }
+        }
+    }
+    out
+}
+
+fn temp_path(path: &Path) -> PathBuf {
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "table.exr".into());
+    let tmp = format!(".{name}.{}.tmp.exr", std::process::id());
+    match path.parent() {
+        Some(dir) if !dir.as_os_str().is_empty() => dir.join(tmp),
+        _ => PathBuf::from(tmp),
+    }
+}

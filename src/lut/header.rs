@@ -1,0 +1,92 @@
+//! The JSON header stored in a table's `irid` attribute.
+
+use serde::{Deserialize, Serialize};
+
+use super::axis::Axis;
+use super::validate::ErrorStats;
+use super::Kind;
+use crate::optics::Stack;
+
+pub const FORMAT_NAME: &str = "irid-lut";
+/// Bumped on any change a reader of an older version would misread.
+pub const FORMAT_VERSION: u32 = 1;
+
+pub const THICKNESS_AXIS: &str = "thickness_nm";
+pub const COS_AXIS: &str = "cos_theta";
+pub const WAVELENGTH_AXIS: &str = "wavelength_nm";
+
+/// Everything a reader needs besides the pixels.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Header {
+    /// Always [`FORMAT_NAME`].
+    pub format: String,
+    pub version: u32,
+    pub kind: Kind,
+    /// The axis along image columns (x).
+    pub x_axis: String,
+    /// The axis along image rows (y). For the spectral kind the rows hold
+    /// one block of cos θ rows per wavelength: row = w · n_cos + c.
+    pub y_axis: String,
+    /// Spectral kind only: the axis whose blocks are stacked along y.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub y_blocks: Option<String>,
+    pub axes: Vec<Axis>,
+    pub channels: Vec<Channel>,
+    /// "f32" or "f16": the sample type on disk.
+    pub precision: String,
+    /// The full stack, so the file alone can be re-validated.
+    pub stack: Stack,
+    /// Which layer's thickness the thickness axis sets (1-based; 0 when the
+    /// stack has no layers).
+    pub layer: usize,
+    pub color: ColorInfo,
+    pub error: ErrorInfo,
+    /// "irid <version>" that wrote the file.
+    pub tool: String,
+    /// [`super::BakeSpec::cache_key`] of the spec that baked it.
+    pub cache_key: String,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Channel {
+    pub name: String,
+    pub meaning: String,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ColorInfo {
+    pub illuminant: String,
+    pub observer: String,
+    pub space: String,
+    /// The spectral sampling of the rgb integration (`exact`, `uniform:N`,
+    /// `rgb3`).
+    pub sampling: String,
+}
+
+/// Measured error of the table against the exact response.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ErrorInfo {
+    /// `--max-error` when the grid was chosen to meet it.
+    pub target_max_abs: Option<f64>,
+    pub bake_check: BakeCheck,
+    /// Random off-grid points against the direct solver (`irid validate`).
+    pub validation: Option<ErrorStats>,
+}
+
+/// The baker's own dense error measurement.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct BakeCheck {
+    pub metric: String,
+    /// How many off-grid points were compared.
+    pub points: usize,
+    /// Largest absolute error per channel, in `channels` order.
+    pub max_abs: Vec<f64>,
+    /// The largest of `max_abs`.
+    pub max_abs_all: f64,
+}
+
+pub const BAKE_CHECK_METRIC: &str =
+    "largest absolute difference, per channel, between the table's \
+    multilinear interpolation and the exact response (fast baker, agrees with the solver to 1e-12) \
+    at every edge midpoint and cell centre of the grid (midpoints in node index; the interpolation \
+    is linear in the axis value)";

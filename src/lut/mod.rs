@@ -1,0 +1,213 @@
+//! Lookup tables of a stack's response over one layer's thickness and the
+//! incidence angle (and wavelength): baking, the OpenEXR file, sampling, and
+//! validation against direct evaluation.
+//!
+//! The file layout is specified in `docs/lut-format.md`.
+
+mod axis;
+mod bake;
+mod file;
+mod header;
+mod sample;
+mod validate;
+
+pub use axis::Axis;
+pub use bake::{bake, bake_with_progress};
+pub use header::{BakeCheck, ColorInfo, ErrorInfo, Header, FORMAT_NAME, FORMAT_VERSION};
+pub use sample::{FilmRgb, Lut};
+pub use validate::{validate, ErrorStats, RegionStats};
+
+use serde::{Deserialize, Serialize};
+
+use crate::color::Sampling;
+use crate::error::{Error, Result};
+use crate::optics::Stack;
+
+/// What a table holds.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Kind {
+    /// Unpolarized R and T as linear sRGB under D65, over thickness × cos θ.
+    Rgb,
+    /// Unpolarized R and T over thickness × cos θ × wavelength.
+    Spectral,
+}
+
+impl std::str::FromStr for Kind {
+    type Err = Error;
+    fn from_str(s: &str) -> Result<Kind> {
+        match s {
+            "rgb" => Ok(Kind::Rgb),
+            "spectral" => Ok(Kind::Spectral),
+            _ => Err(Error::invalid(
+                format!("kind '{s}'"),
+                "expected rgb or spectral",
+            )),
+        }
+    }
+}
+
+impl std::fmt::Display for Kind {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Kind::Rgb => "rgb",
+            Kind::Spectral => "spectral",
+        })
+    }
+}
+
+/// How dense the grid is.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Resolution {
+    /// Node counts per axis (wavelength is ignored for the rgb kind).
+    Nodes {
+        thickness: usize,
+        angle: usize,
+        wavelength: usize,
+    },
+    /// The coarsest grid (found by doubling) whose bake check error — the
+    /// largest absolute error over all channels at every edge midpoint and
+    /// cell centre of the grid — is at most this.
+    MaxError(f64),
+}
+
+/// Everything that determines a table. Two specs with the same
+/// [`BakeSpec::cache_key`] bake bit-identical tables.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct BakeSpec {
+    pub stack: Stack,
+    /// The layer whose thickness is the table's thickness axis, counted from
+    /// 1 at the ambient side. Ignored (the axis is a single node at 0) for a
+    /// stack without layers.
+    pub layer: usize,
+    pub thickness_nm: (f64, f64),
+    /// cos θ in the ambient, within [0, 1].
+    pub cos_theta: (f64, f64),
+    pub kind: Kind,
+    /// The rgb kind's spectral integration (also the colour used for the
+    /// CIEDE2000 figures of a spectral table).
+    pub sampling: Sampling,
+    /// The spectral kind's wavelength axis range.
+    pub wavelength_nm: (f64, f64),
+    pub resolution: Resolution,
+    /// Store f16 instead of f32 (the error figures include the rounding).
+    pub half: bool,
+}
+
+impl BakeSpec {
+    /// A spec with the defaults of `irid bake`: layer 1 at its own thickness
+    /// (one thickness node), 0–89°, rgb with exact integration, error
+    /// at most 1e-3, f32.
+    pub fn new(stack: Stack) -> BakeSpec {
+        let t = stack.layers.first().map_or(0.0, |l| l.thickness_nm);
+        BakeSpec {
+            stack,
+            layer: 1,
+            thickness_nm: (t, t),
+            cos_theta: (DEFAULT_COS_MIN, 1.0),
+            kind: Kind::Rgb,
+            sampling: Sampling::Exact,
+            wavelength_nm: (380.0, 780.0),
+            resolution: Resolution::MaxError(1e-3),
+            half: false,
+        }
+    }
+
+    /// Checks ranges and the stack; errors name the offending field.
+    pub fn validate(&self) -> Result<()> {
+        self.stack.validate()?;
+        let n = self.stack.layers.len();
+        if n > 0 && !(1..=n).contains(&self.layer) {
+            return Err(Error::invalid(
+                "layer",
+                format!(
+                    "must be between 1 and {n} (the stack's layers), got {}",
+                    self.layer
+                ),
+            ));
+        }
+        let (t0, t1) = self.thickness_nm;
+        if !(t0.is_finite() && t1.is_finite() && t0 >= 0.0 && t0 <= t1) {
+            return Err(Error::invalid(
+                "thickness",
+                format!("need finite 0 ≤ min ≤ max, got {t0}:{t1}"),
+            ));
+        }
+        let (c0, c1) = self.cos_theta;
+        if !(c0 >= 0.0 && c1 <= 1.0 && c0 <= c1) {
+            return Err(Error::invalid(
+                "angles",
+                format!("cos θ range must satisfy 0 ≤ min ≤ max ≤ 1, got {c0}:{c1}"),
+            ));
+        }
+        if self.kind == Kind::Spectral {
+            let (w0, w1) = self.wavelength_nm;
+            if !(w0.is_finite() && w1.is_finite() && w0 > 0.0 && w0 <= w1) {
+                return Err(Error::invalid(
+                    "wavelengths",
+                    format!("need finite 0 < min ≤ max, got {w0}:{w1}"),
+                ));
+            }
+        }
+        match self.resolution {
+            Resolution::Nodes {
+                thickness,
+                angle,
+                wavelength,
+            } => {
+                let spectral = self.kind == Kind::Spectral;
+                if thickness == 0 || angle == 0 || (spectral && wavelength == 0) {
+                    return Err(Error::invalid("resolution", "node counts must be ≥ 1"));
+                }
+                let total = thickness * angle * if spectral { wavelength } else { 1 };
+                if thickness > MAX_AXIS_NODES || angle > MAX_AXIS_NODES || total > MAX_NODES {
+                    return Err(Error::invalid(
+                        "resolution",
+                        format!("at most {MAX_AXIS_NODES} nodes per axis and {MAX_NODES} in all"),
+                    ));
+                }
+            }
+            Resolution::MaxError(e) => {
+                if !(e > 0.0 && e.is_finite()) {
+                    return Err(Error::invalid(
+                        "max-error",
+                        format!("must be a positive number, got {e}"),
+                    ));
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// A stable hex digest of everything that determines the table (stack,
+    /// layer, ranges, resolution or error target, kind, sampling, precision,
+    /// format version): a renderer keys its cache of baked tables on it.
+    pub fn cache_key(&self) -> String {
+        // serde_json writes struct fields in declaration order and floats
+        // exactly (shortest round-trip), so the text is a stable identity.
+        let text = serde_json::to_string(&(FORMAT_VERSION, self)).unwrap_or_default();
+        format!("{:016x}", fnv1a64(text.as_bytes()))
+    }
+}
+
+/// cos 89°, the default smallest cos θ. At exactly grazing incidence every
+/// stack reflects fully, but a free-standing film (same medium on both
+/// sides) of vanishing thickness reflects nothing: R jumps at the corner
+/// (0 nm, 90°), which no grid can interpolate. Up to 89° it is steep but
+/// smooth; beyond, the sampler clamps to the 89° row.
+pub const DEFAULT_COS_MIN: f64 = 0.017_452_406_437_283_51;
+
+/// Caps that keep a typo (`--resolution 1000000,…`) from exhausting memory.
+pub const MAX_AXIS_NODES: usize = 1 << 16;
+pub const MAX_NODES: usize = 1 << 26;
+
+/// FNV-1a: tiny, dependency-free and fixed forever (unlike std's hasher).
+fn fnv1a64(bytes: &[u8]) -> u64 {
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    for &b in bytes {
+        h ^= u64::from(b);
+        h = h.wrapping_mul(0x0000_0100_0000_01b3);
+    }
+    h
+}

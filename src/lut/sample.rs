@@ -1,0 +1,203 @@
+//! The in-memory table and its allocation-free sampler.
+
+use super::axis::Locator;
+use super::header::{Header, COS_AXIS, FORMAT_VERSION, THICKNESS_AXIS, WAVELENGTH_AXIS};
+use super::Kind;
+
+/// A film's unpolarized reflectance and transmittance as linear sRGB.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct FilmRgb {
+    pub reflectance: [f32; 3],
+    pub transmittance: [f32; 3],
+}
+
+/// A loaded or freshly baked table.
+///
+/// Values live in one contiguous f32 array, thickness fastest: for the rgb
+/// kind `[cos][thickness][6]` (reflectance R, G, B, transmittance R, G, B),
+/// for the spectral kind `[wavelength][cos][thickness][2]` (R, T).
+#[derive(Clone, Debug)]
+pub struct Lut {
+    header: Header,
+    thickness: Locator,
+    cos: Locator,
+    wavelength: Option<Locator>,
+    data: Vec<f32>,
+}
+
+pub(crate) const RGB_CHANNELS: [&str; 6] = [
+    "reflectance.R",
+    "reflectance.G",
+    "reflectance.B",
+    "transmittance.R",
+    "transmittance.G",
+    "transmittance.B",
+];
+pub(crate) const SPECTRAL_CHANNELS: [&str; 2] = ["reflectance", "transmittance"];
+
+pub(crate) fn channel_names(kind: Kind) -> &'static [&'static str] {
+    match kind {
+        Kind::Rgb => &RGB_CHANNELS,
+        Kind::Spectral => &SPECTRAL_CHANNELS,
+    }
+}
+
+impl Lut {
+    /// Checks that the header describes `data` (names, order and count of
+    /// axes and channels, increasing finite nodes, node counts against the
+    /// value count) and builds the lookup. The error says what disagrees.
+    pub(crate) fn from_parts(header: Header, data: Vec<f32>) -> Result<Lut, String> {
+        if header.version != FORMAT_VERSION {
+            return Err(format!(
+                "format version {} (this irid reads version {FORMAT_VERSION})",
+                header.version
+            ));
+        }
+        let want_axes: &[&str] = match header.kind {
+            Kind::Rgb => &[THICKNESS_AXIS, COS_AXIS],
+            Kind::Spectral => &[THICKNESS_AXIS, COS_AXIS, WAVELENGTH_AXIS],
+        };
+        let names: Vec<&str> = header.axes.iter().map(|a| a.name.as_str()).collect();
+        if names != want_axes {
+            return Err(format!(
+                "header axes {names:?}, a {} table has {want_axes:?}",
+                header.kind
+            ));
+        }
+        if header.x_axis != THICKNESS_AXIS || header.y_axis != COS_AXIS {
+            return Err(format!(
+                "header x_axis/y_axis are {}/{}, expected {THICKNESS_AXIS}/{COS_AXIS}",
+                header.x_axis, header.y_axis
+            ));
+        }
+        for axis in &header.axes {
+            if axis.nodes.is_empty() {
+                return Err(format!("axis {} has no nodes", axis.name));
+            }
+            if axis.nodes.iter().any(|x| !x.is_finite())
+                || axis.nodes.windows(2).any(|w| w[1] <= w[0])
+            {
+                return Err(format!(
+                    "axis {} nodes must be finite and strictly increasing",
+                    axis.name
+                ));
+            }
+        }
+        let cos = &header.axes[1].nodes;
+        if cos[0] < 0.0 || cos[cos.len() - 1] > 1.0 {
+            return Err("axis cos_theta nodes must lie in [0, 1]".into());
+        }
+        let want_channels = channel_names(header.kind);
+        let channels: Vec<&str> = header.channels.iter().map(|c| c.name.as_str()).collect();
+        if channels != want_channels {
+            return Err(format!(
+                "header channels {channels:?}, a {} table has {want_channels:?}",
+                header.kind
+            ));
+        }
+        let nodes: usize = header.axes.iter().map(|a| a.nodes.len()).product();
+        if nodes.checked_mul(want_channels.len()) != Some(data.len()) {
+            return Err(format!(
+                "header axes give {} nodes × {} channels but the image holds {} values",
+                nodes,
+                want_channels.len(),
+                data.len()
+            ));
+        }
+        Ok(Lut {
+            thickness: Locator::new(&header.axes[0].nodes),
+            cos: Locator::new(&header.axes[1].nodes),
+            wavelength: header.axes.get(2).map(|a| Locator::new(&a.nodes)),
+            header,
+            data,
+        })
+    }
+
+    pub fn header(&self) -> &Header {
+        &self.header
+    }
+
+    pub(crate) fn header_mut(&mut self) -> &mut Header {
+        &mut self.header
+    }
+
+    pub fn kind(&self) -> Kind {
+        self.header.kind
+    }
+
+    /// The raw values in the layout described on [`Lut`].
+    pub fn data(&self) -> &[f32] {
+        &self.data
+    }
+
+    /// Bilinear in thickness and cos θ. Inputs outside an axis are clamped
+    /// to its end (NaN to its start): the table never extrapolates. On a
+    /// spectral table every component is NaN. Allocates nothing.
+    #[inline]
+    pub fn sample_rgb(&self, thickness_nm: f32, cos_theta: f32) -> FilmRgb {
+        if self.header.kind != Kind::Rgb {
+            return FilmRgb {
+                reflectance: [f32::NAN; 3],
+                transmittance: [f32::NAN; 3],
+            };
+        }
+        let (i, fx) = self.thickness.locate(thickness_nm);
+        let (j, fy) = self.cos.locate(cos_theta);
+        let nt = self.thickness.len();
+        let dx = if nt > 1 { 6 } else { 0 };
+        let dy = if self.cos.len() > 1 { 6 * nt } else { 0 };
+        let v: [f32; 6] = bilerp(&self.data, (j * nt + i) * 6, dx, dy, fx, fy);
+        FilmRgb {
+            reflectance: [v[0], v[1], v[2]],
+            transmittance: [v[3], v[4], v[5]],
+        }
+    }
+
+    /// Trilinear (R, T) at one wavelength; clamped like [`Lut::sample_rgb`].
+    /// On an rgb table both are NaN. Allocates nothing.
+    #[inline]
+    pub fn sample_spectral(
+        &self,
+        thickness_nm: f32,
+        cos_theta: f32,
+        wavelength_nm: f32,
+    ) -> (f32, f32) {
+        let Some(wl) = &self.wavelength else {
+            return (f32::NAN, f32::NAN);
+        };
+        let (i, fx) = self.thickness.locate(thickness_nm);
+        let (j, fy) = self.cos.locate(cos_theta);
+        let (k, fz) = wl.locate(wavelength_nm);
+        let nt = self.thickness.len();
+        let plane = nt * self.cos.len() * 2;
+        let dx = if nt > 1 { 2 } else { 0 };
+        let dy = if self.cos.len() > 1 { 2 * nt } else { 0 };
+        let dz = if wl.len() > 1 { plane } else { 0 };
+        let base = k * plane + (j * nt + i) * 2;
+        let a: [f32; 2] = bilerp(&self.data, base, dx, dy, fx, fy);
+        let b: [f32; 2] = bilerp(&self.data, base + dz, dx, dy, fx, fy);
+        (a[0] + fz * (b[0] - a[0]), a[1] + fz * (b[1] - a[1]))
+    }
+}
+
+#[inline]
+fn bilerp<const N: usize>(
+    data: &[f32],
+    base: usize,
+    dx: usize,
+    dy: usize,
+    fx: f32,
+    fy: f32,
+) -> [f32; N] {
+    let v00 = &data[base..base + N];
+    let v10 = &data[base + dx..base + dx + N];
+    let v01 = &data[base + dy..base + dy + N];
+    let v11 = &data[base + dy + dx..base + dy + dx + N];
+    let mut out = [0.0; N];
+    for k in 0..N {
+        let lo = v00[k] + fx * (v10[k] - v00[k]);
+        let hi = v01[k] + fx * (v11[k] - v01[k]);
+        out[k] = lo + fy * (hi - lo);
+    }
+    out
+}

@@ -1,0 +1,258 @@
+//! Splitting a stack around one layer, so that the response as a function of
+//! that layer's thickness costs one complex rotation and one division per
+//! polarization.
+//!
+//! With the sub-stack A above the varying layer (ambient down to the layer's
+//! medium, seen as semi-infinite) and B below it (the layer's medium down to
+//! the substrate), the multiple reflections inside the layer sum to Airy's
+//!
+//! ```text
+//! r = r_A + t_A t'_A r_B φ² / (1 − r'_A r_B φ²)      t = t_A t_B φ / (1 − r'_A r_B φ²)
+//! ```
+//!
+//! with φ = e^{i k0 q d}. r', t' are A seen from below. Everything except φ is
+//! fixed for one wavelength and angle, so a thickness sweep reuses it. The
+//! interface coefficients are the solver's own ([`fresnel`]), whose t_ij t_ji
+//! product is sign-consistent, so the composition agrees with [`super::solve`]
+//! to rounding.
+
+use num_complex::Complex64 as C64;
+
+use super::solver::{fresnel, normal_index, Amplitudes, Response};
+
+/// r and t of a stack whose top medium may absorb or gain, for a given
+/// tangential index β² (the solver's [`super::solve_amplitudes`] takes the
+/// angle in a lossless top medium instead). `indices` holds the top medium,
+/// the finite layers and the bottom medium; `thicknesses_nm` the layers.
+/// r is referenced to the top interface, t to the bottom one.
+pub fn amplitudes_beta(
+    indices: &[C64],
+    thicknesses_nm: &[f64],
+    k0: f64,
+    beta_sq: f64,
+) -> Amplitudes {
+    debug_assert_eq!(indices.len(), thicknesses_nm.len() + 2);
+    let last = indices.len() - 1;
+    let mut n_below = indices[last];
+    let mut q_below = normal_index(n_below, beta_sq);
+    let zero = C64::new(0.0, 0.0);
+    let one = C64::new(1.0, 0.0);
+    let (mut gamma_s, mut gamma_p, mut ts, mut tp) = (zero, zero, one, one);
+    for j in (0..last).rev() {
+        let n_above = indices[j];
+        let q_above = normal_index(n_above, beta_sq);
+        if j + 1 < last {
+            let one_way = (C64::new(0.0, k0 * thicknesses_nm[j]) * q_below).exp();
+            let round_trip = one_way * one_way;
+            gamma_s *= round_trip;
+            gamma_p *= round_trip;
+            ts *= one_way;
+            tp *= one_way;
+        }
+        let f = fresnel(n_above, q_above, n_below, q_below);
+        let ds = (one + f.rs * gamma_s).inv();
+        let dp = (one + f.rp * gamma_p).inv();
+        gamma_s = (f.rs + gamma_s) * ds;
+        gamma_p = (f.rp + gamma_p) * dp;
+        ts *= f.ts * ds;
+        tp *= f.tp * dp;
+        n_below = n_above;
+        q_below = q_above;
+    }
+    Amplitudes {
+        rs: gamma_s,
+        rp: gamma_p,
+        ts,
+        tp,
+    }
+}
+
+/// Reusable buffers for [`VaryingLayer::new`], so that a bake allocates once
+/// per worker rather than once per wavelength and angle.
+#[derive(Default)]
+pub struct Scratch {
+    indices: Vec<C64>,
+    thicknesses_nm: Vec<f64>,
+}
+
+/// Everything about one (wavelength, angle) that does not depend on the
+/// varying layer's thickness. Index 0 of each pair is s, index 1 is p.
+#[derive(Clone, Copy, Debug)]
+pub struct VaryingLayer {
+    /// r_A.
+    r_above: [C64; 2],
+    /// t_A t'_A r_B.
+    x: [C64; 2],
+    /// r'_A r_B.
+    y: [C64; 2],
+    /// t_A t_B.
+    z: [C64; 2],
+    /// i k0 q of the varying layer: φ = exp(ikq · d).
+    ikq: C64,
+    /// Poynting factors turning |t|² into transmitted power (s, p).
+    t_power: [f64; 2],
+    /// cos θ0 = 0: no power enters, R = 1 and T = 0 whatever the stack.
+    grazing: bool,
+}
+
+impl VaryingLayer {
+    /// Splits the stack `indices` (ambient, N layers, substrate; the ambient
+    /// lossless) around layer `layer` (1-based from the ambient side). The
+    /// thickness of that layer in `thicknesses_nm` is ignored.
+    pub fn new(
+        indices: &[C64],
+        thicknesses_nm: &[f64],
+        layer: usize,
+        wavelength_nm: f64,
+        cos_theta0: f64,
+        scratch: &mut Scratch,
+    ) -> VaryingLayer {
+        debug_assert!(layer >= 1 && layer + 1 < indices.len());
+        let n0 = indices[0].re;
+        let beta_sq = n0 * n0 * (1.0 - cos_theta0 * cos_theta0);
+        let k0 = std::f64::consts::TAU / wavelength_nm;
+        let n_layer = indices[layer];
+        let q_layer = normal_index(n_layer, beta_sq);
+
+        // A from above: ambient, layers 1..layer-1, the varying medium.
+        let mut top: Vec<C64> = std::mem::take(&mut scratch.indices);
+        top.clear();
+        top.push(C64::new(n0, 0.0));
+        top.extend_from_slice(&indices[1..=layer]);
+        let a = amplitudes_beta(&top, &thicknesses_nm[..layer - 1], k0, beta_sq);
+        // A from below: the same media reversed.
+        top.reverse();
+        let mut t_rev = std::mem::take(&mut scratch.thicknesses_nm);
+        t_rev.clear();
+        t_rev.extend(thicknesses_nm[..layer - 1].iter().rev());
+        let a_up = amplitudes_beta(&top, &t_rev, k0, beta_sq);
+        // B: the varying medium down to the substrate.
+        let b = amplitudes_beta(&indices[layer..], &thicknesses_nm[layer..], k0, beta_sq);
+        scratch.indices = top;
+        scratch.thicknesses_nm = t_rev;
+
+        let n_sub = indices[indices.len() - 1];
+        let q_sub = normal_index(n_sub, beta_sq);
+        let q0 = n0 * cos_theta0;
+        let cos_sub = q_sub / n_sub;
+        VaryingLayer {
+            r_above: [a.rs, a.rp],
+            x: [a.ts * a_up.ts * b.rs, a.tp * a_up.tp * b.rp],
+            y: [a_up.rs * b.rs, a_up.rp * b.rp],
+            z: [a.ts * b.ts, a.tp * b.tp],
+            ikq: C64::new(0.0, k0) * q_layer,
+            t_power: [q_sub.re / q0, (n_sub * cos_sub.conj()).re / q0],
+            grazing: cos_theta0 <= 0.0,
+        }
+    }
+
+    /// φ = e^{i k0 q d} for a thickness of the varying layer.
+    #[inline]
+    pub fn phase(&self, thickness_nm: f64) -> C64 {
+        (self.ikq * thickness_nm).exp()
+    }
+
+    /// The complex amplitudes for the layer's phase factor φ.
+    #[inline]
+    pub fn amplitudes(&self, phase: C64) -> Amplitudes {
+        let p2 = phase * phase;
+        let one = C64::new(1.0, 0.0);
+        let ds = (one - self.y[0] * p2).inv();
+        let dp = (one - self.y[1] * p2).inv();
+        Amplitudes {
+            rs: self.r_above[0] + self.x[0] * p2 * ds,
+            rp: self.r_above[1] + self.x[1] * p2 * dp,
+            ts: self.z[0] * phase * ds,
+            tp: self.z[1] * phase * dp,
+        }
+    }
+
+    /// Power R and T for both polarizations at the layer's phase factor φ.
+    ///
+    /// Written without complex division: with D = 1 − r'_A r_B φ²,
+    /// R = |r_A D + t_A t'_A r_B φ²|² / |D|² and T = |t_A t_B|² |φ|² / |D|²
+    /// (times the Poynting factor), one real division per polarization.
+    #[inline]
+    pub fn response(&self, phase: C64) -> Response {
+        if self.grazing {
+            return Response {
+                rs: 1.0,
+                rp: 1.0,
+                ts: 0.0,
+                tp: 0.0,
+            };
+        }
+        let p2 = phase * phase;
+        let phase_sq = phase.norm_sqr();
+        let one = C64::new(1.0, 0.0);
+        let mut out = [(0.0, 0.0); 2];
+        for (pol, o) in out.iter_mut().enumerate() {
+            let den = one - self.y[pol] * p2;
+            let num = self.r_above[pol] * den + self.x[pol] * p2;
+            let inv = 1.0 / den.norm_sqr();
+            *o = (
+                num.norm_sqr() * inv,
+                self.z[pol].norm_sqr() * self.t_power[pol] * phase_sq * inv,
+            );
+        }
+        Response {
+            rs: out[0].0,
+            rp: out[1].0,
+            ts: out[0].1,
+            tp: out[1].1,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::optics::solve;
+
+    fn check(indices: &[C64], thick: &[f64], layer: usize) {
+        let mut scratch = Scratch::default();
+        for &wl in &[380.0, 550.0, 779.0] {
+            for &c in &[1.0, 0.8, 0.5, 0.2, 0.03, 0.0] {
+                let v = VaryingLayer::new(indices, thick, layer, wl, c, &mut scratch);
+                for &d in &[0.0, 13.0, 250.0, 999.0] {
+                    let mut t = thick.to_vec();
+                    t[layer - 1] = d;
+                    let want = solve(indices, &t, wl, c);
+                    let got = v.response(v.phase(d));
+                    for (g, w) in [
+                        (got.rs, want.rs),
+                        (got.rp, want.rp),
+                        (got.ts, want.ts),
+                        (got.tp, want.tp),
+                    ] {
+                        assert!(
+                            (g - w).abs() <= 1e-12 * (1.0 + w.abs()),
+                            "{indices:?} layer {layer} λ {wl} cos {c} d {d}: {g} vs {w}"
+                        );
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn agrees_with_solver_on_hard_stacks() {
+        let c = |n: f64, k: f64| C64::new(n, k);
+        // Soap film; absorbing film; gain film on gold; dense ambient (TIR).
+        check(&[c(1.0, 0.0), c(1.33, 0.0), c(1.0, 0.0)], &[0.0], 1);
+        check(&[c(1.0, 0.0), c(1.5, 0.15), c(1.33, 0.0)], &[0.0], 1);
+        check(&[c(1.0, 0.0), c(1.5, -0.05), c(0.18, 3.4)], &[0.0], 1);
+        check(&[c(1.5, 0.0), c(1.38, 0.0), c(1.0, 0.0)], &[0.0], 1);
+        // Varying a middle layer of a three-layer stack on metal.
+        let idx = [
+            c(1.0, 0.0),
+            c(2.4, 0.0),
+            c(1.38, 0.01),
+            c(1.6, 0.0),
+            c(0.05, 4.0),
+        ];
+        for layer in 1..=3 {
+            check(&idx, &[90.0, 120.0, 60.0], layer);
+        }
+    }
+}

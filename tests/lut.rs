@@ -1,0 +1,408 @@
+//! Lookup tables: the error of baked tables against the solver (for every
+//! shipped stack and at the hard angles), the file round trip, bad files,
+//! and the `bake`/`info`/`validate` commands.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use irid::color::Sampling;
+use irid::lut::{bake, validate, BakeSpec, Kind, Lut, Resolution};
+use irid::optics::{Layer, Material, Stack};
+
+fn luts_dir() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("luts")
+}
+
+fn scratch_dir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("irid-lut-test-{}-{name}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// A spec small enough for a test: 31 wavelengths instead of 471.
+fn quick_spec(stack: Stack, thickness_nm: (f64, f64), max_error: f64) -> BakeSpec {
+    let mut spec = BakeSpec::new(stack);
+    spec.thickness_nm = thickness_nm;
+    spec.sampling = Sampling::Uniform(31);
+    spec.resolution = Resolution::MaxError(max_error);
+    spec
+}
+
+fn worst(values: &[f64]) -> f64 {
+    values.iter().cloned().fold(0.0, f64::max)
+}
+
+/// Bakes, then validates at fresh random points: the table must meet both
+/// the requested error and the bound it recorded in its header.
+fn bake_and_check(name: &str, spec: &BakeSpec, target: f64) -> irid::lut::ErrorStats {
+    let lut = bake(spec).unwrap_or_else(|e| panic!("{name}: {e}"));
+    let bound = lut.header().error.bake_check.max_abs_all;
+    assert!(
+        bound <= target,
+        "{name}: bake check {bound} > target {target}"
+    );
+    let stats = validate(&lut, 3000, 7).unwrap();
+    let sizes: Vec<usize> = lut.header().axes.iter().map(|a| a.nodes.len()).collect();
+    eprintln!(
+        "{name}: nodes {sizes:?}, bake check {bound:.3e}, validation max {:.3e} mean {:.3e}",
+        worst(&stats.max_abs),
+        stats.mean_abs.iter().sum::<f64>() / stats.mean_abs.len() as f64
+    );
+    for r in &stats.regions {
+        eprintln!(
+            "  {:<9} {:>5} points  max {:.3e}  mean {:.3e}",
+            r.name, r.points, r.max_abs, r.mean_abs
+        );
+    }
+    assert!(
+        worst(&stats.max_abs) <= bound,
+        "{name}: validation max {} exceeds the recorded bound {bound}",
+        worst(&stats.max_abs)
+    );
+    stats
+}
+
+#[test]
+fn every_shipped_stack_meets_its_recorded_bound() {
+    // The gain film keeps away from its lasing poles (R → ∞ near grazing
+    // incidence and at other thicknesses), which no table can follow.
+    let default_cos = (irid::lut::DEFAULT_COS_MIN, 1.0);
+    let ranges = [
+        ("soap-film", (0.0, 1000.0), default_cos),
+        ("oil-on-water", (0.0, 1000.0), default_cos),
+        ("absorbing-film", (0.0, 1000.0), default_cos),
+        ("gain-on-gold", (200.0, 300.0), (0.2, 1.0)),
+        ("two-layer", (0.0, 500.0), default_cos),
+        ("mirror-10", (0.0, 200.0), default_cos),
+    ];
+    for (name, thickness, cos) in ranges {
+        let stack = Stack::load(&luts_dir().join(format!("{name}.toml"))).unwrap();
+        let mut spec = quick_spec(stack, thickness, 2e-3);
+        spec.cos_theta = cos;
+        bake_and_check(name, &spec, 2e-3);
+    }
+}
+
+fn dense_side_film() -> Stack {
+    Stack {
+        ambient: Material::constant(1.5, 0.0),
+        layers: vec![Layer {
+            material: Material::constant(1.38, 0.0),
+            thickness_nm: 100.0,
+        }],
+        substrate: Material::constant(1.0, 0.0),
+    }
+}
+
+#[test]
+fn critical_angle_and_grazing_from_the_dense_side() {
+    // Glass | MgF2-like film | air, seen from the glass: total internal
+    // reflection beyond θc = 41.8°, and incidence all the way to 90°.
+    let mut spec = quick_spec(dense_side_film(), (0.0, 400.0), 1e-3);
+    spec.cos_theta = (0.0, 1.0);
+    let stats = bake_and_check("dense side", &spec, 1e-3);
+    let lut = bake(&spec).unwrap();
+    let cos_nodes = &lut.header().axes[1].nodes;
+    let cc = (1.0f64 - (1.0 / 1.5f64).powi(2)).sqrt();
+    assert!(
+        cos_nodes.iter().any(|&c| (c - cc).abs() < 1e-12),
+        "the critical angle is a node"
+    );
+    for region in ["critical", "grazing"] {
+        let r = stats
+            .regions
+            .iter()
+            .find(|r| r.name == region)
+            .unwrap_or_else(|| panic!("no {region} region reported"));
+        assert!(r.points > 50, "{region}: only {} points", r.points);
+        assert!(r.max_abs <= 1e-3, "{region}: max {}", r.max_abs);
+    }
+}
+
+#[test]
+fn graded_critical_angle_beats_a_uniform_grid_of_the_same_size() {
+    // The same node count, with and without the graded nodes around θc.
+    let mut spec = quick_spec(dense_side_film(), (100.0, 100.0), 1.0);
+    spec.cos_theta = (0.0, 1.0);
+    spec.resolution = Resolution::Nodes {
+        thickness: 1,
+        angle: 65,
+        wavelength: 1,
+    };
+    let graded = validate(&bake(&spec).unwrap(), 4000, 3).unwrap();
+    let mut uniform_spec = spec.clone();
+    // A substrate of k = 1e-9 has no sharp critical angle for the baker to
+    // grade around, yet the same response to 1e-7.
+    uniform_spec.stack.substrate = Material::constant(1.0, 1e-9);
+    let uniform = validate(&bake(&uniform_spec).unwrap(), 4000, 3).unwrap();
+    eprintln!(
+        "65 angle nodes: graded max {:.3e}, uniform max {:.3e}",
+        worst(&graded.max_abs),
+        worst(&uniform.max_abs)
+    );
+    assert!(worst(&graded.max_abs) * 5.0 < worst(&uniform.max_abs));
+}
+
+#[test]
+fn free_standing_film_at_grazing_incidence() {
+    // A soap film near 89°, where the response changes fastest (around zero
+    // thickness its scale shrinks with cos θ).
+    let stack = Stack::load(&luts_dir().join("soap-film.toml")).unwrap();
+    let mut spec = quick_spec(stack, (0.0, 300.0), 1e-3);
+    spec.cos_theta = (irid::lut::DEFAULT_COS_MIN, 0.2);
+    let stats = bake_and_check("soap film, 78°–89°", &spec, 1e-3);
+    let grazing = stats.regions.iter().find(|r| r.name == "grazing").unwrap();
+    assert!(grazing.max_abs <= 1e-3);
+}
+
+#[test]
+fn spectral_table_and_trilinear_sampling() {
+    let stack = Stack::load(&luts_dir().join("oil-on-water.toml")).unwrap();
+    let mut spec = quick_spec(stack, (100.0, 500.0), 2e-3);
+    spec.kind = Kind::Spectral;
+    spec.wavelength_nm = (400.0, 700.0);
+    let lut = bake(&spec).unwrap();
+    let h = lut.header();
+    assert_eq!(h.axes.len(), 3);
+    assert_eq!(h.y_blocks.as_deref(), Some("wavelength_nm"));
+    // Nodes reproduce the solver exactly (to f32).
+    let (t, c, w) = (h.axes[0].nodes[3], h.axes[1].nodes[2], h.axes[2].nodes[4]);
+    let mut stack = h.stack.clone();
+    stack.layers[0].thickness_nm = t;
+    let direct = stack.response(w, c).unwrap();
+    let (r, tr) = lut.sample_spectral(t as f32, c as f32, w as f32);
+    assert!((f64::from(r) - direct.r()).abs() < 1e-6);
+    assert!((f64::from(tr) - direct.t()).abs() < 1e-6);
+    let stats = validate(&lut, 2000, 5).unwrap();
+    assert!(worst(&stats.max_abs) <= h.error.bake_check.max_abs_all);
+    // The table spans 400–700 nm only: no colour figures.
+    assert!(stats.max_de2000.is_none());
+    assert!(lut.sample_rgb(t as f32, c as f32).reflectance[0].is_nan());
+}
+
+fn small_table(half: bool) -> Lut {
+    let stack = Stack::load(&luts_dir().join("two-layer.toml")).unwrap();
+    let mut spec = quick_spec(stack, (50.0, 400.0), 1.0);
+    spec.resolution = Resolution::Nodes {
+        thickness: 37,
+        angle: 11,
+        wavelength: 1,
+    };
+    spec.half = half;
+    bake(&spec).unwrap()
+}
+
+#[test]
+fn write_read_round_trip_is_bit_exact() {
+    let dir = scratch_dir("roundtrip");
+    for half in [false, true] {
+        let lut = small_table(half);
+        let path = dir.join(format!("t-{half}.exr"));
+        lut.write(&path).unwrap();
+        let back = Lut::load(&path).unwrap();
+        assert_eq!(back.header(), lut.header());
+        let bits = |l: &Lut| l.data().iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+        assert_eq!(bits(&back), bits(&lut), "half = {half}");
+        // No temporary file is left beside the table.
+        let left: Vec<_> = std::fs::read_dir(&dir)
+            .unwrap()
+            .filter_map(|e| e.ok())
+            .filter(|e| e.file_name().to_string_lossy().contains("tmp"))
+            .collect();
+        assert!(left.is_empty());
+    }
+    // f16 tables are about half the size of f32 ones and their recorded
+    // error includes the rounding.
+    let f32_size = std::fs::metadata(dir.join("t-false.exr")).unwrap().len();
+    let f16_size = std::fs::metadata(dir.join("t-true.exr")).unwrap().len();
+    assert!(f16_size < f32_size);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn sampling_clamps_outside_the_axes() {
+    let lut = small_table(false);
+    let inside = lut.sample_rgb(50.0, 1.0);
+    assert_eq!(lut.sample_rgb(-20.0, 3.0), inside);
+    assert_eq!(lut.sample_rgb(f32::NAN, 1.0), inside);
+    let far = lut.sample_rgb(400.0, lut.header().axes[1].nodes[0] as f32);
+    assert_eq!(lut.sample_rgb(1e9, -1.0), far);
+}
+
+#[test]
+fn cache_key_follows_the_spec() {
+    let stack = Stack::load(&luts_dir().join("soap-film.toml")).unwrap();
+    let a = quick_spec(stack, (0.0, 100.0), 1e-3);
+    assert_eq!(a.cache_key(), a.clone().cache_key());
+    let mut b = a.clone();
+    b.half = true;
+    let mut c = a.clone();
+    c.stack.layers[0].thickness_nm = 501.0;
+    let mut d = a.clone();
+    d.thickness_nm.1 = 101.0;
+    let keys = [a.cache_key(), b.cache_key(), c.cache_key(), d.cache_key()];
+    for i in 0..keys.len() {
+        for j in 0..i {
+            assert_ne!(keys[i], keys[j]);
+        }
+    }
+}
+
+/// Rewrites the `irid` header of a table file in place of the original,
+/// through the exr crate, keeping the pixels.
+fn rewrite_header(src: &Path, dst: &Path, edit: impl Fn(&mut serde_json::Value)) {
+    use exr::prelude::*;
+    let mut image = read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .all_channels()
+        .first_valid_layer()
+        .all_attributes()
+        .from_file(src)
+        .unwrap();
+    let key = Text::from("irid");
+    let AttributeValue::Text(text) = &image.layer_data.attributes.other[&key] else {
+        panic!("no text header");
+    };
+    let mut json: serde_json::Value = serde_json::from_str(&text.to_string()).unwrap();
+    edit(&mut json);
+    image.layer_data.attributes.other.insert(
+        key,
+        AttributeValue::Text(Text::from(json.to_string().as_str())),
+    );
+    image.write().to_file(dst).unwrap();
+}
+
+#[test]
+fn bad_files_give_clear_errors() {
+    let dir = scratch_dir("bad");
+    let good = dir.join("good.exr");
+    small_table(false).write(&good).unwrap();
+    let bytes = std::fs::read(&good).unwrap();
+
+    let expect = |path: &Path, needle: &str| {
+        let err = Lut::load(path).expect_err("must fail").to_string();
+        assert!(err.contains(&path.display().to_string()), "{err}");
+        assert!(err.contains(needle), "'{err}' lacks '{needle}'");
+    };
+
+    let truncated = dir.join("truncated.exr");
+    std::fs::write(&truncated, &bytes[..bytes.len() * 2 / 3]).unwrap();
+    expect(&truncated, "OpenEXR");
+
+    let garbage = dir.join("garbage.exr");
+    let mut corrupt = bytes.clone();
+    for b in corrupt.iter_mut().skip(8).take(64) {
+        *b = 0xA5;
+    }
+    std::fs::write(&garbage, &corrupt).unwrap();
+    expect(&garbage, "OpenEXR");
+
+    let version = dir.join("version.exr");
+    rewrite_header(&good, &version, |j| j["version"] = 99.into());
+    expect(&version, "format version 99");
+
+    let mismatch = dir.join("mismatch.exr");
+    rewrite_header(&good, &mismatch, |j| {
+        let nodes = j["axes"][1]["nodes"].as_array_mut().unwrap();
+        nodes.pop();
+    });
+    expect(&mismatch, "values");
+
+    let channels = dir.join("channels.exr");
+    rewrite_header(&good, &channels, |j| j["kind"] = "spectral".into());
+    expect(&channels, "channel");
+
+    let missing = dir.join("missing.exr");
+    expect(&missing, "No such file");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+fn irid(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_irid"))
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+#[test]
+fn bake_info_validate_commands() {
+    let dir = scratch_dir("cli");
+    let out = dir.join("soap.exr");
+    let stack = luts_dir().join("soap-film.toml");
+    let o = irid(&[
+        "bake",
+        stack.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+        "--thickness",
+        "100:400",
+        "--sampling",
+        "uniform:16",
+        "--max-error",
+        "3e-3",
+        "--validate-points",
+        "500",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let info = irid(&["info", out.to_str().unwrap()]);
+    let text = String::from_utf8_lossy(&info.stdout);
+    assert!(info.status.success());
+    for needle in [
+        "thickness_nm",
+        "cos_theta",
+        "soap film",
+        "uniform:16",
+        "bake check",
+        "CIEDE2000",
+    ] {
+        assert!(text.contains(needle), "info lacks {needle}:\n{text}");
+    }
+    let v = irid(&[
+        "validate",
+        out.to_str().unwrap(),
+        "--points",
+        "300",
+        "--json",
+    ]);
+    assert!(v.status.success());
+    let json: serde_json::Value = serde_json::from_slice(&v.stdout).unwrap();
+    for key in [
+        "max_abs",
+        "mean_abs",
+        "p99_abs",
+        "max_de2000",
+        "mean_de2000",
+    ] {
+        assert!(json.get(key).is_some(), "no {key}");
+    }
+    assert_eq!(json["max_abs"].as_array().unwrap().len(), 6);
+    let strict = irid(&[
+        "validate",
+        out.to_str().unwrap(),
+        "--points",
+        "300",
+        "--max-error",
+        "1e-9",
+    ]);
+    assert_eq!(strict.status.code(), Some(1));
+
+    let bad = irid(&["info", stack.to_str().unwrap()]);
+    assert_eq!(bad.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&bad.stderr);
+    assert!(
+        err.starts_with("irid: ") && err.contains("soap-film.toml"),
+        "{err}"
+    );
+    let bad_layer = irid(&[
+        "bake",
+        stack.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+        "--layer",
+        "3",
+    ]);
+    assert_eq!(bad_layer.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&bad_layer.stderr).contains("layer"));
+    let _ = std::fs::remove_dir_all(&dir);
+}
