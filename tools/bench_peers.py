@@ -36,36 +36,31 @@ os.environ.setdefault("OMP_NUM_THREADS", str(THREADS_DEFAULT))
 import numpy as np  # noqa: E402
 
 TOLERANCE = 1e-9
-STACKS = ["soap", "absorbing", "two-layer", "mirror-front", "mirror-back"]
+STACKS = ["soap", "absorbing", "gain-on-gold", "two-layer", "mirror-front", "mirror-back"]
 
 
 def irid_bin():
     return os.environ.get("IRID_BIN", "target/release/irid")
 
 
-def run_irid(stack, wavelengths, angles, threads, repeat, thicknesses=None):
-    """Runs the grid in irid; returns its JSON document and R, T arrays
-    shaped [thickness][angle][wavelength] (thickness axis dropped if None)."""
+def run_irid(stack, threads, repeat, *extra):
+    """Runs `irid bench --grid` and returns its JSON document and R, T arrays
+    shaped [angle][thickness][wavelength]."""
     with tempfile.TemporaryDirectory() as tmp:
         raw = os.path.join(tmp, "grid.raw")
         cmd = [
             irid_bin(), "bench", "--grid", stack,
-            "--wavelengths", wavelengths, "--angles", angles,
-            "--threads", str(threads), "--repeat", str(repeat), "--raw", raw,
+            "--threads", str(threads), "--repeat", str(repeat), "--raw", raw, *extra,
         ]
-        if thicknesses is not None:
-            cmd += ["--thicknesses", thicknesses]
         out = subprocess.run(cmd, check=True, capture_output=True, text=True)
         doc = json.loads(out.stdout)
         data = np.fromfile(raw, dtype="<f8")
+    assert doc["layout"] == ["angle", "thickness", "wavelength"], doc["layout"]
     n_w, n_a = len(doc["wavelengths_nm"]), len(doc["angles_deg"])
     n_t = 1 if doc["thicknesses_nm"] is None else len(doc["thicknesses_nm"])
     half = data.size // 2
-    shape = (n_t, n_a, n_w)
-    r, t = data[:half].reshape(shape), data[half:].reshape(shape)
-    if thicknesses is None:
-        r, t = r[0], t[0]
-    return doc, r, t
+    shape = (n_a, n_t, n_w)
+    return doc, data[:half].reshape(shape), data[half:].reshape(shape)
 
 
 def indices(doc):
@@ -124,6 +119,89 @@ def max_diff(a_r, a_t, b_r, b_t):
     return float(max(np.max(np.abs(a_r - b_r)), np.max(np.abs(a_t - b_t))))
 
 
+def compare(r, t, pr, pt, grazing):
+    """How a peer's R, T differ from irid's: max |dR| and |dT| away from
+    grazing incidence, max of either at exactly 90 degrees (`grazing`: a mask
+    broadcastable to r), and how many points the peer left NaN."""
+    bad = ~(np.isfinite(pr) & np.isfinite(pt))
+    pr, pt = np.where(bad, r, pr), np.where(bad, t, pt)
+    dr, dt = np.abs(r - pr), np.abs(t - pt)
+    grazing = np.broadcast_to(grazing, r.shape)
+    away = ~grazing
+    return {
+        "R": float(dr[away].max(initial=0.0)),
+        "T": float(dt[away].max(initial=0.0)),
+        "grazing": float(np.maximum(dr, dt)[grazing].max(initial=0.0)),
+        "nan": int(bad.sum()),
+        "points": int(r.size),
+    }
+
+
+def agrees(c):
+    return max(c["R"], c["T"], c["grazing"]) <= TOLERANCE and c["nan"] == 0
+
+
+def finding(where, peer, c):
+    parts = []
+    if c["R"] > TOLERANCE:
+        parts.append(f"R by up to {c['R']:.2e}")
+    if c["T"] > TOLERANCE:
+        parts.append(f"T by up to {c['T']:.2e}")
+    if c["grazing"] > TOLERANCE:
+        parts.append(f"R or T by {c['grazing']:.2e} at exactly 90°")
+    if c["nan"]:
+        parts.append(f"NaN at {c['nan']} of {c['points']} points")
+    return f"{where}: {peer} differs from irid in " + ", ".join(parts)
+
+
+def colour_dispersion_probe():
+    """A one-film dispersive stack at 45°: does colour-science agree with
+    Byrnes' tmm at every wavelength, or only at the first one given?"""
+    import tmm
+
+    w = np.array([400.0, 500.0, 600.0])
+    n = np.array([[1.0, 1.0, 1.0], [2.7, 2.5, 2.4], [1.47, 1.46, 1.45]])
+    r, _ = colour_grid(n.T, [60.0], np.array([45.0]), w)
+    ref = []
+    for i, wl in enumerate(w):
+        sp = [tmm.coh_tmm(p, list(n[:, i]), [np.inf, 60.0, np.inf], math.radians(45), wl) for p in "sp"]
+        ref.append(0.5 * (sp[0]["R"] + sp[1]["R"]))
+    ok = np.abs(r[0] - np.array(ref)) <= TOLERANCE
+    if ok.all():
+        return None
+    return (
+        "colour-science probe (one dispersive film, 45°, 400/500/600 nm): agrees with Byrnes' tmm at "
+        + ", ".join(f"{wl:.0f} nm" for wl, good in zip(w, ok) if good)
+        + " and not at "
+        + ", ".join(f"{wl:.0f} nm" for wl, good in zip(w, ok) if not good)
+        + ": it appears to refract every wavelength with the indices of the first one"
+        if ok[0] and not ok[1:].any()
+        else f"colour-science probe: |ΔR| = {np.abs(r[0] - np.array(ref))} against Byrnes' tmm"
+    )
+
+
+def tmm_faster_absorbing_substrate_probe():
+    """One film on an absorbing substrate at 45°: which of R_s, R_p, T_s, T_p
+    does tmm-faster compute differently from Byrnes' tmm?"""
+    import tmm
+    import tmm_faster
+
+    n = [1.0, 1.5, 0.4 + 2.4j]
+    d = [np.inf, 250.0, np.inf]
+    got = tmm_faster.calc_coherent(np.array([n], dtype=complex), d, np.array([45.0]), np.array([550.0]))
+    sp = {p: tmm.coh_tmm(p, n, d, math.radians(45), 550.0) for p in "sp"}
+    want = {"R_s": sp["s"]["R"], "R_p": sp["p"]["R"], "T_s": sp["s"]["T"], "T_p": sp["p"]["T"]}
+    off = [k for k, v in want.items() if not abs(float(got[k][0, 0]) - v) <= TOLERANCE]
+    if not off:
+        return None
+    return (
+        "tmm-faster probe (film on a substrate with n = 0.4 + 2.4i, 45°, 550 nm): it differs from Byrnes' tmm in "
+        + ", ".join(f"{k} ({float(got[k][0, 0]):.6f} vs {want[k]:.6f})" for k in off)
+        + "; the other components agree, so the two define p-transmittance into an absorbing "
+        "substrate differently (Byrnes and irid: Re(n conj(cos θ)) over the incident flux)"
+    )
+
+
 def cpu_model():
     try:
         with open("/proc/cpuinfo") as f:
@@ -145,7 +223,9 @@ def general_rows(args, failures, findings):
     """One wavelength x angle grid per stack, every implementation."""
     rows = []
     for stack in STACKS:
-        doc, r, t = run_irid(stack, args.wavelengths, args.angles, args.threads, args.repeat)
+        doc, r, t = run_irid(stack, args.threads, args.repeat,
+                             "--wavelengths", args.wavelengths, "--angles", args.angles)
+        r, t = r[:, 0, :], t[:, 0, :]
         n = indices(doc)
         w = np.array(doc["wavelengths_nm"])
         a = np.array(doc["angles_deg"])
@@ -154,18 +234,14 @@ def general_rows(args, failures, findings):
         irid_s = doc["seconds"]
         row = {"stack": stack, "points": points, "irid": irid_s}
 
+        grazing = (a >= 90.0)[:, None]
         secs, (pr, pt) = best_of(args.repeat, lambda: tmm_faster_grid(n, d, a, w))
         row["tmm-faster"] = secs
-        row["tmm-faster diff"] = max_diff(r, t, pr, pt)
+        row["tmm-faster cmp"] = compare(r, t, pr, pt, grazing)
 
         secs, (pr, pt) = best_of(args.repeat, lambda: colour_grid(n, d, a, w))
         row["colour"] = secs
-        bad = ~(np.isfinite(pr) & np.isfinite(pt))
-        row["colour nan"] = int(bad.sum())
-        pr, pt = np.where(bad, r, pr), np.where(bad, t, pt)
-        row["colour diff"] = max_diff(r, t, pr, pt)
-        normal = a == 0.0
-        row["colour diff normal"] = max_diff(r[normal], t[normal], pr[normal], pt[normal])
+        row["colour cmp"] = compare(r, t, pr, pt, grazing)
 
         # Byrnes' tmm is pure Python, one point per call: time it on every
         # step-th wavelength and scale per point.
@@ -173,22 +249,15 @@ def general_rows(args, failures, findings):
         sub_w, sub_n = w[::step], n[::step]
         secs, (pr, pt) = best_of(1, lambda: byrnes_grid(sub_n, d, a, sub_w))
         row["tmm"] = secs * points / pr.size
-        row["tmm diff"] = max_diff(r[:, ::step], t[:, ::step], pr, pt)
-        # Byrnes' tmm is the reference implementation irid's solver was
-        # verified against; tmm-faster solves the same equations. A
-        # disagreement with either fails the run. colour-science's
-        # disagreements are reported as findings about colour-science only
-        # where Byrnes' tmm agrees with irid on the same stack.
-        for peer in ("tmm-faster", "tmm"):
-            if not row[f"{peer} diff"] <= TOLERANCE:
-                failures.append(f"{stack}: {peer} differs from irid by {row[f'{peer} diff']:.3e}")
-        if row["colour nan"] or not row["colour diff"] <= TOLERANCE:
-            findings.append(
-                f"{stack}: colour-science differs from irid by up to {row['colour diff']:.2e} "
-                f"({row['colour diff normal']:.1e} at normal incidence) and returns NaN at "
-                f"{row['colour nan']} of {points} points; Byrnes' tmm agrees with irid there to "
-                f"{row['tmm diff']:.1e}"
-            )
+        row["tmm cmp"] = compare(r[:, ::step], t[:, ::step], pr, pt, grazing)
+        # Byrnes' tmm is the reference irid's solver was verified against: a
+        # disagreement with it fails the run. The other peers' disagreements
+        # are reported as findings about them, since tmm agrees with irid.
+        if not agrees(row["tmm cmp"]):
+            failures.append(finding(stack, "Byrnes' tmm", row["tmm cmp"]))
+        for peer, label in (("tmm-faster", "tmm-faster"), ("colour", "colour-science")):
+            if not agrees(row[f"{peer} cmp"]):
+                findings.append(finding(stack, label, row[f"{peer} cmp"]))
         rows.append(row)
         print(
             f"  {stack:13s} irid {irid_s * 1e3:8.2f} ms   tmm-faster x{row['tmm-faster'] / irid_s:6.1f}"
@@ -198,15 +267,15 @@ def general_rows(args, failures, findings):
     return rows
 
 
-def bake_rows(args, failures):
-    """A full thickness x angle x wavelength table: irid's grid against
-    tmm-faster called once per thickness node."""
+def bake_rows(args, failures, findings):
+    """A full table: irid's baker (an rgb table with 1 nm integration, so
+    R at every thickness x angle node and every wavelength 360-830 nm) against
+    tmm-faster computing R at the same points, one call per thickness node.
+    The values are compared through irid's grid sweep over the same nodes,
+    which splits the stack around the varying layer the way the baker does."""
     rows = []
     for stack in args.bake_stacks:
-        doc, r, t = run_irid(
-            stack, args.bake_wavelengths, args.bake_angles, args.threads, args.repeat,
-            thicknesses=args.bake_thicknesses,
-        )
+        doc, r, t = run_irid(stack, args.threads, args.repeat, "--bake-nodes", args.bake_nodes)
         n = indices(doc)
         w = np.array(doc["wavelengths_nm"])
         a = np.array(doc["angles_deg"])
@@ -216,19 +285,39 @@ def bake_rows(args, failures):
         def peer():
             out_r = np.empty_like(r)
             out_t = np.empty_like(t)
-            for i, th in enumerate(doc["thicknesses_nm"]):
+            for k, th in enumerate(doc["thicknesses_nm"]):
                 d = list(base)
                 d[v] = th
-                out_r[i], out_t[i] = tmm_faster_grid(n, d, a, w)
+                out_r[:, k, :], out_t[:, k, :] = tmm_faster_grid(n, d, a, w)
             return out_r, out_t
 
         secs, (pr, pt) = best_of(1, peer)
-        diff = max_diff(r, t, pr, pt)
-        if not diff <= TOLERANCE:
-            failures.append(f"bake {stack}: tmm-faster differs from irid by {diff:.3e}")
-        rows.append({"stack": stack, "points": r.size, "irid": doc["seconds"],
-                     "tmm-faster": secs, "diff": diff})
-        print(f"  bake {stack:13s} irid {doc['seconds']:.3f} s   tmm-faster x{secs / doc['seconds']:.1f}",
+        grazing = (a >= 90.0)[:, None, None]
+        cmp = compare(r, t, pr, pt, grazing)
+        if not agrees(cmp):
+            findings.append(finding(f"bake {stack}", "tmm-faster", cmp))
+        # Byrnes' tmm at random points off grazing anchors irid's values.
+        import tmm
+
+        rng = np.random.default_rng(1)
+        worst = 0.0
+        off = np.flatnonzero(a < 90.0)
+        for _ in range(args.byrnes_samples):
+            ai, k, wi = rng.choice(off), rng.integers(r.shape[1]), rng.integers(r.shape[2])
+            d = [np.inf, *base, np.inf]
+            d[v + 1] = doc["thicknesses_nm"][k]
+            n_list = list(n[wi])
+            th = math.radians(a[ai])
+            sp = [tmm.coh_tmm(pol, n_list, d, th, w[wi]) for pol in ("s", "p")]
+            worst = max(worst, abs(r[ai, k, wi] - 0.5 * (sp[0]["R"] + sp[1]["R"])),
+                        abs(t[ai, k, wi] - 0.5 * (sp[0]["T"] + sp[1]["T"])))
+        if not worst <= TOLERANCE:
+            failures.append(f"bake {stack}: Byrnes' tmm differs from irid by {worst:.2e}")
+        rows.append({"stack": stack, "points": r.size, "bake": doc["bake_seconds"],
+                     "sweep": doc["seconds"], "tmm-faster": secs,
+                     "diff": max(cmp["R"], cmp["T"]), "tmm": worst})
+        print(f"  bake {stack:13s} irid bake {doc['bake_seconds']:.3f} s, sweep {doc['seconds']:.3f} s"
+              f"   tmm-faster {secs:.2f} s: x{secs / doc['bake_seconds']:.1f} / x{secs / doc['seconds']:.1f}",
               flush=True)
     return rows
 
@@ -253,15 +342,16 @@ def write_report(path, args, general, bake, failures, findings, command):
         f"Wavelengths `{args.wavelengths}` nm × angles `{args.angles}` °. Byrnes' `tmm` is timed on every "
         f"{args.byrnes_step}th wavelength and scaled per point.",
         "",
-        "| stack | points | irid (ms) | tmm-faster (ms) | ratio | colour-science (ms) | ratio | tmm (ms, scaled) | ratio | max diff (tmm, tmm-faster) |",
-        "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|",
+        "| stack | points | irid (ms) | tmm-faster (ms) | ratio | colour-science (ms) | ratio | tmm (ms, scaled) | ratio | max diff vs tmm | vs tmm-faster (R, T) |",
+        "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|",
     ]
     for r in general:
-        diff = max(r["tmm-faster diff"], r["tmm diff"])
+        tc, fc = r["tmm cmp"], r["tmm-faster cmp"]
+        diff = max(tc["R"], tc["T"])
         lines.append(
             f"| {r['stack']} | {r['points']} | {r['irid'] * 1e3:.2f} | {r['tmm-faster'] * 1e3:.2f} | "
             f"{r['tmm-faster'] / r['irid']:.1f}x | {r['colour'] * 1e3:.1f} | {r['colour'] / r['irid']:.0f}x | "
-            f"{r['tmm'] * 1e3:.0f} | {r['tmm'] / r['irid']:.0f}x | {diff:.1e} |"
+            f"{r['tmm'] * 1e3:.0f} | {r['tmm'] / r['irid']:.0f}x | {diff:.1e} | {fc['R']:.1e}, {fc['T']:.1e} |"
         )
     worst = min(r["tmm-faster"] / r["irid"] for r in general)
     lines += [
@@ -271,27 +361,37 @@ def write_report(path, args, general, bake, failures, findings, command):
         "",
         "## Baking a full table: thickness × angle × wavelength",
         "",
-        f"Thicknesses `{args.bake_thicknesses}` nm of the stack's varying layer × angles `{args.bake_angles}` ° × "
-        f"wavelengths `{args.bake_wavelengths}` nm; tmm-faster computes the same grid one thickness per call.",
+        f"`irid bench --grid STACK --bake-nodes {args.bake_nodes}`: irid's baker (`lut::bake`) builds an rgb table of "
+        f"{args.bake_nodes.replace(',', ' × ')} (thickness × angle) nodes with 1 nm integration, i.e. R at every node and "
+        "every wavelength 360–830 nm, then integrates to colour. tmm-faster computes R at the same "
+        "thickness × angle × wavelength points, one call per thickness node (no colour integration: "
+        "that is irid's extra work). irid's grid sweep evaluates the same points (the baker's "
+        "split-stack method, f64 output) and is the one compared for agreement.",
         "",
-        "| stack | points | irid (s) | tmm-faster (s) | ratio | max diff |",
-        "|---|---:|---:|---:|---:|---:|",
+        "| stack | points | irid bake (s) | irid sweep (s) | tmm-faster (s) | ratio vs bake | ratio vs sweep | max diff vs tmm (sampled) | vs tmm-faster |",
+        "|---|---:|---:|---:|---:|---:|---:|---:|---:|",
     ]
     for r in bake:
         lines.append(
-            f"| {r['stack']} | {r['points']} | {r['irid']:.3f} | {r['tmm-faster']:.3f} | "
-            f"{r['tmm-faster'] / r['irid']:.1f}x | {r['diff']:.1e} |"
+            f"| {r['stack']} | {r['points']} | {r['bake']:.3f} | {r['sweep']:.3f} | {r['tmm-faster']:.2f} | "
+            f"{r['tmm-faster'] / r['bake']:.1f}x | {r['tmm-faster'] / r['sweep']:.1f}x | {r['tmm']:.1e} | {r['diff']:.1e} |"
         )
     if bake:
-        worst = min(r["tmm-faster"] / r["irid"] for r in bake)
-        lines += ["", f"Target: ≥ 50x. Lowest ratio in this run: **{worst:.1f}x** "
-                  f"({'met' if worst >= 50 else 'NOT met'})."]
+        worst = min(r["tmm-faster"] / r["bake"] for r in bake)
+        lines += ["", f"Target: baking ≥ 50x faster than tmm-faster. Lowest ratio (vs the baker) in this run: "
+                  f"**{worst:.1f}x** ({'met' if worst >= 50 else 'NOT met'})."]
     lines += ["", "## Agreement", ""]
+    lines += [
+        "Byrnes' `tmm` is the reference: irid's solver was verified against it, a disagreement with it "
+        "beyond the tolerance fails this run. In the bake, it is evaluated at "
+        f"{args.byrnes_samples} random points off grazing incidence.",
+        "",
+    ]
     lines += [f"- FAILED: {f}" for f in failures] or [
-        "irid, Byrnes' tmm and tmm-faster agree to within the tolerance at every point."
+        "- irid agrees with Byrnes' tmm to within the tolerance at every point compared."
     ]
     if findings:
-        lines += ["", "colour-science (`multilayer_tmm`) does not agree everywhere; its timings are still shown:", ""]
+        lines += ["", "Where the other peers disagree with irid (and so with Byrnes' tmm); their timings are still shown:", ""]
         lines += [f"- {f}" for f in findings]
     tmp = path + ".tmp"
     with open(tmp, "w") as f:
@@ -310,19 +410,22 @@ def main():
         sys.exit("set OMP_NUM_THREADS to --threads before starting (OpenMP reads it once)")
     if args.quick:
         args.wavelengths, args.angles, args.byrnes_step = "380:780:20", "0:80:10", 4
-        args.bake_thicknesses, args.bake_angles, args.bake_wavelengths = "0:1000:50", "0:80:20", "380:780:40"
-        args.bake_stacks, args.repeat = ["soap"], 1
+        args.bake_nodes, args.bake_stacks, args.repeat = "16,8", ["soap"], 1
+        args.byrnes_samples = 50
     else:
         args.wavelengths, args.angles, args.byrnes_step = "380:780:1", "0:89:1", 20
-        args.bake_thicknesses, args.bake_angles, args.bake_wavelengths = "0:1000:2", "0:88:2", "380:780:5"
-        args.bake_stacks = ["soap", "mirror-front"]
+        args.bake_nodes, args.bake_stacks = "256,64", ["soap", "mirror-front"]
+        args.byrnes_samples = 500
     command = "IRID_BIN=" + irid_bin() + " python tools/bench_peers.py " + " ".join(sys.argv[1:])
     failures = []
     print("general evaluation:", flush=True)
     findings = []
     general = general_rows(args, failures, findings)
+    for probe in (colour_dispersion_probe(), tmm_faster_absorbing_substrate_probe()):
+        if probe:
+            findings.append(probe)
     print("baking:", flush=True)
-    bake = bake_rows(args, failures)
+    bake = bake_rows(args, failures, findings)
     os.makedirs(args.out, exist_ok=True)
     path = os.path.join(args.out, "peers.md")
     write_report(path, args, general, bake, failures, findings, command)

@@ -7,4 +7,5 @@ pub mod grid;
 pub mod machine;
 pub mod plot;
 pub mod report;
+pub mod run;
 pub mod stacks;

@@ -7,7 +7,9 @@
 
 use std::path::Path;
 
+use crate::color::Sampling;
 use crate::error::Result;
+use crate::lut::{BakeSpec, Kind, Resolution};
 use crate::optics::Stack;
 
 #[derive(Clone, Debug)]
@@ -19,6 +21,27 @@ pub struct BenchStack {
     /// Index (from the top, 0-based) of the layer whose thickness varies.
     pub varying_layer: usize,
     pub thickness_range_nm: (f64, f64),
+}
+
+impl BenchStack {
+    /// The rgb table the benchmark bakes for this stack: 1 nm integration
+    /// (the `irid bake` default) over its thickness range and every angle.
+    pub fn bake_spec(&self, thickness_nodes: usize, angle_nodes: usize, half: bool) -> BakeSpec {
+        BakeSpec {
+            layer: self.varying_layer + 1,
+            thickness_nm: self.thickness_range_nm,
+            cos_theta: (0.0, 1.0),
+            kind: Kind::Rgb,
+            sampling: Sampling::Exact,
+            resolution: Resolution::Nodes {
+                thickness: thickness_nodes,
+                angle: angle_nodes,
+                wavelength: 1,
+            },
+            half,
+            ..BakeSpec::new(self.stack.clone())
+        }
+    }
 }
 
 struct Def {
