@@ -25,7 +25,7 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
 use super::machine::Machine;
 use super::plot::{speed_vs_error_png, PlotPoint};
 use super::run::{Family, Method, Options, Row};
-use super::stacks::{descriptions, names};
+use super::stacks::{descriptions, find, names};
 use crate::color::Sampling;
 
 /// Errors below this are drawn at it on the log axis (the exact method's
@@ -213,11 +213,16 @@ pub fn markdown(rows: &[Row], options: &Options, machine: &Machine, command: &st
     for (name, description) in descriptions() {
         s.push_str(&format!("\n## {name}: {description}\n\n"));
         if let Some(r) = rows.iter().find(|r| r.stack == name) {
+            let gain = find(name)
+                .ok()
+                .flatten()
+                .is_some_and(|b| b.stack.layers.iter().any(|l| l.material.has_gain()));
             s.push_str(&format!(
-                "Largest reference reflectance over the points: {:.3}{}.\n\n",
+                "Largest reference reflectance channel over the points: {:.3}{}.\n\n",
                 r.reference_max,
-                if r.reference_max > 1.0 {
-                    " (gain: near resonances reflectance exceeds 1 by far, so absolute errors there are large)"
+                if gain {
+                    " (a gain layer: near its resonances reflectance exceeds 1 by far, so absolute \
+                     errors there are large)"
                 } else {
                     ""
                 }
