@@ -139,6 +139,14 @@ fn grid_mode_prints_json_and_rejects_bad_input() {
         vec!["bench", "--grid", "soap", "--angles", "95"],
         vec!["bench", "--grid", "soap", "--threads", "0"],
         vec!["bench", "--points", "0"],
+        vec!["bench", "--grid", "soap", "--bake-nodes", "3"],
+        vec![
+            "bench",
+            "--grid",
+            "soap",
+            "--raw",
+            "/nonexistent-irid-dir/x.raw",
+        ],
     ] {
         let out = irid().args(&bad).output().unwrap();
         assert_eq!(out.status.code(), Some(2), "{bad:?}");

@@ -19,7 +19,7 @@ pub struct Args {
     /// Directory for report.md, results.csv and speed-vs-error.png.
     #[arg(short = 'o', long = "out", default_value = "benches/results")]
     pub out: PathBuf,
-    /// Random points per stack (default 10000, or 400 with --quick).
+    /// Random points per stack (default 10000, or 200 with --quick).
     #[arg(long)]
     pub points: Option<usize>,
     /// Grid mode: evaluate one of the fixed stacks over a wavelength × angle
