@@ -5,9 +5,12 @@
 //! [`color`] (spectra to colour) → [`lut`] (bake, file, sample, validate) →
 //! [`render`] (the tracer).
 
+pub mod analytic;
+pub mod bench;
 pub mod color;
 pub mod error;
 pub mod lut;
 pub mod optics;
+pub mod render;
 
 pub use error::{Error, Result};

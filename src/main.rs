@@ -23,6 +23,8 @@ struct Cli {
 enum Command {
     /// Reflectance and transmittance of a stack over wavelengths and angles.
     Eval(cli::eval::Args),
+    /// Speed against error of every method; `--grid` times one stack for the peers.
+    Bench(cli::bench::Args),
     /// Reflected and transmitted colour of a stack under D65, per angle.
     Color(cli::color::Args),
     /// Bake a stack's response into an OpenEXR lookup table.
@@ -31,6 +33,10 @@ enum Command {
     Info(cli::info::Args),
     /// Measure a lookup table's error against the solver.
     Validate(cli::validate::Args),
+    /// Render a scene (a file or a built-in name) with baked or direct film shading.
+    Render(cli::render::Args),
+    /// Bake, render every built-in scene into out/, and report times and colour error.
+    Demo(cli::demo::Args),
 }
 
 fn main() -> ExitCode {
@@ -45,10 +51,13 @@ fn main() -> ExitCode {
     };
     let result = match cli.command {
         Command::Eval(args) => cli::eval::run(args),
+        Command::Bench(args) => cli::bench::run(args),
         Command::Color(args) => cli::color::run(args),
         Command::Bake(args) => cli::bake::run(args),
         Command::Info(args) => cli::info::run(args),
         Command::Validate(args) => cli::validate::run(args),
+        Command::Render(args) => cli::render::run(args),
+        Command::Demo(args) => cli::demo::run(args),
     };
     match result {
         Ok(code) => code,

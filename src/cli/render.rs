@@ -1,0 +1,158 @@
+//! `irid render`: render a scene file or a built-in scene to PNG (and EXR).
+
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+use std::time::Instant;
+
+use anyhow::{bail, Context, Result};
+use irid::color::Sampling;
+use irid::render::{self, FilmMode, RenderOptions, Scene};
+
+#[derive(clap::Args)]
+pub struct Args {
+    /// A scene file, or a built-in scene: bubbles-uniform, bubbles-noise,
+    /// absorbing-sphere, gain-ring, blue-gem, two-layer-noise.
+    pub scene: String,
+    /// PNG output (8-bit sRGB) [default: out/SCENE.png].
+    #[arg(short = 'o', long = "output")]
+    pub output: Option<PathBuf>,
+    /// Also write a linear float OpenEXR image.
+    #[arg(long)]
+    pub exr: Option<PathBuf>,
+    #[arg(long)]
+    pub width: Option<u32>,
+    #[arg(long)]
+    pub height: Option<u32>,
+    /// Samples per pixel (stratified).
+    #[arg(long)]
+    pub spp: Option<u32>,
+    /// Reflection/refraction depth.
+    #[arg(long)]
+    pub max_depth: Option<u32>,
+    /// lut: sample baked tables (baked on demand); direct: full TMM at every hit.
+    #[arg(long, default_value = "lut", value_parser = ["lut", "direct"])]
+    pub film: String,
+    /// Wavelength sampling of --film direct: rgb3, uniform:N or exact.
+    #[arg(long)]
+    pub sampling: Option<String>,
+    /// Where baked tables are cached.
+    #[arg(long, default_value = "luts/cache")]
+    pub cache: PathBuf,
+    /// Worker threads [default: all cores].
+    #[arg(long)]
+    pub threads: Option<usize>,
+    /// Seed of the pixel sample positions.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+}
+
+/// The film mode from `--film` and `--sampling`.
+pub fn film_mode(film: &str, sampling: Option<&str>, cache: &Path) -> Result<FilmMode> {
+    match (film, sampling) {
+        ("lut", None) => Ok(FilmMode::lut(cache)),
+        ("lut", Some(_)) => {
+            bail!("--sampling applies to --film direct (tables are integrated exactly)")
+        }
+        (_, s) => {
+            let sampling: Sampling = s.unwrap_or("exact").parse()?;
+            Ok(FilmMode::Direct { sampling })
+        }
+    }
+}
+
+/// Runs `f` on a pool of `threads` workers (or rayon's default pool).
+pub fn with_threads<T: Send>(threads: Option<usize>, f: impl FnOnce() -> T + Send) -> Result<T> {
+    match threads {
+        None => Ok(f()),
+        Some(0) => bail!("--threads must be ≥ 1"),
+        Some(n) => {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(n)
+                .build()
+                .context("cannot start the worker threads")?;
+            Ok(pool.install(f))
+        }
+    }
+}
+
+pub fn run(args: Args) -> Result<ExitCode> {
+    let mode = film_mode(&args.film, args.sampling.as_deref(), &args.cache)?;
+    let scene = Scene::load_named(&args.scene)?;
+    for (flag, v) in [
+        ("--width", args.width),
+        ("--height", args.height),
+        ("--spp", args.spp),
+    ] {
+        if let Some(v) = v {
+            if !(1..=16384).contains(&v) {
+                bail!("{flag} must be between 1 and 16384, got {v}");
+            }
+        }
+    }
+    let output = match &args.output {
+        Some(p) => p.clone(),
+        None => {
+            std::fs::create_dir_all("out").context("cannot create out/")?;
+            PathBuf::from("out").join(format!("{}.png", file_stem(&scene.name)))
+        }
+    };
+    let mut opts = RenderOptions::new(mode);
+    opts.width = args.width;
+    opts.height = args.height;
+    opts.spp = args.spp;
+    opts.max_depth = args.max_depth;
+    opts.seed = args.seed;
+    opts.progress = true;
+
+    let (films, image, render_s) = with_threads(args.threads, || -> Result<_> {
+        let films = render::prepare_films(&scene, &opts.film)?;
+        let start = Instant::now();
+        let image = render::render_with(&scene, &films, &opts);
+        Ok((films, image, start.elapsed().as_secs_f64()))
+    })??;
+    image.write_png(&output)?;
+    if let Some(exr) = &args.exr {
+        image.write_exr(exr)?;
+    }
+    let film = match &opts.film {
+        FilmMode::Lut { .. } => format!(
+            "lut: {} table(s) baked, {} from cache, {:.3} s",
+            films.tables_baked,
+            films.tables_cached,
+            films.bake_time.as_secs_f64()
+        ),
+        FilmMode::Direct { sampling } => format!("direct TMM, sampling {sampling}"),
+    };
+    println!("scene   {}", scene.name);
+    println!("films   {film}");
+    println!(
+        "render  {}x{}, {} spp, {:.3} s on {} thread(s)",
+        image.width,
+        image.height,
+        opts.spp.unwrap_or(scene.settings.spp),
+        render_s,
+        args.threads.unwrap_or_else(rayon::current_num_threads)
+    );
+    println!("wrote   {}", output.display());
+    if let Some(exr) = &args.exr {
+        println!("wrote   {}", exr.display());
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+/// A scene name made safe as a file name.
+pub fn file_stem(name: &str) -> String {
+    let stem = Path::new(name)
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "render".into());
+    stem.chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '-' || c == '_' {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect()
+}

@@ -1,0 +1,218 @@
+//! What a ray sees when it leaves the scene: a procedural sky over a
+//! checkered ground, or an equirectangular image the user supplies.
+
+use std::path::Path;
+
+use glam::Vec3;
+
+use super::thickness::fast_floor;
+use crate::error::{Error, Result};
+
+#[derive(Clone, Debug)]
+pub enum Environment {
+    Sky(Sky),
+    Map(EquirectMap),
+}
+
+impl Environment {
+    #[inline]
+    pub fn radiance(&self, dir: Vec3) -> Vec3 {
+        match self {
+            Environment::Sky(s) => s.radiance(dir),
+            Environment::Map(m) => m.radiance(dir),
+        }
+    }
+
+    /// Mean radiance over all directions: the ambient term of diffuse surfaces.
+    pub fn ambient(&self) -> Vec3 {
+        match self {
+            Environment::Sky(s) => 0.5 * (0.5 * (s.zenith + s.horizon)) + 0.5 * s.ground,
+            Environment::Map(m) => m.mean,
+        }
+    }
+}
+
+/// Linear RGB radiances; `up` is +y.
+#[derive(Clone, Debug)]
+pub struct Sky {
+    pub zenith: Vec3,
+    pub horizon: Vec3,
+    pub ground: Vec3,
+    /// Second colour of the ground checkerboard (equal to `ground` for none).
+    pub ground_checker: Vec3,
+    /// Checker square size on a ground plane `ground_depth` below the eye.
+    pub checker_size: f32,
+    pub ground_depth: f32,
+    /// Unit direction toward the sun, its radiance and angular radius.
+    pub sun_direction: Vec3,
+    pub sun_radiance: Vec3,
+    pub sun_radius_deg: f32,
+}
+
+impl Sky {
+    #[inline]
+    pub fn radiance(&self, dir: Vec3) -> Vec3 {
+        if dir.y >= 0.0 {
+            let t = dir.y.sqrt();
+            let mut sky = self.horizon.lerp(self.zenith, t);
+            if self.sun_radius_deg > 0.0
+                && dir.dot(self.sun_direction) >= self.sun_radius_deg.to_radians().cos()
+            {
+                sky += self.sun_radiance;
+            }
+            sky
+        } else {
+            // Project onto a ground plane; fade the checker toward the
+            // horizon, where its squares would alias.
+            let dist = self.ground_depth / -dir.y;
+            let p = dist * dir;
+            let checker = if checker_even(p.x / self.checker_size, p.z / self.checker_size) {
+                self.ground
+            } else {
+                self.ground_checker
+            };
+            let fade = (-dir.y * 8.0).min(1.0);
+            let far = 0.5 * (self.ground + self.ground_checker);
+            far.lerp(checker, fade)
+        }
+    }
+}
+
+/// An equirectangular (latitude–longitude) radiance map, +y up, the
+/// image centre looking down −z.
+#[derive(Clone, Debug)]
+pub struct EquirectMap {
+    width: usize,
+    height: usize,
+    pixels: Vec<Vec3>,
+    mean: Vec3,
+}
+
+impl EquirectMap {
+    /// Loads the first RGB(A) layer of an OpenEXR file, scaled by `intensity`.
+    pub fn load(path: &Path, intensity: f32) -> Result<EquirectMap> {
+        if !path.is_file() {
+            return Err(Error::io(
+                path,
+                std::io::Error::new(std::io::ErrorKind::NotFound, "environment map not found"),
+            ));
+        }
+        let image = exr::prelude::read_first_rgba_layer_from_file(
+            path,
+            |res, _| {
+                let (w, h) = (res.width(), res.height());
+                (w, h, vec![Vec3::ZERO; w * h])
+            },
+            |(w, _, px), pos, (r, g, b, _a): (f32, f32, f32, f32)| {
+                px[pos.y() * *w + pos.x()] = Vec3::new(r, g, b);
+            },
+        )
+        .map_err(|e| Error::malformed(path, format!("not a readable OpenEXR image: {e}")))?;
+        let (width, height, mut pixels) = image.layer_data.channel_data.pixels;
+        if width < 2 || height < 2 {
+            return Err(Error::malformed(
+                path,
+                "environment map must be at least 2x2",
+            ));
+        }
+        let mut sum = Vec3::ZERO;
+        for p in pixels.iter_mut() {
+            if !p.is_finite() {
+                *p = Vec3::ZERO;
+            }
+            *p *= intensity;
+            sum += *p;
+        }
+        let mean = sum / pixels.len() as f32;
+        Ok(EquirectMap {
+            width,
+            height,
+            pixels,
+            mean,
+        })
+    }
+
+    /// Bilinear lookup, wrapping in longitude.
+    #[inline]
+    pub fn radiance(&self, dir: Vec3) -> Vec3 {
+        let u = 0.5 + dir.x.atan2(-dir.z) / std::f32::consts::TAU;
+        let v = dir.y.clamp(-1.0, 1.0).acos() / std::f32::consts::PI;
+        let x = u * self.width as f32 - 0.5;
+        let y = (v * self.height as f32 - 0.5).clamp(0.0, (self.height - 1) as f32);
+        let (x0, y0) = (x.floor(), y.floor());
+        let (fx, fy) = (x - x0, y - y0);
+        let w = self.width as i64;
+        let xi = |k: i64| ((x0 as i64 + k).rem_euclid(w)) as usize;
+        let yi = |k: usize| (y0 as usize + k).min(self.height - 1);
+        let px = |xx: usize, yy: usize| self.pixels[yy * self.width + xx];
+        let top = px(xi(0), yi(0)).lerp(px(xi(1), yi(0)), fx);
+        let bottom = px(xi(0), yi(1)).lerp(px(xi(1), yi(1)), fx);
+        top.lerp(bottom, fy)
+    }
+}
+
+/// Whether (x, z) lies on an even square of a unit checkerboard.
+#[inline]
+pub(crate) fn checker_even(x: f32, z: f32) -> bool {
+    // Far-away points overflow i32 on the ground plane near the horizon;
+    // saturating casts keep them on some square.
+    (fast_floor(x).wrapping_add(fast_floor(z))) & 1 == 0
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn sky() -> Sky {
+        Sky {
+            zenith: Vec3::new(0.1, 0.2, 0.8),
+            horizon: Vec3::ONE,
+            ground: Vec3::splat(0.2),
+            ground_checker: Vec3::splat(0.6),
+            checker_size: 1.0,
+            ground_depth: 1.0,
+            sun_direction: Vec3::new(0.0, 1.0, 1.0).normalize(),
+            sun_radiance: Vec3::splat(50.0),
+            sun_radius_deg: 2.0,
+        }
+    }
+
+    #[test]
+    fn sky_gradient_sun_and_checker() {
+        let s = sky();
+        assert!((s.radiance(Vec3::Y) - s.zenith).length() < 1e-6);
+        assert!((s.radiance(Vec3::X) - s.horizon).length() < 1e-6);
+        assert!(s.radiance(s.sun_direction).x > 50.0);
+        // Straight down onto the centre of a checker square, and one square over.
+        let a = s.radiance(Vec3::new(0.0, -1.0, 0.0001).normalize());
+        let b = s.radiance(Vec3::new(1.5, -1.0, 0.5).normalize());
+        assert!((a - b).length() > 0.1, "{a} vs {b}");
+    }
+
+    #[test]
+    fn equirect_map_round_trips_directions() {
+        let dir = std::env::temp_dir().join(format!("irid-env-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("env.exr");
+        // Upper half red, lower half blue; 8 x 4.
+        exr::prelude::write_rgb_file(&path, 8, 4, |_x, y| {
+            if y < 2 {
+                (1.0f32, 0.0f32, 0.0f32)
+            } else {
+                (0.0, 0.0, 1.0)
+            }
+        })
+        .unwrap();
+        let map = EquirectMap::load(&path, 2.0).unwrap();
+        assert!((map.radiance(Vec3::Y) - Vec3::new(2.0, 0.0, 0.0)).length() < 1e-6);
+        assert!((map.radiance(Vec3::NEG_Y) - Vec3::new(0.0, 0.0, 2.0)).length() < 1e-6);
+        assert!((map.mean - Vec3::new(1.0, 0.0, 1.0)).length() < 1e-6);
+        let err = EquirectMap::load(&dir.join("missing.exr"), 1.0)
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("missing.exr"), "{err}");
+        std::fs::write(dir.join("bad.exr"), b"not exr").unwrap();
+        assert!(EquirectMap::load(&dir.join("bad.exr"), 1.0).is_err());
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+}

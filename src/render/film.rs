@@ -1,0 +1,139 @@
+//! The one interface through which the tracer shades thin films. Two
+//! implementations: [`super::lut_film::LutFilm`] samples baked tables and
+//! [`DirectFilm`] evaluates the transfer matrix at every hit (the reference),
+//! so the two modes share every other line of the renderer.
+
+/// Linear-sRGB reflectance and transmittance of a film at one point.
+pub use crate::lut::FilmRgb;
+
+use std::cell::RefCell;
+
+use num_complex::Complex64 as C64;
+
+use super::material::AngleTable;
+use super::scene::Film;
+use crate::color::{Sampling, SpectralIntegrator};
+use crate::error::Result;
+use crate::optics::{self, Stack};
+
+/// Which side of the film the light arrives from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Side {
+    /// From the ambient: the stack as written.
+    Front,
+    /// From the substrate (inside a coated gem): the reversed stack, whose
+    /// denser incidence medium gives total internal reflection.
+    Back,
+}
+
+/// Reflectance and transmittance of a film, as linear-sRGB weights under D65.
+pub trait FilmShading: Sync + Send {
+    /// `cos_theta` is the cosine of the incidence angle in the medium the
+    /// light arrives from; `thickness_nm` the varying layer's thickness.
+    fn shade(&self, thickness_nm: f32, cos_theta: f32, side: Side) -> FilmRgb;
+}
+
+/// The reference: the full transfer-matrix solution at every wavelength of
+/// a sampling strategy, integrated to colour, at every hit (the paper's method).
+pub struct DirectFilm {
+    integrator: SpectralIntegrator,
+    front: DirectSide,
+    back: Option<DirectSide>,
+}
+
+/// One side's stack, with the indices at every wavelength precomputed.
+struct DirectSide {
+    /// Per wavelength, the stack's N + 2 indices (flattened).
+    indices: Vec<C64>,
+    thicknesses_nm: Vec<f64>,
+    /// Which entry of `thicknesses_nm` the shading thickness replaces.
+    layer: usize,
+}
+
+impl DirectSide {
+    fn new(stack: &Stack, layer: usize, wavelengths_nm: &[f64]) -> Result<DirectSide> {
+        let mut indices = Vec::with_capacity(wavelengths_nm.len() * (stack.layers.len() + 2));
+        let mut buf = Vec::new();
+        for &w in wavelengths_nm {
+            stack.indices_at(w, &mut buf)?;
+            indices.extend_from_slice(&buf);
+        }
+        Ok(DirectSide {
+            indices,
+            thicknesses_nm: stack.thicknesses_nm(),
+            layer,
+        })
+    }
+}
+
+thread_local! {
+    /// Per-thread scratch: thicknesses, R spectrum, T spectrum.
+    static SCRATCH: RefCell<(Vec<f64>, Vec<f64>, Vec<f64>)> = const { RefCell::new((Vec::new(), Vec::new(), Vec::new())) };
+}
+
+impl DirectFilm {
+    pub fn new(film: &Film, sampling: Sampling) -> Result<DirectFilm> {
+        let integrator = SpectralIntegrator::new(sampling);
+        let wl = integrator.wavelengths_nm();
+        let front = DirectSide::new(&film.stack, film.layer, wl)?;
+        let back = if film.back_side {
+            let reversed = film.stack.reversed();
+            let layer = film.stack.layers.len() - 1 - film.layer;
+            Some(DirectSide::new(&reversed, layer, wl)?)
+        } else {
+            None
+        };
+        Ok(DirectFilm {
+            integrator,
+            front,
+            back,
+        })
+    }
+}
+
+impl FilmShading for DirectFilm {
+    fn shade(&self, thickness_nm: f32, cos_theta: f32, side: Side) -> FilmRgb {
+        let s = match side {
+            Side::Back => self.back.as_ref().unwrap_or(&self.front),
+            Side::Front => &self.front,
+        };
+        let wl = self.integrator.wavelengths_nm();
+        let stride = s.thicknesses_nm.len() + 2;
+        SCRATCH.with_borrow_mut(|(d, r, t)| {
+            d.clear();
+            d.extend_from_slice(&s.thicknesses_nm);
+            if let Some(x) = d.get_mut(s.layer) {
+                *x = f64::from(thickness_nm);
+            }
+            r.clear();
+            t.clear();
+            for (i, &w) in wl.iter().enumerate() {
+                let n = &s.indices[i * stride..(i + 1) * stride];
+                let resp = optics::solve(n, d, w, f64::from(cos_theta));
+                r.push(resp.r());
+                t.push(resp.t());
+            }
+            FilmRgb {
+                reflectance: self.integrator.rgb(r).map(|v| v as f32),
+                transmittance: self.integrator.rgb(t).map(|v| v as f32),
+            }
+        })
+    }
+}
+
+/// Reflectance of an uncoated surface (a zero-layer stack, e.g. air on gold)
+/// over cos θ, integrated exactly: the colour of a bare metal.
+pub fn bare_reflectance(stack: &Stack, nodes: usize) -> Result<AngleTable> {
+    let integrator = SpectralIntegrator::new(Sampling::Exact);
+    let film = Film {
+        name: String::new(),
+        stack: stack.clone(),
+        layer: 0,
+        thickness_range_nm: (0.0, 0.0),
+        back_side: false,
+    };
+    let direct = DirectFilm::new(&film, integrator.sampling())?;
+    Ok(AngleTable::from_fn(nodes, |cos| {
+        direct.shade(0.0, cos as f32, Side::Front).reflectance
+    }))
+}

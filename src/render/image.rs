@@ -1,0 +1,189 @@
+//! Rendered images: linear RGB in memory, tiled parallel rendering, and
+//! the comparison of two renders.
+
+use std::io::IsTerminal;
+
+use glam::Vec3;
+use rayon::prelude::*;
+
+use super::camera::Camera;
+use super::tracer::Tracer;
+
+/// A linear-RGB image (exposure applied), rows top to bottom.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Image {
+    pub width: u32,
+    pub height: u32,
+    pub pixels: Vec<[f32; 3]>,
+}
+
+/// Square tiles: small enough to balance two threads on any scene,
+/// large enough that scheduling costs nothing.
+const TILE: u32 = 16;
+
+/// How one render samples its pixels.
+#[derive(Clone, Copy, Debug)]
+pub struct Sampler {
+    pub width: u32,
+    pub height: u32,
+    pub spp: u32,
+    pub seed: u64,
+    pub exposure: f32,
+    pub progress: bool,
+}
+
+/// Renders every pixel. Each pixel's sample positions come from a hash of
+/// (seed, pixel, sample), so the image does not depend on thread count or
+/// scheduling: the same seed gives the same image bit for bit.
+pub fn render_tiles(tracer: &Tracer, camera: &Camera, s: &Sampler) -> Image {
+    let tiles_x = s.width.div_ceil(TILE);
+    let tiles_y = s.height.div_ceil(TILE);
+    let bar = if s.progress && std::io::stderr().is_terminal() {
+        let bar = indicatif::ProgressBar::new(u64::from(tiles_x * tiles_y));
+        bar.set_style(
+            indicatif::ProgressStyle::with_template(
+                "rendering {bar:40} {percent:>3}% {elapsed} (eta {eta})",
+            )
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+        );
+        Some(bar)
+    } else {
+        None
+    };
+    let tiles: Vec<(u32, u32, Vec<[f32; 3]>)> = (0..tiles_x * tiles_y)
+        .into_par_iter()
+        .map(|k| {
+            let (x0, y0) = ((k % tiles_x) * TILE, (k / tiles_x) * TILE);
+            let (x1, y1) = ((x0 + TILE).min(s.width), (y0 + TILE).min(s.height));
+            let mut px = Vec::with_capacity(((x1 - x0) * (y1 - y0)) as usize);
+            for y in y0..y1 {
+                for x in x0..x1 {
+                    px.push(render_pixel(tracer, camera, s, x, y).to_array());
+                }
+            }
+            if let Some(b) = &bar {
+                b.inc(1);
+            }
+            (x0, y0, px)
+        })
+        .collect();
+    if let Some(b) = bar {
+        b.finish_and_clear();
+    }
+    let mut pixels = vec![[0.0f32; 3]; (s.width * s.height) as usize];
+    for (x0, y0, px) in tiles {
+        let w = (x0 + TILE).min(s.width) - x0;
+        for (i, p) in px.into_iter().enumerate() {
+            let (x, y) = (x0 + i as u32 % w, y0 + i as u32 / w);
+            pixels[(y * s.width + x) as usize] = p;
+        }
+    }
+    Image {
+        width: s.width,
+        height: s.height,
+        pixels,
+    }
+}
+
+/// Stratified samples: a jittered k×k grid when spp is a square, otherwise
+/// a jittered Latin hypercube (each row and each column stratum used once);
+/// one sample per pixel goes through the pixel centre.
+fn render_pixel(tracer: &Tracer, camera: &Camera, s: &Sampler, x: u32, y: u32) -> Vec3 {
+    let pixel_index = u64::from(y) * u64::from(s.width) + u64::from(x);
+    let (w, h) = (s.width as f32, s.height as f32);
+    let mut sum = Vec3::ZERO;
+    if s.spp <= 1 {
+        let ray = camera.ray((x as f32 + 0.5) / w, (y as f32 + 0.5) / h);
+        return s.exposure * tracer.trace(&ray, 0, Vec3::ONE);
+    }
+    let k = (s.spp as f32).sqrt().round() as u32;
+    let square = k * k == s.spp;
+    for i in 0..s.spp {
+        let mut rng = SplitMix(
+            s.seed ^ pixel_index.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ (u64::from(i) << 40),
+        );
+        let (jx, jy) = (rng.next_f32(), rng.next_f32());
+        let (sx, sy) = if square {
+            (
+                ((i % k) as f32 + jx) / k as f32,
+                ((i / k) as f32 + jy) / k as f32,
+            )
+        } else {
+            // Column i, row from a seeded permutation of the strata.
+            let row = permuted(i, s.spp, s.seed ^ pixel_index);
+            (
+                (i as f32 + jx) / s.spp as f32,
+                (row as f32 + jy) / s.spp as f32,
+            )
+        };
+        let ray = camera.ray((x as f32 + sx) / w, (y as f32 + sy) / h);
+        sum += tracer.trace(&ray, 0, Vec3::ONE);
+    }
+    s.exposure * sum / s.spp as f32
+}
+
+/// The image of `i` under a pseudo-random permutation of 0..n, by cycle
+/// walking a keyed bijection on the next power of two.
+fn permuted(i: u32, n: u32, key: u64) -> u32 {
+    let bits = n.next_power_of_two().trailing_zeros().max(1);
+    let mask = (1u64 << bits) - 1;
+    let mut v = u64::from(i);
+    loop {
+        // Odd multiplication and xor-shift are bijections modulo 2^bits.
+        for round in 0..3u64 {
+            v = (v ^ ((key >> (round * 8)) & mask)) & mask;
+            v = (v.wrapping_mul(0x2545_F491_4F6C_DD1D | 1)) & mask;
+            v ^= v >> (bits / 2).max(1);
+        }
+        if v < u64::from(n) {
+            return v as u32;
+        }
+    }
+}
+
+/// SplitMix64: a tiny, well-mixed generator; ample for pixel jitter.
+struct SplitMix(u64);
+
+impl SplitMix {
+    #[inline]
+    fn next_u64(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^ (z >> 31)
+    }
+
+    #[inline]
+    fn next_f32(&mut self) -> f32 {
+        (self.next_u64() >> 40) as f32 * (1.0 / (1u64 << 24) as f32)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn permutation_is_a_bijection() {
+        for n in [2u32, 3, 5, 8, 13, 100] {
+            for key in [0u64, 7, 0xDEAD_BEEF_1234] {
+                let mut seen = vec![false; n as usize];
+                for i in 0..n {
+                    let p = permuted(i, n, key) as usize;
+                    assert!(!seen[p], "n {n} key {key}: {p} twice");
+                    seen[p] = true;
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn jitter_is_uniform_on_the_unit_interval() {
+        let mut r = SplitMix(42);
+        let v: Vec<f32> = (0..10_000).map(|_| r.next_f32()).collect();
+        assert!(v.iter().all(|x| (0.0..1.0).contains(x)));
+        let mean = v.iter().sum::<f32>() / v.len() as f32;
+        assert!((mean - 0.5).abs() < 0.02, "{mean}");
+    }
+}

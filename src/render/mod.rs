@@ -1,0 +1,159 @@
+//! The tracer: a Whitted-style renderer whose thin films are shaded through
+//! one interface ([`FilmShading`]) with two implementations, baked tables
+//! ([`LutFilm`]) and the direct transfer-matrix solution ([`DirectFilm`]), so
+//! the two modes share every other line.
+//!
+//! ```no_run
+//! use irid::render::{render, FilmMode, RenderOptions, Scene};
+//! let scene = Scene::load_named("bubbles-noise")?;
+//! let image = render(&scene, &RenderOptions::new(FilmMode::lut("luts/cache")))?;
+//! image.write_png(std::path::Path::new("bubbles.png"))?;
+//! # Ok::<(), irid::Error>(())
+//! ```
+
+pub mod camera;
+pub mod environment;
+pub mod film;
+pub mod geometry;
+pub mod image;
+pub mod lut_film;
+pub mod material;
+pub mod mesh;
+pub mod output;
+pub mod scene;
+pub mod scene_file;
+pub mod thickness;
+pub mod tracer;
+
+use std::path::PathBuf;
+use std::time::{Duration, Instant};
+
+pub use self::image::Image;
+pub use film::{DirectFilm, FilmRgb, FilmShading, Side};
+pub use lut_film::LutFilm;
+pub use output::ColourDifference;
+pub use scene::Scene;
+pub use scene_file::builtin_names;
+
+use crate::color::Sampling;
+use crate::error::Result;
+
+/// How films are shaded.
+#[derive(Clone, Debug, PartialEq)]
+pub enum FilmMode {
+    /// Sample baked tables, baking any that are missing or stale into `cache_dir`.
+    Lut { cache_dir: PathBuf },
+    /// Evaluate the transfer matrix at every hit with this wavelength sampling.
+    Direct { sampling: Sampling },
+}
+
+impl FilmMode {
+    pub fn lut(cache_dir: impl Into<PathBuf>) -> FilmMode {
+        FilmMode::Lut {
+            cache_dir: cache_dir.into(),
+        }
+    }
+}
+
+/// Per-run settings; `None` keeps the scene file's value.
+#[derive(Clone, Debug)]
+pub struct RenderOptions {
+    pub film: FilmMode,
+    pub width: Option<u32>,
+    pub height: Option<u32>,
+    pub spp: Option<u32>,
+    pub max_depth: Option<u32>,
+    pub seed: u64,
+    /// Show a progress bar (only ever drawn on a terminal).
+    pub progress: bool,
+}
+
+impl RenderOptions {
+    pub fn new(film: FilmMode) -> RenderOptions {
+        RenderOptions {
+            film,
+            width: None,
+            height: None,
+            spp: None,
+            max_depth: None,
+            seed: 0,
+            progress: false,
+        }
+    }
+}
+
+/// One shader per film of a scene, and what preparing them cost.
+pub struct PreparedFilms {
+    pub shaders: Vec<Box<dyn FilmShading>>,
+    /// Wall time spent baking or loading tables (zero in direct mode).
+    pub bake_time: Duration,
+    /// Tables baked by this call, and tables found in the cache.
+    pub tables_baked: usize,
+    pub tables_cached: usize,
+}
+
+/// Builds the film shaders a scene needs: in LUT mode, loads each table from
+/// the cache or bakes it (only the thickness range and sides the scene uses).
+pub fn prepare_films(scene: &Scene, mode: &FilmMode) -> Result<PreparedFilms> {
+    let start = Instant::now();
+    let mut shaders: Vec<Box<dyn FilmShading>> = Vec::with_capacity(scene.films.len());
+    let (mut baked, mut cached) = (0, 0);
+    for film in &scene.films {
+        match mode {
+            FilmMode::Direct { sampling } => {
+                shaders.push(Box::new(DirectFilm::new(film, *sampling)?))
+            }
+            FilmMode::Lut { cache_dir } => {
+                let (lut, b, c) = LutFilm::prepare(film, cache_dir)?;
+                baked += b;
+                cached += c;
+                shaders.push(Box::new(lut));
+            }
+        }
+    }
+    let bake_time = match mode {
+        FilmMode::Direct { .. } => Duration::ZERO,
+        FilmMode::Lut { .. } => start.elapsed(),
+    };
+    Ok(PreparedFilms {
+        shaders,
+        bake_time,
+        tables_baked: baked,
+        tables_cached: cached,
+    })
+}
+
+/// Renders with prepared film shaders.
+pub fn render_with(scene: &Scene, films: &PreparedFilms, opts: &RenderOptions) -> Image {
+    let s = &scene.settings;
+    let width = opts.width.unwrap_or(s.width).max(1);
+    let height = opts.height.unwrap_or(s.height).max(1);
+    let c = &scene.camera;
+    let camera = camera::Camera::new(
+        c.position,
+        c.look_at,
+        c.up,
+        c.vfov_deg,
+        width as f32 / height as f32,
+    );
+    let tracer = tracer::Tracer {
+        scene,
+        films: &films.shaders,
+        max_depth: opts.max_depth.unwrap_or(s.max_depth),
+    };
+    let sampler = image::Sampler {
+        width,
+        height,
+        spp: opts.spp.unwrap_or(s.spp).max(1),
+        seed: opts.seed,
+        exposure: s.exposure,
+        progress: opts.progress,
+    };
+    image::render_tiles(&tracer, &camera, &sampler)
+}
+
+/// Prepares the films and renders.
+pub fn render(scene: &Scene, opts: &RenderOptions) -> Result<Image> {
+    let films = prepare_films(scene, &opts.film)?;
+    Ok(render_with(scene, &films, opts))
+}

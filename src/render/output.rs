@@ -1,0 +1,108 @@
+//! Writing images (8-bit sRGB PNG, linear float EXR), always through a
+//! temporary file in the target directory and a rename, and comparing two
+//! renders in CIEDE2000.
+
+use std::path::{Path, PathBuf};
+
+use super::image::Image;
+use crate::color::{delta_e2000_rgb, linear_to_srgb8};
+use crate::error::{Error, Result};
+
+impl Image {
+    /// 8-bit sRGB (clamped) PNG.
+    pub fn write_png(&self, path: &Path) -> Result<()> {
+        let mut bytes = Vec::with_capacity(self.pixels.len() * 3);
+        for p in &self.pixels {
+            bytes.extend_from_slice(&linear_to_srgb8(p.map(f64::from)));
+        }
+        write_atomically(path, |tmp| {
+            ::image::save_buffer_with_format(
+                tmp,
+                &bytes,
+                self.width,
+                self.height,
+                ::image::ExtendedColorType::Rgb8,
+                ::image::ImageFormat::Png,
+            )
+            .map_err(|e| Error::malformed(path, format!("cannot write PNG: {e}")))
+        })
+    }
+
+    /// Linear-sRGB 32-bit float OpenEXR.
+    pub fn write_exr(&self, path: &Path) -> Result<()> {
+        write_atomically(path, |tmp| {
+            let w = self.width as usize;
+            exr::prelude::write_rgb_file(tmp, w, self.height as usize, |x, y| {
+                let p = self.pixels[y * w + x];
+                (p[0], p[1], p[2])
+            })
+            .map_err(|e| Error::malformed(path, format!("cannot write EXR: {e}")))
+        })
+    }
+
+    /// The per-pixel CIEDE2000 difference to another image of the same size,
+    /// on the displayed colours (clamped to [0, 1] as in the PNG).
+    pub fn delta_e2000(&self, other: &Image) -> Result<ColourDifference> {
+        if (self.width, self.height) != (other.width, other.height) {
+            return Err(Error::invalid(
+                "image comparison",
+                format!(
+                    "sizes differ: {}x{} vs {}x{}",
+                    self.width, self.height, other.width, other.height
+                ),
+            ));
+        }
+        let clamp = |p: [f32; 3]| p.map(|v| f64::from(v).clamp(0.0, 1.0));
+        let mut de: Vec<f64> = self
+            .pixels
+            .iter()
+            .zip(&other.pixels)
+            .map(|(a, b)| delta_e2000_rgb(clamp(*a), clamp(*b)))
+            .collect();
+        de.sort_by(f64::total_cmp);
+        let mean = de.iter().sum::<f64>() / de.len().max(1) as f64;
+        let rank = ((de.len() as f64 * 0.99).ceil() as usize).clamp(1, de.len()) - 1;
+        Ok(ColourDifference {
+            mean,
+            p99: de[rank],
+            max: de[de.len() - 1],
+        })
+    }
+}
+
+/// CIEDE2000 statistics over the pixels of two images.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ColourDifference {
+    pub mean: f64,
+    pub p99: f64,
+    pub max: f64,
+}
+
+/// Runs `write` on a temporary path beside `path`, then renames it into
+/// place, so an interrupted write never leaves a half-written file.
+fn write_atomically(path: &Path, write: impl FnOnce(&Path) -> Result<()>) -> Result<()> {
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    if !dir.is_dir() {
+        return Err(Error::io(
+            path,
+            std::io::Error::new(
+                std::io::ErrorKind::NotFound,
+                "output directory does not exist",
+            ),
+        ));
+    }
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let tmp = dir.join(format!(".{name}.{}.tmp", std::process::id()));
+    let result =
+        write(&tmp).and_then(|()| std::fs::rename(&tmp, path).map_err(|e| Error::io(path, e)));
+    if result.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    result
+}
