@@ -104,6 +104,30 @@ fn quick_bench_writes_a_consistent_report() {
         );
     }
 
+    // The full renders: every mode, the LUT close to exact.
+    assert!(
+        report.contains("## Full renders"),
+        "report.md lacks the renders"
+    );
+    let renders = std::fs::read_to_string(dir.path().join("renders.csv")).unwrap();
+    let mut rows = renders.lines();
+    assert_eq!(
+        rows.next().unwrap(),
+        "scene,mode,width,height,prepare_s,render_s,mean_de2000,p99_de2000,max_de2000"
+    );
+    let rows: Vec<Vec<&str>> = rows.map(|l| l.split(',').collect()).collect();
+    assert!(rows.len() >= 5, "{renders}");
+    for r in &rows {
+        let mean: f64 = r[6].parse().unwrap();
+        assert!(mean.is_finite() && mean >= 0.0, "{r:?}");
+        if r[1] == "direct exact" {
+            assert_eq!(mean, 0.0, "{r:?}");
+        }
+        if r[1].starts_with("LUT") {
+            assert!(mean < 2.0, "LUT render far from exact: {r:?}");
+        }
+    }
+
     let png = image::open(dir.path().join("speed-vs-error.png")).unwrap();
     assert!(png.width() > 500 && png.height() > 300);
 }

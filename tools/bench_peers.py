@@ -115,10 +115,6 @@ def byrnes_grid(n_matrix, thicknesses_nm, angles_deg, wavelengths_nm):
     return r, t
 
 
-def max_diff(a_r, a_t, b_r, b_t):
-    return float(max(np.max(np.abs(a_r - b_r)), np.max(np.abs(a_t - b_t))))
-
-
 def compare(r, t, pr, pt, grazing):
     """How a peer's R, T differ from irid's: max |dR| and |dT| away from
     grazing incidence, max of either at exactly 90 degrees (`grazing`: a mask

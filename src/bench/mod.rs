@@ -6,6 +6,7 @@
 pub mod grid;
 pub mod machine;
 pub mod plot;
+pub mod renders;
 pub mod report;
 pub mod run;
 pub mod stacks;

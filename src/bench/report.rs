@@ -25,6 +25,7 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
 
 use super::machine::Machine;
 use super::plot::{speed_vs_error_png, PlotPoint};
+use super::renders::RenderRow;
 use super::run::{Family, Method, Options, Row};
 use super::stacks::{descriptions, find, names};
 use crate::color::Sampling;
@@ -108,6 +109,57 @@ pub fn csv(rows: &[Row]) -> String {
     s
 }
 
+pub fn renders_csv(rows: &[RenderRow]) -> String {
+    let mut s = String::from(
+        "scene,mode,width,height,prepare_s,render_s,mean_de2000,p99_de2000,max_de2000\n",
+    );
+    for r in rows {
+        s.push_str(&format!(
+            "{},{},{},{},{:.4},{:.4},{:.6e},{:.6e},{:.6e}\n",
+            r.scene,
+            r.mode,
+            r.width,
+            r.height,
+            r.prepare_s,
+            r.render_s,
+            r.mean_de2000,
+            r.p99_de2000,
+            r.max_de2000
+        ));
+    }
+    s
+}
+
+fn renders_markdown(rows: &[RenderRow]) -> String {
+    let mut s = String::from(
+        "\n## Full renders\n\nOne frame per film mode of each built-in scene, one sample per pixel, \
+         rendered on every core; CIEDE2000 per pixel against the frame shaded by direct exact \
+         evaluation. Preparing the films (baking the scene's tables on demand) is timed apart.\n\n\
+         | scene | film mode | size | prepare (s) | render (ms) | vs exact | mean ΔE00 | p99 ΔE00 | max ΔE00 |\n\
+         |---|---|---|---:|---:|---:|---:|---:|---:|\n",
+    );
+    for r in rows {
+        let exact = rows
+            .iter()
+            .find(|e| e.scene == r.scene && e.mode == "direct exact")
+            .map_or(f64::NAN, |e| e.render_s);
+        s.push_str(&format!(
+            "| {} | {} | {}x{} | {:.3} | {:.2} | {} | {} | {} | {} |\n",
+            r.scene,
+            r.mode,
+            r.width,
+            r.height,
+            r.prepare_s,
+            r.render_s * 1e3,
+            fmt_ratio(exact / r.render_s),
+            fmt_err(r.mean_de2000),
+            fmt_err(r.p99_de2000),
+            fmt_err(r.max_de2000),
+        ));
+    }
+    s
+}
+
 fn table_header(with_bake: bool) -> String {
     let head = "| method | ns / eval | vs exact | max abs ΔR | p99 abs ΔR | mean ΔE00 | max ΔE00 |";
     let rule = "|---|---:|---:|---:|---:|---:|---:|";
@@ -139,7 +191,13 @@ fn fmt_err(v: f64) -> String {
 
 /// The Markdown report: header (date, machine, command), the summary table,
 /// then one table per stack.
-pub fn markdown(rows: &[Row], options: &Options, machine: &Machine, command: &str) -> String {
+pub fn markdown(
+    rows: &[Row],
+    renders: &[RenderRow],
+    options: &Options,
+    machine: &Machine,
+    command: &str,
+) -> String {
     let summary = summarize(rows);
     let is_exact = |m: &Method| matches!(m, Method::Direct(Sampling::Exact));
     let exact_ns = |stack: &str| {
@@ -253,19 +311,27 @@ pub fn markdown(rows: &[Row], options: &Options, machine: &Machine, command: &st
             ));
         }
     }
+    if !renders.is_empty() {
+        s.push_str(&renders_markdown(renders));
+    }
     s
 }
 
-/// Writes report.md, results.csv and speed-vs-error.png into `dir`.
+/// Writes report.md, results.csv, renders.csv (when there are renders) and
+/// speed-vs-error.png into `dir`.
 pub fn write_all(
     dir: &Path,
     rows: &[Row],
+    renders: &[RenderRow],
     options: &Options,
     machine: &Machine,
     command: &str,
 ) -> Result<()> {
     std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
     write_atomic(&dir.join("results.csv"), csv(rows).as_bytes())?;
+    if !renders.is_empty() {
+        write_atomic(&dir.join("renders.csv"), renders_csv(renders).as_bytes())?;
+    }
     let points: Vec<PlotPoint> = summarize(rows)
         .iter()
         .map(|m| PlotPoint {
@@ -293,6 +359,6 @@ pub fn write_all(
     )?;
     write_atomic(
         &dir.join("report.md"),
-        markdown(rows, options, machine, command).as_bytes(),
+        markdown(rows, renders, options, machine, command).as_bytes(),
     )
 }

@@ -30,6 +30,9 @@ pub struct Options {
     pub lut_resolutions: Vec<(usize, usize)>,
     /// Whether each LUT resolution is also measured stored as f16.
     pub lut_half: bool,
+    /// Built-in scenes rendered in full, and at what size (width, height).
+    pub render_scenes: Vec<&'static str>,
+    pub render_size: (u32, u32),
 }
 
 impl Options {
@@ -39,6 +42,8 @@ impl Options {
             seed: 1,
             lut_resolutions: vec![(16, 8), (64, 16), (256, 32), (1024, 64)],
             lut_half: true,
+            render_scenes: vec!["bubbles-noise", "absorbing-sphere"],
+            render_size: (160, 120),
         }
     }
 
@@ -49,6 +54,8 @@ impl Options {
             seed: 1,
             lut_resolutions: vec![(8, 4), (32, 8), (128, 16)],
             lut_half: true,
+            render_scenes: vec!["absorbing-sphere"],
+            render_size: (32, 24),
         }
     }
 }

@@ -7,7 +7,7 @@ use std::process::ExitCode;
 
 use anyhow::{Context, Result};
 use irid::bench::machine::Machine;
-use irid::bench::{grid, report, run, stacks};
+use irid::bench::{grid, renders, report, run, stacks};
 
 use super::args::{check_angles, parse_list};
 
@@ -83,13 +83,25 @@ fn run_report(args: &Args) -> Result<()> {
         machine.summary()
     );
     let rows = run::run(&options)?;
-    report::write_all(&args.out, &rows, &options, &machine, &command)?;
+    // The renders bake their tables into a private cache, removed afterwards.
+    let cache = std::env::temp_dir().join(format!("irid-bench-luts-{}", std::process::id()));
+    let (width, height) = options.render_size;
+    let renders = renders::run(&options.render_scenes, width, height, &cache);
+    let _ = std::fs::remove_dir_all(&cache);
+    let renders = renders?;
+    report::write_all(&args.out, &rows, &renders, &options, &machine, &command)?;
     for s in report::summarize(&rows) {
         eprintln!(
             "  {:28} {:>12.1} ns/eval   mean ΔE00 {:.2e}",
             s.method.name(),
             s.ns_per_eval,
             s.mean_de2000
+        );
+    }
+    for r in &renders {
+        eprintln!(
+            "  render {:17} {:22} {:>8.3} s   mean ΔE00 {:.2e}",
+            r.scene, r.mode, r.render_s, r.mean_de2000
         );
     }
     eprintln!("wrote {}", args.out.join("report.md").display());
