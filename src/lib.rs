@@ -5,6 +5,8 @@
 //! [`color`] (spectra to colour) → [`lut`] (bake, file, sample, validate) →
 //! [`render`] (the tracer).
 
+pub mod analytic;
+pub mod bench;
 pub mod color;
 pub mod error;
 pub mod lut;

@@ -23,6 +23,8 @@ struct Cli {
 enum Command {
     /// Reflectance and transmittance of a stack over wavelengths and angles.
     Eval(cli::eval::Args),
+    /// Speed against error of every method; `--grid` times one stack for the peers.
+    Bench(cli::bench::Args),
     /// Reflected and transmitted colour of a stack under D65, per angle.
     Color(cli::color::Args),
     /// Bake a stack's response into an OpenEXR lookup table.
@@ -49,6 +51,7 @@ fn main() -> ExitCode {
     };
     let result = match cli.command {
         Command::Eval(args) => cli::eval::run(args),
+        Command::Bench(args) => cli::bench::run(args),
         Command::Color(args) => cli::color::run(args),
         Command::Bake(args) => cli::bake::run(args),
         Command::Info(args) => cli::info::run(args),

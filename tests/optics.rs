@@ -25,6 +25,21 @@ fn assert_close(got: f64, want: f64, tol: f64, what: &str) {
     );
 }
 
+/// |got − want| ≤ tol · max(|want|, 1) for each of Rs, Rp, Ts, Tp.
+fn assert_responses(got: &Response, want: &Response, tol: f64, what: &str) {
+    for (a, b) in [
+        (got.rs, want.rs),
+        (got.rp, want.rp),
+        (got.ts, want.ts),
+        (got.tp, want.tp),
+    ] {
+        assert!(
+            (a - b).abs() <= tol * b.abs().max(1.0),
+            "{what}: {got:?} vs {want:?}"
+        );
+    }
+}
+
 fn assert_finite(r: &Response, what: &str) {
     assert!(
         [r.rs, r.rp, r.ts, r.tp].iter().all(|v| v.is_finite()),
@@ -324,17 +339,7 @@ fn zero_thickness_and_index_matched_layers_are_invisible() {
         }
         let matched = solve(&n, &d, wl, cos);
         for (got, what) in [(zero, "zero-thickness"), (matched, "index-matched")] {
-            for (a, b) in [
-                (got.rs, base.rs),
-                (got.rp, base.rp),
-                (got.ts, base.ts),
-                (got.tp, base.tp),
-            ] {
-                assert!(
-                    (a - b).abs() <= 1e-12 * b.abs().max(1.0),
-                    "{what}: {got:?} vs {base:?}"
-                );
-            }
+            assert_responses(&got, &base, 1e-12, what);
         }
     }
 }
@@ -436,17 +441,7 @@ fn agrees_with_the_characteristic_matrix_method() {
         let cos = rng.random_range(0.2..1.0);
         let got = solve_both(&s, wl, cos);
         let want = matrix_method(&s.indices, &s.thicknesses_nm, wl, cos);
-        for (a, b) in [
-            (got.rs, want.rs),
-            (got.rp, want.rp),
-            (got.ts, want.ts),
-            (got.tp, want.tp),
-        ] {
-            assert!(
-                (a - b).abs() <= 1e-10 * b.abs().max(1.0),
-                "stack {i}: {got:?} vs {want:?}"
-            );
-        }
+        assert_responses(&got, &want, 1e-10, &format!("stack {i}"));
     }
 }
 
@@ -586,12 +581,7 @@ fn gain_film_on_gold() {
         let (wl, ci) = (wavelengths[i / cos.len()], cos[i % cos.len()]);
         let n = grid.indices_at(i / cos.len());
         let m = matrix_method(n, grid.thicknesses_nm(), wl, ci);
-        for (a, b) in [(r.rs, m.rs), (r.rp, m.rp), (r.ts, m.ts), (r.tp, m.tp)] {
-            assert!(
-                (a - b).abs() <= 1e-11 * b.abs().max(1.0),
-                "{wl} nm: {r:?} vs {m:?}"
-            );
-        }
+        assert_responses(r, &m, 1e-11, &format!("{wl} nm"));
         amplifies |= r.r() > 1.0;
     }
     assert!(
@@ -626,9 +616,7 @@ fn thousand_random_layers() {
             // The plain matrix product stays accurate here (thin layers,
             // little loss or gain, propagating waves): an independent answer.
             let m = matrix_method(&s.indices, &s.thicknesses_nm, wl, cos);
-            for (a, b) in [(r.rs, m.rs), (r.rp, m.rp), (r.ts, m.ts), (r.tp, m.tp)] {
-                assert!((a - b).abs() <= 1e-9 * b.abs().max(1.0), "{r:?} vs {m:?}");
-            }
+            assert_responses(&r, &m, 1e-9, "1000 layers");
         }
     }
     // Strong absorbers and evanescent layers among 1000: the matrix method
@@ -712,9 +700,7 @@ fn layer_at_its_critical_angle() {
         for sign in [-1.0, 1.0] {
             let ci = c_crit * (1.0 + sign * e);
             let (r, m) = (solve(&n, &d, 550.0, ci), matrix_method(&n, &d, 550.0, ci));
-            for (a, b) in [(r.rs, m.rs), (r.rp, m.rp), (r.ts, m.ts), (r.tp, m.tp)] {
-                assert!((a - b).abs() < 1e-11, "offset {}: {r:?} vs {m:?}", sign * e);
-            }
+            assert_responses(&r, &m, 1e-11, &format!("offset {}", sign * e));
         }
     }
 }
@@ -745,12 +731,7 @@ fn runs_of_near_critical_layers() {
         n.push(c(rng.random_range(1.0..2.0), rng.random_range(0.0..3.0)));
         let wl = rng.random_range(400.0..700.0);
         let (r, m) = (solve(&n, &d, wl, ci), matrix_method(&n, &d, wl, ci));
-        for (a, b) in [(r.rs, m.rs), (r.rp, m.rp), (r.ts, m.ts), (r.tp, m.tp)] {
-            assert!(
-                (a - b).abs() < 1e-10 * b.abs().max(1.0),
-                "{n:?} {d:?}: {r:?} vs {m:?}"
-            );
-        }
+        assert_responses(&r, &m, 1e-10, &format!("{n:?} {d:?}"));
     }
     // A thick, barely evanescent layer (|q| ≈ 0.005|n|): lossless, so
     // R + T = 1; thick enough, it transmits nothing. Around Im δ = 30, where
@@ -833,17 +814,16 @@ fn split_at_a_buried_layer_recomposes() {
         // The top medium of A is the (lossless) ambient: both entry points agree.
         let a = solve_amplitudes(&n[..=l], &d[..l - 1], wl, cos);
         let a_beta = solve_amplitudes_beta(&n[..=l], &d[..l - 1], wl, beta_sq);
-        for (x, y) in [
+        let pairs = [
             (a.rs, a_beta.rs),
             (a.rp, a_beta.rp),
             (a.ts, a_beta.ts),
             (a.tp, a_beta.tp),
-        ] {
-            assert!(
-                (x - y).norm() <= 1e-12 * y.norm().max(1.0),
-                "stack {i}: {a:?} vs {a_beta:?}"
-            );
-        }
+        ];
+        let agree = pairs
+            .iter()
+            .all(|(x, y)| (x - y).norm() <= 1e-12 * y.norm().max(1.0));
+        assert!(agree, "stack {i}: {a:?} vs {a_beta:?}");
         let mut up_n: Vec<C64> = n[..=l].to_vec();
         up_n.reverse();
         let mut up_d: Vec<f64> = d[..l - 1].to_vec();

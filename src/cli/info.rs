@@ -40,16 +40,20 @@ pub fn run(args: Args) -> Result<ExitCode> {
             (Some(lo), Some(hi)) if hi - lo <= 1e-9 * hi.abs().max(1.0) => {
                 format!("uniform step {lo:.6}")
             }
-            (Some(lo), Some(hi)) => format!("graded, steps {lo:.3e} to {hi:.3e}"),
+            (Some(lo), Some(hi)) => format!("non-uniform, steps {lo:.3e} to {hi:.3e}"),
             _ => "single node".into(),
         };
+        let unit = if a.unit == "1" {
+            String::new()
+        } else {
+            format!(" {}", a.unit)
+        };
         println!(
-            "  {:<14} {:>6} nodes  {} .. {} {}  ({spacing})",
+            "  {:<14} {:>6} nodes  {} .. {}{unit}  ({spacing})",
             a.name,
             n.len(),
             n[0],
             n[n.len() - 1],
-            a.unit
         );
     }
     println!("channels:");
@@ -86,6 +90,10 @@ pub fn run(args: Args) -> Result<ExitCode> {
         check.max_abs_all, check.points, check.metric
     );
     if let Some(v) = &h.error.validation {
+        println!(
+            "  validation            {} random points (seed {}) against the solver:",
+            v.points, v.seed
+        );
         crate::cli::validate::print_stats(v);
     } else {
         println!("  validation            not recorded (run `irid validate`)");

@@ -3,6 +3,7 @@
 #[allow(dead_code)] // until every subcommand that uses them has landed
 pub mod args;
 pub mod bake;
+pub mod bench;
 pub mod color;
 pub mod demo;
 pub mod eval;

@@ -14,7 +14,7 @@ pub struct Args {
     #[arg(long, default_value_t = 20_000)]
     pub points: usize,
     /// Seed of the point stream (PCG64).
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = irid::lut::VALIDATION_SEED)]
     pub seed: u64,
     /// Exit with code 1 when any channel's largest absolute error exceeds this.
     #[arg(long)]
@@ -69,6 +69,16 @@ pub fn print_stats(s: &ErrorStats) {
             max[0], mean[0], max[1], mean[1]
         );
     }
+    let [t, c, w] = s.worst_point;
+    println!(
+        "  worst point      thickness {t:.3} nm, cos θ {c:.5} ({:.2}°){}",
+        c.clamp(-1.0, 1.0).acos().to_degrees(),
+        if w > 0.0 {
+            format!(", {w:.1} nm")
+        } else {
+            String::new()
+        }
+    );
     for r in &s.regions {
         println!(
             "  region {:<9} {:>6} points  max abs {:.3e}  mean {:.3e}  ({})",

@@ -12,7 +12,7 @@ mod sample;
 mod validate;
 
 pub use axis::Axis;
-pub use bake::{bake, bake_with_progress};
+pub use bake::{bake, bake_with_progress, VALIDATION_SEED};
 pub use header::{BakeCheck, ColorInfo, ErrorInfo, Header, FORMAT_NAME, FORMAT_VERSION};
 pub use sample::{FilmRgb, Lut};
 pub use validate::{validate, ErrorStats, RegionStats};
@@ -93,6 +93,9 @@ pub struct BakeSpec {
     pub resolution: Resolution,
     /// Store f16 instead of f32 (the error figures include the rounding).
     pub half: bool,
+    /// Random points at which the finished table is compared with the
+    /// solver (0: none). With an error target they must meet it too.
+    pub validation_points: usize,
 }
 
 impl BakeSpec {
@@ -111,6 +114,7 @@ impl BakeSpec {
             wavelength_nm: (380.0, 780.0),
             resolution: Resolution::MaxError(1e-3),
             half: false,
+            validation_points: 20_000,
         }
     }
 
@@ -189,6 +193,24 @@ impl BakeSpec {
         let text = serde_json::to_string(&(FORMAT_VERSION, self)).unwrap_or_default();
         format!("{:016x}", fnv1a64(text.as_bytes()))
     }
+}
+
+/// The table for `spec` from a cache directory: `DIR/<cache key>.exr` when
+/// it exists, loads, and was baked from the same spec; otherwise baked now
+/// and written there (atomically, so concurrent renderers never read half a
+/// table). A stale or unreadable cache file is replaced, never an error.
+pub fn cached(spec: &BakeSpec, dir: &std::path::Path) -> Result<Lut> {
+    let key = spec.cache_key();
+    let path = dir.join(format!("{key}.exr"));
+    if let Ok(lut) = Lut::load(&path) {
+        if lut.header().cache_key == key {
+            return Ok(lut);
+        }
+    }
+    let lut = bake(spec)?;
+    std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+    lut.write(&path)?;
+    Ok(lut)
 }
 
 /// cos 89°, the default smallest cos θ. At exactly grazing incidence every

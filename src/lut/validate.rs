@@ -30,6 +30,9 @@ pub struct ErrorStats {
     /// sampling's wavelengths.
     pub max_de2000: Option<[f64; 2]>,
     pub mean_de2000: Option<[f64; 2]>,
+    /// Where the largest error (over channels) occurred: thickness (nm),
+    /// cos θ, wavelength (nm; 0 for rgb tables).
+    pub worst_point: [f64; 3],
     /// The same points split by where tables are hard, so a bad corner is
     /// not averaged away.
     pub regions: Vec<RegionStats>,
@@ -52,6 +55,7 @@ const GRAZING_COS: f64 = 0.173_648_177_666_930_4;
 const CRITICAL_BAND: f64 = 0.02;
 
 struct PointError {
+    at: [f64; 3],
     cos_theta: f64,
     abs: [f64; 6],
     de: Option<[f64; 2]>,
@@ -172,6 +176,7 @@ pub fn validate(lut: &Lut, points: usize, seed: u64) -> Result<ErrorStats> {
                     }
                 };
                 Ok(PointError {
+                    at: [f64::from(t), cos, f64::from(w)],
                     cos_theta: cos,
                     abs,
                     de,
@@ -190,6 +195,7 @@ pub fn validate(lut: &Lut, points: usize, seed: u64) -> Result<ErrorStats> {
         max_de2000: None,
         mean_de2000: None,
         regions: Vec::new(),
+        worst_point: [0.0; 3],
     };
     for ch in 0..n_channels {
         let mut e: Vec<f64> = errors.iter().map(|p| p.abs[ch]).collect();
@@ -214,6 +220,9 @@ pub fn validate(lut: &Lut, points: usize, seed: u64) -> Result<ErrorStats> {
     }
 
     let worst = |p: &PointError| p.abs[..n_channels].iter().fold(0.0f64, |a, &b| a.max(b));
+    if let Some(p) = errors.iter().max_by(|a, b| worst(a).total_cmp(&worst(b))) {
+        stats.worst_point = p.at;
+    }
     let critical = critical_cos(stack, kind, w_range)
         .filter(|&cc| cc >= c_range.0 - CRITICAL_BAND && cc <= c_range.1 + CRITICAL_BAND);
     let mut region = |name: &str, description: String, inside: &dyn Fn(f64) -> bool| {

@@ -12,60 +12,18 @@
 //!
 //! with φ = e^{i k0 q d}. r', t' are A seen from below. Everything except φ is
 //! fixed for one wavelength and angle, so a thickness sweep reuses it. The
-//! interface coefficients are the solver's own ([`fresnel`]), whose t_ij t_ji
-//! product is sign-consistent, so the composition agrees with [`super::solve`]
-//! to rounding.
+//! sub-stacks come from the solver's own recursion
+//! ([`solve_amplitudes_beta`]), whose t_ij t_ji product is sign-consistent,
+//! so the composition agrees with [`super::solve`] to rounding.
 
 use num_complex::Complex64 as C64;
 
-use super::solver::{fresnel, normal_index, Amplitudes, Response};
+use super::solver::{normal_index, solve_amplitudes_beta, Amplitudes, Response};
 
-/// r and t of a stack whose top medium may absorb or gain, for a given
-/// tangential index β² (the solver's [`super::solve_amplitudes`] takes the
-/// angle in a lossless top medium instead). `indices` holds the top medium,
-/// the finite layers and the bottom medium; `thicknesses_nm` the layers.
-/// r is referenced to the top interface, t to the bottom one.
-pub fn amplitudes_beta(
-    indices: &[C64],
-    thicknesses_nm: &[f64],
-    k0: f64,
-    beta_sq: f64,
-) -> Amplitudes {
-    debug_assert_eq!(indices.len(), thicknesses_nm.len() + 2);
-    let last = indices.len() - 1;
-    let mut n_below = indices[last];
-    let mut q_below = normal_index(n_below, beta_sq);
-    let zero = C64::new(0.0, 0.0);
-    let one = C64::new(1.0, 0.0);
-    let (mut gamma_s, mut gamma_p, mut ts, mut tp) = (zero, zero, one, one);
-    for j in (0..last).rev() {
-        let n_above = indices[j];
-        let q_above = normal_index(n_above, beta_sq);
-        if j + 1 < last {
-            let one_way = (C64::new(0.0, k0 * thicknesses_nm[j]) * q_below).exp();
-            let round_trip = one_way * one_way;
-            gamma_s *= round_trip;
-            gamma_p *= round_trip;
-            ts *= one_way;
-            tp *= one_way;
-        }
-        let f = fresnel(n_above, q_above, n_below, q_below);
-        let ds = (one + f.rs * gamma_s).inv();
-        let dp = (one + f.rp * gamma_p).inv();
-        gamma_s = (f.rs + gamma_s) * ds;
-        gamma_p = (f.rp + gamma_p) * dp;
-        ts *= f.ts * ds;
-        tp *= f.tp * dp;
-        n_below = n_above;
-        q_below = q_above;
-    }
-    Amplitudes {
-        rs: gamma_s,
-        rp: gamma_p,
-        ts,
-        tp,
-    }
-}
+/// |q|² / |n|² below which the layer counts as at its critical angle. The
+/// split loses about ε|n|/|q| to rounding, so below |q|/|n| = 1e-4 it could
+/// miss 1e-12 (tested on both sides of the threshold).
+const DEGENERATE_Q: f64 = 1e-8;
 
 /// Reusable buffers for [`VaryingLayer::new`], so that a bake allocates once
 /// per worker rather than once per wavelength and angle.
@@ -93,6 +51,9 @@ pub struct VaryingLayer {
     t_power: [f64; 2],
     /// cos θ0 = 0: no power enters, R = 1 and T = 0 whatever the stack.
     grazing: bool,
+    /// The layer's q is (nearly) 0: it sits at its own critical angle, where
+    /// the waves in it have no direction to split the stack by.
+    degenerate: bool,
 }
 
 impl VaryingLayer {
@@ -119,15 +80,20 @@ impl VaryingLayer {
         top.clear();
         top.push(C64::new(n0, 0.0));
         top.extend_from_slice(&indices[1..=layer]);
-        let a = amplitudes_beta(&top, &thicknesses_nm[..layer - 1], k0, beta_sq);
+        let a = solve_amplitudes_beta(&top, &thicknesses_nm[..layer - 1], wavelength_nm, beta_sq);
         // A from below: the same media reversed.
         top.reverse();
         let mut t_rev = std::mem::take(&mut scratch.thicknesses_nm);
         t_rev.clear();
         t_rev.extend(thicknesses_nm[..layer - 1].iter().rev());
-        let a_up = amplitudes_beta(&top, &t_rev, k0, beta_sq);
+        let a_up = solve_amplitudes_beta(&top, &t_rev, wavelength_nm, beta_sq);
         // B: the varying medium down to the substrate.
-        let b = amplitudes_beta(&indices[layer..], &thicknesses_nm[layer..], k0, beta_sq);
+        let b = solve_amplitudes_beta(
+            &indices[layer..],
+            &thicknesses_nm[layer..],
+            wavelength_nm,
+            beta_sq,
+        );
         scratch.indices = top;
         scratch.thicknesses_nm = t_rev;
 
@@ -143,7 +109,14 @@ impl VaryingLayer {
             ikq: C64::new(0.0, k0) * q_layer,
             t_power: [q_sub.re / q0, (n_sub * cos_sub.conj()).re / q0],
             grazing: cos_theta0 <= 0.0,
+            degenerate: q_layer.norm_sqr() < DEGENERATE_Q * n_layer.norm_sqr(),
         }
+    }
+
+    /// True when the split is unusable (the layer's q ≈ 0, see the field):
+    /// evaluate such a (wavelength, angle) with [`super::solve`] instead.
+    pub fn is_degenerate(&self) -> bool {
+        self.degenerate
     }
 
     /// φ = e^{i k0 q d} for a thickness of the varying layer.
@@ -210,10 +183,17 @@ mod tests {
     use crate::optics::solve;
 
     fn check(indices: &[C64], thick: &[f64], layer: usize) {
+        check_at(indices, thick, layer, &[1.0, 0.8, 0.5, 0.2, 0.03, 0.0]);
+    }
+
+    fn check_at(indices: &[C64], thick: &[f64], layer: usize, cosines: &[f64]) {
         let mut scratch = Scratch::default();
         for &wl in &[380.0, 550.0, 779.0] {
-            for &c in &[1.0, 0.8, 0.5, 0.2, 0.03, 0.0] {
+            for &c in cosines {
                 let v = VaryingLayer::new(indices, thick, layer, wl, c, &mut scratch);
+                if v.is_degenerate() {
+                    continue;
+                }
                 for &d in &[0.0, 13.0, 250.0, 999.0] {
                     let mut t = thick.to_vec();
                     t[layer - 1] = d;
@@ -243,6 +223,15 @@ mod tests {
         check(&[c(1.0, 0.0), c(1.5, 0.15), c(1.33, 0.0)], &[0.0], 1);
         check(&[c(1.0, 0.0), c(1.5, -0.05), c(0.18, 3.4)], &[0.0], 1);
         check(&[c(1.5, 0.0), c(1.38, 0.0), c(1.0, 0.0)], &[0.0], 1);
+        // Frustrated TIR: an air gap seen from glass, at and near the gap's
+        // critical angle (where the gap's q is 0).
+        let cc = (1.0f64 - (1.0 / 1.5f64).powi(2)).sqrt();
+        let gap = [c(1.5, 0.0), c(1.0, 0.0), c(1.0, 0.0)];
+        check_at(&gap, &[0.0], 1, &[cc, cc + 1e-9, cc + 2e-6, cc - 2e-6]);
+        let mut scratch = Scratch::default();
+        for near in [cc, cc + 1e-9, cc - 1e-9] {
+            assert!(VaryingLayer::new(&gap, &[0.0], 1, 500.0, near, &mut scratch).is_degenerate());
+        }
         // Varying a middle layer of a three-layer stack on metal.
         let idx = [
             c(1.0, 0.0),

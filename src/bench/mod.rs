@@ -1,0 +1,11 @@
+//! Speed against error: every way `irid` (and the analytic model renderers
+//! use) can turn a film into a colour, timed per shading evaluation and
+//! measured against the exact reference, plus the grid workload the Python
+//! peers are timed on.
+
+pub mod grid;
+pub mod machine;
+pub mod plot;
+pub mod report;
+pub mod run;
+pub mod stacks;

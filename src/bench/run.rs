@@ -1,0 +1,352 @@
+//! The benchmark proper: for each fixed stack and each method, the time per
+//! shading evaluation (one thickness, one angle, to linear sRGB) and the
+//! error against the 1 nm exact reference at random points.
+//!
+//! Times are single-threaded: a renderer parallelizes over pixels, so what
+//! matters is the cost of one evaluation. Each method evaluates all points in
+//! one loop and the wall time is divided by the count, so compare methods by
+//! their ratios within one run; absolute figures move with the machine's load.
+
+use std::hint::black_box;
+use std::time::Instant;
+
+use num_complex::Complex64 as C64;
+use rand::{Rng, SeedableRng};
+
+use super::grid::indices_table;
+use super::stacks::{fixed_stacks, BenchStack};
+use crate::analytic::{AnalyticFilm, Variant};
+use crate::color::{delta_e2000_rgb, Sampling, SpectralIntegrator};
+use crate::error::Result;
+use crate::lut;
+use crate::optics::solve;
+
+#[derive(Clone, Debug)]
+pub struct Options {
+    /// Random (thickness, cos θ) points per stack.
+    pub points: usize,
+    pub seed: u64,
+    /// LUT resolutions as (thickness nodes, angle nodes), coarse to fine.
+    pub lut_resolutions: Vec<(usize, usize)>,
+    /// Whether each LUT resolution is also measured stored as f16.
+    pub lut_half: bool,
+}
+
+impl Options {
+    pub fn full() -> Options {
+        Options {
+            points: 10_000,
+            seed: 1,
+            lut_resolutions: vec![(16, 8), (64, 16), (256, 32), (1024, 64)],
+            lut_half: true,
+        }
+    }
+
+    /// Small enough for a test: fewer points, three LUT resolutions.
+    pub fn quick() -> Options {
+        Options {
+            points: 200,
+            seed: 1,
+            lut_resolutions: vec![(8, 4), (32, 8), (128, 16)],
+            lut_half: true,
+        }
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Family {
+    Direct,
+    Lut,
+    Analytic,
+}
+
+impl Family {
+    pub const ALL: [Family; 3] = [Family::Direct, Family::Lut, Family::Analytic];
+
+    pub fn label(self) -> &'static str {
+        match self {
+            Family::Direct => "direct TMM",
+            Family::Lut => "LUT (bilinear)",
+            Family::Analytic => "analytic (one film)",
+        }
+    }
+
+    pub fn index(self) -> usize {
+        self as usize
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Method {
+    Direct(Sampling),
+    Lut {
+        thickness_nodes: usize,
+        angle_nodes: usize,
+        half: bool,
+    },
+    Analytic(Variant),
+}
+
+impl Method {
+    pub fn name(&self) -> String {
+        match self {
+            Method::Direct(s) => format!("direct {s}"),
+            Method::Lut {
+                thickness_nodes,
+                angle_nodes,
+                half,
+            } => format!(
+                "LUT {thickness_nodes}x{angle_nodes} {}",
+                if *half { "f16" } else { "f32" }
+            ),
+            Method::Analytic(v) => v.label().to_string(),
+        }
+    }
+
+    pub fn family(&self) -> Family {
+        match self {
+            Method::Direct(_) => Family::Direct,
+            Method::Lut { .. } => Family::Lut,
+            Method::Analytic(_) => Family::Analytic,
+        }
+    }
+}
+
+/// One method on one stack.
+#[derive(Clone, Debug)]
+pub struct Row {
+    pub stack: String,
+    pub method: Method,
+    pub ns_per_eval: f64,
+    /// Largest |ΔR| over points and channels (linear sRGB reflectance).
+    pub max_abs: f64,
+    /// 99th percentile over points of the largest channel |ΔR|.
+    pub p99_abs: f64,
+    pub mean_de2000: f64,
+    pub max_de2000: f64,
+    pub points: usize,
+    /// Points where the method returned a non-finite colour.
+    pub nonfinite: usize,
+    /// One-off cost before the first evaluation (baking, for a LUT).
+    pub setup_s: Option<f64>,
+    /// The largest reference reflectance channel over the points: errors
+    /// read differently on a gain stack whose reflectance exceeds 1.
+    pub reference_max: f64,
+}
+
+/// Every method measured on every fixed stack.
+pub fn run(options: &Options) -> Result<Vec<Row>> {
+    let mut rows = Vec::new();
+    for bench in fixed_stacks()? {
+        rows.extend(run_stack(&bench, options)?);
+    }
+    Ok(rows)
+}
+
+pub fn run_stack(bench: &BenchStack, options: &Options) -> Result<Vec<Row>> {
+    let points = sample_points(bench, options.points, options.seed);
+    let mut rows = Vec::new();
+
+    // The exact method is the reference: its error is zero by construction.
+    let mut exact = Direct::new(bench, Sampling::Exact)?;
+    let (ns, reference) = time_all(&points, |t, c| exact.eval(t, c));
+    rows.push(row(
+        bench,
+        Method::Direct(Sampling::Exact),
+        ns,
+        &reference,
+        &reference,
+        None,
+    ));
+
+    for sampling in [
+        Sampling::Rgb3,
+        Sampling::Uniform(9),
+        Sampling::Uniform(41),
+        Sampling::Uniform(81),
+    ] {
+        let mut direct = Direct::new(bench, sampling)?;
+        let (ns, out) = time_all(&points, |t, c| direct.eval(t, c));
+        rows.push(row(
+            bench,
+            Method::Direct(sampling),
+            ns,
+            &out,
+            &reference,
+            None,
+        ));
+    }
+
+    for &(thickness_nodes, angle_nodes) in &options.lut_resolutions {
+        let halves: &[bool] = if options.lut_half {
+            &[false, true]
+        } else {
+            &[false]
+        };
+        for &half in halves {
+            let spec = bench.bake_spec(thickness_nodes, angle_nodes, half);
+            let start = Instant::now();
+            let table = lut::bake(&spec)?;
+            let bake_s = start.elapsed().as_secs_f64();
+            let (ns, out) = time_all(&points, |t, c| {
+                table
+                    .sample_rgb(t as f32, c as f32)
+                    .reflectance
+                    .map(f64::from)
+            });
+            let method = Method::Lut {
+                thickness_nodes,
+                angle_nodes,
+                half,
+            };
+            rows.push(row(bench, method, ns, &out, &reference, Some(bake_s)));
+        }
+    }
+
+    if let Some(film) = AnalyticFilm::from_stack(&bench.stack) {
+        for variant in [Variant::BelcourBarla, Variant::Gltf] {
+            let (ns, out) = time_all(&points, |t, c| film.reflectance_rgb(variant, t, c));
+            rows.push(row(
+                bench,
+                Method::Analytic(variant),
+                ns,
+                &out,
+                &reference,
+                None,
+            ));
+        }
+    }
+    Ok(rows)
+}
+
+/// Uniform in the stack's thickness range and in cos θ ∈ [0, 1] (the
+/// LUT's axes), from a seeded generator so runs are comparable.
+fn sample_points(bench: &BenchStack, n: usize, seed: u64) -> Vec<(f64, f64)> {
+    let mut rng = rand_pcg::Pcg64::seed_from_u64(seed);
+    let (t0, t1) = bench.thickness_range_nm;
+    (0..n)
+        .map(|_| {
+            let t = t0 + (t1 - t0) * rng.random::<f64>();
+            let c = rng.random::<f64>();
+            (t, c)
+        })
+        .collect()
+}
+
+/// Evaluates every point in one loop; repeats while the whole loop takes
+/// under 50 ms (up to 5 times) and keeps the fastest, so cheap methods are
+/// not timed at the clock's resolution.
+fn time_all(
+    points: &[(f64, f64)],
+    mut eval: impl FnMut(f64, f64) -> [f64; 3],
+) -> (f64, Vec<[f64; 3]>) {
+    let mut out = vec![[0.0; 3]; points.len()];
+    let mut best = f64::INFINITY;
+    let mut total = 0.0;
+    for _ in 0..5 {
+        let start = Instant::now();
+        for (o, &(t, c)) in out.iter_mut().zip(points) {
+            *o = eval(black_box(t), black_box(c));
+        }
+        black_box(&out);
+        let s = start.elapsed().as_secs_f64();
+        best = best.min(s);
+        total += s;
+        if total > 0.05 {
+            break;
+        }
+    }
+    (best * 1e9 / points.len().max(1) as f64, out)
+}
+
+fn row(
+    bench: &BenchStack,
+    method: Method,
+    ns_per_eval: f64,
+    out: &[[f64; 3]],
+    reference: &[[f64; 3]],
+    setup_s: Option<f64>,
+) -> Row {
+    // A non-finite output (an f16 table overflowing on a gain resonance) is
+    // counted apart; the error figures are over the finite ones.
+    let mut abs: Vec<f64> = Vec::with_capacity(out.len());
+    let mut de_sum = 0.0;
+    let mut de_max = 0.0f64;
+    let mut nonfinite = 0;
+    for (a, b) in out.iter().zip(reference) {
+        if !a.iter().all(|v| v.is_finite()) {
+            nonfinite += 1;
+            continue;
+        }
+        let d = (0..3).map(|c| (a[c] - b[c]).abs()).fold(0.0, f64::max);
+        abs.push(d);
+        let de = if a == b { 0.0 } else { delta_e2000_rgb(*a, *b) };
+        de_sum += de;
+        de_max = de_max.max(de);
+    }
+    abs.sort_by(f64::total_cmp);
+    let p99 = abs
+        .get(((abs.len() as f64 * 0.99).ceil() as usize).saturating_sub(1))
+        .copied()
+        .unwrap_or(0.0);
+    Row {
+        stack: bench.name.to_string(),
+        method,
+        ns_per_eval,
+        max_abs: abs.last().copied().unwrap_or(0.0),
+        p99_abs: p99,
+        mean_de2000: de_sum / abs.len().max(1) as f64,
+        max_de2000: de_max,
+        points: out.len(),
+        nonfinite,
+        setup_s,
+        reference_max: reference
+            .iter()
+            .flat_map(|c| c.iter().copied())
+            .fold(0.0, f64::max),
+    }
+}
+
+/// Direct evaluation as a renderer would do it: indices cached per
+/// wavelength, one solve per sampled wavelength, one weighted sum per channel.
+struct Direct {
+    integrator: SpectralIntegrator,
+    wavelengths_nm: Vec<f64>,
+    indices: Vec<C64>,
+    media: usize,
+    thicknesses_nm: Vec<f64>,
+    varying: usize,
+    spectrum: Vec<f64>,
+}
+
+impl Direct {
+    fn new(bench: &BenchStack, sampling: Sampling) -> Result<Direct> {
+        let integrator = SpectralIntegrator::new(sampling);
+        let wavelengths_nm = integrator.wavelengths_nm().to_vec();
+        let media = bench.stack.layers.len() + 2;
+        let indices = indices_table(&bench.stack, &wavelengths_nm)?;
+        Ok(Direct {
+            spectrum: vec![0.0; wavelengths_nm.len()],
+            integrator,
+            wavelengths_nm,
+            indices,
+            media,
+            thicknesses_nm: bench.stack.thicknesses_nm(),
+            varying: bench.varying_layer,
+        })
+    }
+
+    #[inline]
+    fn eval(&mut self, thickness_nm: f64, cos_theta: f64) -> [f64; 3] {
+        self.thicknesses_nm[self.varying] = thickness_nm;
+        for ((s, &w), n) in self
+            .spectrum
+            .iter_mut()
+            .zip(&self.wavelengths_nm)
+            .zip(self.indices.chunks_exact(self.media))
+        {
+            *s = solve(n, &self.thicknesses_nm, w, cos_theta).r();
+        }
+        self.integrator.rgb(&self.spectrum)
+    }
+}

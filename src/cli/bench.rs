@@ -1,0 +1,200 @@
+//! `irid bench`: speed against error, and the grid workload the Python peers
+//! (`tools/bench_peers.py`) are timed against.
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+use anyhow::{Context, Result};
+use irid::bench::machine::Machine;
+use irid::bench::{grid, report, run, stacks};
+
+use super::args::{check_angles, parse_list};
+
+#[derive(clap::Args)]
+pub struct Args {
+    /// Fewer points and LUT resolutions: a smoke test, not a measurement.
+    #[arg(long)]
+    pub quick: bool,
+    /// Directory for report.md, results.csv and speed-vs-error.png.
+    #[arg(short = 'o', long = "out", default_value = "benches/results")]
+    pub out: PathBuf,
+    /// Random points per stack (default 10000, or 200 with --quick).
+    #[arg(long)]
+    pub points: Option<usize>,
+    /// Grid mode: evaluate one of the fixed stacks over a wavelength × angle
+    /// (× thickness) grid, print JSON with the wall time, and write no report.
+    #[arg(long, value_name = "STACK")]
+    pub grid: Option<String>,
+    /// Wavelengths in nm: a,b,c or start:end:step.
+    #[arg(long, default_value = "380:780:1")]
+    pub wavelengths: String,
+    /// Incidence angles in degrees: a,b,c or start:end:step.
+    #[arg(long, default_value = "0:89:1")]
+    pub angles: String,
+    /// Thicknesses in nm of the stack's varying layer (default: its own thickness).
+    #[arg(long)]
+    pub thicknesses: Option<String>,
+    /// Worker threads.
+    #[arg(long, default_value_t = 2)]
+    pub threads: usize,
+    /// Repetitions; the fastest is reported.
+    #[arg(long, default_value_t = 3)]
+    pub repeat: usize,
+    /// With --grid: time baking an rgb table of T×A nodes (thickness × angle)
+    /// with the baker, then sweep the same nodes at the integration's
+    /// wavelengths (replaces --wavelengths, --angles, --thicknesses).
+    #[arg(long, value_name = "T,A")]
+    pub bake_nodes: Option<String>,
+    /// Write R then T as little-endian f64 arrays, [angle][thickness][wavelength],
+    /// to this file instead of printing them in the JSON.
+    #[arg(long, value_name = "PATH")]
+    pub raw: Option<PathBuf>,
+}
+
+pub fn run(args: Args) -> Result<ExitCode> {
+    match &args.grid {
+        Some(name) => run_grid(name, &args)?,
+        None => run_report(&args)?,
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+fn run_report(args: &Args) -> Result<()> {
+    let mut options = if args.quick {
+        run::Options::quick()
+    } else {
+        run::Options::full()
+    };
+    if let Some(points) = args.points {
+        if points == 0 {
+            anyhow::bail!("--points must be at least 1");
+        }
+        options.points = points;
+    }
+    let command = std::iter::once("irid".to_string())
+        .chain(std::env::args().skip(1))
+        .collect::<Vec<_>>()
+        .join(" ");
+    let machine = Machine::current();
+    eprintln!(
+        "irid bench: {} points per stack on {}",
+        options.points,
+        machine.summary()
+    );
+    let rows = run::run(&options)?;
+    report::write_all(&args.out, &rows, &options, &machine, &command)?;
+    for s in report::summarize(&rows) {
+        eprintln!(
+            "  {:28} {:>12.1} ns/eval   mean ΔE00 {:.2e}",
+            s.method.name(),
+            s.ns_per_eval,
+            s.mean_de2000
+        );
+    }
+    eprintln!("wrote {}", args.out.join("report.md").display());
+    Ok(())
+}
+
+fn run_grid(name: &str, args: &Args) -> Result<()> {
+    let bench = stacks::find(name)?.with_context(|| {
+        format!(
+            "--grid '{name}': unknown stack (known: {})",
+            stacks::names().join(", ")
+        )
+    })?;
+    let wavelengths_nm = parse_list("--wavelengths", &args.wavelengths)?;
+    let angles_deg = parse_list("--angles", &args.angles)?;
+    check_angles("--angles", &angles_deg)?;
+    let thicknesses_nm = match &args.thicknesses {
+        Some(spec) => {
+            let t = parse_list("--thicknesses", spec)?;
+            if let Some(bad) = t.iter().find(|t| **t < 0.0) {
+                anyhow::bail!("--thicknesses: {bad} is negative");
+            }
+            Some(t)
+        }
+        None => None,
+    };
+    if args.threads == 0 {
+        anyhow::bail!("--threads must be at least 1");
+    }
+    let (bake_seconds, g) = match &args.bake_nodes {
+        Some(spec) => {
+            let nodes = parse_list("--bake-nodes", spec)?;
+            let [t, a] = nodes[..] else {
+                anyhow::bail!("--bake-nodes '{spec}': expected two node counts, T,A");
+            };
+            if t < 1.0 || a < 2.0 || t.fract() != 0.0 || a.fract() != 0.0 {
+                anyhow::bail!("--bake-nodes '{spec}': need whole numbers, T ≥ 1 and A ≥ 2");
+            }
+            let (s, g) =
+                grid::time_bake(&bench, t as usize, a as usize, args.threads, args.repeat)?;
+            (Some(s), g)
+        }
+        None => (
+            None,
+            grid::Grid {
+                wavelengths_nm,
+                angles_deg,
+                thicknesses_nm,
+            },
+        ),
+    };
+    let out = grid::evaluate(
+        &bench.stack,
+        bench.varying_layer,
+        &g,
+        args.threads,
+        args.repeat,
+    )?;
+    let (indices_re, indices_im): (Vec<Vec<f64>>, Vec<Vec<f64>>) = out
+        .indices
+        .chunks(out.media)
+        .map(|c| {
+            (
+                c.iter().map(|z| z.re).collect(),
+                c.iter().map(|z| z.im).collect(),
+            )
+        })
+        .unzip();
+    let mut doc = serde_json::json!({
+        "stack": bench.name,
+        "description": bench.description,
+        "layer_thicknesses_nm": bench.stack.thicknesses_nm(),
+        "varying_layer": bench.varying_layer,
+        "wavelengths_nm": g.wavelengths_nm,
+        "angles_deg": g.angles_deg,
+        "thicknesses_nm": g.thicknesses_nm,
+        "indices_re": indices_re,
+        "indices_im": indices_im,
+        "threads": args.threads,
+        "points": g.points(),
+        "seconds": out.seconds,
+        "bake_seconds": bake_seconds,
+        "layout": ["angle", "thickness", "wavelength"],
+    });
+    match &args.raw {
+        Some(path) => {
+            write_raw(path, &out.r, &out.t)?;
+            doc["raw"] = serde_json::json!(path);
+        }
+        None => {
+            doc["r"] = serde_json::json!(out.r);
+            doc["t"] = serde_json::json!(out.t);
+        }
+    }
+    let mut stdout = std::io::stdout().lock();
+    serde_json::to_writer(&mut stdout, &doc)?;
+    writeln!(stdout)?;
+    Ok(())
+}
+
+/// R then T as little-endian f64, written atomically.
+fn write_raw(path: &Path, r: &[f64], t: &[f64]) -> Result<()> {
+    let mut bytes = Vec::with_capacity(16 * r.len());
+    for v in r.iter().chain(t) {
+        bytes.extend_from_slice(&v.to_le_bytes());
+    }
+    Ok(report::write_atomic(path, &bytes)?)
+}

@@ -1,0 +1,159 @@
+//! `irid bench --quick` end to end: the report files exist and have the
+//! promised structure, every figure is a number, and the LUT's error falls
+//! as its resolution rises on every stack.
+
+use std::collections::BTreeMap;
+use std::process::Command;
+
+fn irid() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_irid"))
+}
+
+#[test]
+fn quick_bench_writes_a_consistent_report() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = irid()
+        .args(["bench", "--quick", "-o"])
+        .arg(dir.path())
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+
+    let report = std::fs::read_to_string(dir.path().join("report.md")).unwrap();
+    for needle in [
+        "# irid bench: speed against error",
+        "- Date: ",
+        "- Machine: ",
+        "logical cores, CPU ",
+        "- Command: `irid bench --quick -o ",
+        "| method | ns / eval | vs exact | max abs ΔR | p99 abs ΔR | mean ΔE00 | max ΔE00 |",
+        "| method | ns / eval | vs exact | max abs ΔR | p99 abs ΔR | mean ΔE00 | max ΔE00 | bake (s) |",
+        "![speed vs error](speed-vs-error.png)",
+    ] {
+        assert!(report.contains(needle), "report.md lacks {needle:?}");
+    }
+
+    let csv = std::fs::read_to_string(dir.path().join("results.csv")).unwrap();
+    let mut lines = csv.lines();
+    assert_eq!(
+        lines.next().unwrap(),
+        "stack,method,family,ns_per_eval,max_abs_r,p99_abs_r,mean_de2000,max_de2000,points,nonfinite,setup_s"
+    );
+    // stack -> method -> mean ΔE00
+    let mut de: BTreeMap<String, BTreeMap<String, f64>> = BTreeMap::new();
+    for line in lines {
+        let f: Vec<&str> = line.split(',').collect();
+        assert_eq!(f.len(), 11, "{line}");
+        let ns: f64 = f[3].parse().unwrap();
+        assert!(ns > 0.0 && ns.is_finite(), "{line}");
+        for v in &f[4..8] {
+            let v: f64 = v.parse().unwrap();
+            assert!(v >= 0.0 && v.is_finite(), "{line}");
+        }
+        de.entry(f[0].to_string())
+            .or_default()
+            .insert(f[1].to_string(), f[6].parse().unwrap());
+    }
+    assert_eq!(de.len(), 6, "one block per fixed stack: {:?}", de.keys());
+    for (stack, methods) in &de {
+        assert_eq!(
+            methods["direct exact"], 0.0,
+            "{stack}: the reference itself"
+        );
+        for m in [
+            "direct rgb3",
+            "direct uniform:9",
+            "direct uniform:41",
+            "direct uniform:81",
+        ] {
+            assert!(methods.contains_key(m), "{stack} lacks {m}");
+        }
+        // Uniform sampling converges on the reference.
+        assert!(
+            methods["direct uniform:81"] < methods["direct uniform:9"],
+            "{stack}"
+        );
+        // LUT error falls as resolution rises, in both precisions.
+        for precision in ["f32", "f16"] {
+            let mut lut: Vec<(usize, f64)> = methods
+                .iter()
+                .filter_map(|(m, &e)| {
+                    let res = m
+                        .strip_prefix("LUT ")?
+                        .strip_suffix(&format!(" {precision}"))?;
+                    let (t, a) = res.split_once('x')?;
+                    Some((t.parse::<usize>().ok()? * a.parse::<usize>().ok()?, e))
+                })
+                .collect();
+            lut.sort_by_key(|&(nodes, _)| nodes);
+            assert!(lut.len() >= 3, "{stack}: {precision} LUTs {lut:?}");
+            assert!(
+                lut.windows(2).all(|w| w[1].1 < w[0].1),
+                "{stack} LUT {precision} mean ΔE00 not falling with resolution: {lut:?}"
+            );
+        }
+        let one_film = ["soap", "absorbing", "gain-on-gold"].contains(&stack.as_str());
+        assert_eq!(
+            methods.contains_key("analytic Belcour-Barla"),
+            one_film,
+            "{stack}"
+        );
+    }
+
+    let png = image::open(dir.path().join("speed-vs-error.png")).unwrap();
+    assert!(png.width() > 500 && png.height() > 300);
+}
+
+#[test]
+fn grid_mode_prints_json_and_rejects_bad_input() {
+    let out = irid()
+        .args([
+            "bench",
+            "--grid",
+            "soap",
+            "--wavelengths",
+            "400,500",
+            "--angles",
+            "0,30",
+            "--repeat",
+            "1",
+        ])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let doc: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(doc["points"], 4);
+    assert_eq!(doc["r"].as_array().unwrap().len(), 4);
+    assert!(doc["seconds"].as_f64().unwrap() >= 0.0);
+
+    for bad in [
+        vec!["bench", "--grid", "nope"],
+        vec!["bench", "--grid", "soap", "--angles", "95"],
+        vec!["bench", "--grid", "soap", "--threads", "0"],
+        vec!["bench", "--points", "0"],
+        vec!["bench", "--grid", "soap", "--bake-nodes", "3"],
+        vec![
+            "bench",
+            "--grid",
+            "soap",
+            "--raw",
+            "/nonexistent-irid-dir/x.raw",
+        ],
+    ] {
+        let out = irid().args(&bad).output().unwrap();
+        assert_eq!(out.status.code(), Some(2), "{bad:?}");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            err.starts_with("irid: ") && err.lines().count() == 1,
+            "{bad:?}: {err}"
+        );
+    }
+}
