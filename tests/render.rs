@@ -284,6 +284,18 @@ fn cli_renders_a_scene_file_to_png_and_exr() {
     assert!(out.contains("render") && out.contains("8x6"), "{out}");
     let png = ::image::open(dir.join("s.png")).unwrap();
     assert_eq!((png.width(), png.height()), (8, 6));
+    let exr = exr::prelude::read_first_rgba_layer_from_file(
+        dir.join("s.exr"),
+        |res, _| vec![[0.0f32; 3]; res.width() * res.height()],
+        |px, pos, (r, g, b, _a): (f32, f32, f32, f32)| px[pos.y() * 8 + pos.x()] = [r, g, b],
+    )
+    .unwrap();
+    assert_eq!(exr.layer_data.size.width(), 8);
+    // Linear radiance in the EXR, the same pixels sRGB-encoded in the PNG.
+    let rgb = png.to_rgb8();
+    let p = exr.layer_data.channel_data.pixels[3 * 8 + 4];
+    let want = irid::color::linear_to_srgb8(p.map(f64::from));
+    assert_eq!(rgb.get_pixel(4, 3).0, want);
     assert!(dir.join("s.exr").is_file());
 }
 

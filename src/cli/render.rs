@@ -96,6 +96,13 @@ pub fn run(args: Args) -> Result<ExitCode> {
             PathBuf::from("out").join(format!("{}.png", file_stem(&scene.name)))
         }
     };
+    // Fail before a long render, not after it.
+    for path in std::iter::once(&output).chain(args.exr.as_ref()) {
+        let dir = path.parent().filter(|d| !d.as_os_str().is_empty());
+        if dir.is_some_and(|d| !d.is_dir()) {
+            bail!("{}: output directory does not exist", path.display());
+        }
+    }
     let mut opts = RenderOptions::new(mode);
     opts.width = args.width;
     opts.height = args.height;

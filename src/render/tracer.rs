@@ -169,3 +169,83 @@ impl Tracer<'_> {
         sum * std::f32::consts::FRAC_1_PI
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use std::path::Path;
+
+    use super::*;
+
+    /// A white floor lit by one point light, under a black sky; `blocker`
+    /// optionally puts an opaque sphere between the light and the floor.
+    fn floor_scene(blocker: &str) -> Scene {
+        let text = format!(
+            r#"
+            [camera]
+            position = [0.0, 5.0, 0.1]
+            look_at = [0.0, 0.0, 0.0]
+            fov_deg = 30.0
+            [environment]
+            kind = "sky"
+            zenith = [0.0, 0.0, 0.0]
+            horizon = [0.0, 0.0, 0.0]
+            ground = [0.0, 0.0, 0.0]
+            [[lights]]
+            kind = "point"
+            position = [0.0, 2.0, 0.0]
+            color = [4.0, 4.0, 4.0]
+            [materials.white]
+            kind = "diffuse"
+            albedo = [1.0, 1.0, 1.0]
+            [materials.mirror]
+            kind = "dielectric"
+            ior = 1.5
+            [[objects]]
+            shape = "plane"
+            material = "white"
+            point = [0.0, 0.0, 0.0]
+            normal = [0.0, 1.0, 0.0]
+            {blocker}
+            "#
+        );
+        Scene::from_toml_str(&text, Path::new("."), "test").unwrap()
+    }
+
+    #[test]
+    fn point_light_falls_off_and_casts_shadows() {
+        let scene = floor_scene("");
+        let tracer = Tracer {
+            scene: &scene,
+            films: &[],
+            max_depth: 2,
+        };
+        let down = |x: f32| {
+            let ray = Ray::new(Vec3::new(x, 1.0, 0.0), Vec3::NEG_Y);
+            tracer.trace(&ray, 0, Vec3::ONE).x
+        };
+        // E = I cos / r² over π for albedo 1: directly below at r = 2.
+        let below = down(0.0);
+        assert!(
+            (below - 4.0 / 4.0 / std::f32::consts::PI).abs() < 1e-4,
+            "{below}"
+        );
+        // At x = 2: r² = 8, cos = 2 / √8.
+        let aside = down(2.0);
+        let want = 4.0 * (2.0 / 8f32.sqrt()) / 8.0 / std::f32::consts::PI;
+        assert!((aside - want).abs() < 1e-4, "{aside} vs {want}");
+
+        let shadowed = floor_scene(
+            "[[objects]]\nshape = \"sphere\"\nmaterial = \"mirror\"\ncenter = [0.0, 1.0, 0.0]\nradius = 0.5",
+        );
+        let tracer = Tracer {
+            scene: &shadowed,
+            films: &[],
+            max_depth: 2,
+        };
+        // Seen from just above the floor, beside the sphere's shadow and in it.
+        let ray = Ray::new(Vec3::new(0.0, 0.3, 0.0), Vec3::NEG_Y);
+        assert_eq!(tracer.trace(&ray, 0, Vec3::ONE), Vec3::ZERO);
+        let ray = Ray::new(Vec3::new(2.0, 0.3, 0.0), Vec3::NEG_Y);
+        assert!((tracer.trace(&ray, 0, Vec3::ONE).x - want).abs() < 1e-4);
+    }
+}
