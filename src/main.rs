@@ -4,7 +4,7 @@
 
 use std::process::ExitCode;
 
-use clap::{Parser, Subcommand};
+use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
 
 mod cli;
 
@@ -40,13 +40,16 @@ enum Command {
 }
 
 fn main() -> ExitCode {
-    let cli = match Cli::try_parse() {
+    let cli = match parse() {
         Ok(cli) => cli,
-        Err(e) => {
-            // --help and --version are not errors.
-            let code = if e.use_stderr() { 2 } else { 0 };
+        // --help and --version are not errors.
+        Err(e) if !e.use_stderr() => {
             let _ = e.print();
-            return ExitCode::from(code);
+            return ExitCode::SUCCESS;
+        }
+        Err(e) => {
+            eprintln!("irid: {}", clap_line(&e));
+            return ExitCode::from(2);
         }
     };
     let result = match cli.command {
@@ -69,6 +72,38 @@ fn main() -> ExitCode {
             ExitCode::from(2)
         }
     }
+}
+
+/// Parses the command line. Option values may start with '-' (`--thickness
+/// -5:600`, `--seed -1`) so that they reach the value checks, which name
+/// the flag, instead of being taken for an unknown flag.
+fn parse() -> Result<Cli, clap::Error> {
+    let command = Cli::command().mut_subcommands(|sub| {
+        sub.mut_args(|arg| {
+            let takes_value = arg.get_action().takes_values() && !arg.is_positional();
+            arg.allow_hyphen_values(takes_value)
+        })
+    });
+    Cli::from_arg_matches_mut(&mut command.try_get_matches()?)
+}
+
+/// The first paragraph of a usage error on one line, without clap's
+/// `error: ` prefix: the project prints every error as one line.
+fn clap_line(e: &clap::Error) -> String {
+    if e.kind() == clap::error::ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand {
+        return "a subcommand is required (see irid --help)".to_string();
+    }
+    let text = e.render().to_string();
+    let paragraph: Vec<&str> = text
+        .trim_start()
+        .lines()
+        .take_while(|l| !l.trim().is_empty())
+        .map(str::trim)
+        .collect();
+    paragraph
+        .join(" ")
+        .trim_start_matches("error: ")
+        .to_string()
 }
 
 fn is_broken_pipe(e: &anyhow::Error) -> bool {

@@ -1,0 +1,93 @@
+//! Bad input never panics: the binary prints one line naming what is wrong,
+//! exits with code 2 and leaves no output file behind.
+
+use std::path::Path;
+use std::process::Command;
+
+/// Runs `irid args...` in `dir`; asserts exit code 2, a single stderr line
+/// that mentions every one of `names`, and that none of `outputs` exists.
+fn rejects(dir: &Path, args: &[&str], names: &[&str], outputs: &[&str]) {
+    let out = Command::new(env!("CARGO_BIN_EXE_irid"))
+        .args(args)
+        .current_dir(dir)
+        .output()
+        .expect("irid runs");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{args:?}: {stderr}");
+    assert_eq!(stderr.lines().count(), 1, "{args:?}: {stderr}");
+    assert!(stderr.starts_with("irid: "), "{args:?}: {stderr}");
+    for name in names {
+        assert!(
+            stderr.contains(name),
+            "{args:?} should name {name}: {stderr}"
+        );
+    }
+    for output in outputs {
+        assert!(!dir.join(output).exists(), "{args:?} left {output}");
+    }
+}
+
+const SOAP: &str = "ambient = { n = 1.0 }\nsubstrate = { n = 1.0 }\n\
+                    [[layers]]\nn = 1.33\nthickness_nm = 500.0\n";
+
+fn soap_dir() -> tempfile::TempDir {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("soap.toml"), SOAP).unwrap();
+    dir
+}
+
+#[test]
+fn usage_errors_are_one_line() {
+    let dir = soap_dir();
+    let d = dir.path();
+    rejects(
+        d,
+        &["bake", "soap.toml", "-o", "o.exr", "--layer", "x"],
+        &["--layer"],
+        &["o.exr"],
+    );
+    rejects(
+        d,
+        &["render", "bubbles-uniform", "--film", "foo"],
+        &["--film"],
+        &[],
+    );
+    rejects(d, &["eval"], &["STACKS"], &[]);
+    rejects(d, &["frobnicate"], &["frobnicate"], &[]);
+    rejects(d, &[], &["subcommand"], &[]);
+}
+
+#[test]
+fn negative_flag_values_reach_the_checks() {
+    let dir = soap_dir();
+    let d = dir.path();
+    let bake = |flag: &str, value: &str, name: &str| {
+        let args = [
+            "bake",
+            "soap.toml",
+            "-o",
+            "o.exr",
+            "--resolution",
+            "4,4",
+            flag,
+            value,
+        ];
+        rejects(d, &args, &[name], &["o.exr"]);
+    };
+    bake("--thickness", "-5:600", "thickness");
+    bake("--max-error", "-1", "max-error");
+    bake("--angles", "-1:1", "angles");
+    rejects(
+        d,
+        &["color", "soap.toml", "--angles", "-5"],
+        &["--angles"],
+        &[],
+    );
+    rejects(
+        d,
+        &["eval", "soap.toml", "--wavelengths", "-5"],
+        &["--wavelengths"],
+        &[],
+    );
+    rejects(d, &["validate", "t.exr", "--seed", "-1"], &["--seed"], &[]);
+}
