@@ -91,3 +91,21 @@ fn negative_flag_values_reach_the_checks() {
     );
     rejects(d, &["validate", "t.exr", "--seed", "-1"], &["--seed"], &[]);
 }
+
+#[test]
+fn bake_thickness_range_is_bounded() {
+    // 1e300 nm is finite in f64 but infinite in the table's f32 axis: the
+    // table was written and then could not be read back.
+    let dir = soap_dir();
+    let args = [
+        "bake",
+        "soap.toml",
+        "-o",
+        "o.exr",
+        "--resolution",
+        "4,4",
+        "--thickness",
+        "1e300:1e301",
+    ];
+    rejects(dir.path(), &args, &["thickness"], &["o.exr"]);
+}

@@ -21,7 +21,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::color::Sampling;
 use crate::error::{Error, Result};
-use crate::optics::Stack;
+use crate::optics::{Stack, MAX_THICKNESS_NM};
 
 /// What a table holds.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
@@ -133,10 +133,11 @@ impl BakeSpec {
             ));
         }
         let (t0, t1) = self.thickness_nm;
-        if !(t0.is_finite() && t1.is_finite() && t0 >= 0.0 && t0 <= t1) {
+        // The stack's own bound also keeps the f32 axis in the file finite.
+        if !(t0 >= 0.0 && t0 <= t1 && t1 <= MAX_THICKNESS_NM) {
             return Err(Error::invalid(
                 "thickness",
-                format!("need finite 0 ≤ min ≤ max, got {t0}:{t1}"),
+                format!("need 0 ≤ min ≤ max ≤ {MAX_THICKNESS_NM:e} nm, got {t0}:{t1}"),
             ));
         }
         let (c0, c1) = self.cos_theta;
