@@ -40,6 +40,7 @@ enum Command {
 }
 
 fn main() -> ExitCode {
+    restore_sigpipe();
     let cli = match parse() {
         Ok(cli) => cli,
         // --help and --version are not errors.
@@ -71,6 +72,18 @@ fn main() -> ExitCode {
             eprintln!("irid: {}", one_line(&e));
             ExitCode::from(2)
         }
+    }
+}
+
+/// Rust ignores SIGPIPE, so a `println!` into a closed pipe (`irid info t.exr
+/// | head -2`) panics. With the default action the process ends quietly, as
+/// other Unix tools do.
+fn restore_sigpipe() {
+    #[cfg(unix)]
+    // SAFETY: called first thing in main, before any other thread exists;
+    // SIG_DFL is a valid disposition for SIGPIPE.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
     }
 }
 

@@ -109,3 +109,25 @@ fn bake_thickness_range_is_bounded() {
     ];
     rejects(dir.path(), &args, &["thickness"], &["o.exr"]);
 }
+
+#[test]
+fn closed_stdout_is_not_a_panic() {
+    use std::process::Stdio;
+    let table = concat!(env!("CARGO_MANIFEST_DIR"), "/luts/soap-film.exr");
+    let mut child = Command::new(env!("CARGO_BIN_EXE_irid"))
+        .args(["info", table])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    drop(child.stdout.take());
+    let out = child.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    // Either it finished before the pipe closed or SIGPIPE ended it.
+    assert!(
+        matches!(out.status.code(), Some(0) | None),
+        "{:?}",
+        out.status
+    );
+}
