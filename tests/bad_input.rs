@@ -131,3 +131,55 @@ fn closed_stdout_is_not_a_panic() {
         out.status
     );
 }
+
+#[test]
+fn render_flags_are_bounded() {
+    let dir = tempfile::tempdir().unwrap();
+    let render = |flag: &str, value: &str| {
+        let args = [
+            "render",
+            "bubbles-uniform",
+            "-o",
+            "o.png",
+            "--width",
+            "8",
+            "--height",
+            "8",
+            flag,
+            value,
+        ];
+        rejects(dir.path(), &args, &[flag], &["o.png"]);
+    };
+    // The tracer recurses on the stack: 100000 overflowed it (SIGABRT).
+    render("--max-depth", "100000");
+    // Starting 100000 worker threads hung.
+    render("--threads", "100000");
+    render("--threads", "0");
+}
+
+#[test]
+fn scene_file_rejects_negative_absorption_and_sun_radius() {
+    let gem = include_str!("../luts/scenes/blue-gem.toml");
+    let dir = tempfile::tempdir().unwrap();
+    let cases = [
+        ("absorption = [1.6", "absorption = [-1.6", "absorption"),
+        (
+            "sun_radius_deg = 3.0",
+            "sun_radius_deg = -3.0",
+            "sun_radius_deg",
+        ),
+        (
+            "sun_radiance = [40.0",
+            "sun_radiance = [-40.0",
+            "sun_radiance",
+        ),
+    ];
+    for (from, to, field) in cases {
+        assert!(gem.contains(from));
+        std::fs::write(dir.path().join("s.toml"), gem.replace(from, to)).unwrap();
+        let args = [
+            "render", "s.toml", "-o", "o.png", "--width", "8", "--height", "8",
+        ];
+        rejects(dir.path(), &args, &["s.toml", field], &["o.png"]);
+    }
+}

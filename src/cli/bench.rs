@@ -128,8 +128,12 @@ fn run_grid(name: &str, args: &Args) -> Result<()> {
         }
         None => None,
     };
-    if args.threads == 0 {
-        anyhow::bail!("--threads must be at least 1");
+    let max = super::render::MAX_THREADS;
+    if !(1..=max).contains(&args.threads) {
+        anyhow::bail!(
+            "--threads must be between 1 and {max}, got {}",
+            args.threads
+        );
     }
     let (bake_seconds, g) = match &args.bake_nodes {
         Some(spec) => {

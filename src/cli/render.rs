@@ -60,11 +60,17 @@ pub fn film_mode(film: &str, sampling: Option<&str>, cache: &Path) -> Result<Fil
     }
 }
 
+/// More workers than this only exhausts the machine: starting 100000
+/// threads hung instead of failing.
+pub const MAX_THREADS: usize = 1024;
+
 /// Runs `f` on a pool of `threads` workers (or rayon's default pool).
 pub fn with_threads<T: Send>(threads: Option<usize>, f: impl FnOnce() -> T + Send) -> Result<T> {
     match threads {
         None => Ok(f()),
-        Some(0) => bail!("--threads must be ≥ 1"),
+        Some(n) if !(1..=MAX_THREADS).contains(&n) => {
+            bail!("--threads must be between 1 and {MAX_THREADS}, got {n}")
+        }
         Some(n) => {
             let pool = rayon::ThreadPoolBuilder::new()
                 .num_threads(n)
@@ -87,6 +93,14 @@ pub fn run(args: Args) -> Result<ExitCode> {
             if !(1..=16384).contains(&v) {
                 bail!("{flag} must be between 1 and 16384, got {v}");
             }
+        }
+    }
+    if let Some(depth) = args.max_depth {
+        if depth > render::scene_file::MAX_DEPTH {
+            bail!(
+                "--max-depth must be at most {}, got {depth}",
+                render::scene_file::MAX_DEPTH
+            );
         }
     }
     let output = match &args.output {

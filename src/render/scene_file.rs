@@ -328,6 +328,18 @@ fn finite3(origin: &str, what: &str, v: [f32; 3]) -> Result<Vec3> {
     }
 }
 
+/// Absorption coefficients and radiances: a negative one would add light.
+fn nonnegative3(origin: &str, what: &str, v: [f32; 3]) -> Result<Vec3> {
+    if v.iter().all(|x| x.is_finite() && *x >= 0.0) {
+        Ok(Vec3::from(v))
+    } else {
+        Err(Error::malformed(
+            origin,
+            format!("{what}: must be finite and ≥ 0, got {v:?}"),
+        ))
+    }
+}
+
 fn positive(origin: &str, what: &str, v: f32) -> Result<f32> {
     if v.is_finite() && v > 0.0 {
         Ok(v)
@@ -350,6 +362,10 @@ fn unit(origin: &str, what: &str, v: [f32; 3]) -> Result<Vec3> {
     Ok(v.normalize())
 }
 
+/// The deepest reflection/refraction recursion: the tracer recurses on the
+/// call stack, and far deeper paths carry no visible light anyway.
+pub const MAX_DEPTH: u32 = 64;
+
 fn build(file: SceneFile, base: &Path, origin: &str) -> Result<Scene> {
     let r = &file.render;
     if !(1..=16384).contains(&r.width) || !(1..=16384).contains(&r.height) {
@@ -361,8 +377,11 @@ fn build(file: SceneFile, base: &Path, origin: &str) -> Result<Scene> {
     if !(1..=4096).contains(&r.spp) {
         return Err(Error::malformed(origin, "render.spp: must be 1..=4096"));
     }
-    if r.max_depth > 64 {
-        return Err(Error::malformed(origin, "render.max_depth: must be ≤ 64"));
+    if r.max_depth > MAX_DEPTH {
+        return Err(Error::malformed(
+            origin,
+            format!("render.max_depth: must be ≤ {MAX_DEPTH}"),
+        ));
     }
     let settings = Settings {
         width: r.width,
@@ -407,10 +426,10 @@ fn build(file: SceneFile, base: &Path, origin: &str) -> Result<Scene> {
             sun_radiance,
             sun_radius_deg,
         } => Environment::Sky(Sky {
-            zenith: finite3(origin, "environment.zenith", zenith)?,
-            horizon: finite3(origin, "environment.horizon", horizon)?,
-            ground: finite3(origin, "environment.ground", ground)?,
-            ground_checker: finite3(
+            zenith: nonnegative3(origin, "environment.zenith", zenith)?,
+            horizon: nonnegative3(origin, "environment.horizon", horizon)?,
+            ground: nonnegative3(origin, "environment.ground", ground)?,
+            ground_checker: nonnegative3(
                 origin,
                 "environment.ground_checker",
                 ground_checker.unwrap_or(ground),
@@ -418,8 +437,15 @@ fn build(file: SceneFile, base: &Path, origin: &str) -> Result<Scene> {
             checker_size: positive(origin, "environment.checker_size", checker_size)?,
             ground_depth: positive(origin, "environment.ground_depth", ground_depth)?,
             sun_direction: unit(origin, "environment.sun_direction", sun_direction)?,
-            sun_radiance: finite3(origin, "environment.sun_radiance", sun_radiance)?,
-            sun_radius_deg,
+            sun_radiance: nonnegative3(origin, "environment.sun_radiance", sun_radiance)?,
+            sun_radius_deg: if (0.0..=90.0).contains(&sun_radius_deg) {
+                sun_radius_deg
+            } else {
+                return Err(Error::malformed(
+                    origin,
+                    format!("environment.sun_radius_deg: must be in [0, 90], got {sun_radius_deg}"),
+                ));
+            },
         }),
         EnvironmentSection::Map { path, intensity } => Environment::Map(EquirectMap::load(
             &base.join(path),
@@ -484,7 +510,7 @@ fn build(file: SceneFile, base: &Path, origin: &str) -> Result<Scene> {
             }
             MaterialSection::Dielectric { ior, absorption } => Material::Dielectric {
                 ior: positive(origin, &what("ior"), *ior)?,
-                absorption: finite3(origin, &what("absorption"), *absorption)?,
+                absorption: nonnegative3(origin, &what("absorption"), *absorption)?,
             },
             MaterialSection::Film {
                 stack,
@@ -557,7 +583,7 @@ fn build(file: SceneFile, base: &Path, origin: &str) -> Result<Scene> {
                 let inside = if transparent {
                     Some(Interior {
                         ior: real_at_550(&stack.substrate)?,
-                        absorption: finite3(origin, &what("absorption"), *absorption)?,
+                        absorption: nonnegative3(origin, &what("absorption"), *absorption)?,
                     })
                 } else {
                     None
