@@ -46,3 +46,17 @@ impl Error {
 }
 
 pub type Result<T, E = Error> = std::result::Result<T, E>;
+
+/// A TOML parse error's message. toml leaves it empty for some syntax errors
+/// (a value missing at the end of the file), which would print as nothing
+/// after the position.
+pub(crate) fn toml_message(e: &toml::de::Error, text: &str) -> String {
+    let message = e.message().trim();
+    if !message.is_empty() {
+        message.replace('\n', "; ")
+    } else if e.span().is_some_and(|s| s.start >= text.trim_end().len()) {
+        "unexpected end of file (a value or bracket is missing)".to_string()
+    } else {
+        "invalid TOML syntax".to_string()
+    }
+}

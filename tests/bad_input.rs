@@ -183,3 +183,29 @@ fn scene_file_rejects_negative_absorption_and_sun_radius() {
         rejects(dir.path(), &args, &["s.toml", field], &["o.png"]);
     }
 }
+
+#[test]
+fn truncated_toml_says_what_is_wrong() {
+    // toml gives no message for a value missing at the end of the file: the
+    // line used to end after "column 19: ".
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    std::fs::write(
+        d.join("t.toml"),
+        "ambient = { n = 1.0 }\nsubstrate = { n = ",
+    )
+    .unwrap();
+    rejects(
+        d,
+        &["eval", "t.toml"],
+        &["t.toml", "line 2", "end of file"],
+        &[],
+    );
+    std::fs::write(d.join("s.toml"), "name = \"x\"\n[render]\nwidth = ").unwrap();
+    rejects(
+        d,
+        &["render", "s.toml", "-o", "o.png"],
+        &["s.toml", "end of file"],
+        &["o.png"],
+    );
+}

@@ -234,7 +234,7 @@ impl Stack {
                 .unwrap_or_default();
             Error::malformed(
                 origin,
-                format!("{at}{}", e.message().trim().replace('\n', "; ")),
+                format!("{at}{}", crate::error::toml_message(&e, text)),
             )
         })?;
         spec.resolve(base_dir)

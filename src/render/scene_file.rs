@@ -91,7 +91,10 @@ impl Scene {
         let file: SceneFile = toml::from_str(text).map_err(|e| {
             let line = e.span().map(|s| text[..s.start].lines().count().max(1));
             let at = line.map(|l| format!("line {l}: ")).unwrap_or_default();
-            Error::malformed(origin, format!("{at}{}", e.message().trim()))
+            Error::malformed(
+                origin,
+                format!("{at}{}", crate::error::toml_message(&e, text)),
+            )
         })?;
         build(file, base_dir, origin)
     }
