@@ -209,3 +209,24 @@ fn truncated_toml_says_what_is_wrong() {
         &["o.png"],
     );
 }
+
+#[test]
+fn bake_names_the_stack_whose_material_fails() {
+    // The table covers 360–830 nm (exact sampling) but the CSV only 500–600:
+    // the error surfaced from the baker without the stack file's name.
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    std::fs::write(d.join("narrow.csv"), "wl,n\n0.5,1.5\n0.6,1.5\n").unwrap();
+    std::fs::write(
+        d.join("narrow.toml"),
+        "ambient = { n = 1.0 }\nsubstrate = { table = \"narrow.csv\" }\n",
+    )
+    .unwrap();
+    let args = ["bake", "narrow.toml", "-o", "o.exr", "--resolution", "4,4"];
+    rejects(
+        d,
+        &args,
+        &["narrow.toml", "narrow.csv", "360 nm"],
+        &["o.exr"],
+    );
+}

@@ -84,6 +84,9 @@ pub fn run(args: Args) -> Result<ExitCode> {
         (None, e) => Resolution::MaxError(e.unwrap_or(1e-3)),
     };
 
+    // Flag errors first; what fails after them comes from the stack (a
+    // material undefined at some wavelength), so name its file.
+    spec.validate()?;
     let bar = std::io::stderr().is_terminal().then(|| {
         let bar = indicatif::ProgressBar::new(1000);
         bar.set_style(
@@ -97,7 +100,8 @@ pub fn run(args: Args) -> Result<ExitCode> {
         if let Some(bar) = &bar {
             bar.set_position((f * 1000.0) as u64);
         }
-    })?;
+    })
+    .with_context(|| args.stack.display().to_string())?;
     let baked = started.elapsed();
     if let Some(bar) = &bar {
         bar.finish_and_clear();
