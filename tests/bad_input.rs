@@ -230,3 +230,23 @@ fn bake_names_the_stack_whose_material_fails() {
         &["o.exr"],
     );
 }
+
+#[test]
+fn scene_film_thickness_is_bounded() {
+    // 1e20 nm is finite in f32 but beyond what the baker accepts: the error
+    // came from the bake without the scene file or the field.
+    let scene = include_str!("../luts/scenes/bubbles-noise.toml");
+    let dir = tempfile::tempdir().unwrap();
+    assert!(scene.contains("max_nm = 1100.0"));
+    let text = scene.replace("max_nm = 1100.0", "max_nm = 1e20");
+    std::fs::write(dir.path().join("s.toml"), text).unwrap();
+    let args = [
+        "render", "s.toml", "-o", "o.png", "--width", "8", "--height", "8",
+    ];
+    rejects(
+        dir.path(),
+        &args,
+        &["s.toml", "thickness.max_nm"],
+        &["o.png"],
+    );
+}

@@ -17,7 +17,7 @@ use super::mesh::{self, Mesh};
 use super::scene::{CameraSpec, Film, Light, Object, Scene, Settings, Shape};
 use super::thickness::ThicknessField;
 use crate::error::{Error, Result};
-use crate::optics::Stack;
+use crate::optics::{Stack, MAX_THICKNESS_NM};
 
 /// Built-in scenes: (name, TOML text).
 const BUILTIN: [(&str, &str); 6] = [
@@ -554,11 +554,11 @@ fn build(file: SceneFile, base: &Path, origin: &str) -> Result<Scene> {
                         ))
                     }
                     (Some(d), None) => ThicknessField::Uniform {
-                        thickness_nm: nonnegative(origin, &what("thickness_nm"), *d)?,
+                        thickness_nm: film_thickness(origin, &what("thickness_nm"), *d)?,
                     },
                     (None, Some(n)) => {
-                        let lo = nonnegative(origin, &what("thickness.min_nm"), n.min_nm)?;
-                        let hi = nonnegative(origin, &what("thickness.max_nm"), n.max_nm)?;
+                        let lo = film_thickness(origin, &what("thickness.min_nm"), n.min_nm)?;
+                        let hi = film_thickness(origin, &what("thickness.max_nm"), n.max_nm)?;
                         if hi < lo {
                             return Err(Error::malformed(
                                 origin,
@@ -714,13 +714,15 @@ fn build(file: SceneFile, base: &Path, origin: &str) -> Result<Scene> {
     })
 }
 
-fn nonnegative(origin: &str, what: &str, v: f32) -> Result<f32> {
-    if v.is_finite() && v >= 0.0 {
+/// A film thickness: the films are baked or solved, which accept at most
+/// [`MAX_THICKNESS_NM`].
+fn film_thickness(origin: &str, what: &str, v: f32) -> Result<f32> {
+    if v >= 0.0 && f64::from(v) <= MAX_THICKNESS_NM {
         Ok(v)
     } else {
         Err(Error::malformed(
             origin,
-            format!("{what}: must be finite and ≥ 0, got {v}"),
+            format!("{what}: must be in [0, {MAX_THICKNESS_NM:e}] nm, got {v}"),
         ))
     }
 }
