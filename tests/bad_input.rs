@@ -250,3 +250,37 @@ fn scene_film_thickness_is_bounded() {
         &["o.png"],
     );
 }
+
+#[test]
+fn absurd_point_counts_fail_instead_of_aborting() {
+    // Each of these aborted on a multi-terabyte allocation (SIGABRT).
+    let dir = soap_dir();
+    let d = dir.path();
+    let table = concat!(env!("CARGO_MANIFEST_DIR"), "/luts/soap-film.exr");
+    let huge = "100000000000";
+    rejects(d, &["validate", table, "--points", huge], &["points"], &[]);
+    rejects(
+        d,
+        &["bench", "--quick", "--out", "b", "--points", huge],
+        &["--points"],
+        &["b"],
+    );
+    let args = [
+        "bake",
+        "soap.toml",
+        "-o",
+        "o.exr",
+        "--validate-points",
+        huge,
+    ];
+    rejects(d, &args, &["validate-points"], &["o.exr"]);
+    let args = [
+        "eval",
+        "soap.toml",
+        "--wavelengths",
+        "1:10000000:1",
+        "--angles",
+        "0:89:0.01",
+    ];
+    rejects(d, &args, &["--wavelengths", "--angles"], &[]);
+}

@@ -67,8 +67,9 @@ fn run_report(args: &Args) -> Result<()> {
         run::Options::full()
     };
     if let Some(points) = args.points {
-        if points == 0 {
-            anyhow::bail!("--points must be at least 1");
+        let max = irid::lut::MAX_VALIDATION_POINTS;
+        if !(1..=max).contains(&points) {
+            anyhow::bail!("--points must be between 1 and {max}, got {points}");
         }
         options.points = points;
     }

@@ -15,7 +15,7 @@ pub use axis::Axis;
 pub use bake::{bake, bake_with_progress, VALIDATION_SEED};
 pub use header::{BakeCheck, ColorInfo, ErrorInfo, Header, FORMAT_NAME, FORMAT_VERSION};
 pub use sample::{FilmRgb, Lut};
-pub use validate::{validate, ErrorStats, RegionStats};
+pub use validate::{validate, ErrorStats, RegionStats, MAX_POINTS as MAX_VALIDATION_POINTS};
 
 use serde::{Deserialize, Serialize};
 
@@ -155,6 +155,15 @@ impl BakeSpec {
                     format!("need finite 0 < min ≤ max, got {w0}:{w1}"),
                 ));
             }
+        }
+        if self.validation_points > MAX_VALIDATION_POINTS {
+            return Err(Error::invalid(
+                "validate-points",
+                format!(
+                    "must be at most {}, got {}",
+                    MAX_VALIDATION_POINTS, self.validation_points
+                ),
+            ));
         }
         match self.resolution {
             Resolution::Nodes {

@@ -61,12 +61,19 @@ struct PointError {
     de: Option<[f64; 2]>,
 }
 
+/// The most validation points: the per-point errors are kept in memory, and
+/// an absurd count aborted on allocation instead of failing.
+pub const MAX_POINTS: usize = 100_000_000;
+
 /// Compares the table with the solver at `points` random points spread
 /// uniformly over the table's domain (thickness, cos θ and, for spectral
 /// tables, wavelength), drawn from a PCG64 stream seeded with `seed`.
 pub fn validate(lut: &Lut, points: usize, seed: u64) -> Result<ErrorStats> {
-    if points == 0 {
-        return Err(Error::invalid("points", "must be at least 1"));
+    if !(1..=MAX_POINTS).contains(&points) {
+        return Err(Error::invalid(
+            "points",
+            format!("must be between 1 and {MAX_POINTS}, got {points}"),
+        ));
     }
     let h = lut.header();
     let stack = &h.stack;
