@@ -284,3 +284,20 @@ fn absurd_point_counts_fail_instead_of_aborting() {
     ];
     rejects(d, &args, &["--wavelengths", "--angles"], &[]);
 }
+
+#[test]
+fn absurd_grids_fail_instead_of_aborting() {
+    let dir = soap_dir();
+    let d = dir.path();
+    // 8.9 million angles × 471 wavelengths aborted on allocation.
+    let args = ["color", "soap.toml", "--angles", "0:89:0.00001"];
+    rejects(d, &args, &["--angles"], &[]);
+    let grid = ["bench", "--grid", "soap", "--repeat", "1"];
+    let bench = |extra: &[&str], names: &[&str]| {
+        let args: Vec<&str> = grid.iter().chain(extra).copied().collect();
+        rejects(d, &args, names, &[]);
+    };
+    bench(&["--wavelengths", "1:10000000:1"], &["--wavelengths"]);
+    bench(&["--thicknesses", "1e300"], &["--thicknesses"]);
+    bench(&["--repeat", "1000000000"], &["--repeat"]);
+}

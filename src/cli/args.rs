@@ -76,6 +76,24 @@ pub fn parse_range(flag: &str, spec: &str) -> Result<(f64, f64)> {
 }
 
 /// Checks that every angle lies in [0, 90) degrees.
+/// The most (wavelength, angle[, thickness]) points one command evaluates:
+/// the responses are kept in memory, and an absurd grid aborted on
+/// allocation instead of failing.
+pub const MAX_GRID_POINTS: usize = 10_000_000;
+
+/// Fails when the product of `counts` exceeds [`MAX_GRID_POINTS`]; `what`
+/// names the flags that set them.
+pub fn check_grid(what: &str, counts: &[usize]) -> Result<()> {
+    let points = counts.iter().try_fold(1usize, |n, c| n.checked_mul(*c));
+    match points {
+        Some(n) if n <= MAX_GRID_POINTS => Ok(()),
+        _ => bail!(
+            "{what}: {} points, at most {MAX_GRID_POINTS}",
+            points.map_or("too many".to_string(), |n| n.to_string())
+        ),
+    }
+}
+
 pub fn check_angles(flag: &str, angles_deg: &[f64]) -> Result<()> {
     if let Some(a) = angles_deg.iter().find(|a| !(**a >= 0.0 && **a < 90.0)) {
         bail!("{flag}: angle {a} is outside [0, 90) degrees");

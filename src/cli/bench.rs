@@ -9,7 +9,7 @@ use anyhow::{Context, Result};
 use irid::bench::machine::Machine;
 use irid::bench::{grid, renders, report, run, stacks};
 
-use super::args::{check_angles, parse_list};
+use super::args::{check_angles, check_grid, parse_list};
 
 #[derive(clap::Args)]
 pub struct Args {
@@ -109,6 +109,9 @@ fn run_report(args: &Args) -> Result<()> {
     Ok(())
 }
 
+/// More repetitions than this only make the run look hung.
+const MAX_REPEAT: usize = 1000;
+
 fn run_grid(name: &str, args: &Args) -> Result<()> {
     let bench = stacks::find(name)?.with_context(|| {
         format!(
@@ -122,13 +125,27 @@ fn run_grid(name: &str, args: &Args) -> Result<()> {
     let thicknesses_nm = match &args.thicknesses {
         Some(spec) => {
             let t = parse_list("--thicknesses", spec)?;
-            if let Some(bad) = t.iter().find(|t| **t < 0.0) {
-                anyhow::bail!("--thicknesses: {bad} is negative");
+            let max = irid::optics::MAX_THICKNESS_NM;
+            if let Some(bad) = t.iter().find(|t| !(0.0..=max).contains(*t)) {
+                anyhow::bail!("--thicknesses: {bad} is outside [0, {max:e}] nm");
             }
             Some(t)
         }
         None => None,
     };
+    if args.bake_nodes.is_none() {
+        let t = thicknesses_nm.as_ref().map_or(1, Vec::len);
+        check_grid(
+            "--wavelengths × --angles × --thicknesses",
+            &[wavelengths_nm.len(), angles_deg.len(), t],
+        )?;
+    }
+    if !(1..=MAX_REPEAT).contains(&args.repeat) {
+        anyhow::bail!(
+            "--repeat must be between 1 and {MAX_REPEAT}, got {}",
+            args.repeat
+        );
+    }
     let max = super::render::MAX_THREADS;
     if !(1..=max).contains(&args.threads) {
         anyhow::bail!(

@@ -8,7 +8,7 @@ use anyhow::{anyhow, Result};
 use irid::color::{linear_to_srgb8, stack_colours, Sampling, SpectralIntegrator};
 use irid::optics::Stack;
 
-use super::args::{check_angles, parse_list};
+use super::args::{check_angles, check_grid, parse_list};
 
 #[derive(clap::Args)]
 pub struct Args {
@@ -32,6 +32,10 @@ pub fn run(args: Args) -> Result<ExitCode> {
     check_angles("--angles", &angles_deg)?;
     let stack = Stack::load(&args.stack)?;
     let integrator = SpectralIntegrator::new(sampling);
+    check_grid(
+        "--angles × --sampling wavelengths",
+        &[angles_deg.len(), integrator.wavelengths_nm().len()],
+    )?;
     let colours = stack_colours(&stack, &integrator, &angles_deg)
         .map_err(|e| anyhow!("{}: {e}", args.stack.display()))?;
 

@@ -10,7 +10,7 @@ use serde::Serialize;
 
 use irid::optics::{Response, Stack, StackGrid, WAVELENGTH_RANGE_NM};
 
-use super::args::{check_angles, parse_list};
+use super::args::{check_angles, check_grid, parse_list};
 
 #[derive(clap::Args)]
 pub struct Args {
@@ -48,8 +48,6 @@ struct Row {
     t: f64,
 }
 
-const MAX_POINTS: usize = 10_000_000;
-
 pub fn run(args: Args) -> Result<ExitCode> {
     let wavelengths_nm = parse_list("--wavelengths", &args.wavelengths)?;
     let (lo, hi) = WAVELENGTH_RANGE_NM;
@@ -58,12 +56,10 @@ pub fn run(args: Args) -> Result<ExitCode> {
     }
     let angles_deg = parse_list("--angles", &args.angles)?;
     check_angles("--angles", &angles_deg)?;
-    // Every response is kept until printing: bound the grid so an absurd
-    // one fails here instead of aborting on allocation.
-    let points = wavelengths_nm.len() * angles_deg.len();
-    if points > MAX_POINTS {
-        anyhow::bail!("--wavelengths × --angles: {points} points, at most {MAX_POINTS} per stack");
-    }
+    check_grid(
+        "--wavelengths × --angles",
+        &[wavelengths_nm.len(), angles_deg.len()],
+    )?;
     let cos_theta0: Vec<f64> = angles_deg.iter().map(|a| a.to_radians().cos()).collect();
 
     // Everything is computed before anything is printed, so an error in
