@@ -36,6 +36,13 @@ fn soap_dir() -> tempfile::TempDir {
     dir
 }
 
+/// `irid bake soap.toml -o o.exr --resolution 4,4 EXTRA...` is rejected.
+fn bake_rejects(dir: &Path, extra: &[&str], names: &[&str]) {
+    let mut args = vec!["bake", "soap.toml", "-o", "o.exr", "--resolution", "4,4"];
+    args.extend_from_slice(extra);
+    rejects(dir, &args, names, &["o.exr"]);
+}
+
 #[test]
 fn usage_errors_are_one_line() {
     let dir = soap_dir();
@@ -61,19 +68,7 @@ fn usage_errors_are_one_line() {
 fn negative_flag_values_reach_the_checks() {
     let dir = soap_dir();
     let d = dir.path();
-    let bake = |flag: &str, value: &str, name: &str| {
-        let args = [
-            "bake",
-            "soap.toml",
-            "-o",
-            "o.exr",
-            "--resolution",
-            "4,4",
-            flag,
-            value,
-        ];
-        rejects(d, &args, &[name], &["o.exr"]);
-    };
+    let bake = |flag: &str, value: &str, name: &str| bake_rejects(d, &[flag, value], &[name]);
     bake("--thickness", "-5:600", "thickness");
     bake("--max-error", "-1", "max-error");
     bake("--angles", "-1:1", "angles");
@@ -97,17 +92,7 @@ fn bake_thickness_range_is_bounded() {
     // 1e300 nm is finite in f64 but infinite in the table's f32 axis: the
     // table was written and then could not be read back.
     let dir = soap_dir();
-    let args = [
-        "bake",
-        "soap.toml",
-        "-o",
-        "o.exr",
-        "--resolution",
-        "4,4",
-        "--thickness",
-        "1e300:1e301",
-    ];
-    rejects(dir.path(), &args, &["thickness"], &["o.exr"]);
+    bake_rejects(dir.path(), &["--thickness", "1e300:1e301"], &["thickness"]);
 }
 
 #[test]
