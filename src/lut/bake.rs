@@ -17,8 +17,8 @@ use crate::error::{Error, Result};
 use crate::optics::twoport::{Scratch, VaryingLayer};
 use crate::optics::{solve, Layer, Stack};
 
-/// The phase factor along a uniform thickness axis is advanced by one
-/// complex multiplication per node and recomputed exactly this often: the
+/// The phase factor along a uniform thickness axis is advanced by complex
+/// multiplications and recomputed exactly this often (see [`phases`]): the
 /// rounding then stays near 1e-14 (tested), while the complex exponential
 /// (a sincos) is paid on one node in 64.
 const PHASE_RESYNC: usize = 64;
@@ -393,27 +393,63 @@ impl Worker {
     }
 }
 
-/// The phase factor at every thickness node. Within a uniform segment it
-/// advances by one complex multiplication per node.
+/// The phase factor at every thickness node. Adjacent uniform segments with
+/// the same spacing (the halves of a refined one) form one run; a run starts
+/// from an exact exponential every [`PHASE_RESYNC`] nodes, its first
+/// [`PHASE_LANES`] nodes follow by one complex multiplication each, and every
+/// later node is the one [`PHASE_LANES`] back times δ^[`PHASE_LANES`]: the
+/// lanes are independent chains, so the loop is not one long chain of
+/// dependent multiplications.
 fn phases(v: &VaryingLayer, t_axis: &AxisGrid, re: &mut [f64], im: &mut [f64]) {
+    let nodes = &t_axis.nodes;
+    let mut run_start = 0;
+    let mut run_step = 0.0;
     let mut j = 0;
-    for (k, seg) in t_axis.segments.iter().enumerate() {
-        let first = usize::from(k > 0);
-        let step = if seg.intervals == 0 {
-            0.0
-        } else {
-            (seg.end - seg.start) / seg.intervals as f64
-        };
-        let delta = v.phase(step);
-        let mut phase = C64::new(1.0, 0.0);
-        for i in first..=seg.intervals {
-            if (i - first) % PHASE_RESYNC == 0 {
-                phase = v.phase(t_axis.nodes[j]);
-            }
+    for seg in &t_axis.segments {
+        if seg.intervals == 0 {
+            continue;
+        }
+        let step = (seg.end - seg.start) / seg.intervals as f64;
+        if (step - run_step).abs() > 1e-12 * step {
+            phase_run(v, nodes, run_start..=j, run_step, re, im);
+            run_start = j;
+            run_step = step;
+        }
+        j += seg.intervals;
+    }
+    phase_run(v, nodes, run_start..=j, run_step, re, im);
+}
+
+/// Independent multiplication chains in [`phases`].
+const PHASE_LANES: usize = 8;
+
+/// [`phases`] over nodes `run` spaced `step` apart.
+fn phase_run(
+    v: &VaryingLayer,
+    nodes: &[f64],
+    run: std::ops::RangeInclusive<usize>,
+    step: f64,
+    re: &mut [f64],
+    im: &mut [f64],
+) {
+    let delta = v.phase(step);
+    let mut lanes_step = delta;
+    for _ in 0..PHASE_LANES.trailing_zeros() {
+        lanes_step = lanes_step * lanes_step;
+    }
+    let (start, end) = (*run.start(), *run.end() + 1);
+    for chunk in (start..end).step_by(PHASE_RESYNC) {
+        let chunk_end = (chunk + PHASE_RESYNC).min(end);
+        let mut phase = v.phase(nodes[chunk]);
+        for j in chunk..chunk_end.min(chunk + PHASE_LANES) {
             re[j] = phase.re;
             im[j] = phase.im;
             phase *= delta;
-            j += 1;
+        }
+        for j in chunk + PHASE_LANES..chunk_end {
+            let (a, b) = (re[j - PHASE_LANES], im[j - PHASE_LANES]);
+            re[j] = a * lanes_step.re - b * lanes_step.im;
+            im[j] = a * lanes_step.im + b * lanes_step.re;
         }
     }
 }
@@ -791,7 +827,11 @@ mod tests {
             let idx = [C64::new(1.0, 0.0), C64::new(n, k), C64::new(0.2, 3.0)];
             let mut scratch = Scratch::default();
             let v = VaryingLayer::new(&idx, &[0.0], 1, 420.0, 0.3, &mut scratch);
-            let axis = AxisGrid::new(&split_uniform(0.0, 2000.0, 3, 700));
+            // Equal spacings that join into one run, and unequal ones.
+            let mut segments = split_uniform(0.0, 2000.0, 3, 700);
+            segments.push(uniform(2000.0, 2003.0, 5));
+            segments.push(uniform(2003.0, 2100.0, 131));
+            let axis = AxisGrid::new(&segments);
             let mut worst = 0.0f64;
             let n = axis.nodes.len();
             let (mut re, mut im) = (vec![0.0; n], vec![0.0; n]);
