@@ -1,6 +1,5 @@
 //! One module per subcommand. Shared argument parsing lives in `args`.
 
-#[allow(dead_code)] // until every subcommand that uses them has landed
 pub mod args;
 pub mod bake;
 pub mod bench;

@@ -15,10 +15,10 @@ use super::{BakeSpec, Kind, Resolution, MAX_AXIS_NODES, MAX_NODES};
 use crate::color::SpectralIntegrator;
 use crate::error::{Error, Result};
 use crate::optics::twoport::{Scratch, VaryingLayer};
-use crate::optics::{solve, Layer, Response, Stack};
+use crate::optics::{solve, Layer, Stack};
 
-/// The phase factor along a uniform thickness axis is advanced by one
-/// complex multiplication per node and recomputed exactly this often: the
+/// The phase factor along a uniform thickness axis is advanced by complex
+/// multiplications and recomputed exactly this often (see [`phases`]): the
 /// rounding then stays near 1e-14 (tested), while the complex exponential
 /// (a sincos) is paid on one node in 64.
 const PHASE_RESYNC: usize = 64;
@@ -238,25 +238,25 @@ impl Prepared {
                 progress(d as f64 / rows as f64);
             }
         };
+        let n = t_axis.nodes.len();
         if !grid.spectral {
             out.par_chunks_mut(row_len).enumerate().for_each_init(
-                || (Scratch::default(), self.thicknesses_nm.clone()),
-                |(scratch, thick), (c, row)| {
+                || Worker::new(n, &self.thicknesses_nm),
+                |wk, (c, row)| {
+                    let cos = c_axis.nodes[c];
+                    // Channel-major accumulators ([channel][node]), so the
+                    // weighting loop below runs over contiguous arrays.
+                    wk.acc.clear();
+                    wk.acc.resize(6 * n, 0.0);
                     for (w, idx) in self.indices.iter().enumerate() {
-                        let cos = c_axis.nodes[c];
                         let wl = self.wavelengths_nm[w];
-                        let v = self.split(idx, wl, cos, scratch);
-                        let [wr, wg, wb] = self.weights[w];
-                        self.sweep(&v, idx, wl, cos, t_axis, thick, |j, resp| {
-                            let (r, t) = (resp.r(), resp.t());
-                            let o = &mut row[j * 6..j * 6 + 6];
-                            o[0] += wr * r;
-                            o[1] += wg * r;
-                            o[2] += wb * r;
-                            o[3] += wr * t;
-                            o[4] += wg * t;
-                            o[5] += wb * t;
-                        });
+                        self.responses(idx, wl, cos, t_axis, wk);
+                        accumulate(&mut wk.acc, &wk.r, &wk.t, self.weights[w]);
+                    }
+                    for (j, o) in row.chunks_exact_mut(6).enumerate() {
+                        for (ch, o) in o.iter_mut().enumerate() {
+                            *o = wk.acc[ch * n + j];
+                        }
                     }
                     tick();
                 },
@@ -265,16 +265,14 @@ impl Prepared {
             let indices = indices_at(&self.stack, &w_axis.nodes)?;
             let nc = c_axis.nodes.len();
             out.par_chunks_mut(row_len).enumerate().for_each_init(
-                || (Scratch::default(), self.thicknesses_nm.clone()),
-                |(scratch, thick), (row_index, row)| {
+                || Worker::new(n, &self.thicknesses_nm),
+                |wk, (row_index, row)| {
                     let (w, c) = (row_index / nc, row_index % nc);
-                    let wl = w_axis.nodes[w];
-                    let cos = c_axis.nodes[c];
-                    let v = self.split(&indices[w], wl, cos, scratch);
-                    self.sweep(&v, &indices[w], wl, cos, t_axis, thick, |j, resp| {
-                        row[2 * j] = resp.r();
-                        row[2 * j + 1] = resp.t();
-                    });
+                    self.responses(&indices[w], w_axis.nodes[w], c_axis.nodes[c], t_axis, wk);
+                    for (o, (&r, &t)) in row.chunks_exact_mut(2).zip(wk.r.iter().zip(&wk.t)) {
+                        o[0] = r;
+                        o[1] = t;
+                    }
                     tick();
                 },
             );
@@ -282,26 +280,28 @@ impl Prepared {
         Ok(out)
     }
 
-    /// [`sweep`], or the solver node by node where the split is degenerate
-    /// (the varying layer at its own critical angle).
-    #[allow(clippy::too_many_arguments)]
-    #[inline]
-    fn sweep(
+    /// Unpolarized R and T at every thickness node into `wk.r`, `wk.t`: the
+    /// split-stack form, or the solver node by node where the split is
+    /// degenerate (the varying layer at its own critical angle).
+    fn responses(
         &self,
-        v: &VaryingLayer,
         idx: &[C64],
         wavelength_nm: f64,
         cos: f64,
         t_axis: &AxisGrid,
-        thick: &mut [f64],
-        mut f: impl FnMut(usize, Response),
+        wk: &mut Worker,
     ) {
+        let v = self.split(idx, wavelength_nm, cos, &mut wk.scratch);
         if !v.is_degenerate() {
-            return sweep(v, t_axis, f);
+            phases(&v, t_axis, &mut wk.phase_re, &mut wk.phase_im);
+            v.responses(&wk.phase_re, &wk.phase_im, &mut wk.r, &mut wk.t);
+            return;
         }
         for (j, &t) in t_axis.nodes.iter().enumerate() {
-            thick[self.layer - 1] = t;
-            f(j, solve(idx, thick, wavelength_nm, cos));
+            wk.thicknesses_nm[self.layer - 1] = t;
+            let resp = solve(idx, &wk.thicknesses_nm, wavelength_nm, cos);
+            wk.r[j] = resp.r();
+            wk.t[j] = resp.t();
         }
     }
 
@@ -358,27 +358,138 @@ pub(crate) fn rgb_weights(integrator: &SpectralIntegrator) -> (Vec<f64>, Vec<[f6
     (wavelengths, weights)
 }
 
-/// Calls `f` with the response at every thickness node. Within a uniform
-/// segment the phase advances by one complex multiplication per node.
-#[inline]
-fn sweep(v: &VaryingLayer, t_axis: &AxisGrid, mut f: impl FnMut(usize, Response)) {
-    let mut j = 0;
-    for (k, seg) in t_axis.segments.iter().enumerate() {
-        let first = usize::from(k > 0);
-        let step = if seg.intervals == 0 {
-            0.0
-        } else {
-            (seg.end - seg.start) / seg.intervals as f64
-        };
-        let delta = v.phase(step);
-        let mut phase = C64::new(1.0, 0.0);
-        for i in first..=seg.intervals {
-            if (i - first) % PHASE_RESYNC == 0 {
-                phase = v.phase(t_axis.nodes[j]);
+/// Adds `weights` × R and × T to channel-major accumulators
+/// (`[channel][node]`, R channels first).
+fn accumulate(acc: &mut [f64], r: &[f64], t: &[f64], weights: [f64; 3]) {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") {
+        // SAFETY: the CPU has AVX2 (checked just above).
+        return unsafe { accumulate_avx2(acc, r, t, weights) };
+    }
+    accumulate_portable(acc, r, t, weights);
+}
+
+/// [`accumulate`] compiled for 4-wide vectors (same result bit for bit:
+/// nothing is fused).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn accumulate_avx2(acc: &mut [f64], r: &[f64], t: &[f64], weights: [f64; 3]) {
+    accumulate_portable(acc, r, t, weights);
+}
+
+#[inline(always)]
+fn accumulate_portable(acc: &mut [f64], r: &[f64], t: &[f64], weights: [f64; 3]) {
+    let n = r.len();
+    let (acc_r, acc_t) = acc.split_at_mut(3 * n);
+    for (acc, values) in [(acc_r, r), (acc_t, t)] {
+        for (a, wt) in acc.chunks_exact_mut(n).zip(weights) {
+            for (a, &v) in a.iter_mut().zip(values) {
+                *a += wt * v;
             }
-            f(j, v.response(phase));
+        }
+    }
+}
+
+/// One worker's buffers, allocated once per rayon task.
+struct Worker {
+    scratch: Scratch,
+    thicknesses_nm: Vec<f64>,
+    phase_re: Vec<f64>,
+    phase_im: Vec<f64>,
+    r: Vec<f64>,
+    t: Vec<f64>,
+    acc: Vec<f64>,
+}
+
+impl Worker {
+    fn new(nodes: usize, thicknesses_nm: &[f64]) -> Worker {
+        Worker {
+            scratch: Scratch::default(),
+            thicknesses_nm: thicknesses_nm.to_vec(),
+            phase_re: vec![0.0; nodes],
+            phase_im: vec![0.0; nodes],
+            r: vec![0.0; nodes],
+            t: vec![0.0; nodes],
+            acc: Vec::with_capacity(6 * nodes),
+        }
+    }
+}
+
+/// The phase factor at every thickness node. Adjacent uniform segments with
+/// the same spacing (the halves of a refined one) form one run; a run starts
+/// from an exact exponential every [`PHASE_RESYNC`] nodes, its first
+/// [`PHASE_LANES`] nodes follow by one complex multiplication each, and every
+/// later node is the one [`PHASE_LANES`] back times δ^[`PHASE_LANES`]: the
+/// lanes are independent chains, so the loop is not one long chain of
+/// dependent multiplications.
+fn phases(v: &VaryingLayer, t_axis: &AxisGrid, re: &mut [f64], im: &mut [f64]) {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") {
+        // SAFETY: the CPU has AVX2 (checked just above).
+        return unsafe { phases_avx2(v, t_axis, re, im) };
+    }
+    phases_portable(v, t_axis, re, im);
+}
+
+/// [`phases`] compiled for 4-wide vectors (same result bit for bit).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn phases_avx2(v: &VaryingLayer, t_axis: &AxisGrid, re: &mut [f64], im: &mut [f64]) {
+    phases_portable(v, t_axis, re, im);
+}
+
+#[inline(always)]
+fn phases_portable(v: &VaryingLayer, t_axis: &AxisGrid, re: &mut [f64], im: &mut [f64]) {
+    let nodes = &t_axis.nodes;
+    let mut run_start = 0;
+    let mut run_step = 0.0;
+    let mut j = 0;
+    for seg in &t_axis.segments {
+        if seg.intervals == 0 {
+            continue;
+        }
+        let step = (seg.end - seg.start) / seg.intervals as f64;
+        if (step - run_step).abs() > 1e-12 * step {
+            phase_run(v, nodes, run_start..=j, run_step, re, im);
+            run_start = j;
+            run_step = step;
+        }
+        j += seg.intervals;
+    }
+    phase_run(v, nodes, run_start..=j, run_step, re, im);
+}
+
+/// Independent multiplication chains in [`phases`].
+const PHASE_LANES: usize = 8;
+
+/// [`phases`] over nodes `run` spaced `step` apart.
+#[inline(always)]
+fn phase_run(
+    v: &VaryingLayer,
+    nodes: &[f64],
+    run: std::ops::RangeInclusive<usize>,
+    step: f64,
+    re: &mut [f64],
+    im: &mut [f64],
+) {
+    let delta = v.phase(step);
+    let mut lanes_step = delta;
+    for _ in 0..PHASE_LANES.trailing_zeros() {
+        lanes_step = lanes_step * lanes_step;
+    }
+    let (start, end) = (*run.start(), *run.end() + 1);
+    for chunk in (start..end).step_by(PHASE_RESYNC) {
+        let chunk_end = (chunk + PHASE_RESYNC).min(end);
+        let mut phase = v.phase(nodes[chunk]);
+        for j in chunk..chunk_end.min(chunk + PHASE_LANES) {
+            re[j] = phase.re;
+            im[j] = phase.im;
             phase *= delta;
-            j += 1;
+        }
+        for j in chunk + PHASE_LANES..chunk_end {
+            let (a, b) = (re[j - PHASE_LANES], im[j - PHASE_LANES]);
+            re[j] = a * lanes_step.re - b * lanes_step.im;
+            im[j] = a * lanes_step.im + b * lanes_step.re;
         }
     }
 }
@@ -747,22 +858,36 @@ fn header(
 mod tests {
     use super::*;
 
-    /// The incremental phase of `sweep` against an exact exponential per
-    /// node, on an absorbing and a gain layer at a steep angle.
+    /// The incremental phase of `phases` and the batched responses against an
+    /// exact exponential and `response` per node, on an absorbing and a gain
+    /// layer at a steep angle.
     #[test]
     fn sweep_matches_exact_phase() {
         for (n, k) in [(1.5, 0.15), (1.5, -0.05), (1.33, 0.0)] {
             let idx = [C64::new(1.0, 0.0), C64::new(n, k), C64::new(0.2, 3.0)];
             let mut scratch = Scratch::default();
             let v = VaryingLayer::new(&idx, &[0.0], 1, 420.0, 0.3, &mut scratch);
-            let axis = AxisGrid::new(&split_uniform(0.0, 2000.0, 3, 700));
+            // Equal spacings that join into one run, and unequal ones.
+            let mut segments = split_uniform(0.0, 2000.0, 3, 700);
+            segments.push(uniform(2000.0, 2003.0, 5));
+            segments.push(uniform(2003.0, 2100.0, 131));
+            let axis = AxisGrid::new(&segments);
             let mut worst = 0.0f64;
-            sweep(&v, &axis, |j, got| {
+            let n = axis.nodes.len();
+            let (mut re, mut im) = (vec![0.0; n], vec![0.0; n]);
+            phases(&v, &axis, &mut re, &mut im);
+            for (j, &d) in axis.nodes.iter().enumerate() {
+                let want = v.phase(d);
+                worst = worst.max((C64::new(re[j], im[j]) - want).norm() / (1.0 + want.norm()));
+            }
+            let (mut r, mut t) = (vec![0.0; n], vec![0.0; n]);
+            v.responses(&re, &im, &mut r, &mut t);
+            for j in 0..n {
                 let want = v.response(v.phase(axis.nodes[j]));
-                for (g, w) in [(got.rs, want.rs), (got.rp, want.rp), (got.ts, want.ts)] {
+                for (g, w) in [(r[j], want.r()), (t[j], want.t())] {
                     worst = worst.max((g - w).abs() / (1.0 + w.abs()));
                 }
-            });
+            }
             assert!(worst < 1e-12, "n = {n}{k:+}i: {worst:e}");
         }
     }
