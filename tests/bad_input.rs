@@ -286,3 +286,23 @@ fn absurd_grids_fail_instead_of_aborting() {
     bench(&["--thicknesses", "1e300"], &["--thicknesses"]);
     bench(&["--repeat", "1000000000"], &["--repeat"]);
 }
+
+#[test]
+fn a_fixed_resolution_too_large_to_check_names_resolution() {
+    let dir = soap_dir();
+    rejects(
+        dir.path(),
+        &[
+            "bake",
+            "soap.toml",
+            "-o",
+            "o.exr",
+            "--resolution",
+            "2000,2000",
+            "--thickness",
+            "100:900",
+        ],
+        &["resolution", "soap.toml"],
+        &["o.exr"],
+    );
+}

@@ -16,7 +16,10 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
         .ok_or_else(|| Error::invalid(path.display().to_string(), "not a file path"))?;
     let tmp = dir.join(format!(".{}.tmp", name.to_string_lossy()));
     // Errors name the file asked for, not the temporary one.
-    std::fs::write(&tmp, bytes).map_err(|e| Error::io(path, e))?;
+    std::fs::write(&tmp, bytes).map_err(|e| {
+        let _ = std::fs::remove_file(&tmp);
+        Error::io(path, e)
+    })?;
     std::fs::rename(&tmp, path).map_err(|e| {
         let _ = std::fs::remove_file(&tmp);
         Error::io(path, e)

@@ -71,14 +71,24 @@ pub fn bake_with_progress(spec: &BakeSpec, progress: &(dyn Fn(f64) + Sync)) -> R
             || coarse.total() > MAX_NODES
             || round > MAX_ROUNDS
         {
-            return Err(Error::invalid(
-                "max-error",
-                format!(
-                    "{} is not reached within the size limits (the last grid tried has {} nodes)",
-                    target.unwrap_or(0.0),
-                    coarse.total()
+            return Err(match target {
+                Some(target) => Error::invalid(
+                    "max-error",
+                    format!(
+                        "{target} is not reached within the size limits (the last grid tried has {} nodes)",
+                        coarse.total()
+                    ),
                 ),
-            ));
+                // A fixed grid whose error check (every interval halved) would
+                // exceed the limits: the resolution itself is what is too large.
+                None => Error::invalid(
+                    "resolution",
+                    format!(
+                        "{} nodes is too large to bake and check within the size limits",
+                        coarse.total()
+                    ),
+                ),
+            });
         }
         let clock = std::time::Instant::now();
         let values = prep.eval(&fine, progress)?;
