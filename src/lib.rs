@@ -6,6 +6,7 @@
 //! [`render`] (the tracer).
 
 pub mod analytic;
+pub mod atomic;
 pub mod bench;
 pub mod color;
 pub mod error;

@@ -12,7 +12,6 @@ use std::sync::Once;
 use plotters::prelude::*;
 use plotters::style::{register_font, FontStyle};
 
-use super::report::write_atomic;
 use crate::error::{Error, Result};
 
 static FONT: &[u8] = include_bytes!("font/DejaVuSans-subset.ttf");
@@ -69,7 +68,7 @@ pub fn speed_vs_error_png(
     let mut png = Cursor::new(Vec::new());
     img.write_to(&mut png, image::ImageFormat::Png)
         .map_err(|e| Error::invalid("plot", e.to_string()))?;
-    write_atomic(path, png.get_ref())
+    crate::atomic::write(path, png.get_ref())
 }
 
 fn draw(

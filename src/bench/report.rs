@@ -4,28 +4,6 @@ use std::path::Path;
 
 use crate::error::{Error, Result};
 
-/// Writes through a temporary file in the same directory, then renames, so
-/// an interrupted run never leaves a half-written file behind.
-pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
-    let dir = path
-        .parent()
-        .filter(|p| !p.as_os_str().is_empty())
-        .unwrap_or(Path::new("."));
-    let name = path
-        .file_name()
-        .ok_or_else(|| Error::invalid(path.display().to_string(), "not a file path"))?;
-    let tmp = dir.join(format!(".{}.tmp", name.to_string_lossy()));
-    // Errors name the file asked for, not the temporary one.
-    std::fs::write(&tmp, bytes).map_err(|e| {
-        let _ = std::fs::remove_file(&tmp);
-        Error::io(path, e)
-    })?;
-    std::fs::rename(&tmp, path).map_err(|e| {
-        let _ = std::fs::remove_file(&tmp);
-        Error::io(path, e)
-    })
-}
-
 use super::machine::Machine;
 use super::plot::{speed_vs_error_png, PlotPoint};
 use super::renders::RenderRow;
@@ -331,9 +309,9 @@ pub fn write_all(
     command: &str,
 ) -> Result<()> {
     std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
-    write_atomic(&dir.join("results.csv"), csv(rows).as_bytes())?;
+    crate::atomic::write(&dir.join("results.csv"), csv(rows).as_bytes())?;
     if !renders.is_empty() {
-        write_atomic(&dir.join("renders.csv"), renders_csv(renders).as_bytes())?;
+        crate::atomic::write(&dir.join("renders.csv"), renders_csv(renders).as_bytes())?;
     }
     let points: Vec<PlotPoint> = summarize(rows)
         .iter()
@@ -360,7 +338,7 @@ pub fn write_all(
         PLOT_FLOOR_DE,
         &caption,
     )?;
-    write_atomic(
+    crate::atomic::write(
         &dir.join("report.md"),
         markdown(rows, renders, options, machine, command).as_bytes(),
     )

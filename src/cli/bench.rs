@@ -230,5 +230,5 @@ fn write_raw(path: &Path, r: &[f64], t: &[f64]) -> Result<()> {
     for v in r.iter().chain(t) {
         bytes.extend_from_slice(&v.to_le_bytes());
     }
-    Ok(report::write_atomic(path, &bytes)?)
+    Ok(irid::atomic::write(path, &bytes)?)
 }

@@ -2,7 +2,7 @@
 //! one channel per stored quantity, and the JSON header in a text
 //! attribute named `irid`. See `docs/lut-format.md`.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use exr::prelude::{
     read, AnyChannel, AnyChannels, AttributeValue, Encoding, FlatSamples, Image, Layer,
@@ -51,18 +51,11 @@ impl Lut {
         );
         let image = Image::from_layer(layer);
 
-        let tmp = temp_path(path);
-        let written = image.write().to_file(&tmp);
-        if let Err(e) = written {
-            let _ = std::fs::remove_file(&tmp);
-            return Err(match e {
+        crate::atomic::write_with(path, |tmp| {
+            image.write().to_file(tmp).map_err(|e| match e {
                 exr::error::Error::Io(io) => Error::io(path, io),
                 other => Error::malformed(path, format!("cannot write OpenEXR: {other}")),
-            });
-        }
-        std::fs::rename(&tmp, path).map_err(|e| {
-            let _ = std::fs::remove_file(&tmp);
-            Error::io(path, e)
+            })
         })
     }
 
@@ -175,16 +168,4 @@ fn ascii_json(json: &str) -> String {
         }
     }
     out
-}
-
-fn temp_path(path: &Path) -> PathBuf {
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_else(|| "table.exr".into());
-    let tmp = format!(".{name}.{}.tmp.exr", std::process::id());
-    match path.parent() {
-        Some(dir) if !dir.as_os_str().is_empty() => dir.join(tmp),
-        _ => PathBuf::from(tmp),
-    }
 }

@@ -2,7 +2,7 @@
 //! temporary file in the target directory and a rename, and comparing two
 //! renders in CIEDE2000.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use super::image::Image;
 use crate::color::{delta_e2000_rgb, linear_to_srgb8};
@@ -15,7 +15,7 @@ impl Image {
         for p in &self.pixels {
             bytes.extend_from_slice(&linear_to_srgb8(p.map(f64::from)));
         }
-        write_atomically(path, |tmp| {
+        crate::atomic::write_with(path, |tmp| {
             ::image::save_buffer_with_format(
                 tmp,
                 &bytes,
@@ -30,7 +30,7 @@ impl Image {
 
     /// Linear-sRGB 32-bit float OpenEXR.
     pub fn write_exr(&self, path: &Path) -> Result<()> {
-        write_atomically(path, |tmp| {
+        crate::atomic::write_with(path, |tmp| {
             let w = self.width as usize;
             exr::prelude::write_rgb_file(tmp, w, self.height as usize, |x, y| {
                 let p = self.pixels[y * w + x];
@@ -76,33 +76,4 @@ pub struct ColourDifference {
     pub mean: f64,
     pub p99: f64,
     pub max: f64,
-}
-
-/// Runs `write` on a temporary path beside `path`, then renames it into
-/// place, so an interrupted write never leaves a half-written file.
-fn write_atomically(path: &Path, write: impl FnOnce(&Path) -> Result<()>) -> Result<()> {
-    let dir = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
-        _ => PathBuf::from("."),
-    };
-    if !dir.is_dir() {
-        return Err(Error::io(
-            path,
-            std::io::Error::new(
-                std::io::ErrorKind::NotFound,
-                "output directory does not exist",
-            ),
-        ));
-    }
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    let tmp = dir.join(format!(".{name}.{}.tmp", std::process::id()));
-    let result =
-        write(&tmp).and_then(|()| std::fs::rename(&tmp, path).map_err(|e| Error::io(path, e)));
-    if result.is_err() {
-        let _ = std::fs::remove_file(&tmp);
-    }
-    result
 }
