@@ -1,5 +1,7 @@
 //! The in-memory table and its allocation-free sampler.
 
+use glam::Vec4;
+
 use super::axis::Locator;
 use super::header::{Header, COS_AXIS, FORMAT_VERSION, THICKNESS_AXIS, WAVELENGTH_AXIS};
 use super::Kind;
@@ -23,6 +25,10 @@ pub struct Lut {
     cos: Locator,
     wavelength: Option<Locator>,
     data: Vec<f32>,
+    /// The rgb kind's nodes again, each as (R, G, B, 0) and (R, G, B, 0) of
+    /// transmittance: four SIMD lerps per lookup instead of eighteen scalar
+    /// ones. Empty for the spectral kind.
+    rgb_nodes: Vec<[Vec4; 2]>,
 }
 
 pub(crate) const RGB_CHANNELS: [&str; 6] = [
@@ -104,7 +110,20 @@ impl Lut {
                 data.len()
             ));
         }
+        let rgb_nodes = match header.kind {
+            Kind::Rgb => data
+                .chunks_exact(6)
+                .map(|v| {
+                    [
+                        Vec4::new(v[0], v[1], v[2], 0.0),
+                        Vec4::new(v[3], v[4], v[5], 0.0),
+                    ]
+                })
+                .collect(),
+            Kind::Spectral => Vec::new(),
+        };
         Ok(Lut {
+            rgb_nodes,
             thickness: Locator::new(&header.axes[0].nodes),
             cos: Locator::new(&header.axes[1].nodes),
             wavelength: header.axes.get(2).map(|a| Locator::new(&a.nodes)),
@@ -135,7 +154,7 @@ impl Lut {
     /// spectral table every component is NaN. Allocates nothing.
     #[inline]
     pub fn sample_rgb(&self, thickness_nm: f32, cos_theta: f32) -> FilmRgb {
-        if self.header.kind != Kind::Rgb {
+        if self.rgb_nodes.is_empty() {
             return FilmRgb {
                 reflectance: [f32::NAN; 3],
                 transmittance: [f32::NAN; 3],
@@ -144,12 +163,23 @@ impl Lut {
         let (i, fx) = self.thickness.locate(thickness_nm);
         let (j, fy) = self.cos.locate(cos_theta);
         let nt = self.thickness.len();
-        let dx = if nt > 1 { 6 } else { 0 };
-        let dy = if self.cos.len() > 1 { 6 * nt } else { 0 };
-        let v: [f32; 6] = bilerp(&self.data, (j * nt + i) * 6, dx, dy, fx, fy);
+        let dx = usize::from(nt > 1);
+        let dy = if self.cos.len() > 1 { nt } else { 0 };
+        let at = j * nt + i;
+        let nodes = &self.rgb_nodes;
+        let (v00, v10, v01, v11) = (
+            nodes[at],
+            nodes[at + dx],
+            nodes[at + dy],
+            nodes[at + dy + dx],
+        );
+        // The same a + f·(b − a) per channel as `bilerp`, four lanes at once.
+        let lerp = |a: Vec4, b: Vec4, f: f32| a + (b - a) * f;
+        let r = lerp(lerp(v00[0], v10[0], fx), lerp(v01[0], v11[0], fx), fy);
+        let t = lerp(lerp(v00[1], v10[1], fx), lerp(v01[1], v11[1], fx), fy);
         FilmRgb {
-            reflectance: [v[0], v[1], v[2]],
-            transmittance: [v[3], v[4], v[5]],
+            reflectance: [r.x, r.y, r.z],
+            transmittance: [t.x, t.y, t.z],
         }
     }
 
