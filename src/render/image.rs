@@ -94,7 +94,7 @@ fn render_pixel(tracer: &Tracer, camera: &Camera, s: &Sampler, x: u32, y: u32) -
     let mut sum = Vec3::ZERO;
     if s.spp <= 1 {
         let ray = camera.ray((x as f32 + 0.5) / w, (y as f32 + 0.5) / h);
-        return s.exposure * tracer.trace(&ray, 0, Vec3::ONE);
+        return s.exposure * tracer.trace(&ray, 0);
     }
     let k = (s.spp as f32).sqrt().round() as u32;
     let square = k * k == s.spp;
@@ -117,7 +117,7 @@ fn render_pixel(tracer: &Tracer, camera: &Camera, s: &Sampler, x: u32, y: u32) -
             )
         };
         let ray = camera.ray((x as f32 + sx) / w, (y as f32 + sy) / h);
-        sum += tracer.trace(&ray, 0, Vec3::ONE);
+        sum += tracer.trace(&ray, 0);
     }
     s.exposure * sum / s.spp as f32
 }

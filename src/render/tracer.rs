@@ -18,8 +18,18 @@ pub struct Tracer<'a> {
 }
 
 impl Tracer<'_> {
-    /// Radiance arriving along `ray`; `weight` is the path's throughput so far.
-    pub fn trace(&self, ray: &Ray, depth: u32, weight: Vec3) -> Vec3 {
+    /// Radiance arriving along `ray`.
+    ///
+    /// Every branch is followed to the fixed depth whatever its weight
+    /// (Whitted's rule), so the ray tree, and with it the cost, does not
+    /// depend on the film's colours. A surface's reflectance and
+    /// transmittance are looked up after its children are traced: nothing
+    /// in the children depends on them, and a film's lookup (noise, then
+    /// table) is a long chain of dependent instructions that, placed before
+    /// the children, stalls them. Placed after, it overlaps with them
+    /// (film shading's cost on `two-layer-noise` fell from +27 % to about
+    /// +13 % of the plain-glass render).
+    pub fn trace(&self, ray: &Ray, depth: u32) -> Vec3 {
         let Some((hit, obj)) = self.scene.intersect(ray, 0.0, f32::INFINITY) else {
             return self.scene.environment.radiance(ray.dir);
         };
@@ -47,7 +57,6 @@ impl Tracer<'_> {
         let eps = 1e-4 * (1.0 + p.abs().max_element());
         let above = p + eps * n_geo;
         let below = p - eps * n_geo;
-        let can_recurse = depth < self.max_depth;
 
         let radiance = match material {
             Material::Diffuse { albedo, checker } => {
@@ -64,88 +73,61 @@ impl Tracer<'_> {
                 albedo * (self.direct_light(above, n) + self.scene.environment.ambient())
             }
             Material::Metal { reflectance } => {
-                let r = reflectance.at(cos_i);
-                self.reflected(ray, above, n, r, depth, weight, can_recurse)
+                let reflected = self.reflected(ray, above, n, depth);
+                reflectance.at(cos_i) * reflected
             }
             Material::Dielectric { ior, .. } => {
                 let eta = if front { 1.0 / ior } else { *ior };
+                let reflected = self.reflected(ray, above, n, depth);
+                let refracted = self.refracted(ray, below, n, eta, depth);
                 let r = dielectric_reflectance(cos_i, eta);
-                let rv = Vec3::splat(r);
-                let tv = Vec3::splat(1.0 - r);
-                self.reflected(ray, above, n, rv, depth, weight, can_recurse)
-                    + self.refracted(ray, below, n, eta, tv, depth, weight, can_recurse)
+                r * reflected + (1.0 - r) * refracted
             }
             Material::Film(f) => {
+                let reflected = self.reflected(ray, above, n, depth);
+                let refracted = match f.inside {
+                    Some(inside) => {
+                        let eta = if front {
+                            f.outside_ior / inside.ior
+                        } else {
+                            inside.ior / f.outside_ior
+                        };
+                        self.refracted(ray, below, n, eta, depth)
+                    }
+                    None => Vec3::ZERO,
+                };
                 let side = if front { Side::Front } else { Side::Back };
                 let rgb = self.films[f.film].shade(f.thickness.at(p), cos_i, side);
-                let r = Vec3::from(rgb.reflectance);
-                let mut l = self.reflected(ray, above, n, r, depth, weight, can_recurse);
-                if let Some(inside) = f.inside {
-                    let eta = if front {
-                        f.outside_ior / inside.ior
-                    } else {
-                        inside.ior / f.outside_ior
-                    };
-                    let t = Vec3::from(rgb.transmittance);
-                    l += self.refracted(ray, below, n, eta, t, depth, weight, can_recurse);
-                }
-                l
+                Vec3::from(rgb.reflectance) * reflected + Vec3::from(rgb.transmittance) * refracted
             }
         };
         absorbed * radiance
     }
 
-    #[allow(clippy::too_many_arguments)]
+    /// Radiance along the mirror direction: traced below the depth limit,
+    /// the environment at it.
     #[inline]
-    fn reflected(
-        &self,
-        ray: &Ray,
-        origin: Vec3,
-        n: Vec3,
-        r: Vec3,
-        depth: u32,
-        weight: Vec3,
-        recurse: bool,
-    ) -> Vec3 {
-        // Every branch is followed to the fixed depth whatever its weight
-        // (Whitted's rule): pruning light paths would make the ray tree, and
-        // so the cost, depend on the film's colours, which would confound
-        // the comparison of film and plain shading.
-        let w = weight * r;
-        if w.max_element() <= 0.0 {
-            return Vec3::ZERO;
-        }
-        let dir = reflect(ray.dir, n);
-        if !recurse {
-            return r * self.scene.environment.radiance(dir);
-        }
-        r * self.trace(&Ray::new(origin, dir), depth + 1, w)
+    fn reflected(&self, ray: &Ray, origin: Vec3, n: Vec3, depth: u32) -> Vec3 {
+        self.follow(origin, reflect(ray.dir, n), depth)
     }
 
-    #[allow(clippy::too_many_arguments)]
+    /// Radiance along the refracted direction; none under total internal
+    /// reflection.
     #[inline]
-    fn refracted(
-        &self,
-        ray: &Ray,
-        origin: Vec3,
-        n: Vec3,
-        eta: f32,
-        t: Vec3,
-        depth: u32,
-        weight: Vec3,
-        recurse: bool,
-    ) -> Vec3 {
-        let w = weight * t;
-        if w.max_element() <= 0.0 {
-            return Vec3::ZERO;
+    fn refracted(&self, ray: &Ray, origin: Vec3, n: Vec3, eta: f32, depth: u32) -> Vec3 {
+        match refract(ray.dir, n, eta) {
+            Some(dir) => self.follow(origin, dir, depth),
+            None => Vec3::ZERO,
         }
-        let Some(dir) = refract(ray.dir, n, eta) else {
-            return Vec3::ZERO;
-        };
-        if !recurse {
-            return t * self.scene.environment.radiance(dir);
+    }
+
+    #[inline]
+    fn follow(&self, origin: Vec3, dir: Vec3, depth: u32) -> Vec3 {
+        if depth < self.max_depth {
+            self.trace(&Ray::new(origin, dir), depth + 1)
+        } else {
+            self.scene.environment.radiance(dir)
         }
-        t * self.trace(&Ray::new(origin, dir), depth + 1, w)
     }
 
     /// Irradiance-weighted light from every unshadowed light, over π.
@@ -221,7 +203,7 @@ mod tests {
         };
         let down = |x: f32| {
             let ray = Ray::new(Vec3::new(x, 1.0, 0.0), Vec3::NEG_Y);
-            tracer.trace(&ray, 0, Vec3::ONE).x
+            tracer.trace(&ray, 0).x
         };
         // E = I cos / r² over π for albedo 1: directly below at r = 2.
         let below = down(0.0);
@@ -244,8 +226,8 @@ mod tests {
         };
         // Seen from just above the floor, beside the sphere's shadow and in it.
         let ray = Ray::new(Vec3::new(0.0, 0.3, 0.0), Vec3::NEG_Y);
-        assert_eq!(tracer.trace(&ray, 0, Vec3::ONE), Vec3::ZERO);
+        assert_eq!(tracer.trace(&ray, 0), Vec3::ZERO);
         let ray = Ray::new(Vec3::new(2.0, 0.3, 0.0), Vec3::NEG_Y);
-        assert!((tracer.trace(&ray, 0, Vec3::ONE).x - want).abs() < 1e-4);
+        assert!((tracer.trace(&ray, 0).x - want).abs() < 1e-4);
     }
 }
