@@ -306,3 +306,14 @@ fn a_fixed_resolution_too_large_to_check_names_resolution() {
         &["o.exr"],
     );
 }
+
+#[test]
+fn no_check_needs_a_fixed_resolution() {
+    let dir = soap_dir();
+    let d = dir.path();
+    let bake = ["bake", "soap.toml", "-o", "o.exr", "--thickness", "100:900"];
+    for extra in [&["--no-check"][..], &["--no-check", "--max-error", "1e-3"]] {
+        let args: Vec<&str> = bake.iter().chain(extra).copied().collect();
+        rejects(d, &args, &["--no-check", "--resolution"], &["o.exr"]);
+    }
+}

@@ -40,7 +40,12 @@ fn bake_and_check(name: &str, spec: &BakeSpec, target: f64) -> irid::lut::ErrorS
     let h = lut.header();
     let bound = h.error.target_max_abs.expect("an error target");
     assert_eq!(bound, target);
-    let check = h.error.bake_check.max_abs_all;
+    let check = h
+        .error
+        .bake_check
+        .as_ref()
+        .expect("a bake check")
+        .max_abs_all;
     assert!(check <= bound, "{name}: bake check {check} > bound {bound}");
     let recorded = h.error.validation.as_ref().expect("validation recorded");
     assert!(worst(&recorded.max_abs) <= bound);
@@ -284,7 +289,17 @@ fn without_a_range_one_thickness_row() {
     assert_eq!(lut.header().layer, 0);
     assert_eq!(lut.header().axes[0].nodes.len(), 1);
     let stats = validate(&lut, 500, 2).unwrap();
-    assert!(worst(&stats.max_abs) <= lut.header().error.bake_check.max_abs_all.max(1e-6));
+    assert!(
+        worst(&stats.max_abs)
+            <= lut
+                .header()
+                .error
+                .bake_check
+                .as_ref()
+                .unwrap()
+                .max_abs_all
+                .max(1e-6)
+    );
     // Any thickness reads the one row.
     assert_eq!(lut.sample_rgb(0.0, 0.5), lut.sample_rgb(1e4, 0.5));
 }
@@ -484,5 +499,121 @@ fn bake_info_validate_commands() {
     ]);
     assert_eq!(bad_layer.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&bad_layer.stderr).contains("layer"));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A fixed resolution baked without the check: the same nodes as the
+/// checked bake and, stored as f32, the same values to the last rounding
+/// step (the f64 responses agree to 1e-12, see the baker's unit test); no
+/// bake check in the header, and the table writes, loads and validates.
+#[test]
+fn unchecked_bake_matches_the_checked_one() {
+    let dir = scratch_dir("nocheck");
+    for (name, kind, wavelength) in [
+        ("two-layer", Kind::Rgb, 1),
+        ("oil-on-water", Kind::Spectral, 9),
+    ] {
+        let stack = Stack::load(&luts_dir().join(format!("{name}.toml"))).unwrap();
+        let mut spec = quick_spec(stack, (0.0, 600.0), 1.0);
+        spec.kind = kind;
+        spec.resolution = Resolution::Nodes {
+            thickness: 97,
+            angle: 19,
+            wavelength,
+        };
+        let checked = bake(&spec).unwrap();
+        spec.check = false;
+        let table = bake(&spec).unwrap();
+        let (h, hc) = (table.header(), checked.header());
+        assert_eq!(h.axes, hc.axes);
+        assert!(hc.error.bake_check.is_some());
+        assert_eq!(h.error.bake_check, None);
+        assert_ne!(h.cache_key, hc.cache_key);
+        for (a, b) in table.data().iter().zip(checked.data()) {
+            let ulps = (a.to_bits() as i64 - b.to_bits() as i64).abs();
+            assert!(ulps <= 1, "{name}: {a} vs {b}");
+        }
+        let path = dir.join(format!("{name}.exr"));
+        table.write(&path).unwrap();
+        let back = Lut::load(&path).unwrap();
+        assert_eq!(back.header(), h);
+        assert_eq!(back.header().version, irid::lut::FORMAT_VERSION);
+        let stats = validate(&back, 300, 3).unwrap();
+        assert!(worst(&stats.max_abs) > 0.0 && worst(&stats.max_abs) < 0.5);
+    }
+    // An error target chooses its grid by the check: it cannot be skipped.
+    let stack = Stack::load(&luts_dir().join("soap-film.toml")).unwrap();
+    let mut spec = quick_spec(stack, (0.0, 600.0), 1e-3);
+    spec.check = false;
+    let err = bake(&spec)
+        .expect_err("--no-check with an error target")
+        .to_string();
+    assert!(
+        err.contains("no-check") && err.contains("max-error"),
+        "{err}"
+    );
+
+    // The commands: bake says no check was made, info too, validate works.
+    let out = dir.join("cli.exr");
+    let o = irid(&[
+        "bake",
+        luts_dir().join("soap-film.toml").to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+        "--thickness",
+        "100:400",
+        "--sampling",
+        "uniform:16",
+        "--resolution",
+        "31,9",
+        "--no-check",
+        "--validate-points",
+        "0",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(String::from_utf8_lossy(&o.stdout).contains("bake check: not made (--no-check)"));
+    let info = irid(&["info", out.to_str().unwrap()]);
+    assert!(info.status.success());
+    let text = String::from_utf8_lossy(&info.stdout);
+    assert!(text.contains("not made (baked with --no-check)"), "{text}");
+    let v = irid(&["validate", out.to_str().unwrap(), "--points", "100"]);
+    assert!(v.status.success(), "{}", String::from_utf8_lossy(&v.stderr));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// The shipped tables are format version 1 (the bake check always
+/// present): they load, sample and validate, and a table read from version
+/// 1 is written back as the current version.
+#[test]
+fn version_1_tables_still_load() {
+    let dir = scratch_dir("v1");
+    let mut seen = 0;
+    for entry in std::fs::read_dir(luts_dir()).unwrap() {
+        let path = entry.unwrap().path();
+        if path.extension().and_then(|e| e.to_str()) != Some("exr") {
+            continue;
+        }
+        let lut = Lut::load(&path).unwrap_or_else(|e| panic!("{e}"));
+        let h = lut.header();
+        if h.version != 1 {
+            continue;
+        }
+        seen += 1;
+        assert!(h.error.bake_check.is_some(), "version 1 has a bake check");
+        // The first points of the recorded validation's stream: within its
+        // figures, channel by channel.
+        let recorded = h.error.validation.as_ref().expect("validation recorded");
+        let stats = validate(&lut, 200, recorded.seed).unwrap();
+        for (now, then) in stats.max_abs.iter().zip(&recorded.max_abs) {
+            assert!(now <= then, "{}: {now} > {then}", path.display());
+        }
+        let copy = dir.join("copy.exr");
+        lut.write(&copy).unwrap();
+        let back = Lut::load(&copy).unwrap();
+        assert_eq!(back.header().version, irid::lut::FORMAT_VERSION);
+        assert_eq!(back.header().error, h.error);
+        assert_eq!(back.data(), lut.data());
+    }
+    assert!(seen > 0, "no version-1 table in luts/");
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -84,11 +84,13 @@ pub fn run(args: Args) -> Result<ExitCode> {
     if let Some(e) = h.error.target_max_abs {
         println!("  target (--max-error)  {e:e}");
     }
-    let check = &h.error.bake_check;
-    println!(
-        "  bake check            max abs {:.3e} over {} points ({})",
-        check.max_abs_all, check.points, check.metric
-    );
+    match &h.error.bake_check {
+        Some(check) => println!(
+            "  bake check            max abs {:.3e} over {} points ({})",
+            check.max_abs_all, check.points, check.metric
+        ),
+        None => println!("  bake check            not made (baked with --no-check)"),
+    }
     if let Some(v) = &h.error.validation {
         println!(
             "  validation            {} random points (seed {}) against the solver:",

@@ -51,11 +51,21 @@ const MAX_WORK: usize = 1 << 30;
 /// table is validated against the solver at `spec.validation_points` random
 /// points; around any point above the target the search refines further.
 /// The validation figures go into the header. A fixed resolution is baked
-/// as asked, without validation (see [`super::validate`]).
+/// as asked, without validation (see [`super::validate`]); with
+/// `spec.check` off it is evaluated at the table's nodes only and the header
+/// records no bake check.
 pub fn bake_with_progress(spec: &BakeSpec, progress: &(dyn Fn(f64) + Sync)) -> Result<Lut> {
     spec.validate()?;
     let prep = Prepared::new(spec)?;
     let mut axes = initial_axes(spec, &prep);
+    if !spec.check {
+        // Only a fixed resolution gets here (see BakeSpec::validate).
+        let grid = Grid::new(&axes, spec.kind);
+        let values = prep.eval(&grid, progress)?;
+        let data = values.iter().map(|&v| stored(v, spec.half)).collect();
+        return Lut::from_parts(header(spec, &prep, &grid, None, None), data)
+            .map_err(|why| Error::invalid("baked table", why));
+    }
     let target = match spec.resolution {
         Resolution::MaxError(e) => Some(e),
         Resolution::Nodes { .. } => None,
@@ -113,7 +123,7 @@ pub fn bake_with_progress(spec: &BakeSpec, progress: &(dyn Fn(f64) + Sync)) -> R
             Some(e) if check.max_all > e => e,
             _ => {
                 let data = even_subgrid(&fine, &values, prep.channels, spec.half);
-                let header = header(spec, &prep, &coarse, &check, target);
+                let header = header(spec, &prep, &coarse, Some(&check), target);
                 let mut lut = Lut::from_parts(header, data)
                     .map_err(|why| Error::invalid("baked table", why))?;
                 if spec.validation_points == 0 || target.is_none() {
@@ -786,7 +796,7 @@ fn header(
     spec: &BakeSpec,
     prep: &Prepared,
     coarse: &Grid,
-    check: &Check,
+    check: Option<&Check>,
     target: Option<f64>,
 ) -> Header {
     let channel_meaning = |name: &str| -> String {
@@ -851,12 +861,12 @@ fn header(
         },
         error: ErrorInfo {
             target_max_abs: target,
-            bake_check: BakeCheck {
+            bake_check: check.map(|check| BakeCheck {
                 metric: BAKE_CHECK_METRIC.into(),
                 points: check.points,
                 max_abs: check.max_channel.clone(),
                 max_abs_all: check.max_all,
-            },
+            }),
             validation: None,
         },
         tool: format!("irid {}", env!("CARGO_PKG_VERSION")),
@@ -899,6 +909,63 @@ mod tests {
                 }
             }
             assert!(worst < 1e-12, "n = {n}{k:+}i: {worst:e}");
+        }
+    }
+
+    /// A table baked without the check evaluates the same nodes as the
+    /// checked bake's even subgrid (node positions equal bit for bit), but
+    /// the phase recurrence steps over the table's spacing instead of half
+    /// of it and re-syncs at other nodes: the f64 responses agree to
+    /// rounding (1e-12), so the stored f32 values can differ at most where
+    /// that rounding straddles an f32 rounding boundary.
+    #[test]
+    fn unchecked_nodes_match_the_checked_even_subgrid() {
+        let stack = Stack {
+            ambient: crate::optics::Material::constant(1.5, 0.0),
+            layers: vec![Layer {
+                material: crate::optics::Material::constant(1.38, 0.02),
+                thickness_nm: 100.0,
+            }],
+            substrate: crate::optics::Material::constant(1.0, 0.0),
+        };
+        for (kind, nodes) in [(Kind::Rgb, (301, 23, 1)), (Kind::Spectral, (150, 9, 5))] {
+            let mut spec = BakeSpec::new(stack.clone());
+            spec.kind = kind;
+            spec.thickness_nm = (0.0, 1500.0);
+            spec.cos_theta = (0.0, 1.0);
+            spec.sampling = crate::color::Sampling::Uniform(16);
+            spec.resolution = Resolution::Nodes {
+                thickness: nodes.0,
+                angle: nodes.1,
+                wavelength: nodes.2,
+            };
+            let prep = Prepared::new(&spec).unwrap();
+            let axes = initial_axes(&spec, &prep);
+            let coarse = Grid::new(&axes, kind);
+            let fine = Grid::new(&axes.clone().map(|a| doubled(&a)), kind);
+            for (c, f) in coarse.axes.iter().zip(&fine.axes) {
+                let even: Vec<f64> = f.nodes.iter().step_by(2).copied().collect();
+                assert_eq!(c.nodes, even);
+            }
+            let table = prep.eval(&coarse, &|_| {}).unwrap();
+            let checked = prep.eval(&fine, &|_| {}).unwrap();
+            let ch = prep.channels;
+            let [nt, nc, _] = fine.axes.clone().map(|a| a.nodes.len());
+            let mut worst = 0.0f64;
+            for (k, v) in table.chunks_exact(ch).enumerate() {
+                let t = k % coarse.axes[0].nodes.len();
+                let rest = k / coarse.axes[0].nodes.len();
+                let (c, w) = (
+                    rest % coarse.axes[1].nodes.len(),
+                    rest / coarse.axes[1].nodes.len(),
+                );
+                let at = ((2 * w * nc + 2 * c) * nt + 2 * t) * ch;
+                for (a, b) in v.iter().zip(&checked[at..at + ch]) {
+                    worst = worst.max((a - b).abs());
+                }
+            }
+            assert!(worst <= 1e-12, "{kind}: {worst:e}");
+            eprintln!("{kind}: largest difference {worst:e}");
         }
     }
 

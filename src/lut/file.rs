@@ -9,7 +9,9 @@ use exr::prelude::{
     LayerAttributes, ReadChannels, ReadLayers, SmallVec, Text, WritableImage,
 };
 
-use super::header::{Header, FORMAT_NAME};
+use super::header::{
+    readable_version, Header, FORMAT_NAME, FORMAT_VERSION, OLDEST_READABLE_VERSION,
+};
 use super::sample::{channel_names, Lut};
 use crate::error::{Error, Result};
 
@@ -26,7 +28,13 @@ impl Lut {
         let width = header.axes[0].nodes.len();
         let height = self.data().len() / (width * channels.len());
         let half = header.precision == "f16";
-        let json = serde_json::to_string(header)
+        // A table read from an older version is written in the current one:
+        // its header is valid in this version too (see OLDEST_READABLE_VERSION).
+        let current = Header {
+            version: FORMAT_VERSION,
+            ..header.clone()
+        };
+        let json = serde_json::to_string(&current)
             .map_err(|e| Error::invalid("table header", e.to_string()))?;
         let mut list: SmallVec<[AnyChannel<FlatSamples>; 4]> = SmallVec::new();
         for (k, name) in channels.iter().enumerate() {
@@ -96,11 +104,10 @@ impl Lut {
             return Err(bad(format!("header 'format' is not \"{FORMAT_NAME}\"")));
         }
         let version = value.get("version").and_then(|v| v.as_u64());
-        if version != Some(u64::from(super::FORMAT_VERSION)) {
+        if !version.is_some_and(readable_version) {
             return Err(bad(format!(
-                "format version {} (this irid reads version {})",
+                "format version {} (this irid reads versions {OLDEST_READABLE_VERSION} to {FORMAT_VERSION})",
                 version.map_or("missing".into(), |v| v.to_string()),
-                super::FORMAT_VERSION
             )));
         }
         let header: Header =

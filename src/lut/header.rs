@@ -9,7 +9,17 @@ use crate::optics::Stack;
 
 pub const FORMAT_NAME: &str = "irid-lut";
 /// Bumped on any change a reader of an older version would misread.
-pub const FORMAT_VERSION: u32 = 1;
+/// Version 2: `error.bake_check` may be null (a table baked without the
+/// check, `irid bake --no-check`).
+pub const FORMAT_VERSION: u32 = 2;
+/// The oldest version this irid reads: every version-1 header is a valid
+/// version-2 header (its bake check is always present).
+pub const OLDEST_READABLE_VERSION: u32 = 1;
+
+/// Whether this irid reads tables of format `version`.
+pub fn readable_version(version: u64) -> bool {
+    (u64::from(OLDEST_READABLE_VERSION)..=u64::from(FORMAT_VERSION)).contains(&version)
+}
 
 pub const THICKNESS_AXIS: &str = "thickness_nm";
 pub const COS_AXIS: &str = "cos_theta";
@@ -68,7 +78,8 @@ pub struct ColorInfo {
 pub struct ErrorInfo {
     /// `--max-error` when the grid was chosen to meet it.
     pub target_max_abs: Option<f64>,
-    pub bake_check: BakeCheck,
+    /// `None` (null in the file) when the table was baked without the check.
+    pub bake_check: Option<BakeCheck>,
     /// Random off-grid points against the direct solver (`irid validate`).
     pub validation: Option<ErrorStats>,
 }

@@ -13,7 +13,9 @@ mod validate;
 
 pub use axis::Axis;
 pub use bake::{bake, bake_with_progress, VALIDATION_SEED};
-pub use header::{BakeCheck, ColorInfo, ErrorInfo, Header, FORMAT_NAME, FORMAT_VERSION};
+pub use header::{
+    BakeCheck, ColorInfo, ErrorInfo, Header, FORMAT_NAME, FORMAT_VERSION, OLDEST_READABLE_VERSION,
+};
 pub use sample::{FilmRgb, Lut};
 pub use validate::{validate, ErrorStats, RegionStats, MAX_POINTS as MAX_VALIDATION_POINTS};
 
@@ -66,7 +68,7 @@ pub enum Resolution {
         angle: usize,
         wavelength: usize,
     },
-    /// The coarsest grid (found by doubling) whose bake check error — the
+    /// The coarsest grid (found by refining) whose bake check error — the
     /// largest absolute error over all channels at every edge midpoint and
     /// cell centre of the grid — is at most this.
     MaxError(f64),
@@ -97,6 +99,16 @@ pub struct BakeSpec {
     /// compared with the solver and must meet the target too (0: none). A
     /// fixed resolution ignores it.
     pub validation_points: usize,
+    /// Measure the table's interpolation error (the header's
+    /// `error.bake_check`) by evaluating the grid with every interval halved,
+    /// about four times the table's nodes. Only a fixed resolution may skip
+    /// it: an error target chooses its grid by this measurement.
+    #[serde(default = "default_check")]
+    pub check: bool,
+}
+
+fn default_check() -> bool {
+    true
 }
 
 impl BakeSpec {
@@ -116,6 +128,7 @@ impl BakeSpec {
             resolution: Resolution::MaxError(1e-3),
             half: false,
             validation_points: 20_000,
+            check: true,
         }
     }
 
@@ -188,6 +201,12 @@ impl BakeSpec {
                     return Err(Error::invalid(
                         "max-error",
                         format!("must be a positive number, got {e}"),
+                    ));
+                }
+                if !self.check {
+                    return Err(Error::invalid(
+                        "no-check",
+                        "needs a fixed resolution: with max-error the bake check is how the grid is chosen",
                     ));
                 }
             }

@@ -3,7 +3,10 @@
 use glam::Vec4;
 
 use super::axis::Locator;
-use super::header::{Header, COS_AXIS, FORMAT_VERSION, THICKNESS_AXIS, WAVELENGTH_AXIS};
+use super::header::{
+    readable_version, Header, COS_AXIS, FORMAT_VERSION, OLDEST_READABLE_VERSION, THICKNESS_AXIS,
+    WAVELENGTH_AXIS,
+};
 use super::Kind;
 
 /// A film's unpolarized reflectance and transmittance as linear sRGB.
@@ -53,9 +56,9 @@ impl Lut {
     /// axes and channels, increasing finite nodes, node counts against the
     /// value count) and builds the lookup. The error says what disagrees.
     pub(crate) fn from_parts(header: Header, data: Vec<f32>) -> Result<Lut, String> {
-        if header.version != FORMAT_VERSION {
+        if !readable_version(header.version.into()) {
             return Err(format!(
-                "format version {} (this irid reads version {FORMAT_VERSION})",
+                "format version {} (this irid reads versions {OLDEST_READABLE_VERSION} to {FORMAT_VERSION})",
                 header.version
             ));
         }
