@@ -158,6 +158,39 @@ fn grid_mode_prints_json_and_rejects_bad_input() {
     assert_eq!(doc["r"].as_array().unwrap().len(), 4);
     assert!(doc["seconds"].as_f64().unwrap() >= 0.0);
 
+    // A bake timed with and without its check, over the same table nodes.
+    let out = irid()
+        .args([
+            "bench",
+            "--grid",
+            "soap",
+            "--bake-nodes",
+            "6,4",
+            "--repeat",
+            "1",
+        ])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let doc: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let points = doc["points"].as_u64().unwrap();
+    assert_eq!(doc["thicknesses_nm"].as_array().unwrap().len(), 6);
+    assert_eq!(doc["angles_deg"].as_array().unwrap().len(), 4);
+    assert_eq!(
+        points,
+        6 * 4 * doc["wavelengths_nm"].as_array().unwrap().len() as u64
+    );
+    assert_eq!(doc["bake_table_points"].as_u64(), Some(points));
+    // Every interval halved: (2T − 1) × (2A − 1) nodes.
+    assert_eq!(doc["bake_points"].as_u64(), Some(points / 24 * 11 * 7));
+    for key in ["bake_seconds", "bake_table_seconds"] {
+        assert!(doc[key].as_f64().unwrap() > 0.0, "{key}");
+    }
+
     for bad in [
         vec!["bench", "--grid", "nope"],
         vec!["bench", "--grid", "soap", "--angles", "95"],

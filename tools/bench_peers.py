@@ -267,6 +267,8 @@ def bake_rows(args, failures, findings):
     """A full table: irid's baker (an rgb table with 1 nm integration, so
     R at every thickness x angle node and every wavelength 360-830 nm) against
     tmm-faster computing R at the same points, one call per thickness node.
+    The baker is timed without its error check (the table's points only, the
+    like-for-like figure) and with it (about 4x the points).
     The values are compared through irid's grid sweep over the same nodes,
     which splits the stack around the varying layer the way the baker does."""
     rows = []
@@ -309,11 +311,17 @@ def bake_rows(args, failures, findings):
                         abs(t[ai, k, wi] - 0.5 * (sp[0]["T"] + sp[1]["T"])))
         if not worst <= TOLERANCE:
             failures.append(f"bake {stack}: Byrnes' tmm differs from irid by {worst:.2e}")
-        rows.append({"stack": stack, "points": r.size, "bake": doc["bake_seconds"],
+        if doc["bake_table_points"] != r.size:
+            failures.append(f"bake {stack}: the table-only bake evaluated {doc['bake_table_points']} "
+                            f"points, tmm-faster {r.size}")
+        rows.append({"stack": stack, "points": r.size, "table": doc["bake_table_seconds"],
+                     "checked": doc["bake_seconds"], "checked points": doc["bake_points"],
                      "sweep": doc["seconds"], "tmm-faster": secs,
                      "diff": max(cmp["R"], cmp["T"]), "tmm": worst})
-        print(f"  bake {stack:13s} irid bake {doc['bake_seconds']:.3f} s, sweep {doc['seconds']:.3f} s"
-              f"   tmm-faster {secs:.2f} s: x{secs / doc['bake_seconds']:.1f} / x{secs / doc['seconds']:.1f}",
+        print(f"  bake {stack:13s} irid table-only bake {doc['bake_table_seconds']:.3f} s, "
+              f"checked bake {doc['bake_seconds']:.3f} s, sweep {doc['seconds']:.3f} s   "
+              f"tmm-faster {secs:.2f} s: x{secs / doc['bake_table_seconds']:.1f} / "
+              f"x{secs / doc['bake_seconds']:.1f} / x{secs / doc['seconds']:.1f}",
               flush=True)
     return rows
 
@@ -364,18 +372,31 @@ def write_report(path, args, general, bake, failures, findings, command):
         "that is irid's extra work). irid's grid sweep evaluates the same points (the baker's "
         "split-stack method, f64 output) and is the one compared for agreement.",
         "",
-        "| stack | points | irid bake (s) | irid sweep (s) | tmm-faster (s) | ratio vs bake | ratio vs sweep | max diff vs tmm (sampled) | vs tmm-faster |",
-        "|---|---:|---:|---:|---:|---:|---:|---:|---:|",
+        "The baker is timed two ways. The **table-only bake** (`irid bake --resolution T,A --no-check`) "
+        "evaluates exactly the table's nodes: the same points as tmm-faster, so it is the like-for-like "
+        "comparison. The **checked bake** (the default) evaluates the grid with every interval halved, "
+        "about 4x the table's points, i.e. ~3x more points than tmm-faster computes (the column gives "
+        "the count), to measure the table's own interpolation error for its header; its even nodes are "
+        "the table.",
+        "",
+        "| stack | points | irid table-only bake (s) | ratio | irid checked bake (s) | points it evaluates | ratio "
+        "| irid sweep (s) | ratio | tmm-faster (s) | max diff vs tmm (sampled) | vs tmm-faster |",
+        "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|",
     ]
     for r in bake:
         lines.append(
-            f"| {r['stack']} | {r['points']} | {r['bake']:.3f} | {r['sweep']:.3f} | {r['tmm-faster']:.2f} | "
-            f"{r['tmm-faster'] / r['bake']:.1f}x | {r['tmm-faster'] / r['sweep']:.1f}x | {r['tmm']:.1e} | {r['diff']:.1e} |"
+            f"| {r['stack']} | {r['points']} | {r['table']:.3f} | {r['tmm-faster'] / r['table']:.1f}x | "
+            f"{r['checked']:.3f} | {r['checked points']} | {r['tmm-faster'] / r['checked']:.1f}x | "
+            f"{r['sweep']:.3f} | {r['tmm-faster'] / r['sweep']:.1f}x | {r['tmm-faster']:.2f} | "
+            f"{r['tmm']:.1e} | {r['diff']:.1e} |"
         )
     if bake:
-        worst = min(r["tmm-faster"] / r["bake"] for r in bake)
-        lines += ["", f"Target: baking ≥ 50x faster than tmm-faster. Lowest ratio (vs the baker) in this run: "
-                  f"**{worst:.1f}x** ({'met' if worst >= 50 else 'NOT met'})."]
+        worst = min(r["tmm-faster"] / r["table"] for r in bake)
+        worst_checked = min(r["tmm-faster"] / r["checked"] for r in bake)
+        lines += ["", "Target: baking ≥ 50x faster than tmm-faster computing the same points. It compares the "
+                  "table-only bake, which computes the same points as tmm-faster. Lowest ratio in this run: "
+                  f"**{worst:.1f}x** ({'met' if worst >= 50 else 'NOT met'}). The checked bake, which also "
+                  f"measures its own error, reaches {worst_checked:.1f}x at its lowest."]
     lines += ["", "## Agreement", ""]
     lines += [
         "Byrnes' `tmm` is the reference: irid's solver was verified against it, a disagreement with it "

@@ -184,31 +184,57 @@ pub fn evaluate(
     })
 }
 
+/// Wall times of baking one table two ways, and how many points each
+/// evaluated (thickness × angle × wavelength).
+#[derive(Clone, Copy, Debug)]
+pub struct BakeTimes {
+    /// The default bake: the grid with every interval halved, so that the
+    /// table's interpolation error is measured (the header's bake check).
+    pub checked_s: f64,
+    pub checked_points: usize,
+    /// `--no-check`: the table's own nodes only, the same points a peer
+    /// computes to build the table.
+    pub table_s: f64,
+    pub table_points: usize,
+}
+
 /// Times [`lut::bake`] of an rgb table (1 nm exact integration, the `irid
 /// bake` default) over the stack's thickness range and all angles, with the
-/// given node counts, on `threads` threads; keeps the fastest of `repeat`.
-/// Returns that time and the grid of the table's nodes (thickness × angle ×
-/// the integration's wavelengths): what a peer must compute point by point
-/// to build the same table.
+/// given node counts, on `threads` threads, with and without the bake check;
+/// keeps the fastest of `repeat` for each. Returns those times and the grid
+/// of the table's nodes (thickness × angle × the integration's wavelengths):
+/// what a peer must compute point by point to build the same table.
 pub fn time_bake(
     bench: &BenchStack,
     thickness_nodes: usize,
     angle_nodes: usize,
     threads: usize,
     repeat: usize,
-) -> Result<(f64, Grid)> {
-    let spec = bench.bake_spec(thickness_nodes, angle_nodes, false);
+) -> Result<(BakeTimes, Grid)> {
+    let checked = bench.bake_spec(thickness_nodes, angle_nodes, false);
+    let table_only = lut::BakeSpec {
+        check: false,
+        ..checked.clone()
+    };
     let pool = thread_pool(threads)?;
-    let mut best = f64::INFINITY;
-    let mut table = None;
-    for _ in 0..repeat.max(1) {
+    let (mut checked_s, mut table_s) = (f64::INFINITY, f64::INFINITY);
+    let time = |spec: &lut::BakeSpec| -> Result<(f64, lut::Lut)> {
         let start = Instant::now();
-        let baked = pool.install(|| lut::bake(&spec))?;
-        best = best.min(start.elapsed().as_secs_f64());
-        table = Some(baked);
+        let lut = pool.install(|| lut::bake(spec))?;
+        Ok((start.elapsed().as_secs_f64(), lut))
+    };
+    let mut baked = None;
+    for _ in 0..repeat.max(1) {
+        let (s, with_check) = time(&checked)?;
+        checked_s = checked_s.min(s);
+        let (s, table) = time(&table_only)?;
+        table_s = table_s.min(s);
+        baked = Some((with_check, table));
     }
-    let header = table.as_ref().map(|t| t.header().clone());
-    let axes = header.map(|h| h.axes).unwrap_or_default();
+    let Some((with_check, table)) = baked else {
+        return Err(Error::invalid("bake", "no repetition ran"));
+    };
+    let axes = &table.header().axes;
     let (Some(thickness), Some(cos)) = (axes.first(), axes.get(1)) else {
         return Err(Error::invalid("bake", "the table has fewer than two axes"));
     };
@@ -223,7 +249,21 @@ pub fn time_bake(
             .collect(),
         thicknesses_nm: Some(thickness.nodes.clone()),
     };
-    Ok((best, grid))
+    // The check compares every node of the halved grid, so its point count
+    // is that grid's size.
+    let checked_nodes = with_check
+        .header()
+        .error
+        .bake_check
+        .as_ref()
+        .map_or(0, |c| c.points);
+    let times = BakeTimes {
+        checked_s,
+        checked_points: checked_nodes * grid.wavelengths_nm.len(),
+        table_s,
+        table_points: grid.points(),
+    };
+    Ok((times, grid))
 }
 
 /// Nodes between exact re-evaluations of the phase on a uniform axis.

@@ -42,7 +42,8 @@ pub struct Args {
     #[arg(long, default_value_t = 3)]
     pub repeat: usize,
     /// With --grid: time baking an rgb table of T×A nodes (thickness × angle)
-    /// with the baker, then sweep the same nodes at the integration's
+    /// with the baker, with and without its error check (`irid bake
+    /// --no-check`), then sweep the same nodes at the integration's
     /// wavelengths (replaces --wavelengths, --angles, --thicknesses).
     #[arg(long, value_name = "T,A")]
     pub bake_nodes: Option<String>,
@@ -153,7 +154,7 @@ fn run_grid(name: &str, args: &Args) -> Result<()> {
             args.threads
         );
     }
-    let (bake_seconds, g) = match &args.bake_nodes {
+    let (bake, g) = match &args.bake_nodes {
         Some(spec) => {
             let nodes = parse_list("--bake-nodes", spec)?;
             let [t, a] = nodes[..] else {
@@ -205,7 +206,13 @@ fn run_grid(name: &str, args: &Args) -> Result<()> {
         "threads": args.threads,
         "points": g.points(),
         "seconds": out.seconds,
-        "bake_seconds": bake_seconds,
+        // The default bake, which also evaluates the grid with every
+        // interval halved to measure the table's error, and the bake of the
+        // table's nodes only (`--no-check`), with the points each evaluated.
+        "bake_seconds": bake.map(|b| b.checked_s),
+        "bake_points": bake.map(|b| b.checked_points),
+        "bake_table_seconds": bake.map(|b| b.table_s),
+        "bake_table_points": bake.map(|b| b.table_points),
         "layout": ["angle", "thickness", "wavelength"],
     });
     match &args.raw {
