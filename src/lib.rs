@@ -13,5 +13,6 @@ pub mod error;
 pub mod lut;
 pub mod optics;
 pub mod render;
+mod simd;
 
 pub use error::{Error, Result};

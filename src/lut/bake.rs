@@ -16,6 +16,7 @@ use crate::color::SpectralIntegrator;
 use crate::error::{Error, Result};
 use crate::optics::twoport::{Scratch, VaryingLayer};
 use crate::optics::{solve, Layer, Stack};
+use crate::simd::avx2_dispatch;
 
 /// The phase factor along a uniform thickness axis is advanced by complex
 /// multiplications and recomputed exactly this often (see [`phases`]): the
@@ -378,33 +379,17 @@ pub(crate) fn rgb_weights(integrator: &SpectralIntegrator) -> (Vec<f64>, Vec<[f6
     (wavelengths, weights)
 }
 
-/// Adds `weights` × R and × T to channel-major accumulators
-/// (`[channel][node]`, R channels first).
-fn accumulate(acc: &mut [f64], r: &[f64], t: &[f64], weights: [f64; 3]) {
-    #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx2") {
-        // SAFETY: the CPU has AVX2 (checked just above).
-        return unsafe { accumulate_avx2(acc, r, t, weights) };
-    }
-    accumulate_portable(acc, r, t, weights);
-}
-
-/// [`accumulate`] compiled for 4-wide vectors (same result bit for bit:
-/// nothing is fused).
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-fn accumulate_avx2(acc: &mut [f64], r: &[f64], t: &[f64], weights: [f64; 3]) {
-    accumulate_portable(acc, r, t, weights);
-}
-
-#[inline(always)]
-fn accumulate_portable(acc: &mut [f64], r: &[f64], t: &[f64], weights: [f64; 3]) {
-    let n = r.len();
-    let (acc_r, acc_t) = acc.split_at_mut(3 * n);
-    for (acc, values) in [(acc_r, r), (acc_t, t)] {
-        for (a, wt) in acc.chunks_exact_mut(n).zip(weights) {
-            for (a, &v) in a.iter_mut().zip(values) {
-                *a += wt * v;
+avx2_dispatch! {
+    /// Adds `weights` × R and × T to channel-major accumulators
+    /// (`[channel][node]`, R channels first).
+    fn accumulate(acc: &mut [f64], r: &[f64], t: &[f64], weights: [f64; 3]) {
+        let n = r.len();
+        let (acc_r, acc_t) = acc.split_at_mut(3 * n);
+        for (acc, values) in [(acc_r, r), (acc_t, t)] {
+            for (a, wt) in acc.chunks_exact_mut(n).zip(weights) {
+                for (a, &v) in a.iter_mut().zip(values) {
+                    *a += wt * v;
+                }
             }
         }
     }
@@ -435,48 +420,33 @@ impl Worker {
     }
 }
 
-/// The phase factor at every thickness node. Adjacent uniform segments with
-/// the same spacing (the halves of a refined one) form one run; a run starts
-/// from an exact exponential every [`PHASE_RESYNC`] nodes, its first
-/// [`PHASE_LANES`] nodes follow by one complex multiplication each, and every
-/// later node is the one [`PHASE_LANES`] back times δ^[`PHASE_LANES`]: the
-/// lanes are independent chains, so the loop is not one long chain of
-/// dependent multiplications.
-fn phases(v: &VaryingLayer, t_axis: &AxisGrid, re: &mut [f64], im: &mut [f64]) {
-    #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx2") {
-        // SAFETY: the CPU has AVX2 (checked just above).
-        return unsafe { phases_avx2(v, t_axis, re, im) };
-    }
-    phases_portable(v, t_axis, re, im);
-}
-
-/// [`phases`] compiled for 4-wide vectors (same result bit for bit).
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-fn phases_avx2(v: &VaryingLayer, t_axis: &AxisGrid, re: &mut [f64], im: &mut [f64]) {
-    phases_portable(v, t_axis, re, im);
-}
-
-#[inline(always)]
-fn phases_portable(v: &VaryingLayer, t_axis: &AxisGrid, re: &mut [f64], im: &mut [f64]) {
-    let nodes = &t_axis.nodes;
-    let mut run_start = 0;
-    let mut run_step = 0.0;
-    let mut j = 0;
-    for seg in &t_axis.segments {
-        if seg.intervals == 0 {
-            continue;
+avx2_dispatch! {
+    /// The phase factor at every thickness node. Adjacent uniform segments with
+    /// the same spacing (the halves of a refined one) form one run; a run starts
+    /// from an exact exponential every [`PHASE_RESYNC`] nodes, its first
+    /// [`PHASE_LANES`] nodes follow by one complex multiplication each, and every
+    /// later node is the one [`PHASE_LANES`] back times δ^[`PHASE_LANES`]: the
+    /// lanes are independent chains, so the loop is not one long chain of
+    /// dependent multiplications.
+    fn phases(v: &VaryingLayer, t_axis: &AxisGrid, re: &mut [f64], im: &mut [f64]) {
+        let nodes = &t_axis.nodes;
+        let mut run_start = 0;
+        let mut run_step = 0.0;
+        let mut j = 0;
+        for seg in &t_axis.segments {
+            if seg.intervals == 0 {
+                continue;
+            }
+            let step = (seg.end - seg.start) / seg.intervals as f64;
+            if (step - run_step).abs() > 1e-12 * step {
+                phase_run(v, nodes, run_start..=j, run_step, re, im);
+                run_start = j;
+                run_step = step;
+            }
+            j += seg.intervals;
         }
-        let step = (seg.end - seg.start) / seg.intervals as f64;
-        if (step - run_step).abs() > 1e-12 * step {
-            phase_run(v, nodes, run_start..=j, run_step, re, im);
-            run_start = j;
-            run_step = step;
-        }
-        j += seg.intervals;
+        phase_run(v, nodes, run_start..=j, run_step, re, im);
     }
-    phase_run(v, nodes, run_start..=j, run_step, re, im);
 }
 
 /// Independent multiplication chains in [`phases`].

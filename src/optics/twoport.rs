@@ -19,6 +19,7 @@
 use num_complex::Complex64 as C64;
 
 use super::solver::{normal_index, solve_amplitudes_beta, Amplitudes, Response};
+use crate::simd::avx2_dispatch;
 
 /// |q|² / |n|² below which the layer counts as at its critical angle. The
 /// split loses about ε|n|/|q| to rounding, so below |q|/|n| = 1e-4 it could
@@ -180,27 +181,22 @@ impl VaryingLayer {
     /// real and imaginary arrays and the loop has no branch, so it compiles
     /// to packed arithmetic: a bake spends most of its time here.
     pub fn responses(&self, phase_re: &[f64], phase_im: &[f64], r: &mut [f64], t: &mut [f64]) {
-        #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx2") {
-            // SAFETY: the CPU has AVX2 (checked just above).
-            return unsafe { self.responses_avx2(phase_re, phase_im, r, t) };
-        }
-        self.responses_portable(phase_re, phase_im, r, t);
+        batch_responses(self, phase_re, phase_im, r, t);
     }
+}
 
-    /// [`Self::responses`] compiled for 4-wide vectors. Rust never fuses a
-    /// multiply and an add on its own, so the result is the same bit for bit.
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2")]
-    fn responses_avx2(&self, phase_re: &[f64], phase_im: &[f64], r: &mut [f64], t: &mut [f64]) {
-        self.responses_portable(phase_re, phase_im, r, t);
-    }
-
-    #[inline(always)]
-    fn responses_portable(&self, phase_re: &[f64], phase_im: &[f64], r: &mut [f64], t: &mut [f64]) {
+avx2_dispatch! {
+    /// [`VaryingLayer::responses`].
+    fn batch_responses(
+        v: &VaryingLayer,
+        phase_re: &[f64],
+        phase_im: &[f64],
+        r: &mut [f64],
+        t: &mut [f64],
+    ) {
         let n = phase_re.len();
         let (phase_im, r, t) = (&phase_im[..n], &mut r[..n], &mut t[..n]);
-        if self.grazing {
+        if v.grazing {
             r.fill(1.0);
             t.fill(0.0);
             return;
@@ -208,11 +204,11 @@ impl VaryingLayer {
         // The same operations in the same order as `response` (complex
         // products written out as num_complex does), so a table does not
         // depend on which of the two evaluated it.
-        let [ra_s, ra_p] = self.r_above;
-        let [x_s, x_p] = self.x;
-        let [y_s, y_p] = self.y;
-        let zt_s = self.z[0].norm_sqr() * self.t_power[0];
-        let zt_p = self.z[1].norm_sqr() * self.t_power[1];
+        let [ra_s, ra_p] = v.r_above;
+        let [x_s, x_p] = v.x;
+        let [y_s, y_p] = v.y;
+        let zt_s = v.z[0].norm_sqr() * v.t_power[0];
+        let zt_p = v.z[1].norm_sqr() * v.t_power[1];
         for j in 0..n {
             let (a, b) = (phase_re[j], phase_im[j]);
             let p2 = C64::new(a * a - b * b, a * b + b * a);
