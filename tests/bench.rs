@@ -132,20 +132,11 @@ fn quick_bench_writes_a_consistent_report() {
     assert!(png.width() > 500 && png.height() > 300);
 }
 
-#[test]
-fn grid_mode_prints_json_and_rejects_bad_input() {
+/// `irid bench --grid soap --repeat 1 EXTRA...`, which must succeed: its JSON.
+fn grid_json(extra: &[&str]) -> serde_json::Value {
     let out = irid()
-        .args([
-            "bench",
-            "--grid",
-            "soap",
-            "--wavelengths",
-            "400,500",
-            "--angles",
-            "0,30",
-            "--repeat",
-            "1",
-        ])
+        .args(["bench", "--grid", "soap", "--repeat", "1"])
+        .args(extra)
         .output()
         .unwrap();
     assert!(
@@ -153,30 +144,18 @@ fn grid_mode_prints_json_and_rejects_bad_input() {
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
-    let doc: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    serde_json::from_slice(&out.stdout).unwrap()
+}
+
+#[test]
+fn grid_mode_prints_json_and_rejects_bad_input() {
+    let doc = grid_json(&["--wavelengths", "400,500", "--angles", "0,30"]);
     assert_eq!(doc["points"], 4);
     assert_eq!(doc["r"].as_array().unwrap().len(), 4);
     assert!(doc["seconds"].as_f64().unwrap() >= 0.0);
 
     // A bake timed with and without its check, over the same table nodes.
-    let out = irid()
-        .args([
-            "bench",
-            "--grid",
-            "soap",
-            "--bake-nodes",
-            "6,4",
-            "--repeat",
-            "1",
-        ])
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let doc: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let doc = grid_json(&["--bake-nodes", "6,4"]);
     let points = doc["points"].as_u64().unwrap();
     assert_eq!(doc["thicknesses_nm"].as_array().unwrap().len(), 6);
     assert_eq!(doc["angles_deg"].as_array().unwrap().len(), 4);

@@ -420,12 +420,11 @@ fn irid(args: &[&str]) -> std::process::Output {
         .unwrap()
 }
 
-#[test]
-fn bake_info_validate_commands() {
-    let dir = scratch_dir("cli");
-    let out = dir.join("soap.exr");
+/// `irid bake luts/soap-film.toml -o OUT` over 100–400 nm with 16-sample
+/// integration, then `extra`.
+fn bake_soap(out: &Path, extra: &[&str]) -> std::process::Output {
     let stack = luts_dir().join("soap-film.toml");
-    let o = irid(&[
+    let mut args = vec![
         "bake",
         stack.to_str().unwrap(),
         "-o",
@@ -434,11 +433,17 @@ fn bake_info_validate_commands() {
         "100:400",
         "--sampling",
         "uniform:16",
-        "--max-error",
-        "3e-3",
-        "--validate-points",
-        "500",
-    ]);
+    ];
+    args.extend_from_slice(extra);
+    irid(&args)
+}
+
+#[test]
+fn bake_info_validate_commands() {
+    let dir = scratch_dir("cli");
+    let out = dir.join("soap.exr");
+    let stack = luts_dir().join("soap-film.toml");
+    let o = bake_soap(&out, &["--max-error", "3e-3", "--validate-points", "500"]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let info = irid(&["info", out.to_str().unwrap()]);
     let text = String::from_utf8_lossy(&info.stdout);
@@ -555,21 +560,16 @@ fn unchecked_bake_matches_the_checked_one() {
 
     // The commands: bake says no check was made, info too, validate works.
     let out = dir.join("cli.exr");
-    let o = irid(&[
-        "bake",
-        luts_dir().join("soap-film.toml").to_str().unwrap(),
-        "-o",
-        out.to_str().unwrap(),
-        "--thickness",
-        "100:400",
-        "--sampling",
-        "uniform:16",
-        "--resolution",
-        "31,9",
-        "--no-check",
-        "--validate-points",
-        "0",
-    ]);
+    let o = bake_soap(
+        &out,
+        &[
+            "--resolution",
+            "31,9",
+            "--no-check",
+            "--validate-points",
+            "0",
+        ],
+    );
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     assert!(String::from_utf8_lossy(&o.stdout).contains("bake check: not made (--no-check)"));
     let info = irid(&["info", out.to_str().unwrap()]);
