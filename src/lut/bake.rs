@@ -48,7 +48,9 @@ const MAX_WORK: usize = 1 << 30;
 /// subdivided once more, which gives the error of the table at every edge
 /// midpoint and cell centre; with `--max-error` each segment whose error
 /// exceeds its share is refined by the factor the h² error law predicts,
-/// and the search repeats until the whole table meets the target. Then the
+/// and the search repeats until the whole table meets the target (each
+/// round copies what it shares with the previous round's grid instead of
+/// evaluating it again, with the same result bit for bit). Then the
 /// table is validated against the solver at `spec.validation_points` random
 /// points; around any point above the target the search refines further.
 /// The validation figures go into the header. A fixed resolution is baked
@@ -62,7 +64,7 @@ pub fn bake_with_progress(spec: &BakeSpec, progress: &(dyn Fn(f64) + Sync)) -> R
     if !spec.check {
         // Only a fixed resolution gets here (see BakeSpec::validate).
         let grid = Grid::new(&axes, spec.kind);
-        let values = prep.eval(&grid, progress)?;
+        let values = prep.eval(&grid, None, progress)?;
         let data = values.iter().map(|&v| stored(v, spec.half)).collect();
         return Lut::from_parts(header(spec, &prep, &grid, None, None), data)
             .map_err(|why| Error::invalid("baked table", why));
@@ -73,6 +75,9 @@ pub fn bake_with_progress(spec: &BakeSpec, progress: &(dyn Fn(f64) + Sync)) -> R
     };
     let wavelength_work = prep.wavelengths_nm.len().max(1);
     let mut round = 0;
+    // The last round's grid and values: nodes it shares with the next one
+    // are copied, not evaluated again.
+    let mut previous: Option<(Grid, Vec<f64>)> = None;
     loop {
         round += 1;
         let coarse = Grid::new(&axes, spec.kind);
@@ -102,7 +107,7 @@ pub fn bake_with_progress(spec: &BakeSpec, progress: &(dyn Fn(f64) + Sync)) -> R
             });
         }
         let clock = std::time::Instant::now();
-        let values = prep.eval(&fine, progress)?;
+        let values = prep.eval(&fine, previous.as_ref(), progress)?;
         let eval_s = clock.elapsed().as_secs_f64();
         let check = measure(&coarse, &fine, &values, prep.channels, spec.half);
         let measure_s = clock.elapsed().as_secs_f64() - eval_s;
@@ -149,6 +154,7 @@ pub fn bake_with_progress(spec: &BakeSpec, progress: &(dyn Fn(f64) + Sync)) -> R
                                 segments.splice(k..=k, finer);
                             }
                         }
+                        previous = Some((fine, values));
                         continue;
                     }
                     _ => {
@@ -194,6 +200,7 @@ pub fn bake_with_progress(spec: &BakeSpec, progress: &(dyn Fn(f64) + Sync)) -> R
                 }
             }
         }
+        previous = Some((fine, values));
     }
 }
 
@@ -246,11 +253,21 @@ impl Prepared {
         })
     }
 
-    /// Exact values on a grid, layout `[w][c][t][channel]`.
-    fn eval(&self, grid: &Grid, progress: &(dyn Fn(f64) + Sync)) -> Result<Vec<f64>> {
+    /// Exact values on a grid, layout `[w][c][t][channel]`. Rows (one cos θ
+    /// and wavelength) that `previous` also has keep the values of its
+    /// thickness chunks that are computed the same way (see [`reuse_plan`]),
+    /// so the result is the same bit for bit as evaluating everything.
+    fn eval(
+        &self,
+        grid: &Grid,
+        previous: Option<&(Grid, Vec<f64>)>,
+        progress: &(dyn Fn(f64) + Sync),
+    ) -> Result<Vec<f64>> {
         let [t_axis, c_axis, w_axis] = &grid.axes;
-        let row_len = t_axis.nodes.len() * self.channels;
+        let ch = self.channels;
+        let row_len = t_axis.nodes.len() * ch;
         let rows = c_axis.nodes.len() * w_axis.nodes.len();
+        let nc = c_axis.nodes.len();
         let mut out = vec![0.0; rows * row_len];
         let done = std::sync::atomic::AtomicUsize::new(0);
         let tick = || {
@@ -259,49 +276,96 @@ impl Prepared {
                 progress(d as f64 / rows as f64);
             }
         };
+        let chunks = chunks(t_axis);
+        let all = [Piece::Compute(0..chunks.len())];
+        let (plan, old_rows) = match previous {
+            Some((old, values)) => (reuse_plan(&chunks, t_axis, &old.axes[0]), {
+                let old_row_len = old.axes[0].nodes.len() * ch;
+                let key = |w: f64, c: f64| (w.to_bits(), c.to_bits());
+                let old_nc = old.axes[1].nodes.len();
+                let index: std::collections::HashMap<_, _> = (0..old.axes[2].nodes.len())
+                    .flat_map(|w| (0..old_nc).map(move |c| (w, c)))
+                    .map(|(w, c)| {
+                        let row = w * old_nc + c;
+                        (
+                            key(old.axes[2].nodes[w], old.axes[1].nodes[c]),
+                            &values[row * old_row_len..(row + 1) * old_row_len],
+                        )
+                    })
+                    .collect();
+                (0..rows)
+                    .map(|row| {
+                        let (w, c) = (row / nc, row % nc);
+                        index.get(&key(w_axis.nodes[w], c_axis.nodes[c])).copied()
+                    })
+                    .collect()
+            }),
+            None => (Vec::new(), vec![None; rows]),
+        };
+        let spectral_indices = if grid.spectral {
+            indices_at(&self.stack, &w_axis.nodes)?
+        } else {
+            Vec::new()
+        };
         let n = t_axis.nodes.len();
-        if !grid.spectral {
-            out.par_chunks_mut(row_len).enumerate().for_each_init(
-                || Worker::new(n, &self.thicknesses_nm),
-                |wk, (c, row)| {
-                    let cos = c_axis.nodes[c];
+        out.par_chunks_mut(row_len).enumerate().for_each_init(
+            || Worker::new(n, &self.thicknesses_nm),
+            |wk, (row_index, row)| {
+                let (w, c) = (row_index / nc, row_index % nc);
+                let cos = c_axis.nodes[c];
+                let (pieces, old_row) = match old_rows[row_index] {
+                    Some(old_row) => (&plan[..], old_row),
+                    None => (&all[..], &[][..]),
+                };
+                for piece in pieces {
+                    let range = match piece {
+                        Piece::Copy {
+                            old_start,
+                            start,
+                            len,
+                        } => {
+                            row[start * ch..(start + len) * ch]
+                                .copy_from_slice(&old_row[old_start * ch..(old_start + len) * ch]);
+                            continue;
+                        }
+                        Piece::Compute(range) => &chunks[range.clone()],
+                    };
+                    let start = range[0].start;
+                    let m = range.iter().map(|k| k.start + k.len).max().unwrap_or(start) - start;
+                    let nodes = &t_axis.nodes[start..start + m];
+                    let dst = &mut row[start * ch..(start + m) * ch];
+                    if grid.spectral {
+                        let wl = w_axis.nodes[w];
+                        self.responses(&spectral_indices[w], wl, cos, nodes, range, wk);
+                        for (o, (&r, &t)) in dst.chunks_exact_mut(2).zip(wk.r.iter().zip(&wk.t)) {
+                            o[0] = r;
+                            o[1] = t;
+                        }
+                        continue;
+                    }
                     // Channel-major accumulators ([channel][node]), so the
                     // weighting loop below runs over contiguous arrays.
                     wk.acc.clear();
-                    wk.acc.resize(6 * n, 0.0);
-                    for (w, idx) in self.indices.iter().enumerate() {
-                        let wl = self.wavelengths_nm[w];
-                        self.responses(idx, wl, cos, t_axis, wk);
-                        accumulate(&mut wk.acc, &wk.r, &wk.t, self.weights[w]);
+                    wk.acc.resize(6 * m, 0.0);
+                    for (i, idx) in self.indices.iter().enumerate() {
+                        let wl = self.wavelengths_nm[i];
+                        self.responses(idx, wl, cos, nodes, range, wk);
+                        accumulate(&mut wk.acc, &wk.r[..m], &wk.t[..m], self.weights[i]);
                     }
-                    for (j, o) in row.chunks_exact_mut(6).enumerate() {
-                        for (ch, o) in o.iter_mut().enumerate() {
-                            *o = wk.acc[ch * n + j];
+                    for (j, o) in dst.chunks_exact_mut(6).enumerate() {
+                        for (k, o) in o.iter_mut().enumerate() {
+                            *o = wk.acc[k * m + j];
                         }
                     }
-                    tick();
-                },
-            );
-        } else {
-            let indices = indices_at(&self.stack, &w_axis.nodes)?;
-            let nc = c_axis.nodes.len();
-            out.par_chunks_mut(row_len).enumerate().for_each_init(
-                || Worker::new(n, &self.thicknesses_nm),
-                |wk, (row_index, row)| {
-                    let (w, c) = (row_index / nc, row_index % nc);
-                    self.responses(&indices[w], w_axis.nodes[w], c_axis.nodes[c], t_axis, wk);
-                    for (o, (&r, &t)) in row.chunks_exact_mut(2).zip(wk.r.iter().zip(&wk.t)) {
-                        o[0] = r;
-                        o[1] = t;
-                    }
-                    tick();
-                },
-            );
-        }
+                }
+                tick();
+            },
+        );
         Ok(out)
     }
 
-    /// Unpolarized R and T at every thickness node into `wk.r`, `wk.t`: the
+    /// Unpolarized R and T at the thickness `nodes` (the nodes `chunks`
+    /// cover, from the first chunk's start) into `wk.r`, `wk.t`: the
     /// split-stack form, or the solver node by node where the split is
     /// degenerate (the varying layer at its own critical angle).
     fn responses(
@@ -309,16 +373,19 @@ impl Prepared {
         idx: &[C64],
         wavelength_nm: f64,
         cos: f64,
-        t_axis: &AxisGrid,
+        nodes: &[f64],
+        chunks: &[Chunk],
         wk: &mut Worker,
     ) {
+        let m = nodes.len();
         let v = self.split(idx, wavelength_nm, cos, &mut wk.scratch);
         if !v.is_degenerate() {
-            phases(&v, t_axis, &mut wk.phase_re, &mut wk.phase_im);
-            v.responses(&wk.phase_re, &wk.phase_im, &mut wk.r, &mut wk.t);
+            let (re, im) = (&mut wk.phase_re[..m], &mut wk.phase_im[..m]);
+            phases(&v, nodes, chunks, re, im);
+            v.responses(re, im, &mut wk.r[..m], &mut wk.t[..m]);
             return;
         }
-        for (j, &t) in t_axis.nodes.iter().enumerate() {
+        for (j, &t) in nodes.iter().enumerate() {
             wk.thicknesses_nm[self.layer - 1] = t;
             let resp = solve(idx, &wk.thicknesses_nm, wavelength_nm, cos);
             wk.r[j] = resp.r();
@@ -420,69 +487,139 @@ impl Worker {
     }
 }
 
-avx2_dispatch! {
-    /// The phase factor at every thickness node. Adjacent uniform segments with
-    /// the same spacing (the halves of a refined one) form one run; a run starts
-    /// from an exact exponential every [`PHASE_RESYNC`] nodes, its first
-    /// [`PHASE_LANES`] nodes follow by one complex multiplication each, and every
-    /// later node is the one [`PHASE_LANES`] back times δ^[`PHASE_LANES`]: the
-    /// lanes are independent chains, so the loop is not one long chain of
-    /// dependent multiplications.
-    fn phases(v: &VaryingLayer, t_axis: &AxisGrid, re: &mut [f64], im: &mut [f64]) {
-        let nodes = &t_axis.nodes;
-        let mut run_start = 0;
-        let mut run_step = 0.0;
-        let mut j = 0;
-        for seg in &t_axis.segments {
-            if seg.intervals == 0 {
-                continue;
-            }
-            let step = (seg.end - seg.start) / seg.intervals as f64;
-            if (step - run_step).abs() > 1e-12 * step {
-                phase_run(v, nodes, run_start..=j, run_step, re, im);
-                run_start = j;
-                run_step = step;
-            }
-            j += seg.intervals;
+/// A stretch of at most [`PHASE_RESYNC`] thickness nodes whose phase
+/// factors start from an exact exponential at the first and advance by the
+/// spacing `step` (see [`phases`]). Their values depend only on that first
+/// node, `step` and the stack, cos θ and wavelength: a chunk that appears
+/// in two grids gives the same values in both.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Chunk {
+    start: usize,
+    len: usize,
+    step: f64,
+}
+
+/// The chunks of a thickness axis, in order. Adjacent uniform segments with
+/// the same spacing (the halves of a refined one) form one run, cut into
+/// chunks of [`PHASE_RESYNC`] nodes from its start; consecutive runs share
+/// their boundary node, which the later run's chunk sets.
+fn chunks(t_axis: &AxisGrid) -> Vec<Chunk> {
+    let mut runs = Vec::new();
+    let (mut run_start, mut run_step, mut j) = (0, 0.0, 0);
+    for seg in &t_axis.segments {
+        if seg.intervals == 0 {
+            continue;
         }
-        phase_run(v, nodes, run_start..=j, run_step, re, im);
+        let step = (seg.end - seg.start) / seg.intervals as f64;
+        if (step - run_step).abs() > 1e-12 * step {
+            if j > run_start {
+                runs.push((run_start, j, run_step));
+            }
+            run_start = j;
+            run_step = step;
+        }
+        j += seg.intervals;
+    }
+    runs.push((run_start, j, run_step));
+    let mut out = Vec::new();
+    for (start, last, step) in runs {
+        for chunk in (start..=last).step_by(PHASE_RESYNC) {
+            out.push(Chunk {
+                start: chunk,
+                len: (chunk + PHASE_RESYNC).min(last + 1) - chunk,
+                step,
+            });
+        }
+    }
+    out
+}
+
+/// One step of evaluating a row: copy a chunk's values from the previous
+/// grid's row, or compute consecutive chunks.
+#[derive(Clone, Debug)]
+enum Piece {
+    Copy {
+        old_start: usize,
+        start: usize,
+        len: usize,
+    },
+    Compute(std::ops::Range<usize>),
+}
+
+/// How to evaluate a row that the previous grid also has (same cos θ and
+/// wavelength): each chunk whose first node and step match a chunk of the
+/// old axis at least as long, with the same node positions, is copied;
+/// the rest are computed. Pieces follow chunk order, so the node two runs
+/// share gets the later run's value, as in a full evaluation.
+fn reuse_plan(chunks: &[Chunk], t_axis: &AxisGrid, old_axis: &AxisGrid) -> Vec<Piece> {
+    let key = |c: &Chunk, nodes: &[f64]| (nodes[c.start].to_bits(), c.step.to_bits());
+    let old: std::collections::HashMap<_, _> = self::chunks(old_axis)
+        .into_iter()
+        .map(|c| (key(&c, &old_axis.nodes), c))
+        .collect();
+    let same_nodes =
+        |a: &[f64], b: &[f64]| a.iter().zip(b).all(|(x, y)| x.to_bits() == y.to_bits());
+    let mut plan: Vec<Piece> = Vec::new();
+    for (i, c) in chunks.iter().enumerate() {
+        let found = old.get(&key(c, &t_axis.nodes)).filter(|o| {
+            o.len >= c.len
+                && same_nodes(
+                    &old_axis.nodes[o.start..o.start + c.len],
+                    &t_axis.nodes[c.start..c.start + c.len],
+                )
+        });
+        match (found, plan.last_mut()) {
+            (Some(o), _) => plan.push(Piece::Copy {
+                old_start: o.start,
+                start: c.start,
+                len: c.len,
+            }),
+            (None, Some(Piece::Compute(range))) => range.end = i + 1,
+            (None, _) => plan.push(Piece::Compute(i..i + 1)),
+        }
+    }
+    plan
+}
+
+avx2_dispatch! {
+    /// The phase factor at the nodes `chunks` cover, from the first chunk's
+    /// start (`nodes`, `re` and `im` begin there). Each chunk starts from an
+    /// exact exponential, its first [`PHASE_LANES`] nodes follow by one
+    /// complex multiplication each, and every later node is the one
+    /// [`PHASE_LANES`] back times δ^[`PHASE_LANES`]: the lanes are
+    /// independent chains, so the loop is not one long chain of dependent
+    /// multiplications.
+    fn phases(v: &VaryingLayer, nodes: &[f64], chunks: &[Chunk], re: &mut [f64], im: &mut [f64]) {
+        let origin = chunks.first().map_or(0, |c| c.start);
+        let mut step_bits = None;
+        let (mut delta, mut lanes_step) = (C64::new(1.0, 0.0), C64::new(1.0, 0.0));
+        for c in chunks {
+            if step_bits != Some(c.step.to_bits()) {
+                step_bits = Some(c.step.to_bits());
+                delta = v.phase(c.step);
+                lanes_step = delta;
+                for _ in 0..PHASE_LANES.trailing_zeros() {
+                    lanes_step = lanes_step * lanes_step;
+                }
+            }
+            let (start, end) = (c.start - origin, c.start - origin + c.len);
+            let mut phase = v.phase(nodes[start]);
+            for j in start..end.min(start + PHASE_LANES) {
+                re[j] = phase.re;
+                im[j] = phase.im;
+                phase *= delta;
+            }
+            for j in start + PHASE_LANES..end {
+                let (a, b) = (re[j - PHASE_LANES], im[j - PHASE_LANES]);
+                re[j] = a * lanes_step.re - b * lanes_step.im;
+                im[j] = a * lanes_step.im + b * lanes_step.re;
+            }
+        }
     }
 }
 
 /// Independent multiplication chains in [`phases`].
 const PHASE_LANES: usize = 8;
-
-/// [`phases`] over nodes `run` spaced `step` apart.
-#[inline(always)]
-fn phase_run(
-    v: &VaryingLayer,
-    nodes: &[f64],
-    run: std::ops::RangeInclusive<usize>,
-    step: f64,
-    re: &mut [f64],
-    im: &mut [f64],
-) {
-    let delta = v.phase(step);
-    let mut lanes_step = delta;
-    for _ in 0..PHASE_LANES.trailing_zeros() {
-        lanes_step = lanes_step * lanes_step;
-    }
-    let (start, end) = (*run.start(), *run.end() + 1);
-    for chunk in (start..end).step_by(PHASE_RESYNC) {
-        let chunk_end = (chunk + PHASE_RESYNC).min(end);
-        let mut phase = v.phase(nodes[chunk]);
-        for j in chunk..chunk_end.min(chunk + PHASE_LANES) {
-            re[j] = phase.re;
-            im[j] = phase.im;
-            phase *= delta;
-        }
-        for j in chunk + PHASE_LANES..chunk_end {
-            let (a, b) = (re[j - PHASE_LANES], im[j - PHASE_LANES]);
-            re[j] = a * lanes_step.re - b * lanes_step.im;
-            im[j] = a * lanes_step.im + b * lanes_step.re;
-        }
-    }
-}
 
 /// The nodes of one axis and the segment each interval belongs to.
 #[derive(Clone, Debug)]
@@ -509,6 +646,7 @@ impl AxisGrid {
 
 /// Node positions of one grid: thickness, cos θ, wavelength (a single
 /// unused node for the rgb kind).
+#[derive(Clone)]
 struct Grid {
     axes: [AxisGrid; 3],
     spectral: bool,
@@ -865,7 +1003,7 @@ mod tests {
             let mut worst = 0.0f64;
             let n = axis.nodes.len();
             let (mut re, mut im) = (vec![0.0; n], vec![0.0; n]);
-            phases(&v, &axis, &mut re, &mut im);
+            phases(&v, &axis.nodes, &chunks(&axis), &mut re, &mut im);
             for (j, &d) in axis.nodes.iter().enumerate() {
                 let want = v.phase(d);
                 worst = worst.max((C64::new(re[j], im[j]) - want).norm() / (1.0 + want.norm()));
@@ -882,6 +1020,23 @@ mod tests {
         }
     }
 
+    /// A slightly absorbing film seen from glass, over all angles: the cos θ
+    /// axis is graded around the substrate's critical angle.
+    fn dense_side_spec(kind: Kind) -> BakeSpec {
+        let mut spec = BakeSpec::new(Stack {
+            ambient: crate::optics::Material::constant(1.5, 0.0),
+            layers: vec![Layer {
+                material: crate::optics::Material::constant(1.38, 0.02),
+                thickness_nm: 100.0,
+            }],
+            substrate: crate::optics::Material::constant(1.0, 0.0),
+        });
+        spec.kind = kind;
+        spec.cos_theta = (0.0, 1.0);
+        spec.sampling = crate::color::Sampling::Uniform(16);
+        spec
+    }
+
     /// A table baked without the check evaluates the same nodes as the
     /// checked bake's even subgrid (node positions equal bit for bit), but
     /// the phase recurrence steps over the table's spacing instead of half
@@ -890,20 +1045,9 @@ mod tests {
     /// that rounding straddles an f32 rounding boundary.
     #[test]
     fn unchecked_nodes_match_the_checked_even_subgrid() {
-        let stack = Stack {
-            ambient: crate::optics::Material::constant(1.5, 0.0),
-            layers: vec![Layer {
-                material: crate::optics::Material::constant(1.38, 0.02),
-                thickness_nm: 100.0,
-            }],
-            substrate: crate::optics::Material::constant(1.0, 0.0),
-        };
         for (kind, nodes) in [(Kind::Rgb, (301, 23, 1)), (Kind::Spectral, (150, 9, 5))] {
-            let mut spec = BakeSpec::new(stack.clone());
-            spec.kind = kind;
+            let mut spec = dense_side_spec(kind);
             spec.thickness_nm = (0.0, 1500.0);
-            spec.cos_theta = (0.0, 1.0);
-            spec.sampling = crate::color::Sampling::Uniform(16);
             spec.resolution = Resolution::Nodes {
                 thickness: nodes.0,
                 angle: nodes.1,
@@ -917,8 +1061,8 @@ mod tests {
                 let even: Vec<f64> = f.nodes.iter().step_by(2).copied().collect();
                 assert_eq!(c.nodes, even);
             }
-            let table = prep.eval(&coarse, &|_| {}).unwrap();
-            let checked = prep.eval(&fine, &|_| {}).unwrap();
+            let table = prep.eval(&coarse, None, &|_| {}).unwrap();
+            let checked = prep.eval(&fine, None, &|_| {}).unwrap();
             let ch = prep.channels;
             let [nt, nc, _] = fine.axes.clone().map(|a| a.nodes.len());
             let mut worst = 0.0f64;
@@ -936,6 +1080,67 @@ mod tests {
             }
             assert!(worst <= 1e-12, "{kind}: {worst:e}");
             eprintln!("{kind}: largest difference {worst:e}");
+        }
+    }
+
+    /// A grid evaluated with the previous round's values at hand equals, bit
+    /// for bit, the same grid evaluated from scratch, and copies some of it:
+    /// rgb and spectral, a critical-angle (graded) axis, refined segments of
+    /// both kinds, and an error target's starting grid refined as the
+    /// search refines it.
+    #[test]
+    fn reusing_the_previous_round_changes_no_bit() {
+        for kind in [Kind::Rgb, Kind::Spectral] {
+            let mut spec = dense_side_spec(kind);
+            spec.thickness_nm = (0.0, 1000.0);
+            spec.wavelength_nm = (400.0, 700.0);
+            let prep = Prepared::new(&spec).unwrap();
+            let mut axes = initial_axes(&spec, &prep);
+            let mut previous: Option<(Grid, Vec<f64>)> = None;
+            let (mut copied_total, mut copied_rows) = (0, 0);
+            for round in 0..4 {
+                let fine = Grid::new(&axes.clone().map(|a| doubled(&a)), kind);
+                let reused = prep.eval(&fine, previous.as_ref(), &|_| {}).unwrap();
+                let fresh = prep.eval(&fine, None, &|_| {}).unwrap();
+                let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+                assert!(bits(&reused) == bits(&fresh), "{kind} round {round}");
+                if let Some((old, _)) = &previous {
+                    let chunks = chunks(&fine.axes[0]);
+                    let plan = reuse_plan(&chunks, &fine.axes[0], &old.axes[0]);
+                    let copied: usize = plan
+                        .iter()
+                        .map(|p| match p {
+                            Piece::Copy { len, .. } => *len,
+                            Piece::Compute(_) => 0,
+                        })
+                        .sum();
+                    copied_total += copied;
+                    // Poisoned old values show which values were copied:
+                    // some were, in whole rows' chunks.
+                    let (old, values) = previous.as_ref().unwrap();
+                    let poisoned = (old.clone(), vec![f64::NAN; values.len()]);
+                    let marked = prep.eval(&fine, Some(&poisoned), &|_| {}).unwrap();
+                    copied_rows += marked.iter().filter(|v| v.is_nan()).count();
+                }
+                previous = Some((fine, fresh));
+                // Refine every other segment of each axis, by odd and even
+                // factors, as the error search does.
+                for segments in axes.iter_mut() {
+                    let mut next = Vec::new();
+                    for (k, seg) in segments.iter().enumerate() {
+                        if seg.intervals == 0 || k % 2 == round % 2 {
+                            next.push(*seg);
+                        } else {
+                            next.extend(refine(seg, seg.intervals * 2 + k % 3));
+                        }
+                    }
+                    *segments = next;
+                }
+            }
+            assert!(
+                copied_total > 0 && copied_rows > 0,
+                "{kind}: nothing reused"
+            );
         }
     }
 
