@@ -16,7 +16,7 @@ peers = open(f"{results}/peers.md").read()
 def between(text, start, end):
     i = text.index(start); j = text.index(end, i + len(start))
     return text[i:j]
-header = [l for l in report.splitlines() if l.startswith("- Date:") or l.startswith("- Machine:") or l.startswith("- Command:")]
+header = [l for l in report.splitlines() if l.startswith(("- Date:", "- Machine:", "- Threads:", "- Command:"))]
 summary = between(report, "| method | ns / eval", "\n\n![speed vs error]")
 renders = between(report, "| scene | film mode |", "\n\n") if "## Full renders" in report else ""
 renders_intro = between(report, "One frame per film mode", "\n\n")

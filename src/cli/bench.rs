@@ -10,6 +10,7 @@ use irid::bench::machine::Machine;
 use irid::bench::{grid, renders, report, run, stacks};
 
 use super::args::{check_angles, check_grid, parse_list};
+use super::render::{check_threads, with_threads};
 
 #[derive(clap::Args)]
 pub struct Args {
@@ -35,7 +36,8 @@ pub struct Args {
     /// Thicknesses in nm of the stack's varying layer (default: its own thickness).
     #[arg(long)]
     pub thicknesses: Option<String>,
-    /// Worker threads.
+    /// Worker threads: the grid's evaluation, or the report's table bakes
+    /// and full renders (its per-evaluation times are single-threaded).
     #[arg(long, default_value_t = 2)]
     pub threads: usize,
     /// Repetitions; the fastest is reported.
@@ -53,9 +55,12 @@ pub struct Args {
 }
 
 pub fn run(args: Args) -> Result<ExitCode> {
+    check_threads(args.threads)?;
     match &args.grid {
         Some(name) => run_grid(name, &args)?,
-        None => run_report(&args)?,
+        // The grid builds its own pool; the report's bakes and renders run
+        // on this one, so --threads holds for everything it times.
+        None => with_threads(Some(args.threads), || run_report(&args))??,
     }
     Ok(ExitCode::SUCCESS)
 }
@@ -144,13 +149,6 @@ fn run_grid(name: &str, args: &Args) -> Result<()> {
         anyhow::bail!(
             "--repeat must be between 1 and {MAX_REPEAT}, got {}",
             args.repeat
-        );
-    }
-    let max = super::render::MAX_THREADS;
-    if !(1..=max).contains(&args.threads) {
-        anyhow::bail!(
-            "--threads must be between 1 and {max}, got {}",
-            args.threads
         );
     }
     let (bake_seconds, g) = match &args.bake_nodes {

@@ -64,14 +64,20 @@ pub fn film_mode(film: &str, sampling: Option<&str>, cache: &Path) -> Result<Fil
 /// threads hung instead of failing.
 pub const MAX_THREADS: usize = 1024;
 
+/// `--threads n` is within 1..=[`MAX_THREADS`].
+pub fn check_threads(n: usize) -> Result<()> {
+    if !(1..=MAX_THREADS).contains(&n) {
+        bail!("--threads must be between 1 and {MAX_THREADS}, got {n}")
+    }
+    Ok(())
+}
+
 /// Runs `f` on a pool of `threads` workers (or rayon's default pool).
 pub fn with_threads<T: Send>(threads: Option<usize>, f: impl FnOnce() -> T + Send) -> Result<T> {
     match threads {
         None => Ok(f()),
-        Some(n) if !(1..=MAX_THREADS).contains(&n) => {
-            bail!("--threads must be between 1 and {MAX_THREADS}, got {n}")
-        }
         Some(n) => {
+            check_threads(n)?;
             let pool = rayon::ThreadPoolBuilder::new()
                 .num_threads(n)
                 .build()
