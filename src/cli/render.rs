@@ -6,7 +6,7 @@ use std::time::Instant;
 
 use anyhow::{bail, Context, Result};
 use irid::color::Sampling;
-use irid::render::{self, FilmMode, RenderOptions, Scene};
+use irid::render::{self, scene_file, FilmMode, RenderOptions, Scene};
 
 #[derive(clap::Args)]
 pub struct Args {
@@ -90,22 +90,23 @@ pub fn with_threads<T: Send>(threads: Option<usize>, f: impl FnOnce() -> T + Sen
 pub fn run(args: Args) -> Result<ExitCode> {
     let mode = film_mode(&args.film, args.sampling.as_deref(), &args.cache)?;
     let scene = Scene::load_named(&args.scene)?;
-    for (flag, v) in [
-        ("--width", args.width),
-        ("--height", args.height),
-        ("--spp", args.spp),
+    let (side, spp) = (scene_file::MAX_IMAGE_SIDE, scene_file::MAX_SPP);
+    for (flag, v, max) in [
+        ("--width", args.width, side),
+        ("--height", args.height, side),
+        ("--spp", args.spp, spp),
     ] {
         if let Some(v) = v {
-            if !(1..=16384).contains(&v) {
-                bail!("{flag} must be between 1 and 16384, got {v}");
+            if !(1..=max).contains(&v) {
+                bail!("{flag} must be between 1 and {max}, got {v}");
             }
         }
     }
     if let Some(depth) = args.max_depth {
-        if depth > render::scene_file::MAX_DEPTH {
+        if depth > scene_file::MAX_DEPTH {
             bail!(
                 "--max-depth must be at most {}, got {depth}",
-                render::scene_file::MAX_DEPTH
+                scene_file::MAX_DEPTH
             );
         }
     }
