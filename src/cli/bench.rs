@@ -9,7 +9,7 @@ use anyhow::{Context, Result};
 use irid::bench::machine::Machine;
 use irid::bench::{grid, renders, report, run, stacks};
 
-use super::args::{check_angles, check_grid, parse_list};
+use super::args::{check_angles, check_count, check_grid, parse_list};
 use super::render::{check_threads, with_threads};
 
 #[derive(clap::Args)]
@@ -72,10 +72,7 @@ fn run_report(args: &Args) -> Result<()> {
         run::Options::full()
     };
     if let Some(points) = args.points {
-        let max = irid::lut::MAX_VALIDATION_POINTS;
-        if !(1..=max).contains(&points) {
-            anyhow::bail!("--points must be between 1 and {max}, got {points}");
-        }
+        check_count("--points", points, irid::lut::MAX_VALIDATION_POINTS)?;
         options.points = points;
     }
     let command = std::iter::once("irid".to_string())
@@ -145,12 +142,7 @@ fn run_grid(name: &str, args: &Args) -> Result<()> {
             &[wavelengths_nm.len(), angles_deg.len(), t],
         )?;
     }
-    if !(1..=MAX_REPEAT).contains(&args.repeat) {
-        anyhow::bail!(
-            "--repeat must be between 1 and {MAX_REPEAT}, got {}",
-            args.repeat
-        );
-    }
+    check_count("--repeat", args.repeat, MAX_REPEAT)?;
     let (bake_seconds, g) = match &args.bake_nodes {
         Some(spec) => {
             let nodes = parse_list("--bake-nodes", spec)?;

@@ -8,6 +8,8 @@ use anyhow::{bail, Context, Result};
 use irid::color::Sampling;
 use irid::render::{self, scene_file, FilmMode, RenderOptions, Scene};
 
+use super::args::check_count;
+
 #[derive(clap::Args)]
 pub struct Args {
     /// A scene file, or a built-in scene: bubbles-uniform, bubbles-noise,
@@ -66,10 +68,7 @@ pub const MAX_THREADS: usize = 1024;
 
 /// `--threads n` is within 1..=[`MAX_THREADS`].
 pub fn check_threads(n: usize) -> Result<()> {
-    if !(1..=MAX_THREADS).contains(&n) {
-        bail!("--threads must be between 1 and {MAX_THREADS}, got {n}")
-    }
-    Ok(())
+    check_count("--threads", n, MAX_THREADS)
 }
 
 /// Runs `f` on a pool of `threads` workers (or rayon's default pool).
@@ -97,9 +96,7 @@ pub fn run(args: Args) -> Result<ExitCode> {
         ("--spp", args.spp, spp),
     ] {
         if let Some(v) = v {
-            if !(1..=max).contains(&v) {
-                bail!("{flag} must be between 1 and {max}, got {v}");
-            }
+            check_count(flag, v, max)?;
         }
     }
     if let Some(depth) = args.max_depth {
