@@ -66,6 +66,13 @@ pub fn film_mode(film: &str, sampling: Option<&str>, cache: &Path) -> Result<Fil
 /// threads hung instead of failing.
 pub const MAX_THREADS: usize = 1024;
 
+/// `f`'s result and its wall time in seconds.
+pub fn timed<T>(f: impl FnOnce() -> T) -> (T, f64) {
+    let start = Instant::now();
+    let out = f();
+    (out, start.elapsed().as_secs_f64())
+}
+
 /// `--threads n` is within 1..=[`MAX_THREADS`].
 pub fn check_threads(n: usize) -> Result<()> {
     check_count("--threads", n, MAX_THREADS)
@@ -131,9 +138,8 @@ pub fn run(args: Args) -> Result<ExitCode> {
 
     let (films, image, render_s) = with_threads(args.threads, || -> Result<_> {
         let films = render::prepare_films(&scene, &opts.film)?;
-        let start = Instant::now();
-        let image = render::render_with(&scene, &films, &opts);
-        Ok((films, image, start.elapsed().as_secs_f64()))
+        let (image, render_s) = timed(|| render::render_with(&scene, &films, &opts));
+        Ok((films, image, render_s))
     })??;
     image.write_png(&output)?;
     if let Some(exr) = &args.exr {
