@@ -51,17 +51,20 @@ fn film_hit(c: &mut Criterion) {
     else {
         unreachable!()
     };
-    let mut state = 0x2545_f491_4f6c_dd1du64;
-    let mut next = || {
-        state = state
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        (state >> 40) as f32 / (1u64 << 24) as f32
-    };
+    // Additive recurrences with irrational steps: spread, repeatable points.
+    let spread = |k: usize, step: f64| (k as f64 * step).fract() as f32;
     let points: Vec<(Vec3, f32, f32)> = (0..4096)
-        .map(|_| {
-            let p = Vec3::new(next() * 2.0 - 1.0, next() * 2.0, next() * 2.0 - 1.0);
-            (p, 100.0 + 500.0 * next(), next())
+        .map(|k| {
+            let p = Vec3::new(
+                2.0 * spread(k, 0.754_877_666) - 1.0,
+                2.0 * spread(k, 0.569_840_291),
+                2.0 * spread(k, 0.618_033_989) - 1.0,
+            );
+            (
+                p,
+                100.0 + 500.0 * spread(k, 0.414_213_562),
+                spread(k, 0.732_050_808),
+            )
         })
         .collect();
     let mut g = c.benchmark_group("film hit");
