@@ -1,11 +1,14 @@
 //! Render speed on the paper's timing scene (`two-layer-noise`, 500 x 500,
 //! 1 sample per pixel): LUT film shading, the paper's direct method at 41
 //! wavelengths, and the same scene with the film replaced by bare glass
-//! (the cost of iridescence). Tables are baked once before timing.
+//! (the cost of iridescence). Tables are baked once before timing. Then the
+//! two parts of a LUT film hit on their own.
 
-use criterion::{criterion_group, criterion_main, Criterion};
+use criterion::{black_box, criterion_group, criterion_main, Criterion, Throughput};
+use glam::Vec3;
 use irid::color::Sampling;
-use irid::render::{self, FilmMode, RenderOptions, Scene};
+use irid::render::material::Material;
+use irid::render::{self, FilmMode, FilmShading, LutFilm, RenderOptions, Scene, Side};
 
 fn bench(c: &mut Criterion) {
     let scene = Scene::builtin("two-layer-noise").unwrap().unwrap();
@@ -33,5 +36,61 @@ fn bench(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, bench);
+/// The two parts of a film hit in LUT mode: the thickness noise and the
+/// table lookup (front side: evenly spaced axes; back side: cos θ crowded
+/// around the critical angle), at pseudo-random points.
+fn film_hit(c: &mut Criterion) {
+    let scene = Scene::builtin("two-layer-noise").unwrap().unwrap();
+    let cache = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("render-bench-cache");
+    let (lut, _, _) = LutFilm::prepare(&scene.films[0], &cache).unwrap();
+    let Material::Film(film) = scene
+        .materials
+        .iter()
+        .find(|m| matches!(m, Material::Film(_)))
+        .unwrap()
+    else {
+        unreachable!()
+    };
+    // Additive recurrences with irrational steps: spread, repeatable points.
+    let spread = |k: usize, step: f64| (k as f64 * step).fract() as f32;
+    let points: Vec<(Vec3, f32, f32)> = (0..4096)
+        .map(|k| {
+            let p = Vec3::new(
+                2.0 * spread(k, 0.754_877_666) - 1.0,
+                2.0 * spread(k, 0.569_840_291),
+                2.0 * spread(k, 0.618_033_989) - 1.0,
+            );
+            (
+                p,
+                100.0 + 500.0 * spread(k, 0.414_213_562),
+                spread(k, 0.732_050_808),
+            )
+        })
+        .collect();
+    let mut g = c.benchmark_group("film hit");
+    g.throughput(Throughput::Elements(points.len() as u64));
+    g.bench_function("thickness noise", |b| {
+        b.iter(|| {
+            points
+                .iter()
+                .map(|(p, _, _)| film.thickness.at(black_box(*p)))
+                .sum::<f32>()
+        })
+    });
+    for (name, side) in [("lut front", Side::Front), ("lut back", Side::Back)] {
+        g.bench_function(name, |b| {
+            b.iter(|| {
+                points
+                    .iter()
+                    .map(|&(_, d, cos)| {
+                        lut.shade(black_box(d), black_box(cos), side).reflectance[1]
+                    })
+                    .sum::<f32>()
+            })
+        });
+    }
+    g.finish();
+}
+
+criterion_group!(benches, bench, film_hit);
 criterion_main!(benches);

@@ -99,8 +99,8 @@ fn batched(c: &mut Criterion) {
 }
 
 fn dispersive(c: &mut Criterion) {
-    // luts/two-layer.toml (a constant film, TiO2 by Sellmeier, gold by
-    // table): evaluating each sample through `Stack::response` (materials
+    // luts/two-layer.toml (a constant film, TiO2 and gold by table):
+    // evaluating each sample through `Stack::response` (materials
     // looked up and buffers allocated per sample) against building a
     // `StackGrid` once and sweeping it.
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("luts/two-layer.toml");

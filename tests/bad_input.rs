@@ -142,6 +142,36 @@ fn render_flags_are_bounded() {
     render("--threads", "0");
 }
 
+/// One samples-per-pixel limit for the command line and for scene files (the
+/// command line allowed 16384, scene files 4096), and both errors name it.
+#[test]
+fn spp_has_one_limit_named_in_the_error() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let small = ["-o", "o.png", "--width", "4", "--height", "4"];
+    let cli = [&["render", "bubbles-uniform", "--spp", "4097"][..], &small].concat();
+    rejects(
+        d,
+        &cli,
+        &["--spp", "between 1 and 4096, got 4097"],
+        &["o.png"],
+    );
+
+    let scene = include_str!("../luts/scenes/absorbing-sphere.toml");
+    assert!(scene.contains("spp = 1\n"));
+    for (spp, shown) in [("4097", "got 4097"), ("0", "got 0")] {
+        let text = scene.replace("spp = 1\n", &format!("spp = {spp}\n"));
+        std::fs::write(d.join("s.toml"), text).unwrap();
+        let args = [&["render", "s.toml"][..], &small].concat();
+        rejects(
+            d,
+            &args,
+            &["s.toml", "render.spp", "between 1 and 4096", shown],
+            &["o.png"],
+        );
+    }
+}
+
 #[test]
 fn scene_file_rejects_negative_absorption_and_sun_radius() {
     let gem = include_str!("../luts/scenes/blue-gem.toml");

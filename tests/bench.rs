@@ -13,7 +13,7 @@ fn irid() -> Command {
 fn quick_bench_writes_a_consistent_report() {
     let dir = tempfile::tempdir().unwrap();
     let out = irid()
-        .args(["bench", "--quick", "-o"])
+        .args(["bench", "--quick", "--threads", "1", "-o"])
         .arg(dir.path())
         .output()
         .unwrap();
@@ -29,7 +29,10 @@ fn quick_bench_writes_a_consistent_report() {
         "- Date: ",
         "- Machine: ",
         "logical cores, CPU ",
-        "- Command: `irid bench --quick -o ",
+        // The whole report runs on the pool --threads asks for.
+        "- Threads: 1 (",
+        "rendered on 1 thread(s)",
+        "- Command: `irid bench --quick --threads 1 -o ",
         "| method | ns / eval | vs exact | max abs ΔR | p99 abs ΔR | mean ΔE00 | max ΔE00 |",
         "| method | ns / eval | vs exact | max abs ΔR | p99 abs ΔR | mean ΔE00 | max ΔE00 | bake (s) |",
         "![speed vs error](speed-vs-error.png)",
@@ -174,6 +177,7 @@ fn grid_mode_prints_json_and_rejects_bad_input() {
         vec!["bench", "--grid", "nope"],
         vec!["bench", "--grid", "soap", "--angles", "95"],
         vec!["bench", "--grid", "soap", "--threads", "0"],
+        vec!["bench", "--quick", "--threads", "0"],
         vec!["bench", "--points", "0"],
         vec!["bench", "--grid", "soap", "--bake-nodes", "3"],
         vec![

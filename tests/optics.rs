@@ -856,3 +856,20 @@ fn split_at_a_buried_layer_recomposes() {
         }
     }
 }
+
+/// A built-in TiO2 film absorbs at the violet end of the bakers' range (its
+/// tabulated k, about 0.004 at 380 nm) and is as good as lossless in the
+/// rest of the visible: R + T < 1 there, not at 600 nm.
+#[test]
+fn titania_film_absorbs_in_the_violet() {
+    let text = "ambient = { n = 1.0 }\nsubstrate = { material = \"fused-silica\" }\n\
+                [[layers]]\nmaterial = \"TiO2\"\nthickness_nm = 200.0\n";
+    let stack = Stack::from_toml_str(text, std::path::Path::new(""), "tio2.toml").unwrap();
+    let absorbed = |wavelength_nm: f64| {
+        let r = stack.response(wavelength_nm, 1.0).unwrap();
+        1.0 - r.r() - r.t()
+    };
+    let (violet, orange) = (absorbed(380.0), absorbed(600.0));
+    assert!(violet > 0.01 && violet < 0.2, "380 nm: {violet}");
+    assert!(orange.abs() < 1e-5, "600 nm: {orange}");
+}

@@ -16,7 +16,7 @@ peers = open(f"{results}/peers.md").read()
 def between(text, start, end):
     i = text.index(start); j = text.index(end, i + len(start))
     return text[i:j]
-header = [l for l in report.splitlines() if l.startswith("- Date:") or l.startswith("- Machine:") or l.startswith("- Command:")]
+header = [l for l in report.splitlines() if l.startswith(("- Date:", "- Machine:", "- Threads:", "- Command:"))]
 summary = between(report, "| method | ns / eval", "\n\n![speed vs error]")
 renders = between(report, "| scene | film mode |", "\n\n") if "## Full renders" in report else ""
 renders_intro = between(report, "One frame per film mode", "\n\n")
@@ -30,7 +30,7 @@ btwo = next(l for l in peers.splitlines() if l.startswith("The baker is timed tw
 btarget = re.search(r"Target: baking.*", peers).group(0)
 out = f"""## Speed against error: `irid bench`
 
-`irid bench [--quick] [-o DIR] [--points N]` measures, for each fixed stack
+`irid bench [--quick] [-o DIR] [--points N] [--threads N]` measures, for each fixed stack
 (the example files in `luts/`: soap film, absorbing film, gain film on gold,
 two layers on gold, and the 10-layer mirror seen from both sides) and each
 method, the time of one shading evaluation (one thickness, one angle, to linear
@@ -41,9 +41,10 @@ Methods: direct TMM with `rgb3`, `uniform:9/41/81` and `exact`; LUT sampling
 (`irid::lut`, bilinear) at several resolutions in f32 and f16; and the
 single-film analytic model renderers ship (`irid::analytic`: Belcour & Barla
 2017 with exact Fresnel, and the glTF `KHR_materials_iridescence` reference
-with Schlick Fresnel) on the one-film stacks. It writes `report.md` (machine,
-date, command, a summary table and one table per stack), `results.csv` and
-`speed-vs-error.png`. Default `-o` is `benches/results/`; the committed files
+with Schlick Fresnel) on the one-film stacks. Table bakes and the full
+renders run on `--threads` workers (default 2). It writes `report.md` (machine,
+threads, date, command, a summary table and one table per stack), `results.csv`
+and `speed-vs-error.png`. Default `-o` is `benches/results/`; the committed files
 there come from the run below:
 
 {chr(10).join(header)}

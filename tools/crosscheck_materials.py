@@ -7,9 +7,8 @@
    reflects what Fresnel's equations give for the index computed here
    independently: the dielectrics from each publication's formula in its
    own form (Ciddor's n − 1 for air, Malitson's and Dodge's resonance
-   wavelengths, DeVore's two-constant form), the metals by linear
-   interpolation of the CSV. Checked at 0° and 30°, 300-850 nm, through
-   `irid eval --json`.
+   wavelengths), the metals and TiO2 by linear interpolation of the CSV.
+   Checked at 0° and 30°, 300-850 nm, through `irid eval --json`.
 
 Pass: |dRs|, |dRp| <= 1e-12 (5e-9 for air, which irid evaluates in a
 Sellmeier form that matches Ciddor's n to 4e-9 over 300-850 nm). Env: IRID_BIN (default
@@ -53,10 +52,6 @@ def ciddor_air(um):
     return 1 + 0.05792105 / (238.0185 - s2) + 0.00167917 / (57.362 - s2)
 
 
-def devore_tio2(um):
-    return math.sqrt(5.913 + 0.2441 / (um**2 - 0.0803))
-
-
 def table(stem):
     rows = [r for r in csv.reader(l for l in (ROOT / "tools" / "data" / f"{stem}.csv").read_text().splitlines()
                                   if l and l[0].isdigit())]
@@ -71,7 +66,7 @@ MATERIALS = {
     "water": (daimon_water, 1e-12),
     "soap": (daimon_water, 1e-12),
     "fused-silica": (sellmeier_resonances([(0.6961663, 0.0684043), (0.4079426, 0.1162414), (0.8974794, 9.896161)]), 1e-12),
-    "TiO2": (devore_tio2, 1e-12),
+    "TiO2": (table("tio2"), 1e-12),
     "MgF2": (sellmeier_resonances([(0.48755108, 0.04338408), (0.39875031, 0.09461442), (2.3120353, 23.793604)]), 1e-12),
     "sapphire": (sellmeier_resonances([(1.4313493, 0.0726631), (0.65054713, 0.1193242), (5.3414021, 18.028251)]), 1e-12),
     "gold": (table("gold"), 1e-12),

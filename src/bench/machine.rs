@@ -1,4 +1,5 @@
-//! The facts every report header carries: when, on what, with how many cores.
+//! The facts every report header carries: when, on what, with how many cores
+//! and worker threads.
 
 use std::time::{SystemTime, UNIX_EPOCH};
 
@@ -7,6 +8,9 @@ pub struct Machine {
     pub cpu_model: String,
     /// Logical CPUs the process may use.
     pub cores: usize,
+    /// Workers of the rayon pool `current` was called in: the run's own
+    /// pool, so what the bakes and renders actually ran on.
+    pub threads: usize,
     /// UTC, `YYYY-MM-DD HH:MM`.
     pub date_utc: String,
 }
@@ -18,6 +22,7 @@ impl Machine {
             cores: std::thread::available_parallelism()
                 .map(|n| n.get())
                 .unwrap_or(1),
+            threads: rayon::current_num_threads(),
             date_utc: utc_now(),
         }
     }
@@ -25,8 +30,8 @@ impl Machine {
     /// One line for a report header.
     pub fn summary(&self) -> String {
         format!(
-            "{} logical cores, CPU {}, {} UTC",
-            self.cores, self.cpu_model, self.date_utc
+            "{} logical cores, CPU {}, {} worker thread(s), {} UTC",
+            self.cores, self.cpu_model, self.threads, self.date_utc
         )
     }
 }

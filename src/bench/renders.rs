@@ -1,7 +1,8 @@
 //! Full small renders: the tracer with each film mode, one frame each, timed
 //! end to end and compared pixel by pixel (CIEDE2000) with the frame shaded by
-//! direct exact evaluation. Renders use every core (the tracer's tiles run in
-//! parallel); preparing the films (baking a table) is timed apart.
+//! direct exact evaluation. Renders run on the caller's rayon pool (the
+//! tracer's tiles run in parallel); preparing the films (baking a table) is
+//! timed apart.
 
 use std::path::Path;
 use std::time::Instant;

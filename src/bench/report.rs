@@ -111,10 +111,10 @@ pub fn renders_csv(rows: &[RenderRow]) -> String {
     s
 }
 
-fn renders_markdown(rows: &[RenderRow]) -> String {
-    let mut s = String::from(
+fn renders_markdown(rows: &[RenderRow], threads: usize) -> String {
+    let mut s = format!(
         "\n## Full renders\n\nOne frame per film mode of each built-in scene, one sample per pixel, \
-         rendered on every core; CIEDE2000 per pixel against the frame shaded by direct exact \
+         rendered on {threads} thread(s); CIEDE2000 per pixel against the frame shaded by direct exact \
          evaluation. Preparing the films (baking the scene's tables on demand) is timed apart.\n\n\
          | scene | film mode | size | prepare (s) | render (ms) | vs exact | mean ΔE00 | p99 ΔE00 | max ΔE00 |\n\
          |---|---|---|---:|---:|---:|---:|---:|---:|\n",
@@ -192,6 +192,10 @@ pub fn markdown(
     s.push_str(&format!(
         "- Machine: {} logical cores, CPU {}\n",
         machine.cores, machine.cpu_model
+    ));
+    s.push_str(&format!(
+        "- Threads: {} (table bakes and full renders run in parallel on them)\n",
+        machine.threads
     ));
     s.push_str(&format!("- Command: `{command}`\n"));
     s.push_str(&format!(
@@ -293,7 +297,7 @@ pub fn markdown(
         }
     }
     if !renders.is_empty() {
-        s.push_str(&renders_markdown(renders));
+        s.push_str(&renders_markdown(renders, machine.threads));
     }
     s
 }

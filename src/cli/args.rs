@@ -1,81 +1,75 @@
 //! Argument forms shared by several subcommands.
 
-use anyhow::{bail, Context, Result};
+use std::fmt::Display;
+
+use anyhow::{anyhow, bail, Result};
+
+/// One number of `spec`, which must be finite; errors name the flag and spec.
+fn number(flag: &str, spec: &str, text: &str) -> Result<f64> {
+    let text = text.trim();
+    let v: f64 = text
+        .parse()
+        .map_err(|_| anyhow!("{flag} '{spec}': '{text}' is not a number"))?;
+    if !v.is_finite() {
+        bail!("{flag} '{spec}': '{text}' is not finite");
+    }
+    Ok(v)
+}
 
 /// Parses a list of numbers: `a,b,c`, or an inclusive `start:end:step`
 /// (the end is included when it lies on the grid, to a tolerance of 1e-9 step).
 pub fn parse_list(flag: &str, spec: &str) -> Result<Vec<f64>> {
-    let bad = |why: &str| anyhow::anyhow!("{flag} '{spec}': {why}");
+    let bad = |why: &str| anyhow!("{flag} '{spec}': {why}");
     let spec_trim = spec.trim();
     if spec_trim.is_empty() {
         return Err(bad("empty list"));
     }
-    let values = if spec_trim.contains(':') {
-        let parts: Vec<&str> = spec_trim.split(':').collect();
-        if parts.len() != 3 {
-            return Err(bad("a range is start:end:step"));
-        }
-        let num = |s: &str| -> Result<f64> {
-            let v: f64 = s
-                .trim()
-                .parse()
-                .map_err(|_| bad(&format!("'{s}' is not a number")))?;
-            if !v.is_finite() {
-                return Err(bad(&format!("'{s}' is not finite")));
-            }
-            Ok(v)
-        };
-        let (start, end, step) = (num(parts[0])?, num(parts[1])?, num(parts[2])?);
-        if step <= 0.0 {
-            return Err(bad("step must be > 0"));
-        }
-        if end < start {
-            return Err(bad("end is before start"));
-        }
-        let count = ((end - start) / step + 1e-9).floor() as u64 + 1;
-        if count > 10_000_000 {
-            return Err(bad("more than 10 million values"));
-        }
-        (0..count).map(|i| start + i as f64 * step).collect()
-    } else {
-        spec_trim
+    if !spec_trim.contains(':') {
+        return spec_trim
             .split(',')
-            .map(|s| {
-                let v: f64 = s
-                    .trim()
-                    .parse()
-                    .map_err(|_| bad(&format!("'{}' is not a number", s.trim())))?;
-                if !v.is_finite() {
-                    return Err(bad(&format!("'{}' is not finite", s.trim())));
-                }
-                Ok(v)
-            })
-            .collect::<Result<Vec<f64>>>()?
+            .map(|s| number(flag, spec, s))
+            .collect();
+    }
+    let parts: Vec<&str> = spec_trim.split(':').collect();
+    let [start, end, step] = parts[..] else {
+        return Err(bad("a range is start:end:step"));
     };
-    Ok(values)
+    let num = |s| number(flag, spec, s);
+    let (start, end, step) = (num(start)?, num(end)?, num(step)?);
+    if step <= 0.0 {
+        return Err(bad("step must be > 0"));
+    }
+    if end < start {
+        return Err(bad("end is before start"));
+    }
+    let count = ((end - start) / step + 1e-9).floor() as u64 + 1;
+    if count > MAX_GRID_POINTS as u64 {
+        return Err(bad(&format!("more than {MAX_GRID_POINTS} values")));
+    }
+    Ok((0..count).map(|i| start + i as f64 * step).collect())
 }
 
 /// Parses a `min:max` range with min ≤ max.
 pub fn parse_range(flag: &str, spec: &str) -> Result<(f64, f64)> {
     let parts: Vec<&str> = spec.split(':').collect();
-    if parts.len() != 2 {
+    let [lo, hi] = parts[..] else {
         bail!("{flag} '{spec}': expected min:max");
-    }
-    let lo: f64 = parts[0]
-        .trim()
-        .parse()
-        .with_context(|| format!("{flag} '{spec}': '{}' is not a number", parts[0]))?;
-    let hi: f64 = parts[1]
-        .trim()
-        .parse()
-        .with_context(|| format!("{flag} '{spec}': '{}' is not a number", parts[1]))?;
-    if !(lo.is_finite() && hi.is_finite()) || lo > hi {
-        bail!("{flag} '{spec}': need finite min ≤ max");
+    };
+    let (lo, hi) = (number(flag, spec, lo)?, number(flag, spec, hi)?);
+    if lo > hi {
+        bail!("{flag} '{spec}': need min ≤ max");
     }
     Ok((lo, hi))
 }
 
-/// Checks that every angle lies in [0, 90) degrees.
+/// Fails unless 1 ≤ `value` ≤ `max`, naming the flag, the limit and the value.
+pub fn check_count<T: PartialOrd + From<u8> + Display>(flag: &str, value: T, max: T) -> Result<()> {
+    if value < T::from(1) || value > max {
+        bail!("{flag} must be between 1 and {max}, got {value}");
+    }
+    Ok(())
+}
+
 /// The most (wavelength, angle[, thickness]) points one command evaluates:
 /// the responses are kept in memory, and an absurd grid aborted on
 /// allocation instead of failing.
@@ -94,6 +88,7 @@ pub fn check_grid(what: &str, counts: &[usize]) -> Result<()> {
     }
 }
 
+/// Checks that every angle lies in [0, 90) degrees.
 pub fn check_angles(flag: &str, angles_deg: &[f64]) -> Result<()> {
     if let Some(a) = angles_deg.iter().find(|a| !(**a >= 0.0 && **a < 90.0)) {
         bail!("{flag}: angle {a} is outside [0, 90) degrees");
@@ -123,7 +118,20 @@ mod tests {
             assert!(parse_list("--x", bad).is_err(), "{bad}");
         }
         assert_eq!(parse_range("--t", "0:1000").unwrap(), (0.0, 1000.0));
-        assert!(parse_range("--t", "5:1").is_err());
+        for bad in ["5:1", "1", "1:2:3", "0:inf", "a:1"] {
+            assert!(parse_range("--t", bad).is_err(), "{bad}");
+        }
+        assert_eq!(
+            parse_list("--x", "1,inf").unwrap_err().to_string(),
+            "--x '1,inf': 'inf' is not finite"
+        );
+        assert!(check_count("--n", 1usize, 4).is_ok() && check_count("--n", 4u32, 4).is_ok());
+        for n in [0, 5] {
+            assert_eq!(
+                check_count("--n", n, 4).unwrap_err().to_string(),
+                format!("--n must be between 1 and 4, got {n}")
+            );
+        }
         assert!(check_angles("--a", &[0.0, 89.9]).is_ok());
         assert!(check_angles("--a", &[90.0]).is_err());
         assert!(check_angles("--a", &[-1.0]).is_err());

@@ -9,7 +9,8 @@ use anyhow::{Context, Result};
 use irid::bench::machine::Machine;
 use irid::bench::{grid, renders, report, run, stacks};
 
-use super::args::{check_angles, check_grid, parse_list};
+use super::args::{check_angles, check_count, check_grid, parse_list};
+use super::render::{check_threads, with_threads};
 
 #[derive(clap::Args)]
 pub struct Args {
@@ -35,7 +36,8 @@ pub struct Args {
     /// Thicknesses in nm of the stack's varying layer (default: its own thickness).
     #[arg(long)]
     pub thicknesses: Option<String>,
-    /// Worker threads.
+    /// Worker threads: the grid's evaluation, or the report's table bakes
+    /// and full renders (its per-evaluation times are single-threaded).
     #[arg(long, default_value_t = 2)]
     pub threads: usize,
     /// Repetitions; the fastest is reported.
@@ -54,9 +56,12 @@ pub struct Args {
 }
 
 pub fn run(args: Args) -> Result<ExitCode> {
+    check_threads(args.threads)?;
     match &args.grid {
         Some(name) => run_grid(name, &args)?,
-        None => run_report(&args)?,
+        // The grid builds its own pool; the report's bakes and renders run
+        // on this one, so --threads holds for everything it times.
+        None => with_threads(Some(args.threads), || run_report(&args))??,
     }
     Ok(ExitCode::SUCCESS)
 }
@@ -68,10 +73,7 @@ fn run_report(args: &Args) -> Result<()> {
         run::Options::full()
     };
     if let Some(points) = args.points {
-        let max = irid::lut::MAX_VALIDATION_POINTS;
-        if !(1..=max).contains(&points) {
-            anyhow::bail!("--points must be between 1 and {max}, got {points}");
-        }
+        check_count("--points", points, irid::lut::MAX_VALIDATION_POINTS)?;
         options.points = points;
     }
     let command = std::iter::once("irid".to_string())
@@ -141,19 +143,7 @@ fn run_grid(name: &str, args: &Args) -> Result<()> {
             &[wavelengths_nm.len(), angles_deg.len(), t],
         )?;
     }
-    if !(1..=MAX_REPEAT).contains(&args.repeat) {
-        anyhow::bail!(
-            "--repeat must be between 1 and {MAX_REPEAT}, got {}",
-            args.repeat
-        );
-    }
-    let max = super::render::MAX_THREADS;
-    if !(1..=max).contains(&args.threads) {
-        anyhow::bail!(
-            "--threads must be between 1 and {max}, got {}",
-            args.threads
-        );
-    }
+    check_count("--repeat", args.repeat, MAX_REPEAT)?;
     let (bake, g) = match &args.bake_nodes {
         Some(spec) => {
             let nodes = parse_list("--bake-nodes", spec)?;

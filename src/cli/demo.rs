@@ -5,7 +5,6 @@
 
 use std::path::PathBuf;
 use std::process::ExitCode;
-use std::time::Instant;
 
 use anyhow::{Context, Result};
 use irid::color::Sampling;
@@ -13,7 +12,7 @@ use irid::render::film::bare_reflectance;
 use irid::render::material::Material;
 use irid::render::{self, builtin_names, FilmMode, RenderOptions, Scene};
 
-use super::render::with_threads;
+use super::render::{timed, with_threads};
 
 #[derive(clap::Args)]
 pub struct Args {
@@ -44,10 +43,6 @@ pub fn run(args: Args) -> Result<ExitCode> {
     with_threads(args.threads, || run_all(&args))?
 }
 
-fn secs(start: Instant) -> f64 {
-    start.elapsed().as_secs_f64()
-}
-
 fn run_all(args: &Args) -> Result<ExitCode> {
     let lut = FilmMode::lut(&args.cache);
     let exact = FilmMode::Direct {
@@ -70,18 +65,14 @@ fn run_all(args: &Args) -> Result<ExitCode> {
         let s = scene.settings;
         let opts = RenderOptions::new(lut.clone());
         let films = render::prepare_films(&scene, &lut)?;
-        let start = Instant::now();
-        let image = render::render_with(&scene, &films, &opts);
-        let render_s = secs(start);
+        let (image, render_s) = timed(|| render::render_with(&scene, &films, &opts));
         image.write_png(&args.out.join(format!("{name}.png")))?;
 
         let mut small = RenderOptions::new(exact.clone());
         small.width = Some(((f64::from(s.width) * args.reference_scale).round() as u32).max(1));
         small.height = Some(((f64::from(s.height) * args.reference_scale).round() as u32).max(1));
         let direct_films = render::prepare_films(&scene, &exact)?;
-        let start = Instant::now();
-        let reference = render::render_with(&scene, &direct_films, &small);
-        let direct_s = secs(start);
+        let (reference, direct_s) = timed(|| render::render_with(&scene, &direct_films, &small));
         reference.write_png(&args.out.join(format!("{name}.direct.png")))?;
         small.film = lut.clone();
         let lut_small = render::render_with(&scene, &films, &small);
@@ -115,12 +106,8 @@ fn run_all(args: &Args) -> Result<ExitCode> {
     let best_pair = || {
         let (mut lut_s, mut plain_s) = (f64::INFINITY, f64::INFINITY);
         for _ in 0..7 {
-            let start = Instant::now();
-            render::render_with(&scene, &films, &opts);
-            lut_s = lut_s.min(secs(start));
-            let start = Instant::now();
-            render::render_with(&plain, &plain_films, &opts);
-            plain_s = plain_s.min(secs(start));
+            lut_s = lut_s.min(timed(|| render::render_with(&scene, &films, &opts)).1);
+            plain_s = plain_s.min(timed(|| render::render_with(&plain, &plain_films, &opts)).1);
         }
         (lut_s, plain_s)
     };
@@ -131,9 +118,8 @@ fn run_all(args: &Args) -> Result<ExitCode> {
         sampling: Sampling::Uniform(41),
     };
     let direct_films = render::prepare_films(&scene, &uniform41)?;
-    let start = Instant::now();
-    render::render_with(&scene, &direct_films, &RenderOptions::new(uniform41));
-    let direct_s = secs(start);
+    let direct_opts = RenderOptions::new(uniform41);
+    let (_, direct_s) = timed(|| render::render_with(&scene, &direct_films, &direct_opts));
     let (w, h) = (scene.settings.width, scene.settings.height);
     println!();
     println!(

@@ -6,7 +6,9 @@ use std::time::Instant;
 
 use anyhow::{bail, Context, Result};
 use irid::color::Sampling;
-use irid::render::{self, FilmMode, RenderOptions, Scene};
+use irid::render::{self, scene_file, FilmMode, RenderOptions, Scene};
+
+use super::args::check_count;
 
 #[derive(clap::Args)]
 pub struct Args {
@@ -64,14 +66,24 @@ pub fn film_mode(film: &str, sampling: Option<&str>, cache: &Path) -> Result<Fil
 /// threads hung instead of failing.
 pub const MAX_THREADS: usize = 1024;
 
+/// `f`'s result and its wall time in seconds.
+pub fn timed<T>(f: impl FnOnce() -> T) -> (T, f64) {
+    let start = Instant::now();
+    let out = f();
+    (out, start.elapsed().as_secs_f64())
+}
+
+/// `--threads n` is within 1..=[`MAX_THREADS`].
+pub fn check_threads(n: usize) -> Result<()> {
+    check_count("--threads", n, MAX_THREADS)
+}
+
 /// Runs `f` on a pool of `threads` workers (or rayon's default pool).
 pub fn with_threads<T: Send>(threads: Option<usize>, f: impl FnOnce() -> T + Send) -> Result<T> {
     match threads {
         None => Ok(f()),
-        Some(n) if !(1..=MAX_THREADS).contains(&n) => {
-            bail!("--threads must be between 1 and {MAX_THREADS}, got {n}")
-        }
         Some(n) => {
+            check_threads(n)?;
             let pool = rayon::ThreadPoolBuilder::new()
                 .num_threads(n)
                 .build()
@@ -84,22 +96,21 @@ pub fn with_threads<T: Send>(threads: Option<usize>, f: impl FnOnce() -> T + Sen
 pub fn run(args: Args) -> Result<ExitCode> {
     let mode = film_mode(&args.film, args.sampling.as_deref(), &args.cache)?;
     let scene = Scene::load_named(&args.scene)?;
-    for (flag, v) in [
-        ("--width", args.width),
-        ("--height", args.height),
-        ("--spp", args.spp),
+    let (side, spp) = (scene_file::MAX_IMAGE_SIDE, scene_file::MAX_SPP);
+    for (flag, v, max) in [
+        ("--width", args.width, side),
+        ("--height", args.height, side),
+        ("--spp", args.spp, spp),
     ] {
         if let Some(v) = v {
-            if !(1..=16384).contains(&v) {
-                bail!("{flag} must be between 1 and 16384, got {v}");
-            }
+            check_count(flag, v, max)?;
         }
     }
     if let Some(depth) = args.max_depth {
-        if depth > render::scene_file::MAX_DEPTH {
+        if depth > scene_file::MAX_DEPTH {
             bail!(
                 "--max-depth must be at most {}, got {depth}",
-                render::scene_file::MAX_DEPTH
+                scene_file::MAX_DEPTH
             );
         }
     }
@@ -127,9 +138,8 @@ pub fn run(args: Args) -> Result<ExitCode> {
 
     let (films, image, render_s) = with_threads(args.threads, || -> Result<_> {
         let films = render::prepare_films(&scene, &opts.film)?;
-        let start = Instant::now();
-        let image = render::render_with(&scene, &films, &opts);
-        Ok((films, image, start.elapsed().as_secs_f64()))
+        let (image, render_s) = timed(|| render::render_with(&scene, &films, &opts));
+        Ok((films, image, render_s))
     })??;
     image.write_png(&output)?;
     if let Some(exr) = &args.exr {

@@ -190,14 +190,24 @@ impl Locator {
             let i = (s as i32).min(last_interval);
             return (i as usize, (s - i as f32).clamp(0.0, 1.0));
         }
+        if self.nodes.len() < 2 {
+            return (0, 0.0);
+        }
         let b = (((x - self.first) * self.bucket_scale) as i32).min(self.buckets.len() as i32 - 1);
-        let (i, span) = self.buckets[b as usize];
-        let mut i = i as usize;
-        for _ in 0..span {
-            if self.nodes[i + 1] > x {
-                break;
+        let (lo, span) = self.buckets[b as usize];
+        let mut i = lo as usize;
+        if span <= 1 {
+            // Most buckets: no node or one inside, settled without a branch
+            // (a mispredicted one costs more than the whole lookup).
+            i = (i + usize::from(self.nodes[i + 1] <= x)).min(last_interval as usize);
+        } else {
+            // Inside a graded cluster.
+            for _ in 0..span {
+                if self.nodes[i + 1] > x {
+                    break;
+                }
+                i += 1;
             }
-            i += 1;
         }
         let f = (x - self.nodes[i]) * self.inv_width[i];
         (i, f.clamp(0.0, 1.0))

@@ -3,11 +3,12 @@
 //! `aluminium`, `copper`, plus a few aliases (chemical formulas, `aluminum`,
 //! `soap-film`, `silica`).
 //!
-//! Dielectrics are published dispersion fits, typed in here with their
-//! sources; the metals are measured n, k tables, generated into
-//! `library_data.rs` by `tools/gen_materials.py` from `tools/data/*.csv`.
-//! Formulas are evaluated at any wavelength: outside the range a fit was
-//! made for (given with each source) they extrapolate. Tables end where
+//! The lossless dielectrics are published dispersion fits, typed in here
+//! with their sources; the metals and TiO2 are measured n, k tables,
+//! extracted by `tools/extract_materials.py` into `tools/data/*.csv` and
+//! generated into `library_data.rs` by `tools/gen_materials.py`. Every fit
+//! here was made over a range that covers the bakers' 360–830 nm (given
+//! with each source); beyond it a formula extrapolates. Tables end where
 //! their data ends, and asking beyond it is an error naming the material.
 
 use super::library_data;
@@ -46,7 +47,7 @@ pub fn builtin(name: &str) -> Option<Material> {
         "water" | "h2o" => ("water", water()),
         "soap" | "soap-film" => ("soap", water()),
         "fused-silica" | "silica" | "sio2" => ("fused-silica", fused_silica()),
-        "tio2" => ("TiO2", titania()),
+        "tio2" => ("TiO2", table(&library_data::TITANIA)),
         "mgf2" => ("MgF2", magnesium_fluoride()),
         "sapphire" | "al2o3" => ("sapphire", sapphire()),
         "gold" | "au" => ("gold", table(&library_data::GOLD)),
@@ -132,18 +133,6 @@ fn fused_silica() -> Dispersion {
     ])
 }
 
-/// Rutile TiO2, ordinary ray: J. R. DeVore, "Refractive indices of rutile and
-/// sphalerite", J. Opt. Soc. Am. 41, 416–419 (1951):
-/// n² = 5.913 + 0.2441/(λ² − 0.0803), λ in µm, valid 0.43–1.53 µm. Since
-/// B λ²/(λ² − C) = B + B C/(λ² − C), this is the Sellmeier form with
-/// C = 0.0803, B = 0.2441/C and A = 5.913 − B. Rutile absorbs below about
-/// 0.41 µm, which this lossless fit does not describe.
-fn titania() -> Dispersion {
-    let c = 0.0803;
-    let b = 0.2441 / c;
-    sellmeier(5.913 - b, &[(b, c)])
-}
-
 /// MgF2 at 19 °C, ordinary ray: M. J. Dodge, "Refractive properties of
 /// magnesium fluoride", Appl. Opt. 23, 1980–1985 (1984), valid 0.2–7.0 µm.
 fn magnesium_fluoride() -> Dispersion {
@@ -181,7 +170,8 @@ mod tests {
             ("water", 589.3, 1.333_3, 0.0),
             ("sapphire", 587.6, 1.768, 0.0),
             ("MgF2", 587.6, 1.3777, 0.0),
-            ("TiO2", 587.6, 2.614, 0.0),
+            // TiO2: Siefke et al.'s rows at 585.2 and 588.6 nm
+            ("TiO2", 587.6, 2.4116, 1.1e-8),
             ("air", 550.0, 1.000_277_84, 0.0), // Ciddor: 1.000277838
             ("gold", 548.6, 0.43, 2.455),
             ("silver", 495.9, 0.05, 3.093),
@@ -195,6 +185,30 @@ mod tests {
                 "{name} at {wl} nm: {got} vs {n}+{k}i"
             );
         }
+    }
+
+    /// TiO2 absorbs at the violet end the bakers integrate: at 380 nm Siefke
+    /// et al. give k ≈ 0.004 (the two rows around it in tools/data/tio2.csv,
+    /// interpolated), where the lossless DeVore fit it replaces gave 0 and
+    /// was only fitted from 430 nm.
+    #[test]
+    fn titania_absorbs_where_its_source_says() {
+        let tio2 = builtin("TiO2").unwrap();
+        let rows = [
+            (377.8647, 2.786287, 0.004898981),
+            (380.04613, 2.7734118, 0.003973052),
+        ];
+        let t = (380.0 - rows[0].0) / (rows[1].0 - rows[0].0);
+        let got = tio2.index_at(380.0).unwrap();
+        assert!((got.re - (rows[0].1 + t * (rows[1].1 - rows[0].1))).abs() < 1e-12);
+        assert!((got.im - (rows[0].2 + t * (rows[1].2 - rows[0].2))).abs() < 1e-12);
+        assert!((got.im - 0.003_993).abs() < 1e-6, "{got}");
+        // The absorption edge: k falls through the violet, and is negligible
+        // across the rest of the visible.
+        let k = |wl: f64| tio2.index_at(wl).unwrap().im;
+        assert!(k(360.0) > 0.02 && k(360.0) > k(380.0) && k(380.0) > k(400.0));
+        assert!(k(400.0) > 1e-4 && k(500.0) < 1e-5 && k(700.0) < 1e-7);
+        assert!(!tio2.is_lossless() && !tio2.has_gain());
     }
 
     #[test]

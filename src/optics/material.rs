@@ -35,8 +35,8 @@ pub enum Dispersion {
         c: f64,
     },
     /// n²(λ) = A + Σ Bᵢ λ² / (λ² − Cᵢ) with λ in micrometres and Cᵢ in µm²;
-    /// k = 0. A is 1 in the classic form; some fits (DeVore's TiO2) carry a
-    /// constant of their own.
+    /// k = 0. A is 1 in the classic form; some fits (the built-in air's
+    /// rewriting of Ciddor's formula) carry a constant of their own.
     Sellmeier {
         #[serde(default = "one")]
         a: f64,

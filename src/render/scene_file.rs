@@ -369,16 +369,28 @@ fn unit(origin: &str, what: &str, v: [f32; 3]) -> Result<Vec3> {
 /// call stack, and far deeper paths carry no visible light anyway.
 pub const MAX_DEPTH: u32 = 64;
 
+/// The widest or tallest image, in pixels: scene files and `irid render
+/// --width/--height` alike.
+pub const MAX_IMAGE_SIDE: u32 = 16384;
+
+/// The most samples per pixel, in scene files and on the command line alike.
+/// Noise falls as 1/√spp: at 4096 it is 1/64 of one sample's, and more only
+/// multiplies the render time.
+pub const MAX_SPP: u32 = 4096;
+
 fn build(file: SceneFile, base: &Path, origin: &str) -> Result<Scene> {
     let r = &file.render;
-    if !(1..=16384).contains(&r.width) || !(1..=16384).contains(&r.height) {
-        return Err(Error::malformed(
-            origin,
-            "render.width/height: must be 1..=16384",
-        ));
-    }
-    if !(1..=4096).contains(&r.spp) {
-        return Err(Error::malformed(origin, "render.spp: must be 1..=4096"));
+    for (field, value, max) in [
+        ("render.width", r.width, MAX_IMAGE_SIDE),
+        ("render.height", r.height, MAX_IMAGE_SIDE),
+        ("render.spp", r.spp, MAX_SPP),
+    ] {
+        if !(1..=max).contains(&value) {
+            return Err(Error::malformed(
+                origin,
+                format!("{field}: must be between 1 and {max}, got {value}"),
+            ));
+        }
     }
     if r.max_depth > MAX_DEPTH {
         return Err(Error::malformed(
