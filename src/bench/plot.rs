@@ -116,9 +116,18 @@ fn draw(
             .map(|p| Circle::new((p.ns_per_eval, y_of(p)), 5, colour_of(p.family).filled())),
     )?;
     // Labels: the first of a few positions around the point whose box
-    // overlaps no label already placed and stays inside the picture.
-    let (label_px, char_px) = (13u32, 7);
-    let mut placed: Vec<(i32, i32, i32, i32)> = Vec::new();
+    // overlaps no point and no label already placed, and stays inside the
+    // axes.
+    let (label_px, char_px) = (13u32, 8);
+    // Inside the axes, clear of the tick labels.
+    let (area_x, area_y) = chart.plotting_area().get_pixel_range();
+    let mut placed: Vec<(i32, i32, i32, i32)> = points
+        .iter()
+        .map(|p| {
+            let (px, py) = chart.backend_coord(&(p.ns_per_eval, y_of(p)));
+            (px - 6, py - 6, 12, 12)
+        })
+        .collect();
     for p in points {
         let (px, py) = chart.backend_coord(&(p.ns_per_eval, y_of(p)));
         let w = char_px * p.label.chars().count() as i32;
@@ -134,9 +143,14 @@ fn draw(
             (8, h + 6),
             (-w - 8, -2 * h - 4),
             (-w - 8, h + 6),
+            (-w / 2, -h - 8),
+            (-w / 2, 8),
+            (-w / 2, -2 * h - 8),
+            (-w / 2, h + 10),
         ];
-        let inside =
-            |x: i32, y: i32| x >= 0 && y >= 0 && x + w <= size.0 as i32 && y + h <= size.1 as i32;
+        let inside = |x: i32, y: i32| {
+            x >= area_x.start && y >= area_y.start && x + w <= area_x.end && y + h <= area_y.end
+        };
         let free = |x: i32, y: i32| {
             placed
                 .iter()
