@@ -347,3 +347,42 @@ fn no_check_needs_a_fixed_resolution() {
         rejects(d, &args, &["--no-check", "--resolution"], &["o.exr"]);
     }
 }
+
+/// A gain film near its resonance reflects beyond f16's largest value: a
+/// `--half` table would store infinity, so the baker refuses it and names
+/// where; the same table in f32 bakes.
+#[test]
+fn half_table_that_overflows_f16_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let stack = concat!(env!("CARGO_MANIFEST_DIR"), "/luts/gain-on-gold.toml");
+    let grid = [
+        "--resolution",
+        "256,32",
+        "--angles",
+        "0:1",
+        "--thickness",
+        "0:1000",
+    ];
+    let mut args = vec!["bake", stack, "-o", "g.exr", "--half"];
+    args.extend_from_slice(&grid);
+    rejects(
+        dir.path(),
+        &args,
+        &["--half", "f16", "thickness"],
+        &["g.exr"],
+    );
+
+    let mut args = vec!["bake", stack, "-o", "g.exr", "--validate-points", "0"];
+    args.extend_from_slice(&grid);
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_irid"))
+        .args(&args)
+        .current_dir(dir.path())
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(dir.path().join("g.exr").exists());
+}

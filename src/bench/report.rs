@@ -7,7 +7,7 @@ use crate::error::{Error, Result};
 use super::machine::Machine;
 use super::plot::{speed_vs_error_png, PlotPoint};
 use super::renders::RenderRow;
-use super::run::{Family, Method, Options, Row};
+use super::run::{Family, Method, Options, Row, Skipped};
 use super::stacks::{descriptions, find, names};
 use crate::color::Sampling;
 
@@ -174,6 +174,7 @@ fn fmt_err(v: f64) -> String {
 /// then one table per stack.
 pub fn markdown(
     rows: &[Row],
+    skipped: &[Skipped],
     renders: &[RenderRow],
     options: &Options,
     machine: &Machine,
@@ -295,6 +296,13 @@ pub fn markdown(
                 r.setup_s.map_or(String::new(), |v| format!("{v:.3}")),
             ));
         }
+        for k in skipped.iter().filter(|k| k.stack == name) {
+            s.push_str(&format!(
+                "\n{} not measured: the baker refuses it ({}).\n",
+                k.method.name(),
+                k.why
+            ));
+        }
     }
     if !renders.is_empty() {
         s.push_str(&renders_markdown(renders, machine.threads));
@@ -307,6 +315,7 @@ pub fn markdown(
 pub fn write_all(
     dir: &Path,
     rows: &[Row],
+    skipped: &[Skipped],
     renders: &[RenderRow],
     options: &Options,
     machine: &Machine,
@@ -344,6 +353,38 @@ pub fn write_all(
     )?;
     crate::atomic::write(
         &dir.join("report.md"),
-        markdown(rows, renders, options, machine, command).as_bytes(),
+        markdown(rows, skipped, renders, options, machine, command).as_bytes(),
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_method_the_baker_refused_is_named_under_its_stack() {
+        let skipped = [Skipped {
+            stack: "gain-on-gold".into(),
+            method: Method::Lut {
+                thickness_nodes: 256,
+                angle_nodes: 32,
+                half: true,
+            },
+            why: "reflectance.R exceeds f16's largest value".into(),
+        }];
+        let text = markdown(
+            &[],
+            &skipped,
+            &[],
+            &Options::quick(),
+            &Machine::current(),
+            "irid bench",
+        );
+        let section = &text[text.find("## gain-on-gold").expect("the stack's section")..];
+        assert!(
+            section.contains("LUT 256x32 f16 not measured: the baker refuses it (reflectance.R exceeds f16's largest value)"),
+            "{section}"
+        );
+        assert!(!text[..text.find("## gain-on-gold").unwrap()].contains("not measured"));
+    }
 }

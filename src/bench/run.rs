@@ -17,7 +17,7 @@ use super::grid::indices_table;
 use super::stacks::{fixed_stacks, BenchStack};
 use crate::analytic::{AnalyticFilm, Variant};
 use crate::color::{delta_e2000_rgb, Sampling, SpectralIntegrator};
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::lut;
 use crate::optics::solve;
 
@@ -141,18 +141,29 @@ pub struct Row {
     pub reference_max: f64,
 }
 
-/// Every method measured on every fixed stack.
-pub fn run(options: &Options) -> Result<Vec<Row>> {
-    let mut rows = Vec::new();
-    for bench in fixed_stacks()? {
-        rows.extend(run_stack(&bench, options)?);
-    }
-    Ok(rows)
+/// A method that could not be measured on a stack, and why.
+#[derive(Clone, Debug)]
+pub struct Skipped {
+    pub stack: String,
+    pub method: Method,
+    pub why: String,
 }
 
-pub fn run_stack(bench: &BenchStack, options: &Options) -> Result<Vec<Row>> {
+/// Every method measured on every fixed stack, and those that could not be.
+pub fn run(options: &Options) -> Result<(Vec<Row>, Vec<Skipped>)> {
+    let (mut rows, mut skipped) = (Vec::new(), Vec::new());
+    for bench in fixed_stacks()? {
+        let (r, s) = run_stack(&bench, options)?;
+        rows.extend(r);
+        skipped.extend(s);
+    }
+    Ok((rows, skipped))
+}
+
+pub fn run_stack(bench: &BenchStack, options: &Options) -> Result<(Vec<Row>, Vec<Skipped>)> {
     let points = sample_points(bench, options.points, options.seed);
     let mut rows = Vec::new();
+    let mut skipped = Vec::new();
 
     // The exact method is the reference: its error is zero by construction.
     let mut exact = Direct::new(bench, Sampling::Exact)?;
@@ -192,8 +203,26 @@ pub fn run_stack(bench: &BenchStack, options: &Options) -> Result<Vec<Row>> {
         };
         for &half in halves {
             let spec = bench.bake_spec(thickness_nodes, angle_nodes, half);
+            let method = Method::Lut {
+                thickness_nodes,
+                angle_nodes,
+                half,
+            };
             let start = Instant::now();
-            let table = lut::bake(&spec)?;
+            let table = match lut::bake(&spec) {
+                Ok(table) => table,
+                // The baker refuses an f16 table whose values overflow f16
+                // (a gain film near its resonances): report that instead.
+                Err(Error::InvalidInput { what, why }) if half && what == "--half" => {
+                    skipped.push(Skipped {
+                        stack: bench.name.to_string(),
+                        method,
+                        why,
+                    });
+                    continue;
+                }
+                Err(e) => return Err(e),
+            };
             let bake_s = start.elapsed().as_secs_f64();
             let (ns, out) = time_all(&points, |t, c| {
                 table
@@ -201,11 +230,6 @@ pub fn run_stack(bench: &BenchStack, options: &Options) -> Result<Vec<Row>> {
                     .reflectance
                     .map(f64::from)
             });
-            let method = Method::Lut {
-                thickness_nodes,
-                angle_nodes,
-                half,
-            };
             rows.push(row(bench, method, ns, &out, &reference, Some(bake_s)));
         }
     }
@@ -223,7 +247,7 @@ pub fn run_stack(bench: &BenchStack, options: &Options) -> Result<Vec<Row>> {
             ));
         }
     }
-    Ok(rows)
+    Ok((rows, skipped))
 }
 
 /// Uniform in the stack's thickness range and in cos θ ∈ [0, 1] (the

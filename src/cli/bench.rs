@@ -86,20 +86,30 @@ fn run_report(args: &Args) -> Result<()> {
         options.points,
         machine.summary()
     );
-    let rows = run::run(&options)?;
+    let (rows, skipped) = run::run(&options)?;
     // The renders bake their tables into a private cache, removed afterwards.
     let cache = std::env::temp_dir().join(format!("irid-bench-luts-{}", std::process::id()));
     let (width, height) = options.render_size;
     let renders = renders::run(&options.render_scenes, width, height, &cache);
     let _ = std::fs::remove_dir_all(&cache);
     let renders = renders?;
-    report::write_all(&args.out, &rows, &renders, &options, &machine, &command)?;
+    report::write_all(
+        &args.out, &rows, &skipped, &renders, &options, &machine, &command,
+    )?;
     for s in report::summarize(&rows) {
         eprintln!(
             "  {:28} {:>12.1} ns/eval   mean ΔE00 {:.2e}",
             s.method.name(),
             s.ns_per_eval,
             s.mean_de2000
+        );
+    }
+    for k in &skipped {
+        eprintln!(
+            "  {:28} not measured on {}: {}",
+            k.method.name(),
+            k.stack,
+            k.why
         );
     }
     for r in &renders {

@@ -65,7 +65,8 @@ pub fn bake_with_progress(spec: &BakeSpec, progress: &(dyn Fn(f64) + Sync)) -> R
         // Only a fixed resolution gets here (see BakeSpec::validate).
         let grid = Grid::new(&axes, spec.kind);
         let values = prep.eval(&grid, None, progress)?;
-        let data = values.iter().map(|&v| stored(v, spec.half)).collect();
+        let data: Vec<f32> = values.iter().map(|&v| stored(v, spec.half)).collect();
+        representable(&data, &grid, spec)?;
         return Lut::from_parts(header(spec, &prep, &grid, None, None), data)
             .map_err(|why| Error::invalid("baked table", why));
     }
@@ -129,6 +130,7 @@ pub fn bake_with_progress(spec: &BakeSpec, progress: &(dyn Fn(f64) + Sync)) -> R
             Some(e) if check.max_all > e => e,
             _ => {
                 let data = even_subgrid(&fine, &values, prep.channels, spec.half);
+                representable(&data, &coarse, spec)?;
                 let header = header(spec, &prep, &coarse, Some(&check), target);
                 let mut lut = Lut::from_parts(header, data)
                     .map_err(|why| Error::invalid("baked table", why))?;
@@ -780,6 +782,37 @@ fn initial_axes(spec: &BakeSpec, prep: &Prepared) -> [Vec<Segment>; 3] {
             ]
         }
     }
+}
+
+/// A table must hold the values it was baked from: a gain film near a
+/// lasing pole reflects far more than f16's largest value (65504), which
+/// would be stored as infinity. Names the first node that does not fit.
+fn representable(data: &[f32], grid: &Grid, spec: &BakeSpec) -> Result<()> {
+    let Some(k) = data.iter().position(|v| !v.is_finite()) else {
+        return Ok(());
+    };
+    let names = channel_names(spec.kind);
+    let (node, channel) = (k / names.len(), names[k % names.len()]);
+    let [t_axis, c_axis, w_axis] = &grid.axes;
+    let (nt, nc) = (t_axis.nodes.len(), c_axis.nodes.len());
+    let mut at = format!(
+        "thickness {:.2} nm, cos θ {:.5}",
+        t_axis.nodes[node % nt],
+        c_axis.nodes[(node / nt) % nc]
+    );
+    if spec.kind == Kind::Spectral {
+        at += &format!(", wavelength {:.1} nm", w_axis.nodes[node / (nt * nc)]);
+    }
+    Err(if spec.half {
+        Error::invalid(
+            "--half",
+            format!(
+                "{channel} exceeds f16's largest value (65504) at {at}; bake in f32 (without --half) or narrow --thickness or --angles"
+            ),
+        )
+    } else {
+        Error::invalid("baked table", format!("{channel} is not finite at {at}"))
+    })
 }
 
 /// Rounds a value as it will be stored.
