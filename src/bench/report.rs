@@ -329,11 +329,22 @@ pub fn write_all(
     let points: Vec<PlotPoint> = summarize(rows)
         .iter()
         .map(|m| PlotPoint {
-            label: if m.mean_de2000 < PLOT_FLOOR_DE {
-                format!("{} (error 0, at floor)", m.method.name())
-            } else {
-                m.method.name()
-            },
+            // A median over fewer stacks is not comparable with the others
+            // at a glance: say so on the plot as in the table.
+            label: format!(
+                "{}{}{}",
+                m.method.name(),
+                if m.stacks < names().len() {
+                    format!(" ({} stacks)", m.stacks)
+                } else {
+                    String::new()
+                },
+                if m.mean_de2000 < PLOT_FLOOR_DE {
+                    " (error 0, at floor)"
+                } else {
+                    ""
+                }
+            ),
             family: m.method.family().index(),
             ns_per_eval: m.ns_per_eval,
             mean_de2000: m.mean_de2000,
