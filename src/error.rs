@@ -9,6 +9,11 @@ pub enum Error {
     #[error("{what}: {why}")]
     InvalidInput { what: String, why: String },
 
+    /// An f16 table (`--half`) cannot hold a value the stack reaches (a
+    /// gain film near its resonances): it would be stored as infinity.
+    #[error("--half: {why}")]
+    HalfOverflow { why: String },
+
     /// A file could not be read or written.
     #[error("{path}: {source}")]
     Io {

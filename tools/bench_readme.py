@@ -58,9 +58,10 @@ tables are in `benches/results/report.md` (with `results.csv` beside it). The
 exact method's error is 0 by construction (it is the reference); the plot
 draws it at 1e-4. The gain film on gold has resonances where reflectance
 reaches the thousands, which dominate every method's absolute error on that
-stack (and overflow f16 at a few points of one table, counted and left out).
-The machine was shared with other jobs (2 cores, load average about 7), so
-compare methods by their ratios within one run.
+stack; where they exceed f16's range the baker refuses the f16 table, and
+`report.md` lists it as not measured (a method marked "(5 stacks)" is a
+median over the others). Timings on this shared 2-core machine move between
+runs, so compare methods by their ratios within one run.
 
 Full small renders (`irid::render`, in the same run). {renders_intro}
 

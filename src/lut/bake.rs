@@ -804,12 +804,11 @@ fn representable(data: &[f32], grid: &Grid, spec: &BakeSpec) -> Result<()> {
         at += &format!(", wavelength {:.1} nm", w_axis.nodes[node / (nt * nc)]);
     }
     Err(if spec.half {
-        Error::invalid(
-            "--half",
-            format!(
+        Error::HalfOverflow {
+            why: format!(
                 "{channel} exceeds f16's largest value (65504) at {at}; bake in f32 (without --half) or narrow --thickness or --angles"
             ),
-        )
+        }
     } else {
         Error::invalid("baked table", format!("{channel} is not finite at {at}"))
     })

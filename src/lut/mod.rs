@@ -230,17 +230,25 @@ impl BakeSpec {
 /// and written there (atomically, so concurrent renderers never read half a
 /// table). A stale or unreadable cache file is replaced, never an error.
 pub fn cached(spec: &BakeSpec, dir: &std::path::Path) -> Result<Lut> {
+    let path = dir.join(format!("{}.exr", spec.cache_key()));
+    cached_at(spec, &path).map(|(lut, _)| lut)
+}
+
+/// [`cached`] at a path of the caller's choosing; also says whether the
+/// table had to be baked (true) or came from the file (false).
+pub fn cached_at(spec: &BakeSpec, path: &std::path::Path) -> Result<(Lut, bool)> {
     let key = spec.cache_key();
-    let path = dir.join(format!("{key}.exr"));
-    if let Ok(lut) = Lut::load(&path) {
+    if let Ok(lut) = Lut::load(path) {
         if lut.header().cache_key == key {
-            return Ok(lut);
+            return Ok((lut, false));
         }
     }
     let lut = bake(spec)?;
-    std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
-    lut.write(&path)?;
-    Ok(lut)
+    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+    }
+    lut.write(path)?;
+    Ok((lut, true))
 }
 
 /// cos 89°, the default smallest cos θ. At exactly grazing incidence every

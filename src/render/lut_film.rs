@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 use super::film::{FilmRgb, FilmShading, Side};
 use super::scene::Film;
 use crate::error::{Error, Result};
-use crate::lut::{bake, BakeSpec, Lut, Resolution};
+use crate::lut::{BakeSpec, Lut, Resolution};
 
 const THICKNESS_STEP_NM: f64 = 4.0;
 const MAX_THICKNESS_NODES: usize = 8193;
@@ -79,16 +79,15 @@ impl LutFilm {
         let mut table = |side: Side| -> Result<Lut> {
             let spec = Self::spec(film, side);
             let path = Self::cache_path(film, side, &spec, cache_dir);
-            if let Ok(lut) = Lut::load(&path) {
-                if lut.header().cache_key == spec.cache_key() {
-                    cached += 1;
-                    return Ok(lut);
-                }
+            let (lut, was_baked) = crate::lut::cached_at(&spec, &path).map_err(|e| match e {
+                Error::Io { .. } => e,
+                e => Error::invalid(format!("film '{}'", film.name), e.to_string()),
+            })?;
+            if was_baked {
+                baked += 1;
+            } else {
+                cached += 1;
             }
-            let lut = bake(&spec)
-                .map_err(|e| Error::invalid(format!("film '{}'", film.name), e.to_string()))?;
-            lut.write(&path)?;
-            baked += 1;
             Ok(lut)
         };
         let front = table(Side::Front)?;

@@ -19,8 +19,6 @@ pub struct Scene {
     pub environment: Environment,
     pub lights: Vec<Light>,
     pub materials: Vec<Material>,
-    /// Names of `materials`, for messages.
-    pub material_names: Vec<String>,
     pub objects: Vec<Object>,
     pub films: Vec<Film>,
 }

@@ -720,7 +720,6 @@ fn build(file: SceneFile, base: &Path, origin: &str) -> Result<Scene> {
         environment,
         lights,
         materials,
-        material_names: names.into_iter().cloned().collect(),
         objects,
         films,
     })
