@@ -52,6 +52,21 @@ impl Error {
 
 pub type Result<T, E = Error> = std::result::Result<T, E>;
 
+/// A TOML parse error as a malformed-file error: where it is (line and
+/// column, 1-based) and what is wrong.
+pub(crate) fn toml_error(origin: &str, e: &toml::de::Error, text: &str) -> Error {
+    let at = e
+        .span()
+        .map(|span| {
+            let before = &text[..span.start.min(text.len())];
+            let line = before.matches('\n').count() + 1;
+            let column = before.len() - before.rfind('\n').map_or(0, |i| i + 1) + 1;
+            format!("line {line}, column {column}: ")
+        })
+        .unwrap_or_default();
+    Error::malformed(origin, format!("{at}{}", toml_message(e, text)))
+}
+
 /// A TOML parse error's message. toml leaves it empty for some syntax errors
 /// (a value missing at the end of the file), which would print as nothing
 /// after the position.

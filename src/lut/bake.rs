@@ -10,7 +10,7 @@ use super::header::{
     FORMAT_VERSION, THICKNESS_AXIS, WAVELENGTH_AXIS,
 };
 use super::sample::{channel_names, Lut};
-use super::validate::validate;
+use super::validate::{max_or_nan, validate};
 use super::{BakeSpec, Kind, Resolution, MAX_AXIS_NODES, MAX_NODES};
 use crate::color::SpectralIntegrator;
 use crate::error::{Error, Result};
@@ -138,7 +138,7 @@ pub fn bake_with_progress(spec: &BakeSpec, progress: &(dyn Fn(f64) + Sync)) -> R
                     return Ok(lut);
                 }
                 let stats = validate(&lut, spec.validation_points, VALIDATION_SEED)?;
-                let worst = stats.max_abs.iter().fold(0.0f64, |a, &b| a.max(b));
+                let worst = max_or_nan(&stats.max_abs);
                 match target {
                     // Midpoints are where interpolation error peaks for a
                     // smooth response, but a feature narrower than the grid

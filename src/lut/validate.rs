@@ -226,7 +226,7 @@ pub fn validate(lut: &Lut, points: usize, seed: u64) -> Result<ErrorStats> {
         stats.mean_de2000 = Some(sum.map(|s| s / des.len() as f64));
     }
 
-    let worst = |p: &PointError| p.abs[..n_channels].iter().fold(0.0f64, |a, &b| a.max(b));
+    let worst = |p: &PointError| max_or_nan(&p.abs[..n_channels]);
     if let Some(p) = errors.iter().max_by(|a, b| worst(a).total_cmp(&worst(b))) {
         stats.worst_point = p.at;
     }
@@ -272,5 +272,30 @@ impl Lut {
     /// Records validation figures in the header (written with the table).
     pub fn set_validation(&mut self, stats: ErrorStats) {
         self.header_mut().error.validation = Some(stats);
+    }
+}
+
+/// The largest of `values` (0 for none), or NaN if any is NaN: `f64::max`
+/// alone drops a NaN, which would let a broken point pass as the best.
+pub(crate) fn max_or_nan(values: &[f64]) -> f64 {
+    values.iter().fold(0.0f64, |a, &b| {
+        if a.is_nan() || b.is_nan() {
+            f64::NAN
+        } else {
+            a.max(b)
+        }
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::max_or_nan;
+
+    #[test]
+    fn a_nan_error_is_never_the_smallest() {
+        assert_eq!(max_or_nan(&[1e-4, 3e-4, 2e-4]), 3e-4);
+        assert_eq!(max_or_nan(&[]), 0.0);
+        assert!(max_or_nan(&[1e-4, f64::NAN, 2e-4]).is_nan());
+        assert!(max_or_nan(&[f64::NAN, 2e-4]).is_nan());
     }
 }

@@ -222,21 +222,8 @@ impl Stack {
 
     /// Parses and resolves stack-file text; `origin` names it in errors.
     pub fn from_toml_str(text: &str, base_dir: &Path, origin: &str) -> Result<Stack> {
-        let spec: StackSpec = toml::from_str(text).map_err(|e| {
-            let at = e
-                .span()
-                .map(|span| {
-                    let before = &text[..span.start.min(text.len())];
-                    let line = before.matches('\n').count() + 1;
-                    let column = before.len() - before.rfind('\n').map_or(0, |i| i + 1) + 1;
-                    format!("line {line}, column {column}: ")
-                })
-                .unwrap_or_default();
-            Error::malformed(
-                origin,
-                format!("{at}{}", crate::error::toml_message(&e, text)),
-            )
-        })?;
+        let spec: StackSpec =
+            toml::from_str(text).map_err(|e| crate::error::toml_error(origin, &e, text))?;
         spec.resolve(base_dir)
             .map_err(|e| Error::malformed(origin, e.to_string()))
     }

@@ -88,14 +88,8 @@ impl Scene {
 
     /// Parses scene text; `origin` names it in error messages.
     pub fn from_toml_str(text: &str, base_dir: &Path, origin: &str) -> Result<Scene> {
-        let file: SceneFile = toml::from_str(text).map_err(|e| {
-            let line = e.span().map(|s| text[..s.start].lines().count().max(1));
-            let at = line.map(|l| format!("line {l}: ")).unwrap_or_default();
-            Error::malformed(
-                origin,
-                format!("{at}{}", crate::error::toml_message(&e, text)),
-            )
-        })?;
+        let file: SceneFile =
+            toml::from_str(text).map_err(|e| crate::error::toml_error(origin, &e, text))?;
         build(file, base_dir, origin)
     }
 }
@@ -876,5 +870,21 @@ mod tests {
             e.contains("materials.m.stack") && e.contains("unobtainium"),
             "{e}"
         );
+    }
+
+    /// A syntax error is placed where it is: a value error on line 3 and
+    /// one at the very start of line 3 (which counting `lines()` of the
+    /// text before it put on line 2).
+    #[test]
+    fn toml_errors_name_their_line_and_column() {
+        let err = |text: &str| {
+            Scene::from_toml_str(text, Path::new("."), "s.toml")
+                .unwrap_err()
+                .to_string()
+        };
+        let e = err("name = \"x\"\n[render]\nwidth = \"a\"\n");
+        assert!(e.contains("line 3, column 9"), "{e}");
+        let e = err("[camera]\nposition = [0.0, 1.0\n");
+        assert!(e.contains("line 3, column 1"), "{e}");
     }
 }
