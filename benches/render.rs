@@ -8,6 +8,7 @@ use criterion::{black_box, criterion_group, criterion_main, Criterion, Throughpu
 use glam::Vec3;
 use irid::color::Sampling;
 use irid::render::material::Material;
+use irid::render::thickness::ThicknessField;
 use irid::render::{self, FilmMode, FilmShading, LutFilm, RenderOptions, Scene, Side};
 
 fn bench(c: &mut Criterion) {
@@ -21,11 +22,23 @@ fn bench(c: &mut Criterion) {
         sampling: Sampling::Uniform(41),
     });
     let direct_films = render::prepare_films(&scene, &direct.film).unwrap();
+    // The same film at one thickness: the tables as they are, no noise.
+    let mut uniform = scene.clone();
+    for m in uniform.materials.iter_mut() {
+        if let Material::Film(f) = m {
+            f.thickness = ThicknessField::Uniform {
+                thickness_nm: 350.0,
+            };
+        }
+    }
 
     let mut g = c.benchmark_group("two-layer-noise 500x500 1spp");
     g.sample_size(10);
     g.bench_function("lut", |b| {
         b.iter(|| render::render_with(&scene, &lut_films, &lut))
+    });
+    g.bench_function("lut, uniform 350 nm film", |b| {
+        b.iter(|| render::render_with(&uniform, &lut_films, &lut))
     });
     g.bench_function("plain glass (no film)", |b| {
         b.iter(|| render::render_with(&plain, &plain_films, &lut))
