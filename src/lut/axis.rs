@@ -187,13 +187,18 @@ impl Locator {
         let last_interval = self.nodes.len().saturating_sub(2) as i32;
         if self.uniform_inv_step > 0.0 {
             let s = (x - self.first) * self.uniform_inv_step;
-            let i = (s as i32).min(last_interval);
+            // SAFETY: x is clamped to [first, last] (NaN too), so s is
+            // finite, ≥ 0 and at most about n − 1 < 2³¹. `as` would add a
+            // saturation this cannot need, at every film hit.
+            let i = unsafe { s.to_int_unchecked::<i32>() }.min(last_interval);
             return (i as usize, (s - i as f32).clamp(0.0, 1.0));
         }
         if self.nodes.len() < 2 {
             return (0, 0.0);
         }
-        let b = (((x - self.first) * self.bucket_scale) as i32).min(self.buckets.len() as i32 - 1);
+        // SAFETY: as above; at most the bucket count (≤ 65536).
+        let b = unsafe { ((x - self.first) * self.bucket_scale).to_int_unchecked::<i32>() }
+            .min(self.buckets.len() as i32 - 1);
         let (lo, span) = self.buckets[b as usize];
         let mut i = lo as usize;
         if span <= 1 {

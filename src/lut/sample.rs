@@ -155,7 +155,7 @@ impl Lut {
     /// Bilinear in thickness and cos θ. Inputs outside an axis are clamped
     /// to its end (NaN to its start): the table never extrapolates. On a
     /// spectral table every component is NaN. Allocates nothing.
-    #[inline]
+    #[inline(always)]
     pub fn sample_rgb(&self, thickness_nm: f32, cos_theta: f32) -> FilmRgb {
         if self.rgb_nodes.is_empty() {
             return FilmRgb {
@@ -169,13 +169,9 @@ impl Lut {
         let dx = usize::from(nt > 1);
         let dy = if self.cos.len() > 1 { nt } else { 0 };
         let at = j * nt + i;
-        let nodes = &self.rgb_nodes;
-        let (v00, v10, v01, v11) = (
-            nodes[at],
-            nodes[at + dx],
-            nodes[at + dy],
-            nodes[at + dy + dx],
-        );
+        // One bounds check for the four corners.
+        let nodes = &self.rgb_nodes[at..=at + dy + dx];
+        let (v00, v10, v01, v11) = (nodes[0], nodes[dx], nodes[dy], nodes[dy + dx]);
         // The same a + f·(b − a) per channel as `bilerp`, four lanes at once.
         let lerp = |a: Vec4, b: Vec4, f: f32| a + (b - a) * f;
         let r = lerp(lerp(v00[0], v10[0], fx), lerp(v01[0], v11[0], fx), fy);
