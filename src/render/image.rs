@@ -7,6 +7,7 @@ use glam::Vec3;
 use rayon::prelude::*;
 
 use super::camera::Camera;
+use super::film::FilmShading;
 use super::tracer::Tracer;
 
 /// A linear-RGB image (exposure applied), rows top to bottom.
@@ -35,7 +36,7 @@ pub struct Sampler {
 /// Renders every pixel. Each pixel's sample positions come from a hash of
 /// (seed, pixel, sample), so the image does not depend on thread count or
 /// scheduling: the same seed gives the same image bit for bit.
-pub fn render_tiles(tracer: &Tracer, camera: &Camera, s: &Sampler) -> Image {
+pub fn render_tiles<F: FilmShading>(tracer: &Tracer<F>, camera: &Camera, s: &Sampler) -> Image {
     let tiles_x = s.width.div_ceil(TILE);
     let tiles_y = s.height.div_ceil(TILE);
     let bar = if s.progress && std::io::stderr().is_terminal() {
@@ -88,7 +89,13 @@ pub fn render_tiles(tracer: &Tracer, camera: &Camera, s: &Sampler) -> Image {
 /// Stratified samples: a jittered k×k grid when spp is a square, otherwise
 /// a jittered Latin hypercube (each row and each column stratum used once);
 /// one sample per pixel goes through the pixel centre.
-fn render_pixel(tracer: &Tracer, camera: &Camera, s: &Sampler, x: u32, y: u32) -> Vec3 {
+fn render_pixel<F: FilmShading>(
+    tracer: &Tracer<F>,
+    camera: &Camera,
+    s: &Sampler,
+    x: u32,
+    y: u32,
+) -> Vec3 {
     let pixel_index = u64::from(y) * u64::from(s.width) + u64::from(x);
     let (w, h) = (s.width as f32, s.height as f32);
     let mut sum = Vec3::ZERO;

@@ -37,6 +37,9 @@ pub use scene_file::builtin_names;
 
 use crate::color::Sampling;
 use crate::error::Result;
+use material::Material;
+use scene::Shape;
+use thickness::ThicknessGrid;
 
 /// How films are shaded.
 #[derive(Clone, Debug, PartialEq)]
@@ -82,10 +85,21 @@ impl RenderOptions {
     }
 }
 
-/// One shader per film of a scene, and what preparing them cost.
+/// One shader per film of a scene, all of one mode.
+pub enum FilmShaders {
+    Lut(Vec<LutFilm>),
+    Direct(Vec<DirectFilm>),
+}
+
+/// The film shaders a scene needs, and what preparing them cost.
 pub struct PreparedFilms {
-    pub shaders: Vec<Box<dyn FilmShading>>,
-    /// Wall time spent baking or loading tables (zero in direct mode).
+    pub shaders: FilmShaders,
+    /// Per object: in LUT mode, its film's noise thickness field baked to
+    /// a grid (where the object is bounded and the grid small enough);
+    /// empty in direct mode, which evaluates the noise at every hit.
+    pub thickness_grids: Vec<Option<ThicknessGrid>>,
+    /// Wall time spent baking or loading tables and baking thickness
+    /// grids (zero in direct mode).
     pub bake_time: Duration,
     /// Tables baked by this call, and tables found in the cache.
     pub tables_baked: usize,
@@ -96,31 +110,63 @@ pub struct PreparedFilms {
 /// the cache or bakes it (only the thickness range and sides the scene uses).
 pub fn prepare_films(scene: &Scene, mode: &FilmMode) -> Result<PreparedFilms> {
     let start = Instant::now();
-    let mut shaders: Vec<Box<dyn FilmShading>> = Vec::with_capacity(scene.films.len());
     let (mut baked, mut cached) = (0, 0);
-    for film in &scene.films {
-        match mode {
-            FilmMode::Direct { sampling } => {
-                shaders.push(Box::new(DirectFilm::new(film, *sampling)?))
-            }
-            FilmMode::Lut { cache_dir } => {
+    let shaders = match mode {
+        FilmMode::Direct { sampling } => FilmShaders::Direct(
+            scene
+                .films
+                .iter()
+                .map(|film| DirectFilm::new(film, *sampling))
+                .collect::<Result<_>>()?,
+        ),
+        FilmMode::Lut { cache_dir } => {
+            let mut tables = Vec::with_capacity(scene.films.len());
+            for film in &scene.films {
                 let (lut, b, c) = LutFilm::prepare(film, cache_dir)?;
                 baked += b;
                 cached += c;
-                shaders.push(Box::new(lut));
+                tables.push(lut);
             }
+            FilmShaders::Lut(tables)
         }
-    }
+    };
+    let thickness_grids = match mode {
+        FilmMode::Direct { .. } => Vec::new(),
+        FilmMode::Lut { .. } => bake_thickness_grids(scene),
+    };
     let bake_time = match mode {
         FilmMode::Direct { .. } => Duration::ZERO,
         FilmMode::Lut { .. } => start.elapsed(),
     };
     Ok(PreparedFilms {
         shaders,
+        thickness_grids,
         bake_time,
         tables_baked: baked,
         tables_cached: cached,
     })
+}
+
+/// Each object's noise thickness field baked over its bounding box (in
+/// parallel: a grid is a few hundred thousand noise evaluations). Planes
+/// have no box and keep the exact field.
+fn bake_thickness_grids(scene: &Scene) -> Vec<Option<ThicknessGrid>> {
+    use rayon::prelude::*;
+    scene
+        .objects
+        .par_iter()
+        .map(|o| {
+            let Material::Film(f) = &scene.materials[o.material] else {
+                return None;
+            };
+            let bounds = match &o.shape {
+                Shape::Sphere(s) => s.bounds(),
+                Shape::Mesh(m) => m.bounds(),
+                Shape::Plane(_) => return None,
+            };
+            ThicknessGrid::bake(&f.thickness, &bounds)
+        })
+        .collect()
 }
 
 /// Renders with prepared film shaders.
@@ -136,11 +182,7 @@ pub fn render_with(scene: &Scene, films: &PreparedFilms, opts: &RenderOptions) -
         c.vfov_deg,
         width as f32 / height as f32,
     );
-    let tracer = tracer::Tracer {
-        scene,
-        films: &films.shaders,
-        max_depth: opts.max_depth.unwrap_or(s.max_depth),
-    };
+    let max_depth = opts.max_depth.unwrap_or(s.max_depth);
     let sampler = image::Sampler {
         width,
         height,
@@ -149,7 +191,27 @@ pub fn render_with(scene: &Scene, films: &PreparedFilms, opts: &RenderOptions) -
         exposure: s.exposure,
         progress: opts.progress,
     };
-    image::render_tiles(&tracer, &camera, &sampler)
+    let films_thickness = &films.thickness_grids;
+    match &films.shaders {
+        FilmShaders::Lut(films) => {
+            let tracer = tracer::Tracer {
+                scene,
+                films,
+                thickness_grids: films_thickness,
+                max_depth,
+            };
+            image::render_tiles(&tracer, &camera, &sampler)
+        }
+        FilmShaders::Direct(films) => {
+            let tracer = tracer::Tracer {
+                scene,
+                films,
+                thickness_grids: films_thickness,
+                max_depth,
+            };
+            image::render_tiles(&tracer, &camera, &sampler)
+        }
+    }
 }
 
 /// Prepares the films and renders.

@@ -49,76 +49,105 @@ impl ThicknessField {
     }
 }
 
-/// Ken Perlin's improved noise (2002): a seeded permutation of 0..256 picks
-/// one of 12 edge gradients at each lattice point, blended with the quintic
-/// fade 6t⁵ − 15t⁴ + 10t³. Written here in f32 rather than taken from the
-/// `noise` crate because it runs at every film hit: the crate's f64 version
-/// costs ~70 ns an evaluation, this one ~16 ns, which is still the largest
-/// part of what film shading adds to the LUT render of `two-layer-noise`.
+/// Ken Perlin's improved noise (2002): one of 12 edge gradients at each
+/// lattice point, blended with the quintic fade 6t⁵ − 15t⁴ + 10t³.
+///
+/// Perlin picks a lattice point's gradient through a seeded permutation of
+/// 0..256 looked up three times (p[p[p[x] + y] + z]); here an integer hash
+/// of the lattice coordinates and the seed picks it instead. The field has
+/// the same form and statistics, does not repeat every 256 cells, and all
+/// eight corners of a cell can be hashed at once in one vector register,
+/// which is what makes it cheap: the noise runs at every film hit and was
+/// the largest part of what film shading adds to a LUT render (the `noise`
+/// crate's f64 version costs ~70 ns an evaluation; a scalar f32 table
+/// version ~16 ns; this one, in AVX2 lanes, is timed by the bench's
+/// `film hit` group).
 #[derive(Clone, Debug)]
 pub struct Perlin {
-    /// The permutation twice over, so p[p[x] + y] never needs wrapping.
-    perm: [u8; 512],
+    /// The seed, spread over 32 bits so nearby seeds give unrelated fields.
+    key: u32,
+    /// Whether this CPU runs the AVX2 evaluation (checked once, here).
+    avx2: bool,
+}
+
+/// Offsets of a cell's eight corners from its lowest one; corner k is
+/// (k & 1, (k >> 1) & 1, k >> 2), the order of the vector lanes.
+const CORNER_X: [i32; 8] = [0, 1, 0, 1, 0, 1, 0, 1];
+const CORNER_Y: [i32; 8] = [0, 0, 1, 1, 0, 0, 1, 1];
+const CORNER_Z: [i32; 8] = [0, 0, 0, 0, 1, 1, 1, 1];
+
+/// Large odd multipliers for the three lattice coordinates (the spatial
+/// hash of Teschner et al. 2003), then Wellons' `lowbias32` finaliser, so
+/// that every bit of the result depends on every input bit.
+const HASH_X: u32 = 0x8DA6_B343;
+const HASH_Y: u32 = 0xD816_3841;
+const HASH_Z: u32 = 0xCB1A_B31F;
+const MIX_1: u32 = 0x7FEB_352D;
+const MIX_2: u32 = 0x846C_A68B;
+
+/// The gradient index (0..16) of lattice point (x, y, z).
+#[inline(always)]
+fn gradient_index(x: i32, y: i32, z: i32, key: u32) -> u32 {
+    let mut h = (x as u32).wrapping_mul(HASH_X)
+        ^ (y as u32).wrapping_mul(HASH_Y)
+        ^ (z as u32).wrapping_mul(HASH_Z)
+        ^ key;
+    h ^= h >> 16;
+    h = h.wrapping_mul(MIX_1);
+    h ^= h >> 15;
+    h = h.wrapping_mul(MIX_2);
+    h ^= h >> 16;
+    h >> 28
+}
+
+/// Perlin's gradient ramp g·(x, y, z) for gradient index `h`, written as
+/// his reference code's `grad` switch (indices 12..15 repeat four of the
+/// 12 edge directions so that 16 choices stay unbiased).
+#[inline(always)]
+fn gradient_dot(h: u32, x: f32, y: f32, z: f32) -> f32 {
+    let u = if h < 8 { x } else { y };
+    let v = if h < 4 {
+        y
+    } else if h | 2 == 14 {
+        x
+    } else {
+        z
+    };
+    // Sign flips by the sign bit, as the vector code does, so the two
+    // agree bit for bit (−0.0 included).
+    let u = f32::from_bits(u.to_bits() ^ ((h & 1) << 31));
+    let v = f32::from_bits(v.to_bits() ^ ((h & 2) << 30));
+    u + v
+}
+
+/// The quintic fade, on all lanes at once.
+#[inline(always)]
+fn fade(d: Vec4) -> Vec4 {
+    d * d * d * (d * (d * 6.0 - 15.0) + 10.0)
 }
 
 impl Perlin {
     pub fn new(seed: u32) -> Perlin {
-        let mut p: [u8; 256] = std::array::from_fn(|i| i as u8);
-        // Fisher–Yates with SplitMix64: a fixed permutation per seed.
-        let mut state = u64::from(seed) ^ 0x005E_ED0F_1D1D;
-        for i in (1..256usize).rev() {
-            state = state.wrapping_add(0x9E37_79B9_7F4A_7C15);
-            let mut z = state;
-            z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-            z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-            z ^= z >> 31;
-            p.swap(i, (z % (i as u64 + 1)) as usize);
+        // SplitMix64's finaliser: seeds 1 and 2 get unrelated keys.
+        let mut z = u64::from(seed).wrapping_add(0x9E37_79B9_7F4A_7C15);
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^= z >> 31;
+        Perlin {
+            key: z as u32,
+            avx2: avx2_available(),
         }
-        let mut perm = [0u8; 512];
-        perm[..256].copy_from_slice(&p);
-        perm[256..].copy_from_slice(&p);
-        Perlin { perm }
     }
 
     /// Signed noise, 0 on the integer lattice; its range is within about ±1.
-    ///
-    /// Perlin blends the eight corners' gradient ramps with three rounds of
-    /// lerps; here the same trilinear blend is written as one weighted sum,
-    /// Σ w_k g_k · (p − c_k), with each term a 4-lane vector product, which
-    /// keeps the evaluation short (it runs at every film hit).
     #[inline]
     pub fn signed(&self, p: Vec3) -> f32 {
-        let (fx, fy, fz) = (fast_floor(p.x), fast_floor(p.y), fast_floor(p.z));
-        let d = Vec4::new(p.x - fx as f32, p.y - fy as f32, p.z - fz as f32, 0.0);
-        let fade = d * d * d * (d * (d * 6.0 - 15.0) + 10.0);
-        let (u, v, w) = (fade.x, fade.y, fade.z);
-        // Lattice coordinates wrap every 256 cells; `& 255` keeps negative
-        // coordinates on the same lattice.
-        let xi = (fx & 255) as usize;
-        let yi = (fy & 255) as usize;
-        let zi = (fz & 255) as usize;
-        let pm = &self.perm;
-        let a = pm[xi] as usize + yi;
-        let aa = pm[a] as usize + zi;
-        let ab = pm[a + 1] as usize + zi;
-        let b = pm[xi + 1] as usize + yi;
-        let ba = pm[b] as usize + zi;
-        let bb = pm[b + 1] as usize + zi;
-        let g = |h: u8| GRADIENTS[usize::from(h & 15)];
-        let (ex, ey, ez) = (Vec4::X, Vec4::Y, Vec4::Z);
-        let (u0, v0, w0) = (1.0 - u, 1.0 - v, 1.0 - w);
-        let (c00, c10, c01, c11) = (u0 * v0, u * v0, u0 * v, u * v);
-        let near = g(pm[aa]) * d * (c00 * w0)
-            + g(pm[ba]) * (d - ex) * (c10 * w0)
-            + g(pm[ab]) * (d - ey) * (c01 * w0)
-            + g(pm[bb]) * (d - ex - ey) * (c11 * w0);
-        let dz = d - ez;
-        let far = g(pm[aa + 1]) * dz * (c00 * w)
-            + g(pm[ba + 1]) * (dz - ex) * (c10 * w)
-            + g(pm[ab + 1]) * (dz - ey) * (c01 * w)
-            + g(pm[bb + 1]) * (dz - ex - ey) * (c11 * w);
-        let sum = near + far;
-        sum.x + sum.y + sum.z
+        #[cfg(target_arch = "x86_64")]
+        if self.avx2 {
+            // SAFETY: `avx2` is only set when the CPU has AVX2.
+            return unsafe { signed_avx2(self.key, p.x, p.y, p.z) };
+        }
+        self.signed_portable(p)
     }
 
     /// Noise mapped from its signed range to [0, 1] (0.5 on the lattice);
@@ -128,6 +157,304 @@ impl Perlin {
     pub fn unit(&self, p: Vec3) -> f32 {
         (0.5 + 0.5 * self.signed(p)).clamp(0.0, 1.0)
     }
+
+    /// The same sum as the AVX2 code, one corner at a time, in the same
+    /// order of operations, so every CPU gets the same image bit for bit.
+    fn signed_portable(&self, p: Vec3) -> f32 {
+        let (fx, fy, fz) = (fast_floor(p.x), fast_floor(p.y), fast_floor(p.z));
+        let d = Vec4::new(p.x - fx as f32, p.y - fy as f32, p.z - fz as f32, 0.0);
+        let f = fade(d);
+        let mut terms = [0.0f32; 8];
+        for (k, term) in terms.iter_mut().enumerate() {
+            let (cx, cy, cz) = (CORNER_X[k], CORNER_Y[k], CORNER_Z[k]);
+            let h = gradient_index(
+                fx.wrapping_add(cx),
+                fy.wrapping_add(cy),
+                fz.wrapping_add(cz),
+                self.key,
+            );
+            let g = gradient_dot(h, d.x - cx as f32, d.y - cy as f32, d.z - cz as f32);
+            let pick = |c: i32, t: f32| if c == 1 { t } else { 1.0 - t };
+            let weight = pick(cx, f.x) * pick(cy, f.y) * pick(cz, f.z);
+            *term = weight * g;
+        }
+        let t = terms;
+        ((t[0] + t[4]) + (t[2] + t[6])) + ((t[1] + t[5]) + (t[3] + t[7]))
+    }
+}
+
+/// The eight corners in the eight lanes of one AVX2 register: hash,
+/// gradient choice, ramp and weight for all of them at once. Takes scalars,
+/// not a `Vec3` behind a reference: it is not inlined into its caller.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn signed_avx2(key: u32, px: f32, py: f32, pz: f32) -> f32 {
+    let p = Vec3::new(px, py, pz);
+    use std::arch::x86_64::*;
+    let (fx, fy, fz) = (fast_floor(p.x), fast_floor(p.y), fast_floor(p.z));
+    let d = Vec4::new(p.x - fx as f32, p.y - fy as f32, p.z - fz as f32, 0.0);
+    let f = fade(d);
+    // Closures here would not inherit this function's target feature
+    // and each intrinsic in them would become a call: everything is
+    // written out.
+    let cx = _mm256_setr_epi32(0, 1, 0, 1, 0, 1, 0, 1);
+    let cy = _mm256_setr_epi32(0, 0, 1, 1, 0, 0, 1, 1);
+    let cz = _mm256_setr_epi32(0, 0, 0, 0, 1, 1, 1, 1);
+    let xs = _mm256_add_epi32(_mm256_set1_epi32(fx), cx);
+    let ys = _mm256_add_epi32(_mm256_set1_epi32(fy), cy);
+    let zs = _mm256_add_epi32(_mm256_set1_epi32(fz), cz);
+    let mut h = _mm256_xor_si256(
+        _mm256_xor_si256(
+            _mm256_mullo_epi32(xs, _mm256_set1_epi32(HASH_X as i32)),
+            _mm256_mullo_epi32(ys, _mm256_set1_epi32(HASH_Y as i32)),
+        ),
+        _mm256_xor_si256(
+            _mm256_mullo_epi32(zs, _mm256_set1_epi32(HASH_Z as i32)),
+            _mm256_set1_epi32(key as i32),
+        ),
+    );
+    h = _mm256_xor_si256(h, _mm256_srli_epi32::<16>(h));
+    h = _mm256_mullo_epi32(h, _mm256_set1_epi32(MIX_1 as i32));
+    h = _mm256_xor_si256(h, _mm256_srli_epi32::<15>(h));
+    h = _mm256_mullo_epi32(h, _mm256_set1_epi32(MIX_2 as i32));
+    h = _mm256_xor_si256(h, _mm256_srli_epi32::<16>(h));
+    let h = _mm256_srli_epi32::<28>(h);
+
+    // Offsets from each corner: d − c, exact for c ∈ {0, 1}.
+    let (cxf, cyf, czf) = (
+        _mm256_cvtepi32_ps(cx),
+        _mm256_cvtepi32_ps(cy),
+        _mm256_cvtepi32_ps(cz),
+    );
+    let x = _mm256_sub_ps(_mm256_set1_ps(d.x), cxf);
+    let y = _mm256_sub_ps(_mm256_set1_ps(d.y), cyf);
+    let z = _mm256_sub_ps(_mm256_set1_ps(d.z), czf);
+    let below_8 = _mm256_castsi256_ps(_mm256_cmpgt_epi32(_mm256_set1_epi32(8), h));
+    let below_4 = _mm256_castsi256_ps(_mm256_cmpgt_epi32(_mm256_set1_epi32(4), h));
+    let is_12_or_14 = _mm256_castsi256_ps(_mm256_cmpeq_epi32(
+        _mm256_or_si256(h, _mm256_set1_epi32(2)),
+        _mm256_set1_epi32(14),
+    ));
+    let u = _mm256_blendv_ps(y, x, below_8);
+    let v = _mm256_blendv_ps(_mm256_blendv_ps(z, x, is_12_or_14), y, below_4);
+    let sign_u = _mm256_slli_epi32::<31>(h);
+    let sign_v = _mm256_slli_epi32::<30>(_mm256_and_si256(h, _mm256_set1_epi32(2)));
+    let u = _mm256_xor_ps(u, _mm256_castsi256_ps(sign_u));
+    let v = _mm256_xor_ps(v, _mm256_castsi256_ps(sign_v));
+    let g = _mm256_add_ps(u, v);
+
+    // Corner weights: the fade where the corner's offset is 1, one
+    // minus it where 0: (1 − t) + c·(2t − 1) would round differently
+    // from the portable code, so select instead.
+    let wx = _mm256_blendv_ps(
+        _mm256_set1_ps(1.0 - f.x),
+        _mm256_set1_ps(f.x),
+        _mm256_castsi256_ps(_mm256_slli_epi32::<31>(cx)),
+    );
+    let wy = _mm256_blendv_ps(
+        _mm256_set1_ps(1.0 - f.y),
+        _mm256_set1_ps(f.y),
+        _mm256_castsi256_ps(_mm256_slli_epi32::<31>(cy)),
+    );
+    let wz = _mm256_blendv_ps(
+        _mm256_set1_ps(1.0 - f.z),
+        _mm256_set1_ps(f.z),
+        _mm256_castsi256_ps(_mm256_slli_epi32::<31>(cz)),
+    );
+    let weight = _mm256_mul_ps(_mm256_mul_ps(wx, wy), wz);
+    let t = _mm256_mul_ps(weight, g);
+
+    // ((t0 + t4) + (t2 + t6)) + ((t1 + t5) + (t3 + t7)), as above.
+    let s4 = _mm_add_ps(_mm256_castps256_ps128(t), _mm256_extractf128_ps::<1>(t));
+    let s2 = _mm_add_ps(s4, _mm_movehl_ps(s4, s4));
+    let s1 = _mm_add_ss(s2, _mm_shuffle_ps::<0b01>(s2, s2));
+    _mm_cvtss_f32(s1)
+}
+
+/// A noise thickness field baked over one object's bounding box: the
+/// field at the nodes of a regular 3-D grid, interpolated trilinearly.
+///
+/// Why: in LUT mode a film hit costs a table lookup plus the noise, and the
+/// noise (eight hashed gradient ramps, ~15 ns) is the larger part, at least
+/// as much as the whole film shading budget. Sampling the field from a
+/// grid is one trilinear lookup, like the film table's own bilinear one,
+/// and its error is small and measured: [`ThicknessGrid::bake`] checks it
+/// against the exact field and the tracer's tests bound the colour error
+/// of LUT renders (grid included) against direct exact renders (which
+/// evaluate the noise at every hit).
+#[derive(Clone, Debug)]
+pub struct ThicknessGrid {
+    origin: Vec4,
+    /// Grid cells per scene unit.
+    inv_step: Vec4,
+    /// The largest grid coordinate a lookup may take, per axis: just short
+    /// of the last node, so the cell's far corner always exists.
+    max_coord: Vec4,
+    /// Nodes per axis; x varies fastest in `nodes`.
+    dims: [usize; 3],
+    min_nm: f32,
+    /// Thickness per quantum of a node's value.
+    nm_per_quantum: f32,
+    /// The field at each node, as a fraction of [min_nm, max_nm] in
+    /// 1/65535 steps (0.008 nm over a 500 nm range, far below the
+    /// interpolation error, at half the memory of f32).
+    nodes: Vec<u16>,
+    /// Largest |grid − field| seen at the bake's check points, in nm.
+    pub max_error_nm: f32,
+}
+
+/// Grid nodes per noise lattice cell: Perlin noise varies on the scale of
+/// a cell, and trilinear interpolation's error falls as the square of the
+/// spacing; 16 keeps it near a nanometre (measured at each bake).
+const GRID_NODES_PER_CELL: f32 = 16.0;
+/// Above this many nodes (8 MiB) a grid stops paying for itself: the
+/// lookups miss the cache, and the exact noise is used instead.
+const MAX_GRID_NODES: usize = 1 << 22;
+/// Random points at which a bake compares the grid with the exact field.
+const GRID_CHECK_POINTS: usize = 20_000;
+
+impl ThicknessGrid {
+    /// Bakes `field` over `bounds` (in scene units). `None` when the field
+    /// is uniform (nothing to bake) or the box would need more than
+    /// [`MAX_GRID_NODES`] nodes at this field's frequency.
+    pub fn bake(field: &ThicknessField, bounds: &super::geometry::Aabb) -> Option<ThicknessGrid> {
+        let ThicknessField::Noise {
+            min_nm,
+            max_nm,
+            scale,
+            perlin,
+        } = field
+        else {
+            return None;
+        };
+        // A margin of one node around the box: hit points computed in f32
+        // may lie just outside it.
+        let step = 1.0 / (GRID_NODES_PER_CELL * scale.abs().max(1e-6));
+        let origin = bounds.min - Vec3::splat(step);
+        let extent = bounds.max + Vec3::splat(step) - origin;
+        if !extent.is_finite() || extent.min_element() < 0.0 {
+            return None;
+        }
+        let cells = (extent / step).ceil().max(Vec3::ONE);
+        let dims = [
+            cells.x as usize + 1,
+            cells.y as usize + 1,
+            cells.z as usize + 1,
+        ];
+        let count = dims[0].checked_mul(dims[1])?.checked_mul(dims[2])?;
+        if count > MAX_GRID_NODES {
+            return None;
+        }
+        let span = max_nm - min_nm;
+        let nodes = (0..count)
+            .map(|k| {
+                let (i, j, l) = (
+                    k % dims[0],
+                    (k / dims[0]) % dims[1],
+                    k / (dims[0] * dims[1]),
+                );
+                let p = origin + step * Vec3::new(i as f32, j as f32, l as f32);
+                (perlin.unit(*scale * p) * 65535.0).round() as u16
+            })
+            .collect();
+        // Short of the last node by a margin f32 resolves at these sizes
+        // (dims ≤ 4M): the far corner's weight is at most 1 − 1e-3 there,
+        // inside the margin cell the box never reaches.
+        let below_last = |n: usize| (n - 1) as f32 - 1e-3;
+        let mut grid = ThicknessGrid {
+            origin: origin.extend(0.0),
+            inv_step: Vec4::splat(1.0 / step),
+            max_coord: Vec4::new(
+                below_last(dims[0]),
+                below_last(dims[1]),
+                below_last(dims[2]),
+                0.0,
+            ),
+            dims,
+            min_nm: *min_nm,
+            nm_per_quantum: span / 65535.0,
+            nodes,
+            max_error_nm: 0.0,
+        };
+        // Reproducible check points spread over the box (the surface lies
+        // somewhere inside it; the error does not depend on where).
+        let mut state = 0x2545_F491_4F6C_DD1Du64;
+        let mut unit = || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 40) as f32 / (1u64 << 24) as f32
+        };
+        for _ in 0..GRID_CHECK_POINTS {
+            let t = Vec3::new(unit(), unit(), unit());
+            let p = bounds.min + t * (bounds.max - bounds.min);
+            let err = (grid.at(p) - field.at(p)).abs();
+            grid.max_error_nm = grid.max_error_nm.max(err);
+        }
+        Some(grid)
+    }
+
+    /// Nodes in the grid (its memory is two bytes each).
+    pub fn node_count(&self) -> usize {
+        self.nodes.len()
+    }
+
+    /// The field at `p`, trilinearly interpolated; points outside the box
+    /// take the value at its nearest face.
+    ///
+    /// Written for few instructions (it runs at every film hit): the
+    /// coordinates stay in one vector, the clamp makes the truncation to
+    /// integers a floor that cannot overflow, and one slice of the cell's
+    /// span carries the bounds check for all eight reads.
+    #[inline(always)]
+    pub fn at(&self, p: Vec3) -> f32 {
+        let g = ((p.extend(0.0) - self.origin) * self.inv_step)
+            .max(Vec4::ZERO)
+            .min(self.max_coord);
+        let cell = truncate(g);
+        let f = g - Vec4::new(cell[0] as f32, cell[1] as f32, cell[2] as f32, 0.0);
+        let [nx, ny, _] = self.dims;
+        let (row, plane) = (nx, nx * ny);
+        let base = cell[0] as usize + row * cell[1] as usize + plane * cell[2] as usize;
+        let span = &self.nodes[base..base + plane + row + 2];
+        let v = |k: usize| f32::from(span[k]);
+        let lerp = |a: f32, b: f32, t: f32| a + t * (b - a);
+        let near = lerp(lerp(v(0), v(1), f.x), lerp(v(row), v(row + 1), f.x), f.y);
+        let far = lerp(
+            lerp(v(plane), v(plane + 1), f.x),
+            lerp(v(plane + row), v(plane + row + 1), f.x),
+            f.y,
+        );
+        self.min_nm + self.nm_per_quantum * lerp(near, far, f.z)
+    }
+}
+
+/// Truncates the lanes of a vector known to hold values in [0, 2³¹) to
+/// integers: one SSE2 instruction, where `as` would saturate lane by lane.
+#[inline(always)]
+fn truncate(v: Vec4) -> [i32; 4] {
+    #[cfg(target_arch = "x86_64")]
+    {
+        use std::arch::x86_64::{__m128, _mm_cvttps_epi32};
+        let m: __m128 = v.into();
+        // SAFETY: [i32; 4] and __m128i have the same size and any bits are
+        // valid for both.
+        unsafe { std::mem::transmute(_mm_cvttps_epi32(m)) }
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        [v.x as i32, v.y as i32, v.z as i32, v.w as i32]
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+fn avx2_available() -> bool {
+    std::arch::is_x86_feature_detected!("avx2")
+}
+
+#[cfg(not(target_arch = "x86_64"))]
+fn avx2_available() -> bool {
+    false
 }
 
 /// floor() as an integer without a libm call (x86-64's baseline has no
@@ -137,27 +464,6 @@ pub(crate) fn fast_floor(x: f32) -> i32 {
     let i = x as i32;
     i - i32::from(x < i as f32)
 }
-
-/// Perlin's 12 cube-edge gradients, padded to 16 by repeating four of
-/// them (as in his reference code's `h & 15` switch).
-const GRADIENTS: [Vec4; 16] = [
-    Vec4::new(1.0, 1.0, 0.0, 0.0),
-    Vec4::new(-1.0, 1.0, 0.0, 0.0),
-    Vec4::new(1.0, -1.0, 0.0, 0.0),
-    Vec4::new(-1.0, -1.0, 0.0, 0.0),
-    Vec4::new(1.0, 0.0, 1.0, 0.0),
-    Vec4::new(-1.0, 0.0, 1.0, 0.0),
-    Vec4::new(1.0, 0.0, -1.0, 0.0),
-    Vec4::new(-1.0, 0.0, -1.0, 0.0),
-    Vec4::new(0.0, 1.0, 1.0, 0.0),
-    Vec4::new(0.0, -1.0, 1.0, 0.0),
-    Vec4::new(0.0, 1.0, -1.0, 0.0),
-    Vec4::new(0.0, -1.0, -1.0, 0.0),
-    Vec4::new(1.0, 1.0, 0.0, 0.0),
-    Vec4::new(0.0, -1.0, 1.0, 0.0),
-    Vec4::new(-1.0, 1.0, 0.0, 0.0),
-    Vec4::new(0.0, -1.0, -1.0, 0.0),
-];
 
 #[cfg(test)]
 mod tests {
@@ -178,12 +484,12 @@ mod tests {
     }
 
     /// Perlin's reference formulation: gradient ramps blended by three
-    /// rounds of lerps with the quintic fade, his `grad` switch included.
+    /// rounds of lerps with the quintic fade, in f64, his `grad` switch
+    /// written out as he wrote it; only the gradient choice is shared.
     fn reference(perlin: &Perlin, p: Vec3) -> f64 {
         let fade = |t: f64| t * t * t * (t * (t * 6.0 - 15.0) + 10.0);
         let lerp = |t: f64, a: f64, b: f64| a + t * (b - a);
-        let grad = |hash: u8, x: f64, y: f64, z: f64| {
-            let h = hash & 15;
+        let grad = |h: u32, x: f64, y: f64, z: f64| {
             let u = if h < 8 { x } else { y };
             let v = if h < 4 {
                 y
@@ -196,41 +502,24 @@ mod tests {
         };
         let (x, y, z) = (f64::from(p.x), f64::from(p.y), f64::from(p.z));
         let (fx, fy, fz) = (x.floor(), y.floor(), z.floor());
-        let (xi, yi, zi) = (
-            (fx as i64 & 255) as usize,
-            (fy as i64 & 255) as usize,
-            (fz as i64 & 255) as usize,
-        );
+        let (xi, yi, zi) = (fx as i32, fy as i32, fz as i32);
         let (x, y, z) = (x - fx, y - fy, z - fz);
         let (u, v, w) = (fade(x), fade(y), fade(z));
-        let pm = &perlin.perm;
-        let a = pm[xi] as usize + yi;
-        let (aa, ab) = (pm[a] as usize + zi, pm[a + 1] as usize + zi);
-        let b = pm[xi + 1] as usize + yi;
-        let (ba, bb) = (pm[b] as usize + zi, pm[b + 1] as usize + zi);
+        let corner = |i: i32, j: i32, k: i32| {
+            let h = gradient_index(xi + i, yi + j, zi + k, perlin.key);
+            grad(h, x - f64::from(i), y - f64::from(j), z - f64::from(k))
+        };
         lerp(
             w,
             lerp(
                 v,
-                lerp(u, grad(pm[aa], x, y, z), grad(pm[ba], x - 1.0, y, z)),
-                lerp(
-                    u,
-                    grad(pm[ab], x, y - 1.0, z),
-                    grad(pm[bb], x - 1.0, y - 1.0, z),
-                ),
+                lerp(u, corner(0, 0, 0), corner(1, 0, 0)),
+                lerp(u, corner(0, 1, 0), corner(1, 1, 0)),
             ),
             lerp(
                 v,
-                lerp(
-                    u,
-                    grad(pm[aa + 1], x, y, z - 1.0),
-                    grad(pm[ba + 1], x - 1.0, y, z - 1.0),
-                ),
-                lerp(
-                    u,
-                    grad(pm[ab + 1], x, y - 1.0, z - 1.0),
-                    grad(pm[bb + 1], x - 1.0, y - 1.0, z - 1.0),
-                ),
+                lerp(u, corner(0, 0, 1), corner(1, 0, 1)),
+                lerp(u, corner(0, 1, 1), corner(1, 1, 1)),
             ),
         )
     }
@@ -238,14 +527,140 @@ mod tests {
     #[test]
     fn weighted_sum_is_perlins_improved_noise() {
         for seed in [1, 9] {
-            let perlin = Perlin::new(seed);
-            for p in grid() {
-                let q = p * 1.7 - Vec3::splat(3.1);
-                let got = f64::from(perlin.signed(q));
-                let want = reference(&perlin, q);
-                assert!((got - want).abs() < 2e-6, "{q}: {got} vs {want}");
+            let mut perlin = Perlin::new(seed);
+            for avx2 in [false, avx2_available()] {
+                perlin.avx2 = avx2;
+                for p in grid() {
+                    let q = p * 1.7 - Vec3::splat(3.1);
+                    let got = f64::from(perlin.signed(q));
+                    let want = reference(&perlin, q);
+                    assert!((got - want).abs() < 2e-6, "{q}: {got} vs {want}");
+                }
             }
         }
+    }
+
+    /// The vector and portable evaluations are the same arithmetic in the
+    /// same order: a render must not depend on which one the CPU runs.
+    #[test]
+    fn avx2_and_portable_agree_bit_for_bit() {
+        if !avx2_available() {
+            return;
+        }
+        let perlin = Perlin::new(5);
+        let mut state = 1u64;
+        for _ in 0..100_000 {
+            let mut next = || {
+                state = state
+                    .wrapping_mul(6364136223846793005)
+                    .wrapping_add(1442695040888963407);
+                ((state >> 40) as f32 / (1u64 << 24) as f32 - 0.5) * 2000.0
+            };
+            let p = Vec3::new(next(), next(), next());
+            // SAFETY: the CPU has AVX2 (checked above).
+            let fast = unsafe { signed_avx2(perlin.key, p.x, p.y, p.z) };
+            assert_eq!(fast.to_bits(), perlin.signed_portable(p).to_bits(), "{p}");
+        }
+    }
+
+    /// Every one of the 16 gradient choices occurs, about equally often:
+    /// the hash must not favour directions (that would streak the field).
+    #[test]
+    fn gradient_choices_are_balanced() {
+        let mut counts = [0u32; 16];
+        for x in -20..20 {
+            for y in -20..20 {
+                for z in -20..20 {
+                    counts[gradient_index(x, y, z, 12345) as usize] += 1;
+                }
+            }
+        }
+        let expected = 64_000.0 / 16.0;
+        for (h, &c) in counts.iter().enumerate() {
+            assert!(
+                (f64::from(c) - expected).abs() < 0.06 * expected,
+                "gradient {h}: {c} of 64000"
+            );
+        }
+    }
+
+    /// Unlike Perlin's 256-entry permutation, the lattice hash does not
+    /// repeat: cells 256 apart get different gradients.
+    #[test]
+    fn field_does_not_repeat_every_256_cells() {
+        let perlin = Perlin::new(3);
+        let same = grid()
+            .filter(|&p| {
+                let q = p + Vec3::new(0.37, 0.11, 0.59);
+                (perlin.signed(q) - perlin.signed(q + Vec3::new(256.0, 0.0, 0.0))).abs() < 1e-6
+            })
+            .count();
+        assert!(same < 100, "{same} of 16000 points repeat at 256 cells");
+    }
+
+    fn unit_sphere_box() -> crate::render::geometry::Aabb {
+        crate::render::geometry::Aabb {
+            min: Vec3::new(-1.0, 0.0, -1.0),
+            max: Vec3::new(1.0, 2.0, 1.0),
+        }
+    }
+
+    /// The grid against the exact field at points on a sphere (where a
+    /// film is), independent of the bake's own check: within a few
+    /// nanometres of a 100–600 nm field, and exact at the nodes up to the
+    /// 1/65535 quantisation.
+    #[test]
+    fn thickness_grid_follows_the_field() {
+        let field = ThicknessField::noise(100.0, 600.0, 2.0, 9);
+        let grid = ThicknessGrid::bake(&field, &unit_sphere_box()).unwrap();
+        assert!(grid.max_error_nm < 3.0, "bake check {}", grid.max_error_nm);
+        let (mut worst, mut sum, mut n) = (0.0f32, 0.0f64, 0);
+        for k in 0..20_000 {
+            // A Fibonacci lattice on the sphere of radius 1 around (0, 1, 0).
+            let z = 1.0 - 2.0 * (k as f32 + 0.5) / 20_000.0;
+            let r = (1.0 - z * z).sqrt();
+            let phi = k as f32 * 2.399_963;
+            let p = Vec3::new(r * phi.cos(), 1.0 + z, r * phi.sin());
+            let err = (grid.at(p) - field.at(p)).abs();
+            worst = worst.max(err);
+            sum += f64::from(err);
+            n += 1;
+        }
+        assert!(worst < 3.0, "worst {worst} nm");
+        assert!(sum / f64::from(n) < 0.5, "mean {} nm", sum / f64::from(n));
+        assert!(
+            worst <= grid.max_error_nm * 1.5 + 0.05,
+            "bake check {} vs {worst}",
+            grid.max_error_nm
+        );
+        // At a node the interpolation is the node's value.
+        let step = 1.0 / (GRID_NODES_PER_CELL * 2.0);
+        let node = Vec3::new(-1.0, 0.0, -1.0) + step * Vec3::new(7.0, 11.0, 5.0);
+        assert!((grid.at(node) - field.at(node)).abs() < 0.01);
+    }
+
+    #[test]
+    fn thickness_grid_clamps_outside_its_box_and_is_only_baked_where_it_pays() {
+        let field = ThicknessField::noise(100.0, 600.0, 2.0, 9);
+        let grid = ThicknessGrid::bake(&field, &unit_sphere_box()).unwrap();
+        for p in [
+            Vec3::splat(-50.0),
+            Vec3::splat(50.0),
+            Vec3::new(0.0, f32::NAN, 0.0),
+        ] {
+            let d = grid.at(p);
+            assert!((100.0..=600.0).contains(&d), "{p}: {d}");
+        }
+        let uniform = ThicknessField::Uniform {
+            thickness_nm: 300.0,
+        };
+        assert!(ThicknessGrid::bake(&uniform, &unit_sphere_box()).is_none());
+        // A box far too large for the field's frequency keeps the exact field.
+        let huge = crate::render::geometry::Aabb {
+            min: Vec3::splat(-100.0),
+            max: Vec3::splat(100.0),
+        };
+        assert!(ThicknessGrid::bake(&field, &huge).is_none());
     }
 
     #[test]

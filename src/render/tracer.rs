@@ -9,26 +9,32 @@ use super::film::{FilmShading, Side};
 use super::geometry::{reflect, refract, Ray};
 use super::material::{dielectric_reflectance, Material};
 use super::scene::{Light, Scene};
+use super::thickness::ThicknessGrid;
 
-pub struct Tracer<'a> {
+/// Generic over the film shader rather than holding trait objects: a film
+/// hit is frequent enough that an indirect call, which cannot be inlined,
+/// is a measurable part of what film shading costs in LUT mode.
+pub struct Tracer<'a, F: FilmShading> {
     pub scene: &'a Scene,
     /// One shader per entry of `scene.films`.
-    pub films: &'a [Box<dyn FilmShading + 'a>],
+    pub films: &'a [F],
+    /// Per object, its film's thickness field baked to a grid, where one
+    /// was (LUT mode); other objects evaluate their field exactly. May be
+    /// empty.
+    pub thickness_grids: &'a [Option<ThicknessGrid>],
     pub max_depth: u32,
 }
 
-impl Tracer<'_> {
+impl<F: FilmShading> Tracer<'_, F> {
     /// Radiance arriving along `ray`.
     ///
     /// Every branch is followed to the fixed depth whatever its weight
     /// (Whitted's rule), so the ray tree, and with it the cost, does not
     /// depend on the film's colours. A surface's reflectance and
     /// transmittance are looked up after its children are traced: nothing
-    /// in the children depends on them, and a film's lookup (noise, then
-    /// table) is a long chain of dependent instructions that, placed before
-    /// the children, stalls them. Placed after, it overlaps with them
-    /// (film shading's cost on `two-layer-noise` fell from +27 % to about
-    /// +13 % of the plain-glass render).
+    /// in the children depends on them, and a film's lookup (thickness,
+    /// then table) is a long chain of dependent instructions that, placed
+    /// before the children, stalls them; placed after, it overlaps with them.
     pub fn trace(&self, ray: &Ray, depth: u32) -> Vec3 {
         let Some((hit, obj)) = self.scene.intersect(ray, 0.0, f32::INFINITY) else {
             return self.scene.environment.radiance(ray.dir);
@@ -97,7 +103,11 @@ impl Tracer<'_> {
                     None => Vec3::ZERO,
                 };
                 let side = if front { Side::Front } else { Side::Back };
-                let rgb = self.films[f.film].shade(f.thickness.at(p), cos_i, side);
+                let thickness_nm = match self.thickness_grids.get(obj) {
+                    Some(Some(grid)) => grid.at(p),
+                    _ => f.thickness.at(p),
+                };
+                let rgb = self.films[f.film].shade(thickness_nm, cos_i, side);
                 Vec3::from(rgb.reflectance) * reflected + Vec3::from(rgb.transmittance) * refracted
             }
         };
@@ -157,6 +167,7 @@ mod tests {
     use std::path::Path;
 
     use super::*;
+    use crate::render::LutFilm;
 
     /// A white floor lit by one point light, under a black sky; `blocker`
     /// optionally puts an opaque sphere between the light and the floor.
@@ -196,9 +207,10 @@ mod tests {
     #[test]
     fn point_light_falls_off_and_casts_shadows() {
         let scene = floor_scene("");
-        let tracer = Tracer {
+        let tracer: Tracer<LutFilm> = Tracer {
             scene: &scene,
             films: &[],
+            thickness_grids: &[],
             max_depth: 2,
         };
         let down = |x: f32| {
@@ -219,9 +231,10 @@ mod tests {
         let shadowed = floor_scene(
             "[[objects]]\nshape = \"sphere\"\nmaterial = \"mirror\"\ncenter = [0.0, 1.0, 0.0]\nradius = 0.5",
         );
-        let tracer = Tracer {
+        let tracer: Tracer<LutFilm> = Tracer {
             scene: &shadowed,
             films: &[],
+            thickness_grids: &[],
             max_depth: 2,
         };
         // Seen from just above the floor, beside the sphere's shadow and in it.
