@@ -123,35 +123,23 @@ impl AnalyticFilm {
 
     fn belcour_barla(&self, thickness_nm: f64, cos_theta: f64) -> [f64; 3] {
         const TERMS: usize = 3;
-        let mut rgb = [0.0; 3];
-        let mut done = [false; 3];
+        // Total reflection at the top: no light reaches the film.
+        let Some(top) = TopInterface::new(self, thickness_nm, cos_theta) else {
+            return [1.0; 3];
+        };
         // The path difference depends on the film only, so the spectral
         // integrals are shared by every channel and both polarizations.
-        let mut sens = None;
-        for c in 0..3 {
-            if done[c] {
-                continue;
-            }
-            let terms = match airy_terms(self, c, thickness_nm, cos_theta) {
-                Some(t) => t,
-                // Total reflection at the top: no light reaches the film.
-                None => return [1.0; 3],
-            };
-            let sens = sens.get_or_insert_with(|| sensitivities::<TERMS>(terms.opd_nm));
+        let sens = sensitivities::<TERMS>(top.opd_nm);
+        let rgb = per_substrate(&self.base_ior, |base| {
+            let pol = top.pol_terms(base);
             let mut xyz = [0.0; 3];
             let mut dc = 0.0;
-            for pol in &terms.pol {
+            for pol in &pol {
                 dc += 0.5 * pol.c0;
-                add_oscillation(&mut xyz, pol, sens, 0.5);
+                add_oscillation(&mut xyz, pol, &sens, 0.5);
             }
-            // Channels with the same substrate index share one evaluation.
-            for c2 in c..3 {
-                if self.base_ior[c2] == self.base_ior[c] {
-                    rgb[c2] = dc + dot(&XYZ_TO_LINEAR_SRGB[c2], &xyz);
-                    done[c2] = true;
-                }
-            }
-        }
+            (dc, xyz)
+        });
         rgb.map(|v| v.clamp(0.0, 1.0))
     }
 
@@ -169,11 +157,10 @@ impl AnalyticFilm {
         let phi21 = std::f64::consts::PI - phi12;
         let opd_nm = 2.0 * n2 * thickness_nm * cos_theta2;
         let sens = sensitivities::<TERMS>(opd_nm);
-        let mut rgb = [0.0; 3];
-        for (c, out) in rgb.iter_mut().enumerate() {
+        let rgb = per_substrate(&self.base_ior, |base_ior| {
             // glTF derives a real index from F0 (measured against air), so a
             // conductor's extinction is lost here by design of the format.
-            let base = ior_from_f0(f0_complex(self.base_ior[c]));
+            let base = ior_from_f0(f0_complex(base_ior));
             let r23 = schlick(f0_between(base, n2), cos_theta2);
             let phi23 = if base < n2 { std::f64::consts::PI } else { 0.0 };
             let r123 = (r12 * r23).clamp(1e-5, 0.9999);
@@ -186,10 +173,33 @@ impl AnalyticFilm {
             };
             let mut xyz = [0.0; 3];
             add_oscillation(&mut xyz, &pol, &sens, 1.0);
-            *out = (pol.c0 + dot(&XYZ_TO_LINEAR_SRGB[c], &xyz)).max(0.0);
-        }
-        rgb
+            (pol.c0, xyz)
+        });
+        rgb.map(|v| v.max(0.0))
     }
+}
+
+/// Linear sRGB from a model evaluated once per distinct substrate index:
+/// `eval` gives the constant term and the XYZ of the oscillating part, and
+/// each channel with that index takes its own row of the XYZ-to-RGB matrix.
+/// Only the substrate differs between channels, so a substrate with one
+/// index (a dielectric, or any `AnalyticFilm::new`) costs one evaluation.
+fn per_substrate(base_ior: &[C64; 3], mut eval: impl FnMut(C64) -> (f64, [f64; 3])) -> [f64; 3] {
+    let mut rgb = [0.0; 3];
+    let mut done = [false; 3];
+    for c in 0..3 {
+        if done[c] {
+            continue;
+        }
+        let (dc, xyz) = eval(base_ior[c]);
+        for c2 in c..3 {
+            if base_ior[c2] == base_ior[c] {
+                rgb[c2] = dc + dot(&XYZ_TO_LINEAR_SRGB[c2], &xyz);
+                done[c2] = true;
+            }
+        }
+    }
+    rgb
 }
 
 /// The Airy-series coefficients of one polarization: R(δ) = c0 + 2 Σ c1 ρᵐ
@@ -202,55 +212,70 @@ struct PolTerms {
     phasor: C64,
 }
 
-struct AiryTerms {
-    /// s then p.
-    pol: [PolTerms; 2],
+/// What the series needs from the outside medium and the film, the same for
+/// every channel: the film's normal index, the top interface's reflection
+/// (s, p) and its power, and the path difference.
+struct TopInterface {
+    n2: C64,
+    q2: C64,
+    beta_sq: f64,
+    /// r₁₂, |r₁₂|² and T₁₂₁ = 1 − |r₁₂|², s then p.
+    r12: [(C64, f64, f64); 2],
     opd_nm: f64,
 }
 
-/// Exact Fresnel coefficients of both interfaces for channel `c`, turned into
-/// series coefficients. `None` under total reflection at the top interface.
-fn airy_terms(
-    film: &AnalyticFilm,
-    c: usize,
-    thickness_nm: f64,
-    cos_theta: f64,
-) -> Option<AiryTerms> {
-    let n1 = C64::new(film.outside_ior, 0.0);
-    let n2 = C64::new(film.film_ior, 0.0);
-    let n3 = film.base_ior[c];
-    let beta_sq = film.outside_ior * film.outside_ior * (1.0 - cos_theta * cos_theta);
-    let q1 = C64::new(film.outside_ior * cos_theta, 0.0);
-    let q2 = normal_index(n2, beta_sq);
-    if q2.re <= 0.0 {
-        return None;
-    }
-    let q3 = normal_index(n3, beta_sq);
-    let top = fresnel(n1, q1, n2, q2);
-    let bottom = fresnel(n2, q2, n3, q3);
-    let series = |r12: C64, r23: C64| {
-        let r12_sq = r12.norm_sqr();
-        let r23_sq = r23.norm_sqr();
-        let t121 = 1.0 - r12_sq;
-        let r123 = r12_sq * r23_sq;
-        let rs = t121 * t121 * r23_sq / (1.0 - r123);
-        let a = -r12 * r23;
-        let a_abs = a.norm();
-        PolTerms {
-            c0: r12_sq + rs,
-            c1: rs - t121,
-            rho: r123.sqrt(),
-            phasor: if a_abs > 0.0 {
-                a / a_abs
-            } else {
-                C64::new(1.0, 0.0)
-            },
+impl TopInterface {
+    /// `None` under total reflection at the top interface.
+    fn new(film: &AnalyticFilm, thickness_nm: f64, cos_theta: f64) -> Option<TopInterface> {
+        let n1 = C64::new(film.outside_ior, 0.0);
+        let n2 = C64::new(film.film_ior, 0.0);
+        let beta_sq = film.outside_ior * film.outside_ior * (1.0 - cos_theta * cos_theta);
+        let q1 = C64::new(film.outside_ior * cos_theta, 0.0);
+        let q2 = normal_index(n2, beta_sq);
+        if q2.re <= 0.0 {
+            return None;
         }
-    };
-    Some(AiryTerms {
-        pol: [series(top.rs, bottom.rs), series(top.rp, bottom.rp)],
-        opd_nm: 2.0 * thickness_nm * q2.re,
-    })
+        let top = fresnel(n1, q1, n2, q2);
+        let power = |r: C64| {
+            let r_sq = r.norm_sqr();
+            (r, r_sq, 1.0 - r_sq)
+        };
+        Some(TopInterface {
+            n2,
+            q2,
+            beta_sq,
+            r12: [power(top.rs), power(top.rp)],
+            opd_nm: 2.0 * thickness_nm * q2.re,
+        })
+    }
+
+    /// Exact Fresnel coefficients of the bottom interface onto a substrate
+    /// of index `n3`, turned into series coefficients with the top's.
+    fn pol_terms(&self, n3: C64) -> [PolTerms; 2] {
+        let q3 = normal_index(n3, self.beta_sq);
+        let bottom = fresnel(self.n2, self.q2, n3, q3);
+        let series = |(r12, r12_sq, t121): (C64, f64, f64), r23: C64| {
+            let r23_sq = r23.norm_sqr();
+            let r123 = r12_sq * r23_sq;
+            let rs = t121 * t121 * r23_sq / (1.0 - r123);
+            let a = -r12 * r23;
+            let a_abs = a.norm();
+            PolTerms {
+                c0: r12_sq + rs,
+                c1: rs - t121,
+                rho: r123.sqrt(),
+                phasor: if a_abs > 0.0 {
+                    a / a_abs
+                } else {
+                    C64::new(1.0, 0.0)
+                },
+            }
+        };
+        [
+            series(self.r12[0], bottom.rs),
+            series(self.r12[1], bottom.rp),
+        ]
+    }
 }
 
 /// [`sensitivity`] at m·OPD for m = 1..=M.
@@ -358,11 +383,12 @@ mod tests {
             let film = AnalyticFilm::new(n1, n2, n3);
             for &cos_theta in &[1.0, 0.8, 0.5, 0.2] {
                 for &d in &[0.0, 37.0, 250.0, 810.0] {
-                    let Some(terms) = airy_terms(&film, 0, d, cos_theta) else {
+                    let Some(top) = TopInterface::new(&film, d, cos_theta) else {
                         continue;
                     };
+                    let pol = top.pol_terms(film.base_ior[0]);
                     for &wavelength_nm in &[420.0, 555.0, 700.0] {
-                        let delta = std::f64::consts::TAU * terms.opd_nm / wavelength_nm;
+                        let delta = std::f64::consts::TAU * top.opd_nm / wavelength_nm;
                         let series = |p: &PolTerms| {
                             let mut r = p.c0;
                             let mut cm = p.c1;
@@ -379,7 +405,7 @@ mod tests {
                             wavelength_nm,
                             cos_theta,
                         );
-                        let (rs, rp) = (series(&terms.pol[0]), series(&terms.pol[1]));
+                        let (rs, rp) = (series(&pol[0]), series(&pol[1]));
                         assert!(
                             (rs - exact.rs).abs() < 1e-9 && (rp - exact.rp).abs() < 1e-9,
                             "n={n1},{n2},{n3} cos={cos_theta} d={d} λ={wavelength_nm}: \

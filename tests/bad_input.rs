@@ -1,27 +1,16 @@
 //! Bad input never panics: the binary prints one line naming what is wrong,
 //! exits with code 2 and leaves no output file behind.
 
+mod common;
+
 use std::path::Path;
-use std::process::Command;
+
+use common::{command, irid_in, Scratch};
 
 /// Runs `irid args...` in `dir`; asserts exit code 2, a single stderr line
 /// that mentions every one of `names`, and that none of `outputs` exists.
 fn rejects(dir: &Path, args: &[&str], names: &[&str], outputs: &[&str]) {
-    let out = Command::new(env!("CARGO_BIN_EXE_irid"))
-        .args(args)
-        .current_dir(dir)
-        .output()
-        .expect("irid runs");
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    assert_eq!(out.status.code(), Some(2), "{args:?}: {stderr}");
-    assert_eq!(stderr.lines().count(), 1, "{args:?}: {stderr}");
-    assert!(stderr.starts_with("irid: "), "{args:?}: {stderr}");
-    for name in names {
-        assert!(
-            stderr.contains(name),
-            "{args:?} should name {name}: {stderr}"
-        );
-    }
+    irid_in(dir, args).assert_one_line_error(&format!("{args:?}"), names);
     for output in outputs {
         assert!(!dir.join(output).exists(), "{args:?} left {output}");
     }
@@ -30,9 +19,9 @@ fn rejects(dir: &Path, args: &[&str], names: &[&str], outputs: &[&str]) {
 const SOAP: &str = "ambient = { n = 1.0 }\nsubstrate = { n = 1.0 }\n\
                     [[layers]]\nn = 1.33\nthickness_nm = 500.0\n";
 
-fn soap_dir() -> tempfile::TempDir {
-    let dir = tempfile::tempdir().unwrap();
-    std::fs::write(dir.path().join("soap.toml"), SOAP).unwrap();
+fn soap_dir() -> Scratch {
+    let dir = Scratch::new("bad-input");
+    dir.write("soap.toml", SOAP);
     dir
 }
 
@@ -99,7 +88,7 @@ fn bake_thickness_range_is_bounded() {
 fn closed_stdout_is_not_a_panic() {
     use std::process::Stdio;
     let table = concat!(env!("CARGO_MANIFEST_DIR"), "/luts/soap-film.exr");
-    let mut child = Command::new(env!("CARGO_BIN_EXE_irid"))
+    let mut child = command()
         .args(["info", table])
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
@@ -119,7 +108,7 @@ fn closed_stdout_is_not_a_panic() {
 
 #[test]
 fn render_flags_are_bounded() {
-    let dir = tempfile::tempdir().unwrap();
+    let dir = Scratch::new("bad-input");
     let render = |flag: &str, value: &str| {
         let args = [
             "render",
@@ -146,7 +135,7 @@ fn render_flags_are_bounded() {
 /// command line allowed 16384, scene files 4096), and both errors name it.
 #[test]
 fn spp_has_one_limit_named_in_the_error() {
-    let dir = tempfile::tempdir().unwrap();
+    let dir = Scratch::new("bad-input");
     let d = dir.path();
     let small = ["-o", "o.png", "--width", "4", "--height", "4"];
     let cli = [&["render", "bubbles-uniform", "--spp", "4097"][..], &small].concat();
@@ -175,7 +164,7 @@ fn spp_has_one_limit_named_in_the_error() {
 #[test]
 fn scene_file_rejects_negative_absorption_and_sun_radius() {
     let gem = include_str!("../luts/scenes/blue-gem.toml");
-    let dir = tempfile::tempdir().unwrap();
+    let dir = Scratch::new("bad-input");
     let cases = [
         ("absorption = [1.6", "absorption = [-1.6", "absorption"),
         (
@@ -203,7 +192,7 @@ fn scene_file_rejects_negative_absorption_and_sun_radius() {
 fn truncated_toml_says_what_is_wrong() {
     // toml gives no message for a value missing at the end of the file: the
     // line used to end after "column 19: ".
-    let dir = tempfile::tempdir().unwrap();
+    let dir = Scratch::new("bad-input");
     let d = dir.path();
     std::fs::write(
         d.join("t.toml"),
@@ -229,7 +218,7 @@ fn truncated_toml_says_what_is_wrong() {
 fn bake_names_the_stack_whose_material_fails() {
     // The table covers 360–830 nm (exact sampling) but the CSV only 500–600:
     // the error surfaced from the baker without the stack file's name.
-    let dir = tempfile::tempdir().unwrap();
+    let dir = Scratch::new("bad-input");
     let d = dir.path();
     std::fs::write(d.join("narrow.csv"), "wl,n\n0.5,1.5\n0.6,1.5\n").unwrap();
     std::fs::write(
@@ -251,7 +240,7 @@ fn scene_film_thickness_is_bounded() {
     // 1e20 nm is finite in f32 but beyond what the baker accepts: the error
     // came from the bake without the scene file or the field.
     let scene = include_str!("../luts/scenes/bubbles-noise.toml");
-    let dir = tempfile::tempdir().unwrap();
+    let dir = Scratch::new("bad-input");
     assert!(scene.contains("max_nm = 1100.0"));
     let text = scene.replace("max_nm = 1100.0", "max_nm = 1e20");
     std::fs::write(dir.path().join("s.toml"), text).unwrap();
@@ -353,7 +342,7 @@ fn no_check_needs_a_fixed_resolution() {
 /// where; the same table in f32 bakes.
 #[test]
 fn half_table_that_overflows_f16_is_refused() {
-    let dir = tempfile::tempdir().unwrap();
+    let dir = Scratch::new("bad-input");
     let stack = concat!(env!("CARGO_MANIFEST_DIR"), "/luts/gain-on-gold.toml");
     let grid = [
         "--resolution",
@@ -374,15 +363,7 @@ fn half_table_that_overflows_f16_is_refused() {
 
     let mut args = vec!["bake", stack, "-o", "g.exr", "--validate-points", "0"];
     args.extend_from_slice(&grid);
-    let out = std::process::Command::new(env!("CARGO_BIN_EXE_irid"))
-        .args(&args)
-        .current_dir(dir.path())
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    let out = irid_in(dir.path(), &args);
+    assert!(out.success(), "{}", out.stderr);
     assert!(dir.path().join("g.exr").exists());
 }

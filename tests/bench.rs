@@ -2,26 +2,24 @@
 //! promised structure, every figure is a number, and the LUT's error falls
 //! as its resolution rises on every stack.
 
-use std::collections::BTreeMap;
-use std::process::Command;
+mod common;
 
-fn irid() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_irid"))
-}
+use std::collections::BTreeMap;
+
+use common::{irid, Scratch};
 
 #[test]
 fn quick_bench_writes_a_consistent_report() {
-    let dir = tempfile::tempdir().unwrap();
-    let out = irid()
-        .args(["bench", "--quick", "--threads", "1", "-o"])
-        .arg(dir.path())
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    let dir = Scratch::new("bench");
+    let out = irid([
+        "bench",
+        "--quick",
+        "--threads",
+        "1",
+        "-o",
+        dir.path().to_str().unwrap(),
+    ]);
+    assert!(out.success(), "{}", out.stderr);
 
     let report = std::fs::read_to_string(dir.path().join("report.md")).unwrap();
     for needle in [
@@ -137,17 +135,11 @@ fn quick_bench_writes_a_consistent_report() {
 
 /// `irid bench --grid soap --repeat 1 EXTRA...`, which must succeed: its JSON.
 fn grid_json(extra: &[&str]) -> serde_json::Value {
-    let out = irid()
-        .args(["bench", "--grid", "soap", "--repeat", "1"])
-        .args(extra)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    serde_json::from_slice(&out.stdout).unwrap()
+    let mut args = vec!["bench", "--grid", "soap", "--repeat", "1"];
+    args.extend_from_slice(extra);
+    let out = irid(&args);
+    assert!(out.success(), "{}", out.stderr);
+    serde_json::from_str(&out.stdout).unwrap()
 }
 
 #[test]
@@ -188,12 +180,6 @@ fn grid_mode_prints_json_and_rejects_bad_input() {
             "/nonexistent-irid-dir/x.raw",
         ],
     ] {
-        let out = irid().args(&bad).output().unwrap();
-        assert_eq!(out.status.code(), Some(2), "{bad:?}");
-        let err = String::from_utf8_lossy(&out.stderr);
-        assert!(
-            err.starts_with("irid: ") && err.lines().count() == 1,
-            "{bad:?}: {err}"
-        );
+        irid(&bad).assert_one_line_error(&format!("{bad:?}"), &[]);
     }
 }

@@ -1,5 +1,8 @@
 //! Colour: CIE integration, sampling strategies, Lab and CIEDE2000.
 
+mod common;
+
+use common::{irid, Scratch};
 use irid::color::{
     delta_e2000, delta_e2000_rgb, linear_srgb_to_xyz, stack_colours, white_xyz, xyz_to_lab,
     xyz_to_linear_srgb, Sampling, SpectralIntegrator,
@@ -295,53 +298,30 @@ fn sampling_error_on_a_soap_film() {
     assert!(r3.mean > results[1].1.mean, "rgb3 {r3:?}");
 }
 
-/// A stack file in the temp dir, removed on drop.
-struct TempStack(std::path::PathBuf);
-
-impl TempStack {
-    fn new(name: &str, text: &str) -> TempStack {
-        let path =
-            std::env::temp_dir().join(format!("irid-color-{}-{name}.toml", std::process::id()));
-        std::fs::write(&path, text).unwrap();
-        TempStack(path)
-    }
-}
-
-impl Drop for TempStack {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_file(&self.0);
-    }
-}
-
 const SOAP_500NM: &str = "ambient = { n = 1.0 }\nsubstrate = { n = 1.0 }\n\
                           [[layers]]\nn = 1.33\nthickness_nm = 500.0\n";
 
-fn irid(args: &[&str]) -> std::process::Output {
-    std::process::Command::new(env!("CARGO_BIN_EXE_irid"))
-        .args(args)
-        .output()
-        .unwrap()
+/// A stack file in a scratch folder (removed with it).
+fn stack_file(text: &str) -> (Scratch, String) {
+    let dir = Scratch::new("color");
+    let path = dir.write("stack.toml", text).to_str().unwrap().to_owned();
+    (dir, path)
 }
 
 #[test]
 fn cli_json_matches_the_library() {
-    let stack = TempStack::new("json", SOAP_500NM);
-    let path = stack.0.to_str().unwrap();
-    let out = irid(&[
+    let (_dir, path) = stack_file(SOAP_500NM);
+    let out = irid([
         "color",
-        path,
+        &path,
         "--angles",
         "0:80:40",
         "--sampling",
         "uniform:81",
         "--json",
     ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert!(out.success(), "{}", out.stderr);
+    let json: serde_json::Value = serde_json::from_str(&out.stdout).unwrap();
     let rows = json.as_array().unwrap();
     assert_eq!(rows.len(), 3);
     let want = stack_colours(
@@ -395,14 +375,10 @@ fn cli_json_matches_the_library() {
 
 #[test]
 fn cli_human_output_has_a_hex_swatch_per_angle() {
-    let stack = TempStack::new("human", "ambient = { n = 1.0 }\nsubstrate = { n = 1.5 }\n");
-    let out = irid(&["color", stack.0.to_str().unwrap(), "--angles", "0,30"]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let text = String::from_utf8(out.stdout).unwrap();
+    let (_dir, path) = stack_file("ambient = { n = 1.0 }\nsubstrate = { n = 1.5 }\n");
+    let out = irid(["color", &path, "--angles", "0,30"]);
+    assert!(out.success(), "{}", out.stderr);
+    let text = out.stdout;
     // Bare glass at normal incidence: R = 0.04 → sRGB 56 = #38, T = 0.96 → 250 = #fa.
     let lines: Vec<&str> = text.lines().collect();
     assert_eq!(lines.len(), 4, "{text}");
@@ -415,8 +391,7 @@ fn cli_human_output_has_a_hex_swatch_per_angle() {
 
 #[test]
 fn cli_bad_input_is_one_line_and_exit_2() {
-    let stack = TempStack::new("bad", SOAP_500NM);
-    let path = stack.0.to_str().unwrap();
+    let (_dir, path) = stack_file(SOAP_500NM);
     for (args, needle) in [
         (vec!["--sampling", "rgb4"], "--sampling 'rgb4'"),
         (vec!["--sampling", "uniform:1"], "N must be between 2"),
@@ -425,19 +400,13 @@ fn cli_bad_input_is_one_line_and_exit_2() {
         (vec!["--angles=-5:10:5"], "outside [0, 90)"),
         (vec!["--angles", "10:0:5"], "--angles"),
     ] {
-        let mut full = vec!["color", path];
+        let mut full = vec!["color", path.as_str()];
         full.extend(&args);
         let out = irid(&full);
-        let err = String::from_utf8_lossy(&out.stderr);
-        assert_eq!(out.status.code(), Some(2), "{args:?}: {err}");
-        assert_eq!(err.lines().count(), 1, "{args:?}: {err}");
-        assert!(
-            err.starts_with("irid: ") && err.contains(needle),
-            "{args:?}: {err}"
-        );
+        out.assert_one_line_error(&format!("{args:?}"), &[needle]);
         assert!(out.stdout.is_empty());
     }
-    let out = irid(&["color", "/nonexistent/stack.toml"]);
-    assert_eq!(out.status.code(), Some(2));
-    assert!(String::from_utf8_lossy(&out.stderr).contains("/nonexistent/stack.toml"));
+    let out = irid(["color", "/nonexistent/stack.toml"]);
+    assert_eq!(out.code, Some(2));
+    assert!(out.stderr.contains("/nonexistent/stack.toml"));
 }

@@ -1,27 +1,13 @@
 //! `irid eval` run as a program: output formats, and bad input giving one
 //! `irid: ...` line that names the file and field, exit code 2, no panic.
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+mod common;
 
-fn irid(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_irid"))
-        .args(args)
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .output()
-        .expect("run irid")
-}
-
-fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("irid-eval-cli-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
+use common::{irid, Scratch};
 
 #[test]
 fn json_has_exactly_the_agreed_keys_and_the_airy_value() {
-    let out = irid(&[
+    let out = irid([
         "eval",
         "luts/soap-film.toml",
         "--wavelengths",
@@ -30,13 +16,9 @@ fn json_has_exactly_the_agreed_keys_and_the_airy_value() {
         "0,45",
         "--json",
     ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert!(out.success(), "{}", out.stderr);
     let rows: Vec<serde_json::Map<String, serde_json::Value>> =
-        serde_json::from_slice(&out.stdout).unwrap();
+        serde_json::from_str(&out.stdout).unwrap();
     assert_eq!(rows.len(), 6);
     for row in &rows {
         let mut keys: Vec<&str> = row.keys().map(String::as_str).collect();
@@ -94,7 +76,7 @@ fn json_has_exactly_the_agreed_keys_and_the_airy_value() {
 
 #[test]
 fn several_stacks_and_the_table() {
-    let out = irid(&[
+    let out = irid([
         "eval",
         "luts/soap-film.toml",
         "luts/two-layer.toml",
@@ -104,8 +86,8 @@ fn several_stacks_and_the_table() {
         "0",
         "--json",
     ]);
-    assert!(out.status.success());
-    let text = String::from_utf8(out.stdout).unwrap();
+    assert!(out.success());
+    let text = out.stdout;
     let lines: Vec<&str> = text.lines().collect();
     assert_eq!(lines.len(), 2, "one JSON array per stack");
     for line in lines {
@@ -113,9 +95,9 @@ fn several_stacks_and_the_table() {
         assert_eq!(rows.len(), 1);
     }
     // Defaults: 380:780:10 × 0,30,60, as a table with a header.
-    let out = irid(&["eval", "luts/mirror-10.toml"]);
-    assert!(out.status.success());
-    let text = String::from_utf8(out.stdout).unwrap();
+    let out = irid(["eval", "luts/mirror-10.toml"]);
+    assert!(out.success());
+    let text = out.stdout;
     let lines: Vec<&str> = text.lines().collect();
     assert_eq!(lines.len(), 1 + 41 * 3);
     assert!(lines[0].contains("wavelength_nm") && lines[0].contains("Tp"));
@@ -125,27 +107,15 @@ fn several_stacks_and_the_table() {
 /// and containing every needle, nothing on stdout, no panic.
 fn fails(args: &[&str], needles: &[&str]) {
     let out = irid(args);
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert_eq!(out.status.code(), Some(2), "{args:?}: {err}");
+    out.assert_one_line_error(&format!("{args:?}"), needles);
     assert!(out.stdout.is_empty(), "{args:?} printed to stdout");
-    assert_eq!(err.lines().count(), 1, "{args:?}: {err}");
-    assert!(
-        err.starts_with("irid: ") && !err.contains("panicked"),
-        "{err}"
-    );
-    for needle in needles {
-        assert!(err.contains(needle), "{args:?}: {err:?} lacks {needle:?}");
-    }
+    assert!(!out.stderr.contains("panicked"), "{}", out.stderr);
 }
 
 #[test]
 fn bad_input_exits_2_with_one_line() {
-    let dir = scratch("bad");
-    let write = |name: &str, text: &str| -> String {
-        let path = dir.join(name);
-        std::fs::write(&path, text).unwrap();
-        path.display().to_string()
-    };
+    let dir = Scratch::new("eval-cli");
+    let write = |name: &str, text: &str| -> String { dir.write(name, text).display().to_string() };
     let base = "ambient = { n = 1.0 }\nsubstrate = { n = 1.5 }\n";
     let malformed = write("malformed.toml", "ambient = { n = 1.0 \n");
     let unknown = write(
@@ -201,8 +171,8 @@ fn bad_input_exits_2_with_one_line() {
         &["badcsv.toml", "layers[1].table", "bad.csv", "line 2"],
     );
     fails(&["eval", "no/such/stack.toml"], &["no/such/stack.toml"]);
-    let missing = irid(&["eval", "no/such/stack.toml"]);
-    let err = String::from_utf8_lossy(&missing.stderr);
+    let missing = irid(["eval", "no/such/stack.toml"]);
+    let err = &missing.stderr;
     assert_eq!(err.matches("os error").count(), 1, "said once: {err}");
     fails(
         &[
@@ -231,5 +201,5 @@ fn bad_input_exits_2_with_one_line() {
     fails(&["eval", ok, "--angles", "1:2:0"], &["--angles", "step"]);
     // A good stack before a bad one: still nothing printed.
     fails(&["eval", ok, &unknown, "--json"], &["unknown.toml"]);
-    assert!(Path::new(&dir).exists());
+    assert!(dir.exists());
 }

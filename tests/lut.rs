@@ -2,21 +2,17 @@
 //! shipped stack and at the hard angles), the file round trip, bad files,
 //! and the `bake`/`info`/`validate` commands.
 
-use std::path::{Path, PathBuf};
-use std::process::Command;
+mod common;
 
+use std::path::{Path, PathBuf};
+
+use common::{irid, Run, Scratch};
 use irid::color::Sampling;
 use irid::lut::{bake, validate, BakeSpec, Kind, Lut, Resolution};
 use irid::optics::{Layer, Material, Stack};
 
 fn luts_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("luts")
-}
-
-fn scratch_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("irid-lut-test-{}-{name}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
 }
 
 /// A spec small enough for a test: 31 wavelengths instead of 471.
@@ -202,7 +198,7 @@ fn small_table(half: bool) -> Lut {
 
 #[test]
 fn write_read_round_trip_is_bit_exact() {
-    let dir = scratch_dir("roundtrip");
+    let dir = Scratch::new("lut-roundtrip");
     for half in [false, true] {
         let lut = small_table(half);
         let path = dir.join(format!("t-{half}.exr"));
@@ -241,7 +237,6 @@ fn write_read_round_trip_is_bit_exact() {
     let f32_size = std::fs::metadata(dir.join("t-false.exr")).unwrap().len();
     let f16_size = std::fs::metadata(dir.join("t-true.exr")).unwrap().len();
     assert!(f16_size < f32_size);
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 #[test]
@@ -306,7 +301,7 @@ fn without_a_range_one_thickness_row() {
 
 #[test]
 fn cache_bakes_once_and_rebakes_stale_tables() {
-    let dir = scratch_dir("cache");
+    let dir = Scratch::new("lut-cache");
     let stack = Stack::load(&luts_dir().join("absorbing-film.toml")).unwrap();
     let spec = quick_spec(stack, (0.0, 200.0), 5e-3);
     let first = irid::lut::cached(&spec, &dir).unwrap();
@@ -323,7 +318,6 @@ fn cache_bakes_once_and_rebakes_stale_tables() {
     let rebaked = irid::lut::cached(&spec, &dir).unwrap();
     assert_eq!(rebaked.data(), first.data());
     assert!(Lut::load(&path).is_ok());
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// Rewrites the `irid` header of a table file in place of the original,
@@ -370,7 +364,7 @@ fn rewrite_header(src: &Path, dst: &Path, edit: impl Fn(&mut serde_json::Value))
 
 #[test]
 fn bad_files_give_clear_errors() {
-    let dir = scratch_dir("bad");
+    let dir = Scratch::new("lut-bad");
     let good = dir.join("good.exr");
     small_table(false).write(&good).unwrap();
     let bytes = std::fs::read(&good).unwrap();
@@ -410,19 +404,11 @@ fn bad_files_give_clear_errors() {
 
     let missing = dir.join("missing.exr");
     expect(&missing, "No such file");
-    let _ = std::fs::remove_dir_all(&dir);
-}
-
-fn irid(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_irid"))
-        .args(args)
-        .output()
-        .unwrap()
 }
 
 /// `irid bake luts/soap-film.toml -o OUT` over 100–400 nm with 16-sample
 /// integration, then `extra`.
-fn bake_soap(out: &Path, extra: &[&str]) -> std::process::Output {
+fn bake_soap(out: &Path, extra: &[&str]) -> Run {
     let stack = luts_dir().join("soap-film.toml");
     let mut args = vec![
         "bake",
@@ -440,14 +426,14 @@ fn bake_soap(out: &Path, extra: &[&str]) -> std::process::Output {
 
 #[test]
 fn bake_info_validate_commands() {
-    let dir = scratch_dir("cli");
+    let dir = Scratch::new("lut-cli");
     let out = dir.join("soap.exr");
     let stack = luts_dir().join("soap-film.toml");
     let o = bake_soap(&out, &["--max-error", "3e-3", "--validate-points", "500"]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let info = irid(&["info", out.to_str().unwrap()]);
-    let text = String::from_utf8_lossy(&info.stdout);
-    assert!(info.status.success());
+    assert!(o.success(), "{}", o.stderr);
+    let info = irid(["info", out.to_str().unwrap()]);
+    let text = &info.stdout;
+    assert!(info.success());
     for needle in [
         "thickness_nm",
         "cos_theta",
@@ -458,15 +444,15 @@ fn bake_info_validate_commands() {
     ] {
         assert!(text.contains(needle), "info lacks {needle}:\n{text}");
     }
-    let v = irid(&[
+    let v = irid([
         "validate",
         out.to_str().unwrap(),
         "--points",
         "300",
         "--json",
     ]);
-    assert!(v.status.success());
-    let json: serde_json::Value = serde_json::from_slice(&v.stdout).unwrap();
+    assert!(v.success());
+    let json: serde_json::Value = serde_json::from_str(&v.stdout).unwrap();
     for key in [
         "max_abs",
         "mean_abs",
@@ -477,7 +463,7 @@ fn bake_info_validate_commands() {
         assert!(json.get(key).is_some(), "no {key}");
     }
     assert_eq!(json["max_abs"].as_array().unwrap().len(), 6);
-    let strict = irid(&[
+    let strict = irid([
         "validate",
         out.to_str().unwrap(),
         "--points",
@@ -485,16 +471,16 @@ fn bake_info_validate_commands() {
         "--max-error",
         "1e-9",
     ]);
-    assert_eq!(strict.status.code(), Some(1));
+    assert_eq!(strict.code, Some(1));
 
-    let bad = irid(&["info", stack.to_str().unwrap()]);
-    assert_eq!(bad.status.code(), Some(2));
-    let err = String::from_utf8_lossy(&bad.stderr);
+    let bad = irid(["info", stack.to_str().unwrap()]);
+    assert_eq!(bad.code, Some(2));
+    let err = &bad.stderr;
     assert!(
         err.starts_with("irid: ") && err.contains("soap-film.toml"),
         "{err}"
     );
-    let bad_layer = irid(&[
+    let bad_layer = irid([
         "bake",
         stack.to_str().unwrap(),
         "-o",
@@ -502,9 +488,8 @@ fn bake_info_validate_commands() {
         "--layer",
         "3",
     ]);
-    assert_eq!(bad_layer.status.code(), Some(2));
-    assert!(String::from_utf8_lossy(&bad_layer.stderr).contains("layer"));
-    let _ = std::fs::remove_dir_all(&dir);
+    assert_eq!(bad_layer.code, Some(2));
+    assert!(bad_layer.stderr.contains("layer"));
 }
 
 /// A fixed resolution baked without the check: the same nodes as the
@@ -513,7 +498,7 @@ fn bake_info_validate_commands() {
 /// bake check in the header, and the table writes, loads and validates.
 #[test]
 fn unchecked_bake_matches_the_checked_one() {
-    let dir = scratch_dir("nocheck");
+    let dir = Scratch::new("lut-nocheck");
     for (name, kind, wavelength) in [
         ("two-layer", Kind::Rgb, 1),
         ("oil-on-water", Kind::Spectral, 9),
@@ -570,15 +555,14 @@ fn unchecked_bake_matches_the_checked_one() {
             "0",
         ],
     );
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    assert!(String::from_utf8_lossy(&o.stdout).contains("bake check: not made (--no-check)"));
-    let info = irid(&["info", out.to_str().unwrap()]);
-    assert!(info.status.success());
-    let text = String::from_utf8_lossy(&info.stdout);
+    assert!(o.success(), "{}", o.stderr);
+    assert!(o.stdout.contains("bake check: not made (--no-check)"));
+    let info = irid(["info", out.to_str().unwrap()]);
+    assert!(info.success());
+    let text = &info.stdout;
     assert!(text.contains("not made (baked with --no-check)"), "{text}");
-    let v = irid(&["validate", out.to_str().unwrap(), "--points", "100"]);
-    assert!(v.status.success(), "{}", String::from_utf8_lossy(&v.stderr));
-    let _ = std::fs::remove_dir_all(&dir);
+    let v = irid(["validate", out.to_str().unwrap(), "--points", "100"]);
+    assert!(v.success(), "{}", v.stderr);
 }
 
 /// The shipped tables are format version 1 (the bake check always
@@ -586,7 +570,7 @@ fn unchecked_bake_matches_the_checked_one() {
 /// 1 is written back as the current version.
 #[test]
 fn version_1_tables_still_load() {
-    let dir = scratch_dir("v1");
+    let dir = Scratch::new("lut-v1");
     let mut seen = 0;
     for entry in std::fs::read_dir(luts_dir()).unwrap() {
         let path = entry.unwrap().path();
@@ -615,5 +599,4 @@ fn version_1_tables_still_load() {
         assert_eq!(back.data(), lut.data());
     }
     assert!(seen > 0, "no version-1 table in luts/");
-    let _ = std::fs::remove_dir_all(&dir);
 }

@@ -2,9 +2,11 @@
 //! built-in scene, determinism, the physics the pictures must show, and the
 //! command line's handling of bad scene files.
 
-use std::path::{Path, PathBuf};
-use std::process::Command;
+mod common;
 
+use std::path::{Path, PathBuf};
+
+use common::{irid_in, Scratch};
 use irid::color::Sampling;
 use irid::render::{
     self, builtin_names, DirectFilm, FilmMode, FilmShading, Image, RenderOptions, Scene, Side,
@@ -221,19 +223,6 @@ fn reversed_stack_reflects_totally_beyond_the_critical_angle() {
     );
 }
 
-fn irid(args: &[&str], dir: &Path) -> (i32, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_irid"))
-        .args(args)
-        .current_dir(dir)
-        .output()
-        .unwrap();
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
-}
-
 const GOOD: &str = r#"
 [render]
 width = 8
@@ -255,20 +244,14 @@ center = [0.0, 0.0, 0.0]
 radius = 1.0
 "#;
 
-fn scratch(name: &str) -> PathBuf {
-    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("render-cli-{name}"));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
-
 #[test]
 fn cli_renders_a_scene_file_to_png_and_exr() {
-    let dir = scratch("ok");
-    std::fs::write(dir.join("s.toml"), GOOD).unwrap();
+    let dir = Scratch::new("render-cli-ok");
+    dir.write("s.toml", GOOD);
     let cache = cache_dir();
-    let (code, out, err) = irid(
-        &[
+    let run = irid_in(
+        &dir,
+        [
             "render",
             "s.toml",
             "-o",
@@ -278,9 +261,9 @@ fn cli_renders_a_scene_file_to_png_and_exr() {
             "--cache",
             cache.to_str().unwrap(),
         ],
-        &dir,
     );
-    assert_eq!(code, 0, "{err}");
+    assert_eq!(run.code, Some(0), "{}", run.stderr);
+    let out = &run.stdout;
     assert!(out.contains("render") && out.contains("8x6"), "{out}");
     let png = ::image::open(dir.join("s.png")).unwrap();
     assert_eq!((png.width(), png.height()), (8, 6));
@@ -338,26 +321,23 @@ fn cli_rejects_bad_scenes_with_one_line() {
         ),
     ];
     for (name, text, needle) in cases {
-        let dir = scratch(name);
-        std::fs::write(dir.join("s.toml"), text).unwrap();
-        let (code, _, err) = irid(&["render", "s.toml", "-o", "s.png", "--cache", "c"], &dir);
-        assert_eq!(code, 2, "{name}: {err}");
-        assert_eq!(err.trim_end().lines().count(), 1, "{name}: {err}");
-        assert!(
-            err.starts_with("irid: ") && err.contains(needle),
-            "{name}: {err}"
-        );
+        let dir = Scratch::new(&format!("render-cli-{name}"));
+        dir.write("s.toml", text);
+        irid_in(&dir, ["render", "s.toml", "-o", "s.png", "--cache", "c"])
+            .assert_one_line_error(name, &[needle]);
         assert!(!dir.join("s.png").exists(), "{name}: wrote an image");
     }
-    let dir = scratch("no-scene");
-    let (code, _, err) = irid(&["render", "no-such-scene"], &dir);
-    assert_eq!(code, 2);
+    let dir = Scratch::new("render-cli-no-scene");
+    let run = irid_in(&dir, ["render", "no-such-scene"]);
+    assert_eq!(run.code, Some(2));
+    let err = &run.stderr;
     assert!(
         err.contains("no-such-scene") && err.contains("bubbles-noise"),
         "{err}"
     );
-    let (code, _, err) = irid(
-        &[
+    let run = irid_in(
+        &dir,
+        [
             "render",
             "bubbles-noise",
             "--film",
@@ -365,11 +345,11 @@ fn cli_rejects_bad_scenes_with_one_line() {
             "--sampling",
             "rgb3",
         ],
-        &dir,
     );
-    assert_eq!(code, 2, "{err}");
-    let (code, _, err) = irid(
-        &[
+    assert_eq!(run.code, Some(2), "{}", run.stderr);
+    let run = irid_in(
+        &dir,
+        [
             "render",
             "bubbles-noise",
             "--film",
@@ -377,7 +357,6 @@ fn cli_rejects_bad_scenes_with_one_line() {
             "--sampling",
             "uniform:1",
         ],
-        &dir,
     );
-    assert_eq!(code, 2, "{err}");
+    assert_eq!(run.code, Some(2), "{}", run.stderr);
 }

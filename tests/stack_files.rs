@@ -1,17 +1,12 @@
 //! Stack files (TOML) and index tables (CSV): every accepted form, and an
 //! error naming the file and the field for each kind of bad input.
 
-use std::path::{Path, PathBuf};
+mod common;
 
+use std::path::Path;
+
+use common::Scratch;
 use irid::optics::{Dispersion, IndexTable, Stack, StackSpec};
-
-/// A fresh scratch folder for one test.
-fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("irid-stack-files-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
 
 fn parse(text: &str) -> irid::Result<Stack> {
     Stack::from_toml_str(text, Path::new("."), "test.toml")
@@ -57,7 +52,7 @@ thickness_nm = 80.0
 
 #[test]
 fn every_index_form() {
-    let dir = scratch("forms");
+    let dir = Scratch::new("stack-files-forms");
     std::fs::create_dir_all(dir.join("data")).unwrap();
     std::fs::write(
         dir.join("data/film.csv"),

@@ -23,18 +23,20 @@ impl Environment {
         }
     }
 
-    /// Mean radiance over all directions: the ambient term of diffuse surfaces.
+    /// Mean radiance over all directions: the ambient term of diffuse
+    /// surfaces, read at every diffuse hit, so stored when the scene is built.
+    #[inline]
     pub fn ambient(&self) -> Vec3 {
         match self {
-            Environment::Sky(s) => 0.5 * (0.5 * (s.zenith + s.horizon)) + 0.5 * s.ground,
+            Environment::Sky(s) => s.ambient,
             Environment::Map(m) => m.mean,
         }
     }
 }
 
-/// Linear RGB radiances; `up` is +y.
+/// A procedural sky as the scene describes it. Linear RGB radiances; `up` is +y.
 #[derive(Clone, Debug)]
-pub struct Sky {
+pub struct SkyParams {
     pub zenith: Vec3,
     pub horizon: Vec3,
     pub ground: Vec3,
@@ -49,31 +51,63 @@ pub struct Sky {
     pub sun_radius_deg: f32,
 }
 
+/// A sky ready to shade rays: its parameters, and what depends on them
+/// alone, worked out once instead of per ray.
+#[derive(Clone, Debug)]
+pub struct Sky {
+    params: SkyParams,
+    /// Directions this close to the sun (cosine of the angle) see it; +∞
+    /// without a sun, which no direction's cosine reaches.
+    sun_cos_radius: f32,
+    /// What the checkerboard fades to toward the horizon: its mean.
+    ground_far: Vec3,
+    /// Mean radiance over all directions (sky half and ground half).
+    ambient: Vec3,
+}
+
 impl Sky {
+    pub fn new(params: SkyParams) -> Sky {
+        let p = &params;
+        Sky {
+            sun_cos_radius: if p.sun_radius_deg > 0.0 {
+                p.sun_radius_deg.to_radians().cos()
+            } else {
+                f32::INFINITY
+            },
+            ground_far: 0.5 * (p.ground + p.ground_checker),
+            ambient: 0.5 * (0.5 * (p.zenith + p.horizon)) + 0.5 * p.ground,
+            params,
+        }
+    }
+
+    pub fn params(&self) -> &SkyParams {
+        &self.params
+    }
+
     #[inline]
     pub fn radiance(&self, dir: Vec3) -> Vec3 {
+        let p = &self.params;
         if dir.y >= 0.0 {
             let t = dir.y.sqrt();
-            let mut sky = self.horizon.lerp(self.zenith, t);
-            if self.sun_radius_deg > 0.0
-                && dir.dot(self.sun_direction) >= self.sun_radius_deg.to_radians().cos()
-            {
-                sky += self.sun_radiance;
+            let mut sky = p.horizon.lerp(p.zenith, t);
+            if dir.dot(p.sun_direction) >= self.sun_cos_radius {
+                sky += p.sun_radiance;
             }
             sky
         } else {
             // Project onto a ground plane; fade the checker toward the
-            // horizon, where its squares would alias.
-            let dist = self.ground_depth / -dir.y;
-            let p = dist * dir;
-            let checker = if checker_even(p.x / self.checker_size, p.z / self.checker_size) {
-                self.ground
+            // horizon, where its squares would alias. (Dividing by the
+            // square size, not multiplying by its inverse, keeps the
+            // squares' edges where they have always been, to the bit.)
+            let dist = p.ground_depth / -dir.y;
+            let q = dist * dir;
+            let checker = if checker_even(q.x / p.checker_size, q.z / p.checker_size) {
+                p.ground
             } else {
-                self.ground_checker
+                p.ground_checker
             };
             let fade = (-dir.y * 8.0).min(1.0);
-            let far = 0.5 * (self.ground + self.ground_checker);
-            far.lerp(checker, fade)
+            self.ground_far.lerp(checker, fade)
         }
     }
 }
@@ -164,7 +198,7 @@ mod tests {
     use super::*;
 
     fn sky() -> Sky {
-        Sky {
+        Sky::new(SkyParams {
             zenith: Vec3::new(0.1, 0.2, 0.8),
             horizon: Vec3::ONE,
             ground: Vec3::splat(0.2),
@@ -174,15 +208,16 @@ mod tests {
             sun_direction: Vec3::new(0.0, 1.0, 1.0).normalize(),
             sun_radiance: Vec3::splat(50.0),
             sun_radius_deg: 2.0,
-        }
+        })
     }
 
     #[test]
     fn sky_gradient_sun_and_checker() {
         let s = sky();
-        assert!((s.radiance(Vec3::Y) - s.zenith).length() < 1e-6);
-        assert!((s.radiance(Vec3::X) - s.horizon).length() < 1e-6);
-        assert!(s.radiance(s.sun_direction).x > 50.0);
+        let p = s.params();
+        assert!((s.radiance(Vec3::Y) - p.zenith).length() < 1e-6);
+        assert!((s.radiance(Vec3::X) - p.horizon).length() < 1e-6);
+        assert!(s.radiance(p.sun_direction).x > 50.0);
         // Straight down onto the centre of a checker square, and one square over.
         let a = s.radiance(Vec3::new(0.0, -1.0, 0.0001).normalize());
         let b = s.radiance(Vec3::new(1.5, -1.0, 0.5).normalize());

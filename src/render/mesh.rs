@@ -166,15 +166,31 @@ impl Mesh {
     /// Nearest hit with t in (t_min, t_max).
     pub fn intersect(&self, ray: &Ray, t_min: f32, mut t_max: f32) -> Option<SurfaceHit> {
         let inv_dir = ray.dir.recip();
+        let enter = |node: u32, t_max: f32| {
+            self.nodes[node as usize]
+                .bounds
+                .hit(ray.origin, inv_dir, t_min, t_max)
+        };
         let mut best: Option<(usize, f32, f32, f32)> = None;
-        let mut stack = [0u32; 64];
-        let mut sp = 1usize;
+        // Entries are (node, where the ray enters its box). A box is
+        // slab-tested once, when its parent is visited; on its turn only the
+        // stored entry is compared with the nearest hit so far.
+        let mut stack = [(0u32, 0.0f32); 64];
+        let mut sp = 0usize;
+        if let Some(near) = enter(0, t_max) {
+            stack[0] = (0, near);
+            sp = 1;
+        }
         while sp > 0 {
             sp -= 1;
-            let node = &self.nodes[stack[sp] as usize];
-            if node.bounds.hit(ray.origin, inv_dir, t_min, t_max).is_none() {
+            let (ni, near) = stack[sp];
+            // A hit found since the push may lie in front of this box. Only
+            // t_max has changed since its slab test, so this comparison gives
+            // the answer testing the box again would.
+            if near > t_max {
                 continue;
             }
+            let node = &self.nodes[ni as usize];
             if node.count > 0 {
                 let first = node.first as usize;
                 for i in first..first + node.count as usize {
@@ -186,21 +202,29 @@ impl Mesh {
                     }
                 }
             } else if sp + 2 <= stack.len() {
-                // Visit the nearer child first so t_max shrinks sooner.
                 let (l, r) = (node.first, node.first + 1);
-                let dl = self.nodes[l as usize]
-                    .bounds
-                    .hit(ray.origin, inv_dir, t_min, t_max);
-                let dr = self.nodes[r as usize]
-                    .bounds
-                    .hit(ray.origin, inv_dir, t_min, t_max);
-                let (near, far) = match (dl, dr) {
-                    (Some(a), Some(b)) if b < a => (r, l),
-                    _ => (l, r),
-                };
-                stack[sp] = far;
-                stack[sp + 1] = near;
-                sp += 2;
+                match (enter(l, t_max), enter(r, t_max)) {
+                    // The nearer child on top, so t_max shrinks sooner.
+                    (Some(dl), Some(dr)) => {
+                        let (near, far) = if dr < dl {
+                            ((r, dr), (l, dl))
+                        } else {
+                            ((l, dl), (r, dr))
+                        };
+                        stack[sp] = far;
+                        stack[sp + 1] = near;
+                        sp += 2;
+                    }
+                    (Some(dl), None) => {
+                        stack[sp] = (l, dl);
+                        sp += 1;
+                    }
+                    (None, Some(dr)) => {
+                        stack[sp] = (r, dr);
+                        sp += 1;
+                    }
+                    (None, None) => {}
+                }
             }
         }
         let (i, t, u, v) = best?;
@@ -474,6 +498,75 @@ mod tests {
             }
         }
         assert!(hits > 100, "the test rays should mostly hit ({hits})");
+    }
+
+    /// The nearest of all triangles, tried one by one: (t, unit normal).
+    fn nearest_of_all(mesh: &Mesh, ray: &Ray, t_min: f32, t_max: f32) -> Option<(f32, Vec3)> {
+        mesh.triangles
+            .iter()
+            .filter_map(|tri| {
+                intersect_triangle(tri, ray, t_min, t_max).map(|(t, _, _)| (t, tri.normal))
+            })
+            .min_by(|a, b| a.0.total_cmp(&b.0))
+    }
+
+    /// Random rays, from inside and outside each mesh's box, and with finite
+    /// and infinite t_max, against every triangle: the BVH must find the
+    /// same nearest triangle, to the bit, whichever order it visits boxes in.
+    #[test]
+    fn bvh_agrees_with_brute_force_on_random_rays() {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_pcg::Pcg64::seed_from_u64(7);
+        let point = |rng: &mut rand_pcg::Pcg64, half: f32| {
+            Vec3::new(
+                rng.random_range(-half..half),
+                rng.random_range(-half..half),
+                rng.random_range(-half..half),
+            )
+        };
+        // Overlapping boxes of every size: the case where visiting order and
+        // pruning matter most.
+        let soup: Vec<Vec3> = (0..900).map(|_| point(&mut rng, 1.5)).collect();
+        let soup_indices: Vec<[u32; 3]> = (0..300).map(|k| [3 * k, 3 * k + 1, 3 * k + 2]).collect();
+        let (tp, ti, tn) = torus(1.0, 0.3, 40, 20);
+        let (gp, gi, _) = brilliant_gem();
+        let meshes = [
+            ("soup", Mesh::new(&soup, &soup_indices, Vec::new()).unwrap()),
+            ("torus", Mesh::new(&tp, &ti, tn).unwrap()),
+            ("gem", Mesh::new(&gp, &gi, Vec::new()).unwrap()),
+        ];
+        for (name, mesh) in &meshes {
+            let mut hits = 0;
+            for k in 0..2000 {
+                let origin = point(&mut rng, 3.0);
+                // Half the rays aim into the mesh's box, so that many hit.
+                let b = mesh.bounds();
+                let toward = if k % 2 == 0 {
+                    b.min + (b.max - b.min) * (point(&mut rng, 0.5) + 0.5)
+                } else {
+                    origin + point(&mut rng, 1.0)
+                };
+                let dir = (toward - origin).normalize_or(Vec3::X);
+                let ray = Ray::new(origin, dir);
+                let t_max = if k % 4 == 0 {
+                    rng.random_range(0.5..4.0)
+                } else {
+                    f32::INFINITY
+                };
+                let want = nearest_of_all(mesh, &ray, 1e-4, t_max);
+                let got = mesh.intersect(&ray, 1e-4, t_max).map(|h| (h.t, h.normal));
+                assert_eq!(
+                    got.map(|(t, n)| (t.to_bits(), n)),
+                    want.map(|(t, n)| (t.to_bits(), n)),
+                    "{name}, ray {k}: {ray:?} up to {t_max}"
+                );
+                hits += usize::from(got.is_some());
+            }
+            assert!(
+                hits > 500,
+                "{name}: the test rays should often hit ({hits})"
+            );
+        }
     }
 
     #[test]

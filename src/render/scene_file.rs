@@ -9,7 +9,7 @@ use std::sync::Arc;
 use glam::{EulerRot, Mat3, Vec3};
 use serde::Deserialize;
 
-use super::environment::{Environment, EquirectMap, Sky};
+use super::environment::{Environment, EquirectMap, Sky, SkyParams};
 use super::film::bare_reflectance;
 use super::geometry::{Plane, Sphere};
 use super::material::{Checker, FilmMaterial, Interior, Material};
@@ -434,7 +434,7 @@ fn build(file: SceneFile, base: &Path, origin: &str) -> Result<Scene> {
             sun_direction,
             sun_radiance,
             sun_radius_deg,
-        } => Environment::Sky(Sky {
+        } => Environment::Sky(Sky::new(SkyParams {
             zenith: nonnegative3(origin, "environment.zenith", zenith)?,
             horizon: nonnegative3(origin, "environment.horizon", horizon)?,
             ground: nonnegative3(origin, "environment.ground", ground)?,
@@ -455,7 +455,7 @@ fn build(file: SceneFile, base: &Path, origin: &str) -> Result<Scene> {
                     format!("environment.sun_radius_deg: must be in [0, 90], got {sun_radius_deg}"),
                 ));
             },
-        }),
+        })),
         EnvironmentSection::Map { path, intensity } => Environment::Map(EquirectMap::load(
             &base.join(path),
             positive(origin, "environment.intensity", intensity)?,

@@ -1,0 +1,104 @@
+//! What the integration tests share: one way to run the `irid` binary and
+//! capture what it did, and one way to make a scratch folder.
+
+// Each test binary compiles its own copy and uses only part of it.
+#![allow(dead_code)]
+
+use std::ffi::OsStr;
+use std::ops::Deref;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+/// The `irid` binary, to run in the crate's root unless told otherwise.
+pub fn command() -> Command {
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_irid"));
+    cmd.current_dir(env!("CARGO_MANIFEST_DIR"));
+    cmd
+}
+
+/// What one run of `irid` did.
+#[derive(Debug)]
+pub struct Run {
+    /// None when a signal ended it.
+    pub code: Option<i32>,
+    pub stdout: String,
+    pub stderr: String,
+}
+
+impl Run {
+    pub fn success(&self) -> bool {
+        self.code == Some(0)
+    }
+
+    /// Asserts the command-line error shape: exit code 2 and one stderr line
+    /// `irid: ...` naming each of `needles`; `what` says which run failed.
+    pub fn assert_one_line_error(&self, what: &str, needles: &[&str]) {
+        let err = &self.stderr;
+        assert_eq!(self.code, Some(2), "{what}: {err}");
+        assert_eq!(err.lines().count(), 1, "{what}: {err}");
+        assert!(err.starts_with("irid: "), "{what}: {err}");
+        for needle in needles {
+            assert!(err.contains(needle), "{what}: {err:?} lacks {needle:?}");
+        }
+    }
+}
+
+/// Runs `irid args...` in the crate's root and waits for it.
+pub fn irid<I: IntoIterator<Item = S>, S: AsRef<OsStr>>(args: I) -> Run {
+    run(command().args(args))
+}
+
+/// Runs `irid args...` in `dir` and waits for it.
+pub fn irid_in<I: IntoIterator<Item = S>, S: AsRef<OsStr>>(dir: &Path, args: I) -> Run {
+    run(command().args(args).current_dir(dir))
+}
+
+fn run(cmd: &mut Command) -> Run {
+    let out = cmd.output().expect("irid runs");
+    Run {
+        code: out.status.code(),
+        stdout: String::from_utf8(out.stdout).expect("irid writes UTF-8 to stdout"),
+        stderr: String::from_utf8_lossy(&out.stderr).into_owned(),
+    }
+}
+
+/// A fresh folder in the system's temporary directory, removed with
+/// everything in it when dropped; it reads as its path.
+pub struct Scratch(tempfile::TempDir);
+
+impl Scratch {
+    /// `name` appears in the folder's name, to tell whose it is.
+    pub fn new(name: &str) -> Scratch {
+        Scratch(
+            tempfile::Builder::new()
+                .prefix(&format!("irid-{name}-"))
+                .tempdir()
+                .expect("a scratch folder"),
+        )
+    }
+
+    pub fn path(&self) -> &Path {
+        self.0.path()
+    }
+
+    /// Writes `contents` to `name` in the folder; its path.
+    pub fn write(&self, name: &str, contents: impl AsRef<[u8]>) -> PathBuf {
+        let path = self.join(name);
+        std::fs::write(&path, contents).unwrap();
+        path
+    }
+}
+
+impl Deref for Scratch {
+    type Target = Path;
+
+    fn deref(&self) -> &Path {
+        self.0.path()
+    }
+}
+
+impl AsRef<Path> for Scratch {
+    fn as_ref(&self) -> &Path {
+        self.0.path()
+    }
+}
