@@ -10,16 +10,14 @@
 use std::hint::black_box;
 use std::time::Instant;
 
-use num_complex::Complex64 as C64;
 use rand::{Rng, SeedableRng};
 
-use super::grid::indices_table;
 use super::stacks::{fixed_stacks, BenchStack};
 use crate::analytic::{AnalyticFilm, Variant};
 use crate::color::{delta_e2000_rgb, Sampling, SpectralIntegrator};
 use crate::error::{Error, Result};
 use crate::lut;
-use crate::optics::solve;
+use crate::optics::{solve, StackGrid};
 
 #[derive(Clone, Debug)]
 pub struct Options {
@@ -344,9 +342,7 @@ fn row(
 /// wavelength, one solve per sampled wavelength, one weighted sum per channel.
 struct Direct {
     integrator: SpectralIntegrator,
-    wavelengths_nm: Vec<f64>,
-    indices: Vec<C64>,
-    media: usize,
+    grid: StackGrid,
     thicknesses_nm: Vec<f64>,
     varying: usize,
     spectrum: Vec<f64>,
@@ -355,16 +351,12 @@ struct Direct {
 impl Direct {
     fn new(bench: &BenchStack, sampling: Sampling) -> Result<Direct> {
         let integrator = SpectralIntegrator::new(sampling);
-        let wavelengths_nm = integrator.wavelengths_nm().to_vec();
-        let media = bench.stack.layers.len() + 2;
-        let indices = indices_table(&bench.stack, &wavelengths_nm)?;
+        let grid = StackGrid::new(&bench.stack, integrator.wavelengths_nm())?;
         Ok(Direct {
-            spectrum: vec![0.0; wavelengths_nm.len()],
+            spectrum: vec![0.0; grid.wavelengths_nm().len()],
             integrator,
-            wavelengths_nm,
-            indices,
-            media,
-            thicknesses_nm: bench.stack.thicknesses_nm(),
+            thicknesses_nm: grid.thicknesses_nm().to_vec(),
+            grid,
             varying: bench.varying_layer,
         })
     }
@@ -372,12 +364,7 @@ impl Direct {
     #[inline]
     fn eval(&mut self, thickness_nm: f64, cos_theta: f64) -> [f64; 3] {
         self.thicknesses_nm[self.varying] = thickness_nm;
-        for ((s, &w), n) in self
-            .spectrum
-            .iter_mut()
-            .zip(&self.wavelengths_nm)
-            .zip(self.indices.chunks_exact(self.media))
-        {
+        for (s, (w, n)) in self.spectrum.iter_mut().zip(self.grid.iter()) {
             *s = solve(n, &self.thicknesses_nm, w, cos_theta).r();
         }
         self.integrator.rgb(&self.spectrum)

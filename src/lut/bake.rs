@@ -15,7 +15,7 @@ use super::{BakeSpec, Kind, Resolution, MAX_AXIS_NODES, MAX_NODES};
 use crate::color::SpectralIntegrator;
 use crate::error::{Error, Result};
 use crate::optics::twoport::{Scratch, VaryingLayer};
-use crate::optics::{solve, Layer, Stack};
+use crate::optics::{solve, Layer, Stack, StackGrid};
 use crate::simd::avx2_dispatch;
 
 /// The phase factor along a uniform thickness axis is advanced by complex
@@ -74,7 +74,7 @@ pub fn bake_with_progress(spec: &BakeSpec, progress: &(dyn Fn(f64) + Sync)) -> R
         Resolution::MaxError(e) => Some(e),
         Resolution::Nodes { .. } => None,
     };
-    let wavelength_work = prep.wavelengths_nm.len().max(1);
+    let wavelength_work = prep.stack_grid.wavelengths_nm().len().max(1);
     let mut round = 0;
     // The last round's grid and values: nodes it shares with the next one
     // are copied, not evaluated again.
@@ -212,12 +212,10 @@ struct Prepared {
     /// layer of the ambient medium, which changes nothing optically.
     stack: Stack,
     layer: usize,
-    thicknesses_nm: Vec<f64>,
     channels: usize,
-    /// rgb kind: the integration wavelengths, their stack indices and the
-    /// linear-sRGB weight of each wavelength.
-    wavelengths_nm: Vec<f64>,
-    indices: Vec<Vec<C64>>,
+    /// rgb kind: the stack at the integration wavelengths and the
+    /// linear-sRGB weight of each wavelength (the spectral kind has none).
+    stack_grid: StackGrid,
     weights: Vec<[f64; 3]>,
     /// The substrate's critical cos θ (where its q has a branch point),
     /// when it is lossless and optically thinner than the ambient.
@@ -236,20 +234,22 @@ impl Prepared {
         } else {
             spec.layer
         };
-        let thicknesses_nm = stack.thicknesses_nm();
-        let (wavelengths_nm, weights) = match spec.kind {
-            Kind::Rgb => rgb_weights(&SpectralIntegrator::new(spec.sampling)),
-            Kind::Spectral => (Vec::new(), Vec::new()),
+        let (stack_grid, weights) = match spec.kind {
+            Kind::Rgb => {
+                let integrator = SpectralIntegrator::new(spec.sampling);
+                (
+                    StackGrid::new(&stack, integrator.wavelengths_nm())?,
+                    rgb_weights(&integrator).1,
+                )
+            }
+            Kind::Spectral => (StackGrid::new(&stack, &[])?, Vec::new()),
         };
-        let indices = indices_at(&stack, &wavelengths_nm)?;
         let critical_cos = critical_cos(&stack, spec.kind, spec.wavelength_nm);
         Ok(Prepared {
             stack,
             layer,
-            thicknesses_nm,
             channels: channel_names(spec.kind).len(),
-            wavelengths_nm,
-            indices,
+            stack_grid,
             weights,
             critical_cos,
         })
@@ -304,21 +304,33 @@ impl Prepared {
             }),
             None => (Vec::new(), vec![None; rows]),
         };
-        let spectral_indices = if grid.spectral {
-            indices_at(&self.stack, &w_axis.nodes)?
+        // The stack at the wavelengths a row integrates over (rgb) or the
+        // one it holds (spectral: the row's wavelength node).
+        let spectral_grid;
+        let stack_grid = if grid.spectral {
+            spectral_grid = StackGrid::new(&self.stack, &w_axis.nodes)?;
+            &spectral_grid
         } else {
-            Vec::new()
+            &self.stack_grid
         };
         let n = t_axis.nodes.len();
         out.par_chunks_mut(row_len).enumerate().for_each_init(
-            || Worker::new(n, &self.thicknesses_nm),
+            || Worker::new(n, stack_grid.thicknesses_nm()),
             |wk, (row_index, row)| {
                 let (w, c) = (row_index / nc, row_index % nc);
                 let cos = c_axis.nodes[c];
+                let wavelengths = if grid.spectral {
+                    w..w + 1
+                } else {
+                    0..stack_grid.wavelengths_nm().len()
+                };
                 let (pieces, old_row) = match old_rows[row_index] {
                     Some(old_row) => (&plan[..], old_row),
                     None => (&all[..], &[][..]),
                 };
+                // The row's split stacks, one per wavelength, made at its
+                // first computed piece and shared by the others.
+                wk.splits.clear();
                 for piece in pieces {
                     let range = match piece {
                         Piece::Copy {
@@ -332,13 +344,19 @@ impl Prepared {
                         }
                         Piece::Compute(range) => &chunks[range.clone()],
                     };
+                    if wk.splits.is_empty() {
+                        for i in wavelengths.clone() {
+                            let v = self.split(stack_grid, i, cos, &mut wk.scratch);
+                            wk.splits.push((i, v));
+                        }
+                    }
                     let start = range[0].start;
                     let m = range.iter().map(|k| k.start + k.len).max().unwrap_or(start) - start;
                     let nodes = &t_axis.nodes[start..start + m];
                     let dst = &mut row[start * ch..(start + m) * ch];
                     if grid.spectral {
-                        let wl = w_axis.nodes[w];
-                        self.responses(&spectral_indices[w], wl, cos, nodes, range, wk);
+                        let split = wk.splits[0];
+                        self.responses(&split, stack_grid, cos, nodes, range, wk);
                         for (o, (&r, &t)) in dst.chunks_exact_mut(2).zip(wk.r.iter().zip(&wk.t)) {
                             o[0] = r;
                             o[1] = t;
@@ -349,10 +367,10 @@ impl Prepared {
                     // weighting loop below runs over contiguous arrays.
                     wk.acc.clear();
                     wk.acc.resize(6 * m, 0.0);
-                    for (i, idx) in self.indices.iter().enumerate() {
-                        let wl = self.wavelengths_nm[i];
-                        self.responses(idx, wl, cos, nodes, range, wk);
-                        accumulate(&mut wk.acc, &wk.r[..m], &wk.t[..m], self.weights[i]);
+                    for k in 0..wk.splits.len() {
+                        let split = wk.splits[k];
+                        self.responses(&split, stack_grid, cos, nodes, range, wk);
+                        accumulate(&mut wk.acc, &wk.r[..m], &wk.t[..m], self.weights[split.0]);
                     }
                     for (j, o) in dst.chunks_exact_mut(6).enumerate() {
                         for (k, o) in o.iter_mut().enumerate() {
@@ -368,25 +386,26 @@ impl Prepared {
 
     /// Unpolarized R and T at the thickness `nodes` (the nodes `chunks`
     /// cover, from the first chunk's start) into `wk.r`, `wk.t`: the
-    /// split-stack form, or the solver node by node where the split is
+    /// split-stack form (`split`: the stack split at `stack_grid`'s wavelength
+    /// of that index), or the solver node by node where the split is
     /// degenerate (the varying layer at its own critical angle).
     fn responses(
         &self,
-        idx: &[C64],
-        wavelength_nm: f64,
+        &(i, ref v): &(usize, VaryingLayer),
+        stack_grid: &StackGrid,
         cos: f64,
         nodes: &[f64],
         chunks: &[Chunk],
         wk: &mut Worker,
     ) {
         let m = nodes.len();
-        let v = self.split(idx, wavelength_nm, cos, &mut wk.scratch);
         if !v.is_degenerate() {
             let (re, im) = (&mut wk.phase_re[..m], &mut wk.phase_im[..m]);
-            phases(&v, nodes, chunks, re, im);
+            phases(v, nodes, chunks, re, im);
             v.responses(re, im, &mut wk.r[..m], &mut wk.t[..m]);
             return;
         }
+        let (idx, wavelength_nm) = (stack_grid.indices_at(i), stack_grid.wavelengths_nm()[i]);
         for (j, &t) in nodes.iter().enumerate() {
             wk.thicknesses_nm[self.layer - 1] = t;
             let resp = solve(idx, &wk.thicknesses_nm, wavelength_nm, cos);
@@ -395,9 +414,24 @@ impl Prepared {
         }
     }
 
+    /// The stack split around the varying layer at `stack_grid`'s `i`-th
+    /// wavelength and `cos`.
     #[inline]
-    fn split(&self, idx: &[C64], wl: f64, cos: f64, scratch: &mut Scratch) -> VaryingLayer {
-        VaryingLayer::new(idx, &self.thicknesses_nm, self.layer, wl, cos, scratch)
+    fn split(
+        &self,
+        stack_grid: &StackGrid,
+        i: usize,
+        cos: f64,
+        scratch: &mut Scratch,
+    ) -> VaryingLayer {
+        VaryingLayer::new(
+            stack_grid.indices_at(i),
+            stack_grid.thicknesses_nm(),
+            self.layer,
+            stack_grid.wavelengths_nm()[i],
+            cos,
+            scratch,
+        )
     }
 }
 
@@ -418,17 +452,6 @@ pub(crate) fn critical_cos(stack: &Stack, kind: Kind, wavelength_nm: (f64, f64))
         }
         _ => None,
     }
-}
-
-fn indices_at(stack: &Stack, wavelengths_nm: &[f64]) -> Result<Vec<Vec<C64>>> {
-    wavelengths_nm
-        .iter()
-        .map(|&wl| {
-            let mut v = Vec::new();
-            stack.indices_at(wl, &mut v)?;
-            Ok(v)
-        })
-        .collect()
 }
 
 /// The integrator is linear in the spectrum, so its response to a unit
@@ -467,6 +490,8 @@ avx2_dispatch! {
 /// One worker's buffers, allocated once per rayon task.
 struct Worker {
     scratch: Scratch,
+    /// The current row's split stacks, each with its wavelength's index.
+    splits: Vec<(usize, VaryingLayer)>,
     thicknesses_nm: Vec<f64>,
     phase_re: Vec<f64>,
     phase_im: Vec<f64>,
@@ -479,6 +504,7 @@ impl Worker {
     fn new(nodes: usize, thicknesses_nm: &[f64]) -> Worker {
         Worker {
             scratch: Scratch::default(),
+            splits: Vec::new(),
             thicknesses_nm: thicknesses_nm.to_vec(),
             phase_re: vec![0.0; nodes],
             phase_im: vec![0.0; nodes],
