@@ -239,7 +239,7 @@ impl Prepared {
                 let integrator = SpectralIntegrator::new(spec.sampling);
                 (
                     StackGrid::new(&stack, integrator.wavelengths_nm())?,
-                    rgb_weights(&integrator).1,
+                    rgb_weights(&integrator),
                 )
             }
             Kind::Spectral => (StackGrid::new(&stack, &[])?, Vec::new()),
@@ -454,21 +454,16 @@ pub(crate) fn critical_cos(stack: &Stack, kind: Kind, wavelength_nm: (f64, f64))
     }
 }
 
-/// The integrator is linear in the spectrum, so its response to a unit
-/// impulse at each wavelength is that wavelength's weight: the bake then
-/// accumulates weight × R per node instead of storing whole spectra.
-pub(crate) fn rgb_weights(integrator: &SpectralIntegrator) -> (Vec<f64>, Vec<[f64; 3]>) {
-    let wavelengths = integrator.wavelengths_nm().to_vec();
-    let mut impulse = vec![0.0; wavelengths.len()];
-    let weights = (0..wavelengths.len())
-        .map(|i| {
-            impulse[i] = 1.0;
-            let w = integrator.rgb(&impulse);
-            impulse[i] = 0.0;
-            w
-        })
-        .collect();
-    (wavelengths, weights)
+/// The linear-sRGB weight of each integration wavelength, as triples: the
+/// integrator is linear in the spectrum, so the bake accumulates weight × R
+/// per node instead of storing whole spectra.
+fn rgb_weights(integrator: &SpectralIntegrator) -> Vec<[f64; 3]> {
+    let [r, g, b] = integrator.rgb_weights();
+    r.iter()
+        .zip(g)
+        .zip(b)
+        .map(|((&r, &g), &b)| [r, g, b])
+        .collect()
 }
 
 avx2_dispatch! {
@@ -1075,6 +1070,37 @@ mod tests {
                 }
             }
             assert!(worst < 1e-12, "n = {n}{k:+}i: {worst:e}");
+        }
+    }
+
+    /// The weights the bake accumulates are the integrator's colour of a
+    /// unit impulse at each wavelength, bit for bit (its dot product adds
+    /// only zeros to the one weight), so folding the integration into the
+    /// bake gives what integrating each spectrum would.
+    #[test]
+    fn rgb_weights_are_the_colour_of_an_impulse() {
+        use crate::color::Sampling;
+        for sampling in [
+            Sampling::Exact,
+            Sampling::Rgb3,
+            Sampling::Uniform(9),
+            Sampling::Uniform(16),
+            Sampling::Uniform(81),
+        ] {
+            let integrator = SpectralIntegrator::new(sampling);
+            let weights = rgb_weights(&integrator);
+            let mut impulse = vec![0.0; integrator.wavelengths_nm().len()];
+            assert_eq!(weights.len(), impulse.len());
+            for (i, w) in weights.iter().enumerate() {
+                impulse[i] = 1.0;
+                let want = integrator.rgb(&impulse);
+                impulse[i] = 0.0;
+                assert_eq!(
+                    w.map(f64::to_bits),
+                    want.map(f64::to_bits),
+                    "{sampling} {i}"
+                );
+            }
         }
     }
 
