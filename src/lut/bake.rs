@@ -110,7 +110,9 @@ pub fn bake_with_progress(spec: &BakeSpec, progress: &(dyn Fn(f64) + Sync)) -> R
         let clock = std::time::Instant::now();
         let values = prep.eval(&fine, previous.as_ref(), progress)?;
         let eval_s = clock.elapsed().as_secs_f64();
-        let check = measure(&coarse, &fine, &values, prep.channels, spec.half);
+        // The coarse table as it would be stored: the check interpolates it.
+        let data = even_subgrid(&fine, &values, prep.channels, spec.half);
+        let check = measure(&coarse, &fine, &values, &data, prep.channels);
         let measure_s = clock.elapsed().as_secs_f64() - eval_s;
         if std::env::var_os("IRID_DEBUG").is_some() {
             eprintln!(
@@ -129,7 +131,6 @@ pub fn bake_with_progress(spec: &BakeSpec, progress: &(dyn Fn(f64) + Sync)) -> R
         let e = match target {
             Some(e) if check.max_all > e => e,
             _ => {
-                let data = even_subgrid(&fine, &values, prep.channels, spec.half);
                 representable(&data, &coarse, spec)?;
                 let header = header(spec, &prep, &coarse, Some(&check), target);
                 let mut lut = Lut::from_parts(header, data)
@@ -858,10 +859,11 @@ struct Check {
 }
 
 /// Compares exact values at every fine node with the multilinear
-/// interpolation of the stored (rounded) coarse values, which are the fine
-/// values at even indices.
-fn measure(coarse: &Grid, fine: &Grid, values: &[f64], channels: usize, half: bool) -> Check {
+/// interpolation of the stored coarse table `data` (the fine values at even
+/// indices, rounded as stored: see [`even_subgrid`]).
+fn measure(coarse: &Grid, fine: &Grid, values: &[f64], data: &[f32], channels: usize) -> Check {
     let dims = fine.axes.clone().map(|a| a.nodes.len());
+    let coarse_dims = coarse.axes.each_ref().map(|a| a.nodes.len());
     // Interpolation weight of the right-hand coarse neighbour at each odd
     // fine index (1/2 on uniform segments, not on graded ones).
     let weights: Vec<Vec<f64>> = fine
@@ -880,6 +882,11 @@ fn measure(coarse: &Grid, fine: &Grid, values: &[f64], channels: usize, half: bo
         })
         .collect();
     let strides = [channels, dims[0] * channels, dims[0] * dims[1] * channels];
+    let coarse_strides = [
+        channels,
+        coarse_dims[0] * channels,
+        coarse_dims[0] * coarse_dims[1] * channels,
+    ];
     let mut check = Check {
         max_channel: vec![0.0; channels],
         max_all: 0.0,
@@ -894,8 +901,8 @@ fn measure(coarse: &Grid, fine: &Grid, values: &[f64], channels: usize, half: bo
                 let at_idx = [t, c, w];
                 let at = t * strides[0] + c * strides[1] + w * strides[2];
                 // Corners of the coarse cell: each odd axis contributes its
-                // two neighbours.
-                corners[0] = (at, 1.0);
+                // two neighbours, the coarse nodes i / 2 and i / 2 + 1.
+                corners[0] = ((0..3).map(|a| at_idx[a] / 2 * coarse_strides[a]).sum(), 1.0);
                 let mut count = 1;
                 for a in 0..3 {
                     let i = at_idx[a];
@@ -903,8 +910,8 @@ fn measure(coarse: &Grid, fine: &Grid, values: &[f64], channels: usize, half: bo
                         let wt = weights[a][i];
                         for k in 0..count {
                             let (base, cw) = corners[k];
-                            corners[k] = (base - strides[a], cw * (1.0 - wt));
-                            corners[count + k] = (base + strides[a], cw * wt);
+                            corners[k] = (base, cw * (1.0 - wt));
+                            corners[count + k] = (base + coarse_strides[a], cw * wt);
                         }
                         count *= 2;
                     }
@@ -913,7 +920,7 @@ fn measure(coarse: &Grid, fine: &Grid, values: &[f64], channels: usize, half: bo
                 for ch in 0..channels {
                     let interp: f64 = corners[..count]
                         .iter()
-                        .map(|&(base, wt)| wt * f64::from(stored(values[base + ch], half)))
+                        .map(|&(base, wt)| wt * f64::from(data[base + ch]))
                         .sum();
                     let err = (interp - values[at + ch]).abs();
                     check.max_channel[ch] = check.max_channel[ch].max(err);
