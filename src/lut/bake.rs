@@ -66,7 +66,7 @@ pub fn bake_with_progress(spec: &BakeSpec, progress: &(dyn Fn(f64) + Sync)) -> R
         let grid = Grid::new(&axes, spec.kind);
         let values = prep.eval(&grid, None, progress)?;
         let data: Vec<f32> = values.iter().map(|&v| stored(v, spec.half)).collect();
-        representable(&data, &grid, spec)?;
+        representable(&data, &grid.nodes(), spec.kind, spec.half)?;
         return Lut::from_parts(header(spec, &prep, &grid, None, None), data)
             .map_err(|why| Error::invalid("baked table", why));
     }
@@ -131,7 +131,7 @@ pub fn bake_with_progress(spec: &BakeSpec, progress: &(dyn Fn(f64) + Sync)) -> R
         let e = match target {
             Some(e) if check.max_all > e => e,
             _ => {
-                representable(&data, &coarse, spec)?;
+                representable(&data, &coarse.nodes(), spec.kind, spec.half)?;
                 let header = header(spec, &prep, &coarse, Some(&check), target);
                 let mut lut = Lut::from_parts(header, data)
                     .map_err(|why| Error::invalid("baked table", why))?;
@@ -691,6 +691,10 @@ impl Grid {
     fn total(&self) -> usize {
         self.axes.iter().map(|a| a.nodes.len()).product()
     }
+
+    fn nodes(&self) -> [&[f64]; 3] {
+        self.axes.each_ref().map(|a| &a.nodes[..])
+    }
 }
 
 fn doubled(segments: &[Segment]) -> Vec<Segment> {
@@ -808,24 +812,25 @@ fn initial_axes(spec: &BakeSpec, prep: &Prepared) -> [Vec<Segment>; 3] {
 
 /// A table must hold the values it was baked from: a gain film near a
 /// lasing pole reflects far more than f16's largest value (65504), which
-/// would be stored as infinity. Names the first node that does not fit.
-fn representable(data: &[f32], grid: &Grid, spec: &BakeSpec) -> Result<()> {
+/// would be stored as infinity. Names the first node that does not fit
+/// (`nodes`: thickness, cos θ and wavelength axes; the last unused for rgb).
+fn representable(data: &[f32], nodes: &[&[f64]; 3], kind: Kind, half: bool) -> Result<()> {
     let Some(k) = data.iter().position(|v| !v.is_finite()) else {
         return Ok(());
     };
-    let names = channel_names(spec.kind);
+    let names = channel_names(kind);
     let (node, channel) = (k / names.len(), names[k % names.len()]);
-    let [t_axis, c_axis, w_axis] = &grid.axes;
-    let (nt, nc) = (t_axis.nodes.len(), c_axis.nodes.len());
+    let [t_nodes, c_nodes, w_nodes] = nodes;
+    let (nt, nc) = (t_nodes.len(), c_nodes.len());
     let mut at = format!(
         "thickness {:.2} nm, cos θ {:.5}",
-        t_axis.nodes[node % nt],
-        c_axis.nodes[(node / nt) % nc]
+        t_nodes[node % nt],
+        c_nodes[(node / nt) % nc]
     );
-    if spec.kind == Kind::Spectral {
-        at += &format!(", wavelength {:.1} nm", w_axis.nodes[node / (nt * nc)]);
+    if kind == Kind::Spectral {
+        at += &format!(", wavelength {:.1} nm", w_nodes[node / (nt * nc)]);
     }
-    Err(if spec.half {
+    Err(if half {
         Error::HalfOverflow {
             why: format!(
                 "{channel} exceeds f16's largest value (65504) at {at}; bake in f32 (without --half) or narrow --thickness or --angles"
@@ -836,13 +841,44 @@ fn representable(data: &[f32], grid: &Grid, spec: &BakeSpec) -> Result<()> {
     })
 }
 
-/// Rounds a value as it will be stored.
+impl Lut {
+    /// This table with every value rounded to f16, for a caller that has the
+    /// f32 table and wants the f16 one too without baking again: the values a
+    /// `--half` bake of the same spec stores (it rounds through f32 too), but
+    /// the header keeps no error figures (they measured the f32 table's
+    /// rounding) and no cache key (a bake's header differs). Refused, as by
+    /// the baker, when a value overflows f16.
+    pub(crate) fn rounded_to_half(&self) -> Result<Lut> {
+        let data: Vec<f32> = self
+            .data()
+            .iter()
+            .map(|&v| stored(f64::from(v), true))
+            .collect();
+        let h = self.header();
+        let axis = |k: usize| h.axes.get(k).map_or(&[][..], |a| &a.nodes[..]);
+        representable(&data, &[axis(0), axis(1), axis(2)], h.kind, true)?;
+        let mut header = h.clone();
+        header.precision = "f16".into();
+        header.error.bake_check = None;
+        header.error.validation = None;
+        header.cache_key.clear();
+        Lut::from_parts(header, data).map_err(|why| Error::invalid("rounded table", why))
+    }
+}
+
+/// Rounds a value as it will be stored. An f16 value is rounded from the
+/// f32 one, as the `half` crate's f64 conversion does on x86 with F16C; its
+/// other paths (no F16C, aarch64) work from the f64, which differs where the
+/// f32 value lies exactly halfway between two f16 values. Through f32
+/// everywhere, a table is the same on every machine and an f32 table rounded
+/// to f16 is the f16 table (see [`Lut::rounded_to_half`]).
 #[inline]
 fn stored(v: f64, half: bool) -> f32 {
+    let single = v as f32;
     if half {
-        half::f16::from_f64(v).to_f32()
+        half::f16::from_f32(single).to_f32()
     } else {
-        v as f32
+        single
     }
 }
 
@@ -1233,6 +1269,53 @@ mod tests {
                 "{kind}: nothing reused"
             );
         }
+    }
+
+    /// The f32 table rounded to f16 is the `--half` bake of the same spec,
+    /// bit for bit; a value beyond f16's range is refused as the baker
+    /// refuses it.
+    #[test]
+    fn rounding_an_f32_table_to_half_is_the_half_bake() {
+        for kind in [Kind::Rgb, Kind::Spectral] {
+            let mut spec = dense_side_spec(kind);
+            spec.thickness_nm = (0.0, 1500.0);
+            spec.resolution = Resolution::Nodes {
+                thickness: 301,
+                angle: 23,
+                wavelength: 5,
+            };
+            let full = bake(&spec).unwrap();
+            spec.half = true;
+            let baked = bake(&spec).unwrap();
+            let rounded = full.rounded_to_half().unwrap();
+            assert_eq!(rounded.header().precision, "f16");
+            assert_eq!(rounded.header().axes, baked.header().axes);
+            let bits = |l: &Lut| l.data().iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+            assert!(bits(&rounded) == bits(&baked), "{kind}");
+
+            let mut data = full.data().to_vec();
+            data[7] = 1e5;
+            let big = Lut::from_parts(full.header().clone(), data).unwrap();
+            assert!(matches!(
+                big.rounded_to_half(),
+                Err(Error::HalfOverflow { .. })
+            ));
+        }
+    }
+
+    /// f16 values are rounded from f32 ones: at an f64 value just past an
+    /// f16 tie, which f32 rounds onto the tie, the result is the tie's even
+    /// neighbour, as with F16C, on any machine.
+    #[test]
+    fn half_values_round_through_f32() {
+        // 1 + 2^-11 is halfway between the f16 values 1 and 1 + 2^-10.
+        let just_past_tie = 1.0 + 2f64.powi(-11) + 2f64.powi(-40);
+        assert_eq!(just_past_tie as f32, 1.0 + 2f32.powi(-11));
+        assert_eq!(stored(just_past_tie, true), 1.0);
+        assert_eq!(
+            stored(1.0 + 2f64.powi(-11) + 2f64.powi(-20), true),
+            1.0 + 2f32.powi(-10)
+        );
     }
 
     /// An air gap seen from glass has its critical angle at the substrate's,
