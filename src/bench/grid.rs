@@ -17,7 +17,7 @@ use crate::color::{Sampling, SpectralIntegrator};
 use crate::error::{Error, Result};
 use crate::lut;
 use crate::optics::twoport::{Scratch, VaryingLayer};
-use crate::optics::{solve, Stack};
+use crate::optics::{solve, Stack, StackGrid};
 
 #[derive(Clone, Debug)]
 pub struct Grid {
@@ -78,17 +78,15 @@ pub fn evaluate(
         ));
     }
     let pool = thread_pool(threads)?;
-    let media = stack.layers.len() + 2;
     let n_w = grid.wavelengths_nm.len();
     let rows = grid.thickness_count() * grid.angles_deg.len();
     let mut r = vec![0.0; rows * n_w];
     let mut t = vec![0.0; rows * n_w];
-    let mut indices = Vec::new();
+    let mut stack_grid = None;
     let mut best = f64::INFINITY;
     for _ in 0..repeat.max(1) {
         let start = Instant::now();
-        indices = indices_table(stack, &grid.wavelengths_nm)?;
-        let base_thickness = stack.thicknesses_nm();
+        let sg = stack_grid.insert(StackGrid::new(stack, &grid.wavelengths_nm)?);
         let cosines: Vec<f64> = grid
             .angles_deg
             .iter()
@@ -103,7 +101,7 @@ pub fn evaluate(
                 .for_each_init(
                     || {
                         (
-                            base_thickness.clone(),
+                            sg.thicknesses_nm().to_vec(),
                             Scratch::default(),
                             Vec::with_capacity(n_w),
                             Vec::with_capacity(n_w),
@@ -113,8 +111,7 @@ pub fn evaluate(
                     |(thick, scratch, splits, rotations, phases), ((r_block, t_block), &cos)| {
                         match &grid.thicknesses_nm {
                             None => {
-                                for (w, &wavelength_nm) in grid.wavelengths_nm.iter().enumerate() {
-                                    let n = &indices[w * media..(w + 1) * media];
+                                for (w, (wavelength_nm, n)) in sg.iter().enumerate() {
                                     let resp = solve(n, thick, wavelength_nm, cos);
                                     r_block[w] = resp.r();
                                     t_block[w] = resp.t();
@@ -124,8 +121,7 @@ pub fn evaluate(
                                 // All wavelengths of this angle split first, then
                                 // thickness-major so the writes are contiguous.
                                 splits.clear();
-                                for (w, &wavelength_nm) in grid.wavelengths_nm.iter().enumerate() {
-                                    let n = &indices[w * media..(w + 1) * media];
+                                for (wavelength_nm, n) in sg.iter() {
                                     splits.push(VaryingLayer::new(
                                         n,
                                         thick,
@@ -175,11 +171,12 @@ pub fn evaluate(
         });
         best = best.min(start.elapsed().as_secs_f64());
     }
+    let stack_grid = stack_grid.ok_or_else(|| Error::invalid("repeat", "no repetition ran"))?;
     Ok(GridOutput {
         r,
         t,
-        indices,
-        media,
+        indices: stack_grid.indices().to_vec(),
+        media: stack.layers.len() + 2,
         seconds: best,
     })
 }
@@ -289,17 +286,6 @@ fn thread_pool(threads: usize) -> Result<rayon::ThreadPool> {
         .num_threads(threads.max(1))
         .build()
         .map_err(|e| Error::invalid("threads", e.to_string()))
-}
-
-/// The indices of every medium at each wavelength, `[wavelength][medium]`.
-pub(crate) fn indices_table(stack: &Stack, wavelengths_nm: &[f64]) -> Result<Vec<C64>> {
-    let mut all = Vec::with_capacity(wavelengths_nm.len() * (stack.layers.len() + 2));
-    let mut one = Vec::new();
-    for &w in wavelengths_nm {
-        stack.indices_at(w, &mut one)?;
-        all.extend_from_slice(&one);
-    }
-    Ok(all)
 }
 
 #[cfg(test)]

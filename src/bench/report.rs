@@ -214,7 +214,7 @@ pub fn markdown(
     );
     s.push_str(
         "- LUTs: rgb tables baked with 1 nm integration over thickness × cos θ, sampled bilinearly; \
-         bake time in the last column\n",
+         bake time in the last column (an f16 table is the f32 one rounded: its bake and the rounding)\n",
     );
     s.push_str(
         "- Analytic: the single-film model of Belcour & Barla (2017) (exact Fresnel, 3 terms) and the \

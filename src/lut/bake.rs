@@ -15,7 +15,7 @@ use super::{BakeSpec, Kind, Resolution, MAX_AXIS_NODES, MAX_NODES};
 use crate::color::SpectralIntegrator;
 use crate::error::{Error, Result};
 use crate::optics::twoport::{Scratch, VaryingLayer};
-use crate::optics::{solve, Layer, Stack};
+use crate::optics::{solve, Layer, Stack, StackGrid};
 use crate::simd::avx2_dispatch;
 
 /// The phase factor along a uniform thickness axis is advanced by complex
@@ -66,7 +66,7 @@ pub fn bake_with_progress(spec: &BakeSpec, progress: &(dyn Fn(f64) + Sync)) -> R
         let grid = Grid::new(&axes, spec.kind);
         let values = prep.eval(&grid, None, progress)?;
         let data: Vec<f32> = values.iter().map(|&v| stored(v, spec.half)).collect();
-        representable(&data, &grid, spec)?;
+        representable(&data, &grid.nodes(), spec.kind, spec.half)?;
         return Lut::from_parts(header(spec, &prep, &grid, None, None), data)
             .map_err(|why| Error::invalid("baked table", why));
     }
@@ -74,7 +74,7 @@ pub fn bake_with_progress(spec: &BakeSpec, progress: &(dyn Fn(f64) + Sync)) -> R
         Resolution::MaxError(e) => Some(e),
         Resolution::Nodes { .. } => None,
     };
-    let wavelength_work = prep.wavelengths_nm.len().max(1);
+    let wavelength_work = prep.stack_grid.wavelengths_nm().len().max(1);
     let mut round = 0;
     // The last round's grid and values: nodes it shares with the next one
     // are copied, not evaluated again.
@@ -110,7 +110,9 @@ pub fn bake_with_progress(spec: &BakeSpec, progress: &(dyn Fn(f64) + Sync)) -> R
         let clock = std::time::Instant::now();
         let values = prep.eval(&fine, previous.as_ref(), progress)?;
         let eval_s = clock.elapsed().as_secs_f64();
-        let check = measure(&coarse, &fine, &values, prep.channels, spec.half);
+        // The coarse table as it would be stored: the check interpolates it.
+        let data = even_subgrid(&fine, &values, prep.channels, spec.half);
+        let check = measure(&coarse, &fine, &values, &data, prep.channels);
         let measure_s = clock.elapsed().as_secs_f64() - eval_s;
         if std::env::var_os("IRID_DEBUG").is_some() {
             eprintln!(
@@ -129,8 +131,7 @@ pub fn bake_with_progress(spec: &BakeSpec, progress: &(dyn Fn(f64) + Sync)) -> R
         let e = match target {
             Some(e) if check.max_all > e => e,
             _ => {
-                let data = even_subgrid(&fine, &values, prep.channels, spec.half);
-                representable(&data, &coarse, spec)?;
+                representable(&data, &coarse.nodes(), spec.kind, spec.half)?;
                 let header = header(spec, &prep, &coarse, Some(&check), target);
                 let mut lut = Lut::from_parts(header, data)
                     .map_err(|why| Error::invalid("baked table", why))?;
@@ -212,12 +213,10 @@ struct Prepared {
     /// layer of the ambient medium, which changes nothing optically.
     stack: Stack,
     layer: usize,
-    thicknesses_nm: Vec<f64>,
     channels: usize,
-    /// rgb kind: the integration wavelengths, their stack indices and the
-    /// linear-sRGB weight of each wavelength.
-    wavelengths_nm: Vec<f64>,
-    indices: Vec<Vec<C64>>,
+    /// rgb kind: the stack at the integration wavelengths and the
+    /// linear-sRGB weight of each wavelength (the spectral kind has none).
+    stack_grid: StackGrid,
     weights: Vec<[f64; 3]>,
     /// The substrate's critical cos θ (where its q has a branch point),
     /// when it is lossless and optically thinner than the ambient.
@@ -236,20 +235,22 @@ impl Prepared {
         } else {
             spec.layer
         };
-        let thicknesses_nm = stack.thicknesses_nm();
-        let (wavelengths_nm, weights) = match spec.kind {
-            Kind::Rgb => rgb_weights(&SpectralIntegrator::new(spec.sampling)),
-            Kind::Spectral => (Vec::new(), Vec::new()),
+        let (stack_grid, weights) = match spec.kind {
+            Kind::Rgb => {
+                let integrator = SpectralIntegrator::new(spec.sampling);
+                (
+                    StackGrid::new(&stack, integrator.wavelengths_nm())?,
+                    rgb_weights(&integrator),
+                )
+            }
+            Kind::Spectral => (StackGrid::new(&stack, &[])?, Vec::new()),
         };
-        let indices = indices_at(&stack, &wavelengths_nm)?;
         let critical_cos = critical_cos(&stack, spec.kind, spec.wavelength_nm);
         Ok(Prepared {
             stack,
             layer,
-            thicknesses_nm,
             channels: channel_names(spec.kind).len(),
-            wavelengths_nm,
-            indices,
+            stack_grid,
             weights,
             critical_cos,
         })
@@ -304,21 +305,33 @@ impl Prepared {
             }),
             None => (Vec::new(), vec![None; rows]),
         };
-        let spectral_indices = if grid.spectral {
-            indices_at(&self.stack, &w_axis.nodes)?
+        // The stack at the wavelengths a row integrates over (rgb) or the
+        // one it holds (spectral: the row's wavelength node).
+        let spectral_grid;
+        let stack_grid = if grid.spectral {
+            spectral_grid = StackGrid::new(&self.stack, &w_axis.nodes)?;
+            &spectral_grid
         } else {
-            Vec::new()
+            &self.stack_grid
         };
         let n = t_axis.nodes.len();
         out.par_chunks_mut(row_len).enumerate().for_each_init(
-            || Worker::new(n, &self.thicknesses_nm),
+            || Worker::new(n, stack_grid.thicknesses_nm()),
             |wk, (row_index, row)| {
                 let (w, c) = (row_index / nc, row_index % nc);
                 let cos = c_axis.nodes[c];
+                let wavelengths = if grid.spectral {
+                    w..w + 1
+                } else {
+                    0..stack_grid.wavelengths_nm().len()
+                };
                 let (pieces, old_row) = match old_rows[row_index] {
                     Some(old_row) => (&plan[..], old_row),
                     None => (&all[..], &[][..]),
                 };
+                // The row's split stacks, one per wavelength, made at its
+                // first computed piece and shared by the others.
+                wk.splits.clear();
                 for piece in pieces {
                     let range = match piece {
                         Piece::Copy {
@@ -332,13 +345,19 @@ impl Prepared {
                         }
                         Piece::Compute(range) => &chunks[range.clone()],
                     };
+                    if wk.splits.is_empty() {
+                        for i in wavelengths.clone() {
+                            let v = self.split(stack_grid, i, cos, &mut wk.scratch);
+                            wk.splits.push((i, v));
+                        }
+                    }
                     let start = range[0].start;
                     let m = range.iter().map(|k| k.start + k.len).max().unwrap_or(start) - start;
                     let nodes = &t_axis.nodes[start..start + m];
                     let dst = &mut row[start * ch..(start + m) * ch];
                     if grid.spectral {
-                        let wl = w_axis.nodes[w];
-                        self.responses(&spectral_indices[w], wl, cos, nodes, range, wk);
+                        let split = wk.splits[0];
+                        self.responses(&split, stack_grid, cos, nodes, range, wk);
                         for (o, (&r, &t)) in dst.chunks_exact_mut(2).zip(wk.r.iter().zip(&wk.t)) {
                             o[0] = r;
                             o[1] = t;
@@ -349,10 +368,10 @@ impl Prepared {
                     // weighting loop below runs over contiguous arrays.
                     wk.acc.clear();
                     wk.acc.resize(6 * m, 0.0);
-                    for (i, idx) in self.indices.iter().enumerate() {
-                        let wl = self.wavelengths_nm[i];
-                        self.responses(idx, wl, cos, nodes, range, wk);
-                        accumulate(&mut wk.acc, &wk.r[..m], &wk.t[..m], self.weights[i]);
+                    for k in 0..wk.splits.len() {
+                        let split = wk.splits[k];
+                        self.responses(&split, stack_grid, cos, nodes, range, wk);
+                        accumulate(&mut wk.acc, &wk.r[..m], &wk.t[..m], self.weights[split.0]);
                     }
                     for (j, o) in dst.chunks_exact_mut(6).enumerate() {
                         for (k, o) in o.iter_mut().enumerate() {
@@ -368,25 +387,26 @@ impl Prepared {
 
     /// Unpolarized R and T at the thickness `nodes` (the nodes `chunks`
     /// cover, from the first chunk's start) into `wk.r`, `wk.t`: the
-    /// split-stack form, or the solver node by node where the split is
+    /// split-stack form (`split`: the stack split at `stack_grid`'s wavelength
+    /// of that index), or the solver node by node where the split is
     /// degenerate (the varying layer at its own critical angle).
     fn responses(
         &self,
-        idx: &[C64],
-        wavelength_nm: f64,
+        &(i, ref v): &(usize, VaryingLayer),
+        stack_grid: &StackGrid,
         cos: f64,
         nodes: &[f64],
         chunks: &[Chunk],
         wk: &mut Worker,
     ) {
         let m = nodes.len();
-        let v = self.split(idx, wavelength_nm, cos, &mut wk.scratch);
         if !v.is_degenerate() {
             let (re, im) = (&mut wk.phase_re[..m], &mut wk.phase_im[..m]);
-            phases(&v, nodes, chunks, re, im);
+            phases(v, nodes, chunks, re, im);
             v.responses(re, im, &mut wk.r[..m], &mut wk.t[..m]);
             return;
         }
+        let (idx, wavelength_nm) = (stack_grid.indices_at(i), stack_grid.wavelengths_nm()[i]);
         for (j, &t) in nodes.iter().enumerate() {
             wk.thicknesses_nm[self.layer - 1] = t;
             let resp = solve(idx, &wk.thicknesses_nm, wavelength_nm, cos);
@@ -395,9 +415,24 @@ impl Prepared {
         }
     }
 
+    /// The stack split around the varying layer at `stack_grid`'s `i`-th
+    /// wavelength and `cos`.
     #[inline]
-    fn split(&self, idx: &[C64], wl: f64, cos: f64, scratch: &mut Scratch) -> VaryingLayer {
-        VaryingLayer::new(idx, &self.thicknesses_nm, self.layer, wl, cos, scratch)
+    fn split(
+        &self,
+        stack_grid: &StackGrid,
+        i: usize,
+        cos: f64,
+        scratch: &mut Scratch,
+    ) -> VaryingLayer {
+        VaryingLayer::new(
+            stack_grid.indices_at(i),
+            stack_grid.thicknesses_nm(),
+            self.layer,
+            stack_grid.wavelengths_nm()[i],
+            cos,
+            scratch,
+        )
     }
 }
 
@@ -420,32 +455,16 @@ pub(crate) fn critical_cos(stack: &Stack, kind: Kind, wavelength_nm: (f64, f64))
     }
 }
 
-fn indices_at(stack: &Stack, wavelengths_nm: &[f64]) -> Result<Vec<Vec<C64>>> {
-    wavelengths_nm
-        .iter()
-        .map(|&wl| {
-            let mut v = Vec::new();
-            stack.indices_at(wl, &mut v)?;
-            Ok(v)
-        })
+/// The linear-sRGB weight of each integration wavelength, as triples: the
+/// integrator is linear in the spectrum, so the bake accumulates weight × R
+/// per node instead of storing whole spectra.
+fn rgb_weights(integrator: &SpectralIntegrator) -> Vec<[f64; 3]> {
+    let [r, g, b] = integrator.rgb_weights();
+    r.iter()
+        .zip(g)
+        .zip(b)
+        .map(|((&r, &g), &b)| [r, g, b])
         .collect()
-}
-
-/// The integrator is linear in the spectrum, so its response to a unit
-/// impulse at each wavelength is that wavelength's weight: the bake then
-/// accumulates weight × R per node instead of storing whole spectra.
-pub(crate) fn rgb_weights(integrator: &SpectralIntegrator) -> (Vec<f64>, Vec<[f64; 3]>) {
-    let wavelengths = integrator.wavelengths_nm().to_vec();
-    let mut impulse = vec![0.0; wavelengths.len()];
-    let weights = (0..wavelengths.len())
-        .map(|i| {
-            impulse[i] = 1.0;
-            let w = integrator.rgb(&impulse);
-            impulse[i] = 0.0;
-            w
-        })
-        .collect();
-    (wavelengths, weights)
 }
 
 avx2_dispatch! {
@@ -467,6 +486,8 @@ avx2_dispatch! {
 /// One worker's buffers, allocated once per rayon task.
 struct Worker {
     scratch: Scratch,
+    /// The current row's split stacks, each with its wavelength's index.
+    splits: Vec<(usize, VaryingLayer)>,
     thicknesses_nm: Vec<f64>,
     phase_re: Vec<f64>,
     phase_im: Vec<f64>,
@@ -479,6 +500,7 @@ impl Worker {
     fn new(nodes: usize, thicknesses_nm: &[f64]) -> Worker {
         Worker {
             scratch: Scratch::default(),
+            splits: Vec::new(),
             thicknesses_nm: thicknesses_nm.to_vec(),
             phase_re: vec![0.0; nodes],
             phase_im: vec![0.0; nodes],
@@ -669,6 +691,10 @@ impl Grid {
     fn total(&self) -> usize {
         self.axes.iter().map(|a| a.nodes.len()).product()
     }
+
+    fn nodes(&self) -> [&[f64]; 3] {
+        self.axes.each_ref().map(|a| &a.nodes[..])
+    }
 }
 
 fn doubled(segments: &[Segment]) -> Vec<Segment> {
@@ -786,24 +812,25 @@ fn initial_axes(spec: &BakeSpec, prep: &Prepared) -> [Vec<Segment>; 3] {
 
 /// A table must hold the values it was baked from: a gain film near a
 /// lasing pole reflects far more than f16's largest value (65504), which
-/// would be stored as infinity. Names the first node that does not fit.
-fn representable(data: &[f32], grid: &Grid, spec: &BakeSpec) -> Result<()> {
+/// would be stored as infinity. Names the first node that does not fit
+/// (`nodes`: thickness, cos θ and wavelength axes; the last unused for rgb).
+fn representable(data: &[f32], nodes: &[&[f64]; 3], kind: Kind, half: bool) -> Result<()> {
     let Some(k) = data.iter().position(|v| !v.is_finite()) else {
         return Ok(());
     };
-    let names = channel_names(spec.kind);
+    let names = channel_names(kind);
     let (node, channel) = (k / names.len(), names[k % names.len()]);
-    let [t_axis, c_axis, w_axis] = &grid.axes;
-    let (nt, nc) = (t_axis.nodes.len(), c_axis.nodes.len());
+    let [t_nodes, c_nodes, w_nodes] = nodes;
+    let (nt, nc) = (t_nodes.len(), c_nodes.len());
     let mut at = format!(
         "thickness {:.2} nm, cos θ {:.5}",
-        t_axis.nodes[node % nt],
-        c_axis.nodes[(node / nt) % nc]
+        t_nodes[node % nt],
+        c_nodes[(node / nt) % nc]
     );
-    if spec.kind == Kind::Spectral {
-        at += &format!(", wavelength {:.1} nm", w_axis.nodes[node / (nt * nc)]);
+    if kind == Kind::Spectral {
+        at += &format!(", wavelength {:.1} nm", w_nodes[node / (nt * nc)]);
     }
-    Err(if spec.half {
+    Err(if half {
         Error::HalfOverflow {
             why: format!(
                 "{channel} exceeds f16's largest value (65504) at {at}; bake in f32 (without --half) or narrow --thickness or --angles"
@@ -814,13 +841,44 @@ fn representable(data: &[f32], grid: &Grid, spec: &BakeSpec) -> Result<()> {
     })
 }
 
-/// Rounds a value as it will be stored.
+impl Lut {
+    /// This table with every value rounded to f16, for a caller that has the
+    /// f32 table and wants the f16 one too without baking again: the values a
+    /// `--half` bake of the same spec stores (it rounds through f32 too), but
+    /// the header keeps no error figures (they measured the f32 table's
+    /// rounding) and no cache key (a bake's header differs). Refused, as by
+    /// the baker, when a value overflows f16.
+    pub(crate) fn rounded_to_half(&self) -> Result<Lut> {
+        let data: Vec<f32> = self
+            .data()
+            .iter()
+            .map(|&v| stored(f64::from(v), true))
+            .collect();
+        let h = self.header();
+        let axis = |k: usize| h.axes.get(k).map_or(&[][..], |a| &a.nodes[..]);
+        representable(&data, &[axis(0), axis(1), axis(2)], h.kind, true)?;
+        let mut header = h.clone();
+        header.precision = "f16".into();
+        header.error.bake_check = None;
+        header.error.validation = None;
+        header.cache_key.clear();
+        Lut::from_parts(header, data).map_err(|why| Error::invalid("rounded table", why))
+    }
+}
+
+/// Rounds a value as it will be stored. An f16 value is rounded from the
+/// f32 one, as the `half` crate's f64 conversion does on x86 with F16C; its
+/// other paths (no F16C, aarch64) work from the f64, which differs where the
+/// f32 value lies exactly halfway between two f16 values. Through f32
+/// everywhere, a table is the same on every machine and an f32 table rounded
+/// to f16 is the f16 table (see [`Lut::rounded_to_half`]).
 #[inline]
 fn stored(v: f64, half: bool) -> f32 {
+    let single = v as f32;
     if half {
-        half::f16::from_f64(v).to_f32()
+        half::f16::from_f32(single).to_f32()
     } else {
-        v as f32
+        single
     }
 }
 
@@ -837,10 +895,11 @@ struct Check {
 }
 
 /// Compares exact values at every fine node with the multilinear
-/// interpolation of the stored (rounded) coarse values, which are the fine
-/// values at even indices.
-fn measure(coarse: &Grid, fine: &Grid, values: &[f64], channels: usize, half: bool) -> Check {
+/// interpolation of the stored coarse table `data` (the fine values at even
+/// indices, rounded as stored: see [`even_subgrid`]).
+fn measure(coarse: &Grid, fine: &Grid, values: &[f64], data: &[f32], channels: usize) -> Check {
     let dims = fine.axes.clone().map(|a| a.nodes.len());
+    let coarse_dims = coarse.axes.each_ref().map(|a| a.nodes.len());
     // Interpolation weight of the right-hand coarse neighbour at each odd
     // fine index (1/2 on uniform segments, not on graded ones).
     let weights: Vec<Vec<f64>> = fine
@@ -859,6 +918,11 @@ fn measure(coarse: &Grid, fine: &Grid, values: &[f64], channels: usize, half: bo
         })
         .collect();
     let strides = [channels, dims[0] * channels, dims[0] * dims[1] * channels];
+    let coarse_strides = [
+        channels,
+        coarse_dims[0] * channels,
+        coarse_dims[0] * coarse_dims[1] * channels,
+    ];
     let mut check = Check {
         max_channel: vec![0.0; channels],
         max_all: 0.0,
@@ -873,8 +937,8 @@ fn measure(coarse: &Grid, fine: &Grid, values: &[f64], channels: usize, half: bo
                 let at_idx = [t, c, w];
                 let at = t * strides[0] + c * strides[1] + w * strides[2];
                 // Corners of the coarse cell: each odd axis contributes its
-                // two neighbours.
-                corners[0] = (at, 1.0);
+                // two neighbours, the coarse nodes i / 2 and i / 2 + 1.
+                corners[0] = ((0..3).map(|a| at_idx[a] / 2 * coarse_strides[a]).sum(), 1.0);
                 let mut count = 1;
                 for a in 0..3 {
                     let i = at_idx[a];
@@ -882,8 +946,8 @@ fn measure(coarse: &Grid, fine: &Grid, values: &[f64], channels: usize, half: bo
                         let wt = weights[a][i];
                         for k in 0..count {
                             let (base, cw) = corners[k];
-                            corners[k] = (base - strides[a], cw * (1.0 - wt));
-                            corners[count + k] = (base + strides[a], cw * wt);
+                            corners[k] = (base, cw * (1.0 - wt));
+                            corners[count + k] = (base + coarse_strides[a], cw * wt);
                         }
                         count *= 2;
                     }
@@ -892,7 +956,7 @@ fn measure(coarse: &Grid, fine: &Grid, values: &[f64], channels: usize, half: bo
                 for ch in 0..channels {
                     let interp: f64 = corners[..count]
                         .iter()
-                        .map(|&(base, wt)| wt * f64::from(stored(values[base + ch], half)))
+                        .map(|&(base, wt)| wt * f64::from(data[base + ch]))
                         .sum();
                     let err = (interp - values[at + ch]).abs();
                     check.max_channel[ch] = check.max_channel[ch].max(err);
@@ -1052,6 +1116,37 @@ mod tests {
         }
     }
 
+    /// The weights the bake accumulates are the integrator's colour of a
+    /// unit impulse at each wavelength, bit for bit (its dot product adds
+    /// only zeros to the one weight), so folding the integration into the
+    /// bake gives what integrating each spectrum would.
+    #[test]
+    fn rgb_weights_are_the_colour_of_an_impulse() {
+        use crate::color::Sampling;
+        for sampling in [
+            Sampling::Exact,
+            Sampling::Rgb3,
+            Sampling::Uniform(9),
+            Sampling::Uniform(16),
+            Sampling::Uniform(81),
+        ] {
+            let integrator = SpectralIntegrator::new(sampling);
+            let weights = rgb_weights(&integrator);
+            let mut impulse = vec![0.0; integrator.wavelengths_nm().len()];
+            assert_eq!(weights.len(), impulse.len());
+            for (i, w) in weights.iter().enumerate() {
+                impulse[i] = 1.0;
+                let want = integrator.rgb(&impulse);
+                impulse[i] = 0.0;
+                assert_eq!(
+                    w.map(f64::to_bits),
+                    want.map(f64::to_bits),
+                    "{sampling} {i}"
+                );
+            }
+        }
+    }
+
     /// A slightly absorbing film seen from glass, over all angles: the cos θ
     /// axis is graded around the substrate's critical angle.
     fn dense_side_spec(kind: Kind) -> BakeSpec {
@@ -1174,6 +1269,53 @@ mod tests {
                 "{kind}: nothing reused"
             );
         }
+    }
+
+    /// The f32 table rounded to f16 is the `--half` bake of the same spec,
+    /// bit for bit; a value beyond f16's range is refused as the baker
+    /// refuses it.
+    #[test]
+    fn rounding_an_f32_table_to_half_is_the_half_bake() {
+        for kind in [Kind::Rgb, Kind::Spectral] {
+            let mut spec = dense_side_spec(kind);
+            spec.thickness_nm = (0.0, 1500.0);
+            spec.resolution = Resolution::Nodes {
+                thickness: 301,
+                angle: 23,
+                wavelength: 5,
+            };
+            let full = bake(&spec).unwrap();
+            spec.half = true;
+            let baked = bake(&spec).unwrap();
+            let rounded = full.rounded_to_half().unwrap();
+            assert_eq!(rounded.header().precision, "f16");
+            assert_eq!(rounded.header().axes, baked.header().axes);
+            let bits = |l: &Lut| l.data().iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+            assert!(bits(&rounded) == bits(&baked), "{kind}");
+
+            let mut data = full.data().to_vec();
+            data[7] = 1e5;
+            let big = Lut::from_parts(full.header().clone(), data).unwrap();
+            assert!(matches!(
+                big.rounded_to_half(),
+                Err(Error::HalfOverflow { .. })
+            ));
+        }
+    }
+
+    /// f16 values are rounded from f32 ones: at an f64 value just past an
+    /// f16 tie, which f32 rounds onto the tie, the result is the tie's even
+    /// neighbour, as with F16C, on any machine.
+    #[test]
+    fn half_values_round_through_f32() {
+        // 1 + 2^-11 is halfway between the f16 values 1 and 1 + 2^-10.
+        let just_past_tie = 1.0 + 2f64.powi(-11) + 2f64.powi(-40);
+        assert_eq!(just_past_tie as f32, 1.0 + 2f32.powi(-11));
+        assert_eq!(stored(just_past_tie, true), 1.0);
+        assert_eq!(
+            stored(1.0 + 2f64.powi(-11) + 2f64.powi(-20), true),
+            1.0 + 2f32.powi(-10)
+        );
     }
 
     /// An air gap seen from glass has its critical angle at the substrate's,

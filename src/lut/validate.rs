@@ -1,7 +1,6 @@
 //! Validation: the table against direct evaluation by the solver at random
 //! off-grid points, with the hard angles reported on their own.
 
-use num_complex::Complex64 as C64;
 use rand::{Rng, SeedableRng};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -11,7 +10,7 @@ use super::sample::{channel_names, Lut};
 use super::Kind;
 use crate::color::{delta_e2000_rgb, Sampling, SpectralIntegrator};
 use crate::error::{Error, Result};
-use crate::optics::solve;
+use crate::optics::{solve, StackGrid};
 
 /// Error of a table against the solver. Arrays named `*_abs` have one
 /// entry per channel (in `channels` order); `*_de2000` have two entries,
@@ -90,24 +89,14 @@ pub fn validate(lut: &Lut, points: usize, seed: u64) -> Result<ErrorStats> {
     };
     let sampling: Sampling = h.color.sampling.parse()?;
     let integrator = SpectralIntegrator::new(sampling);
-    let wavelengths = integrator.wavelengths_nm().to_vec();
+    let wavelengths = integrator.wavelengths_nm();
     let colour_covered = match kind {
         Kind::Rgb => true,
         Kind::Spectral => wavelengths
             .iter()
             .all(|&w| w >= w_range.0 && w <= w_range.1),
     };
-    let indices: Vec<Vec<C64>> = if colour_covered {
-        wavelengths
-            .iter()
-            .map(|&wl| {
-                let mut v = Vec::new();
-                stack.indices_at(wl, &mut v).map(|_| v)
-            })
-            .collect::<Result<_>>()?
-    } else {
-        Vec::new()
-    };
+    let colour_grid = StackGrid::new(stack, if colour_covered { wavelengths } else { &[] })?;
 
     let mut rng = rand_pcg::Pcg64::seed_from_u64(seed);
     let mut draw = |(lo, hi): (f64, f64)| (lo + rng.random::<f64>() * (hi - lo)) as f32;
@@ -135,7 +124,7 @@ pub fn validate(lut: &Lut, points: usize, seed: u64) -> Result<ErrorStats> {
                 }
                 let cos = f64::from(c);
                 let mut colour = |table_r: &[f64; 3], table_t: &[f64; 3]| {
-                    for (k, (&wl, n)) in wavelengths.iter().zip(&indices).enumerate() {
+                    for (k, (wl, n)) in colour_grid.iter().enumerate() {
                         let resp = solve(n, thick, wl, cos);
                         spec_r[k] = resp.r();
                         spec_t[k] = resp.t();

@@ -176,6 +176,15 @@ impl StackGrid {
         &self.indices[i * media..(i + 1) * media]
     }
 
+    /// Each wavelength with its N + 2 indices, in order.
+    pub fn iter(&self) -> impl Iterator<Item = (f64, &[C64])> + '_ {
+        let media = self.thicknesses_nm.len() + 2;
+        self.wavelengths_nm
+            .iter()
+            .copied()
+            .zip(self.indices.chunks_exact(media))
+    }
+
     /// Changes one layer's thickness (the baker's varying layer); the value
     /// must lie in [0, [`MAX_THICKNESS_NM`]], as [`Stack::validate`] requires.
     pub fn set_thickness_nm(&mut self, layer: usize, thickness_nm: f64) {

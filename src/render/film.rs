@@ -8,13 +8,11 @@ pub use crate::lut::FilmRgb;
 
 use std::cell::RefCell;
 
-use num_complex::Complex64 as C64;
-
 use super::material::AngleTable;
 use super::scene::Film;
 use crate::color::{Sampling, SpectralIntegrator};
 use crate::error::Result;
-use crate::optics::{self, Stack};
+use crate::optics::{self, Stack, StackGrid};
 
 /// Which side of the film the light arrives from.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -43,24 +41,15 @@ pub struct DirectFilm {
 
 /// One side's stack, with the indices at every wavelength precomputed.
 struct DirectSide {
-    /// Per wavelength, the stack's N + 2 indices (flattened).
-    indices: Vec<C64>,
-    thicknesses_nm: Vec<f64>,
-    /// Which entry of `thicknesses_nm` the shading thickness replaces.
+    grid: StackGrid,
+    /// Which layer (0-based) the shading thickness replaces.
     layer: usize,
 }
 
 impl DirectSide {
     fn new(stack: &Stack, layer: usize, wavelengths_nm: &[f64]) -> Result<DirectSide> {
-        let mut indices = Vec::with_capacity(wavelengths_nm.len() * (stack.layers.len() + 2));
-        let mut buf = Vec::new();
-        for &w in wavelengths_nm {
-            stack.indices_at(w, &mut buf)?;
-            indices.extend_from_slice(&buf);
-        }
         Ok(DirectSide {
-            indices,
-            thicknesses_nm: stack.thicknesses_nm(),
+            grid: StackGrid::new(stack, wavelengths_nm)?,
             layer,
         })
     }
@@ -97,18 +86,15 @@ impl FilmShading for DirectFilm {
             Side::Back => self.back.as_ref().unwrap_or(&self.front),
             Side::Front => &self.front,
         };
-        let wl = self.integrator.wavelengths_nm();
-        let stride = s.thicknesses_nm.len() + 2;
         SCRATCH.with_borrow_mut(|(d, r, t)| {
             d.clear();
-            d.extend_from_slice(&s.thicknesses_nm);
+            d.extend_from_slice(s.grid.thicknesses_nm());
             if let Some(x) = d.get_mut(s.layer) {
                 *x = f64::from(thickness_nm);
             }
             r.clear();
             t.clear();
-            for (i, &w) in wl.iter().enumerate() {
-                let n = &s.indices[i * stride..(i + 1) * stride];
+            for (w, n) in s.grid.iter() {
                 let resp = optics::solve(n, d, w, f64::from(cos_theta));
                 r.push(resp.r());
                 t.push(resp.t());
