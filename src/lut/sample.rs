@@ -171,7 +171,10 @@ impl Lut {
         let at = j * nt + i;
         // One bounds check for the four corners.
         let nodes = &self.rgb_nodes[at..=at + dy + dx];
-        let (v00, v10, v01, v11) = (nodes[0], nodes[dx], nodes[dy], nodes[dy + dx]);
+        // SAFETY: 0, dx and dy are at most dy + dx, the last index of
+        // `nodes` (bounds-checked when it was sliced).
+        let corner = |k: usize| unsafe { *nodes.get_unchecked(k) };
+        let (v00, v10, v01, v11) = (corner(0), corner(dx), corner(dy), corner(dy + dx));
         // The same a + f·(b − a) per channel as `bilerp`, four lanes at once.
         let lerp = |a: Vec4, b: Vec4, f: f32| a + (b - a) * f;
         let r = lerp(lerp(v00[0], v10[0], fx), lerp(v01[0], v11[0], fx), fy);

@@ -90,6 +90,14 @@ impl<F: FilmShading> Tracer<'_, F> {
                 r * reflected + (1.0 - r) * refracted
             }
             Material::Film(f) => {
+                // The thickness is found before the children are traced: a
+                // grid lookup is short enough not to stall them, and its
+                // latency then overlaps with them instead of lengthening
+                // the table lookup's chain at the end.
+                let thickness_nm = match self.thickness_grids.get(obj) {
+                    Some(Some(grid)) => grid.at(p),
+                    _ => f.thickness.at(p),
+                };
                 let reflected = self.reflected(ray, above, n, depth);
                 let refracted = match f.inside {
                     Some(inside) => {
@@ -103,10 +111,6 @@ impl<F: FilmShading> Tracer<'_, F> {
                     None => Vec3::ZERO,
                 };
                 let side = if front { Side::Front } else { Side::Back };
-                let thickness_nm = match self.thickness_grids.get(obj) {
-                    Some(Some(grid)) => grid.at(p),
-                    _ => f.thickness.at(p),
-                };
                 let rgb = self.films[f.film].shade(thickness_nm, cos_i, side);
                 Vec3::from(rgb.reflectance) * reflected + Vec3::from(rgb.transmittance) * refracted
             }
