@@ -1,14 +1,16 @@
 //! Render speed on the paper's timing scene (`two-layer-noise`, 500 x 500,
 //! 1 sample per pixel): LUT film shading, the paper's direct method at 41
 //! wavelengths, and the same scene with the film replaced by bare glass
-//! (the cost of iridescence). Tables are baked once before timing. Then the
-//! two parts of a LUT film hit on their own.
+//! (the cost of iridescence). Tables and thickness grids are baked once
+//! before timing. Then the parts of a LUT film hit on their own: the
+//! thickness (noise evaluated, or read from the grid) and the table lookup.
 
 use criterion::{black_box, criterion_group, criterion_main, Criterion, Throughput};
 use glam::Vec3;
 use irid::color::Sampling;
 use irid::render::material::Material;
-use irid::render::thickness::ThicknessField;
+use irid::render::scene::Shape;
+use irid::render::thickness::{ThicknessField, ThicknessGrid};
 use irid::render::{self, FilmMode, FilmShading, LutFilm, RenderOptions, Scene, Side};
 
 fn bench(c: &mut Criterion) {
@@ -22,7 +24,8 @@ fn bench(c: &mut Criterion) {
         sampling: Sampling::Uniform(41),
     });
     let direct_films = render::prepare_films(&scene, &direct.film).unwrap();
-    // The same film at one thickness: the tables as they are, no noise.
+    // The same film at one thickness: the tables as they are, no noise
+    // and so no thickness grid.
     let mut uniform = scene.clone();
     for m in uniform.materials.iter_mut() {
         if let Material::Film(f) = m {
@@ -31,14 +34,22 @@ fn bench(c: &mut Criterion) {
             };
         }
     }
+    let uniform_films = render::prepare_films(&uniform, &lut.film).unwrap();
+    // The noise film with its field evaluated at every hit, as before
+    // thickness grids (and as direct mode does).
+    let mut exact_noise_films = render::prepare_films(&scene, &lut.film).unwrap();
+    exact_noise_films.thickness_grids.clear();
 
     let mut g = c.benchmark_group("two-layer-noise 500x500 1spp");
     g.sample_size(10);
     g.bench_function("lut", |b| {
         b.iter(|| render::render_with(&scene, &lut_films, &lut))
     });
+    g.bench_function("lut, noise evaluated at every hit", |b| {
+        b.iter(|| render::render_with(&scene, &exact_noise_films, &lut))
+    });
     g.bench_function("lut, uniform 350 nm film", |b| {
-        b.iter(|| render::render_with(&uniform, &lut_films, &lut))
+        b.iter(|| render::render_with(&uniform, &uniform_films, &lut))
     });
     g.bench_function("plain glass (no film)", |b| {
         b.iter(|| render::render_with(&plain, &plain_films, &lut))
@@ -87,6 +98,20 @@ fn film_hit(c: &mut Criterion) {
             points
                 .iter()
                 .map(|(p, _, _)| film.thickness.at(black_box(*p)))
+                .sum::<f32>()
+        })
+    });
+    let sphere = scene
+        .objects
+        .iter()
+        .find(|o| matches!(o.shape, Shape::Sphere(_)))
+        .unwrap();
+    let grid = ThicknessGrid::bake(&film.thickness, &sphere.shape).unwrap();
+    g.bench_function("thickness grid", |b| {
+        b.iter(|| {
+            points
+                .iter()
+                .map(|(p, _, _)| grid.at(black_box(*p)))
                 .sum::<f32>()
         })
     });

@@ -95,6 +95,13 @@ impl Mesh {
         self.nodes[0].bounds
     }
 
+    /// Each triangle's three corners.
+    pub fn triangles(&self) -> impl ExactSizeIterator<Item = [Vec3; 3]> + '_ {
+        self.triangles
+            .iter()
+            .map(|t| [t.v0, t.v0 + t.e1, t.v0 + t.e2])
+    }
+
     fn tri_bounds(t: &Triangle) -> Aabb {
         let mut b = Aabb::EMPTY;
         b.grow(t.v0);

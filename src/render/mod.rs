@@ -38,7 +38,6 @@ pub use scene_file::builtin_names;
 use crate::color::Sampling;
 use crate::error::Result;
 use material::Material;
-use scene::Shape;
 use thickness::ThicknessGrid;
 
 /// How films are shaded.
@@ -147,9 +146,9 @@ pub fn prepare_films(scene: &Scene, mode: &FilmMode) -> Result<PreparedFilms> {
     })
 }
 
-/// Each object's noise thickness field baked over its bounding box (in
-/// parallel: a grid is a few hundred thousand noise evaluations). Planes
-/// have no box and keep the exact field.
+/// Each film object's noise thickness field baked near its surface (see
+/// [`ThicknessGrid`]); planes, and objects whose grid would be too large,
+/// keep the exact field.
 fn bake_thickness_grids(scene: &Scene) -> Vec<Option<ThicknessGrid>> {
     use rayon::prelude::*;
     scene
@@ -159,12 +158,7 @@ fn bake_thickness_grids(scene: &Scene) -> Vec<Option<ThicknessGrid>> {
             let Material::Film(f) = &scene.materials[o.material] else {
                 return None;
             };
-            let bounds = match &o.shape {
-                Shape::Sphere(s) => s.bounds(),
-                Shape::Mesh(m) => m.bounds(),
-                Shape::Plane(_) => return None,
-            };
-            ThicknessGrid::bake(&f.thickness, &bounds)
+            ThicknessGrid::bake(&f.thickness, &o.shape)
         })
         .collect()
 }
