@@ -68,7 +68,12 @@ pub fn run(scenes: &[&str], width: u32, height: u32, cache_dir: &Path) -> Result
             push(format!("direct {sampling}"), p, r, &image)?;
         }
         let (p, r, image) = frame(FilmMode::lut(cache_dir))?;
-        push("LUT (baked on demand)".into(), p, r, &image)?;
+        push(
+            "LUT + thickness grid (baked on demand)".into(),
+            p,
+            r,
+            &image,
+        )?;
     }
     Ok(rows)
 }

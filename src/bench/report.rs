@@ -115,7 +115,9 @@ fn renders_markdown(rows: &[RenderRow], threads: usize) -> String {
     let mut s = format!(
         "\n## Full renders\n\nOne frame per film mode of each built-in scene, one sample per pixel, \
          rendered on {threads} thread(s); CIEDE2000 per pixel against the frame shaded by direct exact \
-         evaluation. Preparing the films (baking the scene's tables on demand) is timed apart.\n\n\
+         evaluation. Preparing the films (baking the scene's tables and, for a noise film, its \
+         thickness grid, on demand) is timed apart; the LUT frames' error includes the grid's \
+         (at most 2 nm of thickness).\n\n\
          | scene | film mode | size | prepare (s) | render (ms) | vs exact | mean ΔE00 | p99 ΔE00 | max ΔE00 |\n\
          |---|---|---|---:|---:|---:|---:|---:|---:|\n",
     );

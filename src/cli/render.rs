@@ -156,6 +156,17 @@ pub fn run(args: Args) -> Result<ExitCode> {
     };
     println!("scene   {}", scene.name);
     println!("films   {film}");
+    let grids: Vec<_> = films.thickness_grids.iter().flatten().collect();
+    if !grids.is_empty() {
+        let nodes: usize = grids.iter().map(|g| g.node_count()).sum();
+        let worst = grids.iter().map(|g| g.max_error_nm).fold(0.0f32, f32::max);
+        println!(
+            "noise   thickness baked to {} grid(s), {:.1} MB, max error {:.2} nm (exact noise with --film direct)",
+            grids.len(),
+            (nodes * 4) as f64 / 1e6,
+            worst
+        );
+    }
     println!(
         "render  {}x{}, {} spp, {:.3} s on {} thread(s)",
         image.width,
