@@ -37,6 +37,10 @@ pub struct Args {
     /// Wavelength sampling of --film direct: rgb3, uniform:N or exact.
     #[arg(long)]
     pub sampling: Option<String>,
+    /// With --film lut: evaluate noise thickness at every hit instead of
+    /// baking it to a grid (exact, slower).
+    #[arg(long)]
+    pub exact_noise: bool,
     /// Where baked tables are cached.
     #[arg(long, default_value = "luts/cache")]
     pub cache: PathBuf,
@@ -137,7 +141,10 @@ pub fn run(args: Args) -> Result<ExitCode> {
     opts.progress = true;
 
     let (films, image, render_s) = with_threads(args.threads, || -> Result<_> {
-        let films = render::prepare_films(&scene, &opts.film)?;
+        let mut films = render::prepare_films(&scene, &opts.film)?;
+        if args.exact_noise {
+            films.thickness_grids.clear();
+        }
         let (image, render_s) = timed(|| render::render_with(&scene, &films, &opts));
         Ok((films, image, render_s))
     })??;

@@ -185,27 +185,33 @@ pub fn render_with(scene: &Scene, films: &PreparedFilms, opts: &RenderOptions) -
         exposure: s.exposure,
         progress: opts.progress,
     };
-    let films_thickness = &films.thickness_grids;
+    // One tracer type per kind of shader, each compiled with its shader's
+    // lookup inlined.
     match &films.shaders {
-        FilmShaders::Lut(films) => {
-            let tracer = tracer::Tracer {
-                scene,
-                films,
-                thickness_grids: films_thickness,
-                max_depth,
-            };
-            image::render_tiles(&tracer, &camera, &sampler)
+        FilmShaders::Lut(shaders) => {
+            render_tiles_with(scene, shaders, films, max_depth, &camera, &sampler)
         }
-        FilmShaders::Direct(films) => {
-            let tracer = tracer::Tracer {
-                scene,
-                films,
-                thickness_grids: films_thickness,
-                max_depth,
-            };
-            image::render_tiles(&tracer, &camera, &sampler)
+        FilmShaders::Direct(shaders) => {
+            render_tiles_with(scene, shaders, films, max_depth, &camera, &sampler)
         }
     }
+}
+
+fn render_tiles_with<F: FilmShading>(
+    scene: &Scene,
+    shaders: &[F],
+    films: &PreparedFilms,
+    max_depth: u32,
+    camera: &camera::Camera,
+    sampler: &image::Sampler,
+) -> Image {
+    let tracer = tracer::Tracer {
+        scene,
+        films: shaders,
+        thickness_grids: &films.thickness_grids,
+        max_depth,
+    };
+    image::render_tiles(&tracer, camera, sampler)
 }
 
 /// Prepares the films and renders.
