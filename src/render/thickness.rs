@@ -458,6 +458,9 @@ fn surface_points(shape: &Shape, n: usize) -> Vec<Vec3> {
             .collect(),
         Shape::Mesh(m) => {
             let triangles: Vec<[Vec3; 3]> = m.triangles().collect();
+            if triangles.is_empty() {
+                return Vec::new();
+            }
             (0..n)
                 .map(|k| {
                     let [a, b, c] = triangles[k % triangles.len()];
