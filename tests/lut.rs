@@ -600,3 +600,71 @@ fn version_1_tables_still_load() {
     }
     assert!(seen > 0, "no version-1 table in luts/");
 }
+
+/// Bilinear interpolation of the stored channels, written out from the
+/// data layout (`[cos][thickness][6]`), as a reference for `sample_rgb`.
+fn bilinear_reference(lut: &Lut, thickness_nm: f64, cos: f64) -> [f64; 6] {
+    let axes = &lut.header().axes;
+    let locate = |nodes: &[f64], x: f64| {
+        let i = nodes.partition_point(|&n| n <= x).clamp(1, nodes.len() - 1) - 1;
+        (
+            i,
+            ((x - nodes[i]) / (nodes[i + 1] - nodes[i])).clamp(0.0, 1.0),
+        )
+    };
+    let (t_nodes, c_nodes) = (&axes[0].nodes, &axes[1].nodes);
+    let (i, fx) = locate(t_nodes, thickness_nm);
+    let (j, fy) = locate(c_nodes, cos);
+    let at =
+        |i: usize, j: usize, ch: usize| f64::from(lut.data()[(j * t_nodes.len() + i) * 6 + ch]);
+    std::array::from_fn(|ch| {
+        let lo = at(i, j, ch) + fx * (at(i + 1, j, ch) - at(i, j, ch));
+        let hi = at(i, j + 1, ch) + fx * (at(i + 1, j + 1, ch) - at(i, j + 1, ch));
+        lo + fy * (hi - lo)
+    })
+}
+
+/// A lossless film's table is sampled from its reflectance alone, with the
+/// transmittance as white − R; both agree with the stored channels. Tables
+/// of absorbing films, or films on a metal, keep both channels.
+#[test]
+fn lossless_tables_sample_reflectance_only() {
+    let nodes = Resolution::Nodes {
+        thickness: 41,
+        angle: 9,
+        wavelength: 1,
+    };
+    let soap = Stack::load(&luts_dir().join("soap-film.toml")).unwrap();
+    let mut spec = quick_spec(soap, (100.0, 900.0), 1.0);
+    spec.resolution = nodes;
+    let lut = bake(&spec).unwrap();
+    assert!(lut.samples_as_lossless());
+    let mut state = 11u64;
+    let mut unit = || {
+        state = state
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (state >> 11) as f64 / (1u64 << 53) as f64
+    };
+    for _ in 0..2000 {
+        let (d, c) = (100.0 + 800.0 * unit(), unit());
+        let got = lut.sample_rgb(d as f32, c as f32);
+        let want = bilinear_reference(&lut, d, c);
+        for ch in 0..3 {
+            assert!(
+                (f64::from(got.reflectance[ch]) - want[ch]).abs() < 2e-5,
+                "R at {d} {c}"
+            );
+            assert!(
+                (f64::from(got.transmittance[ch]) - want[3 + ch]).abs() < 2e-5,
+                "T at {d} {c}"
+            );
+        }
+    }
+    for name in ["absorbing-film.toml", "two-layer.toml", "gain-on-gold.toml"] {
+        let stack = Stack::load(&luts_dir().join(name)).unwrap();
+        let mut spec = quick_spec(stack, (100.0, 300.0), 1.0);
+        spec.resolution = nodes;
+        assert!(!bake(&spec).unwrap().samples_as_lossless(), "{name}");
+    }
+}

@@ -28,10 +28,60 @@ pub struct Lut {
     cos: Locator,
     wavelength: Option<Locator>,
     data: Vec<f32>,
-    /// The rgb kind's nodes again, each as (R, G, B, 0) and (R, G, B, 0) of
-    /// transmittance: four SIMD lerps per lookup instead of eighteen scalar
-    /// ones. Empty for the spectral kind.
-    rgb_nodes: Vec<[Vec4; 2]>,
+    /// The rgb kind's nodes again, laid out for [`Lut::sample_rgb`].
+    rgb_nodes: RgbNodes,
+}
+
+/// An rgb table's nodes as SIMD lanes: each colour as (R, G, B, 0), so a
+/// lookup is a few vector lerps instead of eighteen scalar ones.
+#[derive(Clone, Debug)]
+enum RgbNodes {
+    /// A spectral table.
+    None,
+    /// Reflectance and transmittance at every node.
+    Full(Vec<[Vec4; 2]>),
+    /// Every node's R + T is the same colour: a lossless film, where what
+    /// is not reflected is transmitted. Only R is stored and read, and
+    /// T = white − R (half the reads of a lookup, at every film hit).
+    Lossless { reflectance: Vec<Vec4>, white: Vec4 },
+}
+
+/// How far R + T may stray from one colour across a table for it to be
+/// sampled as lossless: a few f32 roundings of values near 1, far below
+/// any table's interpolation error.
+const LOSSLESS_TOLERANCE: f32 = 1e-5;
+
+impl RgbNodes {
+    fn new(kind: Kind, data: &[f32]) -> RgbNodes {
+        if kind != Kind::Rgb {
+            return RgbNodes::None;
+        }
+        let full: Vec<[Vec4; 2]> = data
+            .chunks_exact(6)
+            .map(|v| {
+                [
+                    Vec4::new(v[0], v[1], v[2], 0.0),
+                    Vec4::new(v[3], v[4], v[5], 0.0),
+                ]
+            })
+            .collect();
+        let Some(&[r0, t0]) = full.first() else {
+            return RgbNodes::Full(full);
+        };
+        let white = r0 + t0;
+        let lossless = full.iter().all(|&[r, t]| {
+            let sum = r + t;
+            sum.is_finite() && (sum - white).abs().max_element() <= LOSSLESS_TOLERANCE
+        });
+        if lossless {
+            RgbNodes::Lossless {
+                reflectance: full.iter().map(|&[r, _]| r).collect(),
+                white,
+            }
+        } else {
+            RgbNodes::Full(full)
+        }
+    }
 }
 
 pub(crate) const RGB_CHANNELS: [&str; 6] = [
@@ -113,18 +163,7 @@ impl Lut {
                 data.len()
             ));
         }
-        let rgb_nodes = match header.kind {
-            Kind::Rgb => data
-                .chunks_exact(6)
-                .map(|v| {
-                    [
-                        Vec4::new(v[0], v[1], v[2], 0.0),
-                        Vec4::new(v[3], v[4], v[5], 0.0),
-                    ]
-                })
-                .collect(),
-            Kind::Spectral => Vec::new(),
-        };
+        let rgb_nodes = RgbNodes::new(header.kind, &data);
         Ok(Lut {
             rgb_nodes,
             thickness: Locator::new(&header.axes[0].nodes),
@@ -157,32 +196,47 @@ impl Lut {
     /// spectral table every component is NaN. Allocates nothing.
     #[inline(always)]
     pub fn sample_rgb(&self, thickness_nm: f32, cos_theta: f32) -> FilmRgb {
-        if self.rgb_nodes.is_empty() {
-            return FilmRgb {
-                reflectance: [f32::NAN; 3],
-                transmittance: [f32::NAN; 3],
-            };
-        }
         let (i, fx) = self.thickness.locate(thickness_nm);
         let (j, fy) = self.cos.locate(cos_theta);
         let nt = self.thickness.len();
         let dx = usize::from(nt > 1);
         let dy = if self.cos.len() > 1 { nt } else { 0 };
         let at = j * nt + i;
-        // One bounds check for the four corners.
-        let nodes = &self.rgb_nodes[at..=at + dy + dx];
-        // SAFETY: 0, dx and dy are at most dy + dx, the last index of
-        // `nodes` (bounds-checked when it was sliced).
-        let corner = |k: usize| unsafe { *nodes.get_unchecked(k) };
-        let (v00, v10, v01, v11) = (corner(0), corner(dx), corner(dy), corner(dy + dx));
         // The same a + f·(b − a) per channel as `bilerp`, four lanes at once.
         let lerp = |a: Vec4, b: Vec4, f: f32| a + (b - a) * f;
-        let r = lerp(lerp(v00[0], v10[0], fx), lerp(v01[0], v11[0], fx), fy);
-        let t = lerp(lerp(v00[1], v10[1], fx), lerp(v01[1], v11[1], fx), fy);
+        let (r, t) = match &self.rgb_nodes {
+            RgbNodes::Lossless { reflectance, white } => {
+                // One bounds check for the four corners.
+                let nodes = &reflectance[at..=at + dy + dx];
+                // SAFETY: 0, dx and dy are at most dy + dx, the last index
+                // of `nodes` (bounds-checked when it was sliced).
+                let corner = |k: usize| unsafe { *nodes.get_unchecked(k) };
+                let (v00, v10, v01, v11) = (corner(0), corner(dx), corner(dy), corner(dy + dx));
+                let r = lerp(lerp(v00, v10, fx), lerp(v01, v11, fx), fy);
+                (r, *white - r)
+            }
+            RgbNodes::Full(full) => {
+                let nodes = &full[at..=at + dy + dx];
+                // SAFETY: as above.
+                let corner = |k: usize| unsafe { *nodes.get_unchecked(k) };
+                let (v00, v10, v01, v11) = (corner(0), corner(dx), corner(dy), corner(dy + dx));
+                (
+                    lerp(lerp(v00[0], v10[0], fx), lerp(v01[0], v11[0], fx), fy),
+                    lerp(lerp(v00[1], v10[1], fx), lerp(v01[1], v11[1], fx), fy),
+                )
+            }
+            RgbNodes::None => (Vec4::NAN, Vec4::NAN),
+        };
         FilmRgb {
             reflectance: [r.x, r.y, r.z],
             transmittance: [t.x, t.y, t.z],
         }
+    }
+
+    /// Whether [`Lut::sample_rgb`] reads reflectance only and takes the
+    /// transmittance as its complement (an rgb table of a lossless film).
+    pub fn samples_as_lossless(&self) -> bool {
+        matches!(self.rgb_nodes, RgbNodes::Lossless { .. })
     }
 
     /// Trilinear (R, T) at one wavelength; clamped like [`Lut::sample_rgb`].
