@@ -37,8 +37,8 @@ fn bench(c: &mut Criterion) {
     let uniform_films = render::prepare_films(&uniform, &lut.film).unwrap();
     // The noise film with its field evaluated at every hit, as before
     // thickness grids (and as direct mode does).
-    let mut exact_noise_films = render::prepare_films(&scene, &lut.film).unwrap();
-    exact_noise_films.thickness_grids.clear();
+    let exact_noise_films =
+        render::prepare_films(&scene, &FilmMode::lut_exact_noise(&cache)).unwrap();
 
     let mut g = c.benchmark_group("two-layer-noise 500x500 1spp");
     g.sample_size(10);

@@ -98,7 +98,10 @@ pub fn with_threads<T: Send>(threads: Option<usize>, f: impl FnOnce() -> T + Sen
 }
 
 pub fn run(args: Args) -> Result<ExitCode> {
-    let mode = film_mode(&args.film, args.sampling.as_deref(), &args.cache)?;
+    let mode = match film_mode(&args.film, args.sampling.as_deref(), &args.cache)? {
+        FilmMode::Lut { cache_dir, .. } if args.exact_noise => FilmMode::lut_exact_noise(cache_dir),
+        mode => mode,
+    };
     let scene = Scene::load_named(&args.scene)?;
     let (side, spp) = (scene_file::MAX_IMAGE_SIDE, scene_file::MAX_SPP);
     for (flag, v, max) in [
@@ -141,10 +144,7 @@ pub fn run(args: Args) -> Result<ExitCode> {
     opts.progress = true;
 
     let (films, image, render_s) = with_threads(args.threads, || -> Result<_> {
-        let mut films = render::prepare_films(&scene, &opts.film)?;
-        if args.exact_noise {
-            films.thickness_grids.clear();
-        }
+        let films = render::prepare_films(&scene, &opts.film)?;
         let (image, render_s) = timed(|| render::render_with(&scene, &films, &opts));
         Ok((films, image, render_s))
     })??;
@@ -166,7 +166,10 @@ pub fn run(args: Args) -> Result<ExitCode> {
     let grids: Vec<_> = films.thickness_grids.iter().flatten().collect();
     if !grids.is_empty() {
         let nodes: usize = grids.iter().map(|g| g.node_count()).sum();
-        let worst = grids.iter().map(|g| g.max_error_nm).fold(0.0f32, f32::max);
+        let worst = grids
+            .iter()
+            .map(|g| g.max_error_nm())
+            .fold(0.0f32, f32::max);
         println!(
             "noise   thickness baked to {} grid(s), {:.1} MB, max error {:.2} nm (exact noise with --film direct)",
             grids.len(),

@@ -56,32 +56,35 @@ impl RgbNodes {
         if kind != Kind::Rgb {
             return RgbNodes::None;
         }
-        let full: Vec<[Vec4; 2]> = data
-            .chunks_exact(6)
-            .map(|v| {
-                [
-                    Vec4::new(v[0], v[1], v[2], 0.0),
-                    Vec4::new(v[3], v[4], v[5], 0.0),
-                ]
+        let colour = |v: &[f32]| Vec4::new(v[0], v[1], v[2], 0.0);
+        let nodes = data.chunks_exact(6);
+        let white = data.get(..6).map(|v| colour(v) + colour(&v[3..]));
+        let lossless = white.filter(|&white| {
+            nodes.clone().all(|v| {
+                let sum = colour(v) + colour(&v[3..]);
+                sum.is_finite() && (sum - white).abs().max_element() <= LOSSLESS_TOLERANCE
             })
-            .collect();
-        let Some(&[r0, t0]) = full.first() else {
-            return RgbNodes::Full(full);
-        };
-        let white = r0 + t0;
-        let lossless = full.iter().all(|&[r, t]| {
-            let sum = r + t;
-            sum.is_finite() && (sum - white).abs().max_element() <= LOSSLESS_TOLERANCE
         });
-        if lossless {
-            RgbNodes::Lossless {
-                reflectance: full.iter().map(|&[r, _]| r).collect(),
+        match lossless {
+            Some(white) => RgbNodes::Lossless {
+                reflectance: nodes.map(colour).collect(),
                 white,
-            }
-        } else {
-            RgbNodes::Full(full)
+            },
+            None => RgbNodes::Full(nodes.map(|v| [colour(v), colour(&v[3..])]).collect()),
         }
     }
+}
+
+/// The four corners of the cell whose lower corner is `at`, the next node
+/// `dx` along thickness and `dy` along cos θ (either may be 0 on a
+/// one-node axis), under one bounds check.
+#[inline(always)]
+fn cell_corners<T: Copy>(nodes: &[T], at: usize, dx: usize, dy: usize) -> [T; 4] {
+    let cell = &nodes[at..=at + dy + dx];
+    // SAFETY: 0, dx and dy are at most dy + dx, the last index of `cell`
+    // (bounds-checked when it was sliced).
+    let corner = |k: usize| unsafe { *cell.get_unchecked(k) };
+    [corner(0), corner(dx), corner(dy), corner(dy + dx)]
 }
 
 pub(crate) const RGB_CHANNELS: [&str; 6] = [
@@ -206,20 +209,12 @@ impl Lut {
         let lerp = |a: Vec4, b: Vec4, f: f32| a + (b - a) * f;
         let (r, t) = match &self.rgb_nodes {
             RgbNodes::Lossless { reflectance, white } => {
-                // One bounds check for the four corners.
-                let nodes = &reflectance[at..=at + dy + dx];
-                // SAFETY: 0, dx and dy are at most dy + dx, the last index
-                // of `nodes` (bounds-checked when it was sliced).
-                let corner = |k: usize| unsafe { *nodes.get_unchecked(k) };
-                let (v00, v10, v01, v11) = (corner(0), corner(dx), corner(dy), corner(dy + dx));
+                let [v00, v10, v01, v11] = cell_corners(reflectance, at, dx, dy);
                 let r = lerp(lerp(v00, v10, fx), lerp(v01, v11, fx), fy);
                 (r, *white - r)
             }
             RgbNodes::Full(full) => {
-                let nodes = &full[at..=at + dy + dx];
-                // SAFETY: as above.
-                let corner = |k: usize| unsafe { *nodes.get_unchecked(k) };
-                let (v00, v10, v01, v11) = (corner(0), corner(dx), corner(dy), corner(dy + dx));
+                let [v00, v10, v01, v11] = cell_corners(full, at, dx, dy);
                 (
                     lerp(lerp(v00[0], v10[0], fx), lerp(v01[0], v11[0], fx), fy),
                     lerp(lerp(v00[1], v10[1], fx), lerp(v01[1], v11[1], fx), fy),

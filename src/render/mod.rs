@@ -43,16 +43,32 @@ use thickness::ThicknessGrid;
 /// How films are shaded.
 #[derive(Clone, Debug, PartialEq)]
 pub enum FilmMode {
-    /// Sample baked tables, baking any that are missing or stale into `cache_dir`.
-    Lut { cache_dir: PathBuf },
+    /// Sample baked tables, baking any that are missing or stale into
+    /// `cache_dir`; with `thickness_grids`, bake each noise film's thickness
+    /// field to a grid too (see [`ThicknessGrid`]) rather than evaluate the
+    /// noise at every hit.
+    Lut {
+        cache_dir: PathBuf,
+        thickness_grids: bool,
+    },
     /// Evaluate the transfer matrix at every hit with this wavelength sampling.
     Direct { sampling: Sampling },
 }
 
 impl FilmMode {
+    /// Tables and thickness grids: the default, fast mode.
     pub fn lut(cache_dir: impl Into<PathBuf>) -> FilmMode {
         FilmMode::Lut {
             cache_dir: cache_dir.into(),
+            thickness_grids: true,
+        }
+    }
+
+    /// Tables, with the noise evaluated at every hit.
+    pub fn lut_exact_noise(cache_dir: impl Into<PathBuf>) -> FilmMode {
+        FilmMode::Lut {
+            cache_dir: cache_dir.into(),
+            thickness_grids: false,
         }
     }
 }
@@ -93,9 +109,10 @@ pub enum FilmShaders {
 /// The film shaders a scene needs, and what preparing them cost.
 pub struct PreparedFilms {
     pub shaders: FilmShaders,
-    /// Per object: in LUT mode, its film's noise thickness field baked to
-    /// a grid (where the object is bounded and the grid small enough);
-    /// empty in direct mode, which evaluates the noise at every hit.
+    /// Per object: in LUT mode with thickness grids, its film's noise
+    /// thickness field baked to a grid (where the object is bounded and the
+    /// grid small enough); otherwise empty, and the noise is evaluated at
+    /// every hit.
     pub thickness_grids: Vec<Option<ThicknessGrid>>,
     /// Wall time spent baking or loading tables and baking thickness
     /// grids (zero in direct mode).
@@ -118,7 +135,7 @@ pub fn prepare_films(scene: &Scene, mode: &FilmMode) -> Result<PreparedFilms> {
                 .map(|film| DirectFilm::new(film, *sampling))
                 .collect::<Result<_>>()?,
         ),
-        FilmMode::Lut { cache_dir } => {
+        FilmMode::Lut { cache_dir, .. } => {
             let mut tables = Vec::with_capacity(scene.films.len());
             for film in &scene.films {
                 let (lut, b, c) = LutFilm::prepare(film, cache_dir)?;
@@ -130,8 +147,11 @@ pub fn prepare_films(scene: &Scene, mode: &FilmMode) -> Result<PreparedFilms> {
         }
     };
     let thickness_grids = match mode {
-        FilmMode::Direct { .. } => Vec::new(),
-        FilmMode::Lut { .. } => bake_thickness_grids(scene),
+        FilmMode::Lut {
+            thickness_grids: true,
+            ..
+        } => bake_thickness_grids(scene),
+        _ => Vec::new(),
     };
     let bake_time = match mode {
         FilmMode::Direct { .. } => Duration::ZERO,

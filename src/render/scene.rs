@@ -6,7 +6,7 @@ use std::sync::Arc;
 use glam::Vec3;
 
 use super::environment::Environment;
-use super::geometry::{Plane, Ray, Sphere, SurfaceHit};
+use super::geometry::{Aabb, Plane, Ray, Sphere, SurfaceHit};
 use super::material::Material;
 use super::mesh::Mesh;
 use crate::optics::Stack;
@@ -59,6 +59,15 @@ pub enum Shape {
 }
 
 impl Shape {
+    /// The box around the shape; `None` for an unbounded plane.
+    pub fn bounds(&self) -> Option<Aabb> {
+        match self {
+            Shape::Sphere(s) => Some(s.bounds()),
+            Shape::Plane(_) => None,
+            Shape::Mesh(m) => Some(m.bounds()),
+        }
+    }
+
     #[inline]
     pub fn intersect(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<SurfaceHit> {
         match self {

@@ -305,7 +305,7 @@ pub struct ThicknessGrid {
     nodes: Vec<f32>,
     /// Largest |grid − field| seen at the bake's check points on the
     /// surface, in nm.
-    pub max_error_nm: f32,
+    max_error_nm: f32,
 }
 
 /// The largest thickness error a grid may have against the exact field.
@@ -321,8 +321,10 @@ const GRID_ERROR_COEFFICIENT: f32 = 1.3;
 /// Above this many nodes (32 MiB) a grid costs more to bake and hold than
 /// it saves, and the exact noise is used instead.
 const MAX_GRID_NODES: usize = 1 << 23;
-/// Points on the surface at which a bake compares the grid with the field.
+/// Points on the surface at which a bake compares the grid with the field,
+/// and the seed that places them on a mesh.
 const GRID_CHECK_POINTS: usize = 20_000;
+const GRID_CHECK_SEED: u64 = 0x2545_F491_4F6C_DD1D;
 
 impl ThicknessGrid {
     /// Bakes `field` over the bounding box of `shape`. `None` when the
@@ -335,11 +337,7 @@ impl ThicknessGrid {
         let ThicknessField::Noise { scale, .. } = field else {
             return None;
         };
-        let bounds = match shape {
-            Shape::Sphere(s) => s.bounds(),
-            Shape::Mesh(m) => m.bounds(),
-            Shape::Plane(_) => return None,
-        };
+        let bounds = shape.bounds()?;
         let (min_nm, max_nm) = field.range_nm();
         let nodes_per_cell = (GRID_ERROR_COEFFICIENT * (max_nm - min_nm).abs() / GRID_MAX_ERROR_NM)
             .sqrt()
@@ -402,6 +400,12 @@ impl ThicknessGrid {
         self.nodes.len()
     }
 
+    /// The largest |grid − exact field| the bake measured at points on the
+    /// object's surface, in nm (at most [`GRID_MAX_ERROR_NM`]).
+    pub fn max_error_nm(&self) -> f32 {
+        self.max_error_nm
+    }
+
     /// The field at `p`, trilinearly interpolated; points outside the box
     /// take the value at its nearest face.
     ///
@@ -440,13 +444,8 @@ impl ThicknessGrid {
 /// lattice on a sphere, random barycentric points on a mesh's triangles
 /// in turn.
 fn surface_points(shape: &Shape, n: usize) -> Vec<Vec3> {
-    let mut state = 0x2545_F491_4F6C_DD1Du64;
-    let mut unit = move || {
-        state ^= state << 13;
-        state ^= state >> 7;
-        state ^= state << 17;
-        (state >> 40) as f32 / (1u64 << 24) as f32
-    };
+    use rand::{Rng, SeedableRng};
+    let mut rng = rand_pcg::Pcg64::seed_from_u64(GRID_CHECK_SEED);
     match shape {
         Shape::Sphere(s) => (0..n)
             .map(|k| {
@@ -464,7 +463,7 @@ fn surface_points(shape: &Shape, n: usize) -> Vec<Vec3> {
             (0..n)
                 .map(|k| {
                     let [a, b, c] = triangles[k % triangles.len()];
-                    let (mut u, mut v) = (unit(), unit());
+                    let (mut u, mut v): (f32, f32) = (rng.random(), rng.random());
                     if u + v > 1.0 {
                         (u, v) = (1.0 - u, 1.0 - v);
                     }
