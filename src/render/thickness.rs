@@ -634,14 +634,20 @@ mod tests {
     /// repeat: cells 256 apart get different gradients.
     #[test]
     fn field_does_not_repeat_every_256_cells() {
-        let perlin = Perlin::new(3);
-        let same = grid()
-            .filter(|&p| {
-                let q = p + Vec3::new(0.37, 0.11, 0.59);
-                (perlin.signed(q) - perlin.signed(q + Vec3::new(256.0, 0.0, 0.0))).abs() < 1e-6
-            })
-            .count();
-        assert!(same < 100, "{same} of 16000 points repeat at 256 cells");
+        let mut perlin = Perlin::new(3);
+        for avx2 in [false, avx2_available()] {
+            perlin.avx2 = avx2;
+            let same = grid()
+                .filter(|&p| {
+                    let q = p + Vec3::new(0.37, 0.11, 0.59);
+                    (perlin.signed(q) - perlin.signed(q + Vec3::new(256.0, 0.0, 0.0))).abs() < 1e-6
+                })
+                .count();
+            assert!(
+                same < 100,
+                "{same} of 16000 points repeat at 256 cells (avx2 {avx2})"
+            );
+        }
     }
 
     fn unit_sphere() -> Shape {
