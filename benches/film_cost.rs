@@ -1,0 +1,87 @@
+//! What film shading adds to a LUT render of the paper's timing scene
+//! (`two-layer-noise`, 500 x 500, 1 sample per pixel), measured as paired
+//! ratios: each round renders the scene with thickness grids, with the
+//! noise evaluated at every hit, with the film at one thickness, and with
+//! bare glass, back to back, so every ratio compares renders that saw the
+//! same machine load (the order rotates from round to round). Prints the median and quartiles of the per-round
+//! ratios against bare glass, and each variant's best time.
+//!
+//! `cargo bench --bench film_cost [-- ROUNDS [THREADS]]` (default 40
+//! rounds on 2 threads). A plain program, not criterion: criterion times
+//! each variant in its own block of samples, so a change of load between
+//! blocks moves the ratio.
+
+use irid::render::material::Material;
+use irid::render::thickness::ThicknessField;
+use irid::render::{self, FilmMode, RenderOptions, Scene};
+use std::time::Instant;
+
+fn main() {
+    // `cargo bench` passes "--bench"; numbers are ours.
+    let numbers: Vec<usize> = std::env::args()
+        .skip(1)
+        .filter_map(|a| a.parse().ok())
+        .collect();
+    let rounds = numbers.first().copied().unwrap_or(40).max(1);
+    let threads = numbers.get(1).copied().unwrap_or(2).max(1);
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build_global()
+        .expect("thread pool");
+
+    let scene = Scene::builtin("two-layer-noise").unwrap().unwrap();
+    let cache = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("render-bench-cache");
+    let opts = RenderOptions::new(FilmMode::lut(&cache));
+    let grid = render::prepare_films(&scene, &opts.film).unwrap();
+    let exact = render::prepare_films(&scene, &FilmMode::lut_exact_noise(&cache)).unwrap();
+    let mut uniform = scene.clone();
+    for m in uniform.materials.iter_mut() {
+        if let Material::Film(f) = m {
+            f.thickness = ThicknessField::Uniform {
+                thickness_nm: 350.0,
+            };
+        }
+    }
+    let uniform_films = render::prepare_films(&uniform, &opts.film).unwrap();
+    let plain = scene.without_films(|_| unreachable!("two-layer-noise coats glass"));
+    let plain_films = render::prepare_films(&plain, &opts.film).unwrap();
+
+    let variants = [
+        ("LUT, thickness grid", &scene, &grid),
+        ("LUT, noise at every hit", &scene, &exact),
+        ("LUT, one thickness", &uniform, &uniform_films),
+        ("bare glass", &plain, &plain_films),
+    ];
+    let mut times = vec![Vec::with_capacity(rounds); variants.len()];
+    for round in 0..rounds {
+        // Each round starts with another variant, so that none always runs
+        // first or after the same neighbour.
+        for i in 0..variants.len() {
+            let k = (round + i) % variants.len();
+            let (_, s, f) = variants[k];
+            let start = Instant::now();
+            std::hint::black_box(render::render_with(s, f, &opts));
+            times[k].push(start.elapsed().as_secs_f64() * 1e3);
+        }
+    }
+    let plain_k = variants.len() - 1;
+    println!("two-layer-noise 500x500 1spp, {threads} thread(s), {rounds} rounds");
+    for (k, (name, _, _)) in variants.iter().enumerate() {
+        let best = times[k].iter().copied().fold(f64::INFINITY, f64::min);
+        if k == plain_k {
+            println!("  {name:<26} best {best:6.1} ms");
+            continue;
+        }
+        let mut ratios: Vec<f64> = (0..rounds)
+            .map(|r| 100.0 * (times[k][r] / times[plain_k][r] - 1.0))
+            .collect();
+        ratios.sort_by(f64::total_cmp);
+        let q = |f: f64| ratios[((rounds - 1) as f64 * f).round() as usize];
+        println!(
+            "  {name:<26} best {best:6.1} ms   adds {:+.1} % to bare glass (median of paired rounds; quartiles {:+.1} .. {:+.1} %)",
+            q(0.5),
+            q(0.25),
+            q(0.75)
+        );
+    }
+}
