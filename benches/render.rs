@@ -40,22 +40,25 @@ fn bench(c: &mut Criterion) {
     let exact_noise_films =
         render::prepare_films(&scene, &FilmMode::lut_exact_noise(&cache)).unwrap();
 
+    // Renders are timed inside the pool, as `irid render` runs them (see
+    // `benches/film_cost.rs` on renders handed to the pool from outside).
+    let pool = rayon::ThreadPoolBuilder::new().build().unwrap();
     let mut g = c.benchmark_group("two-layer-noise 500x500 1spp");
     g.sample_size(10);
     g.bench_function("lut", |b| {
-        b.iter(|| render::render_with(&scene, &lut_films, &lut))
+        pool.install(|| b.iter(|| render::render_with(&scene, &lut_films, &lut)))
     });
     g.bench_function("lut, noise evaluated at every hit", |b| {
-        b.iter(|| render::render_with(&scene, &exact_noise_films, &lut))
+        pool.install(|| b.iter(|| render::render_with(&scene, &exact_noise_films, &lut)))
     });
     g.bench_function("lut, uniform 350 nm film", |b| {
-        b.iter(|| render::render_with(&uniform, &uniform_films, &lut))
+        pool.install(|| b.iter(|| render::render_with(&uniform, &uniform_films, &lut)))
     });
     g.bench_function("plain glass (no film)", |b| {
-        b.iter(|| render::render_with(&plain, &plain_films, &lut))
+        pool.install(|| b.iter(|| render::render_with(&plain, &plain_films, &lut)))
     });
     g.bench_function("direct uniform:41", |b| {
-        b.iter(|| render::render_with(&scene, &direct_films, &direct))
+        pool.install(|| b.iter(|| render::render_with(&scene, &direct_films, &direct)))
     });
     g.finish();
 }

@@ -82,19 +82,21 @@ pub fn check_threads(n: usize) -> Result<()> {
     check_count("--threads", n, MAX_THREADS)
 }
 
-/// Runs `f` on a pool of `threads` workers (or rayon's default pool).
+/// Runs `f` inside a pool of `threads` workers (by default, one per CPU,
+/// or `RAYON_NUM_THREADS`). Inside, not from outside: a render called from
+/// a thread outside the pool is handed to the workers while the caller
+/// sleeps, and on one thread that hand-off made renders bimodal, up to 15 %
+/// slower when the two threads sat on different CPUs (`cargo bench --bench
+/// film_cost -- 40 1 handoff`).
 pub fn with_threads<T: Send>(threads: Option<usize>, f: impl FnOnce() -> T + Send) -> Result<T> {
-    match threads {
-        None => Ok(f()),
-        Some(n) => {
-            check_threads(n)?;
-            let pool = rayon::ThreadPoolBuilder::new()
-                .num_threads(n)
-                .build()
-                .context("cannot start the worker threads")?;
-            Ok(pool.install(f))
-        }
+    if let Some(n) = threads {
+        check_threads(n)?;
     }
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads.unwrap_or(0))
+        .build()
+        .context("cannot start the worker threads")?;
+    Ok(pool.install(f))
 }
 
 pub fn run(args: Args) -> Result<ExitCode> {
