@@ -14,14 +14,19 @@
 //!
 //! The rounds run inside the thread pool, as `irid render --threads N` and
 //! the demo run their renders. `handoff` instead calls each render from
-//! the main thread, outside the pool, so that every render is handed to
-//! the workers and the caller sleeps until it is done. On one thread that
-//! is how the earlier version of this bench ran, and on this machine (a
-//! 2-vCPU VM) it makes renders bimodal: when the sleeping caller and the
-//! worker sit on different CPUs, the worker runs 5–15 % slower. That is
-//! not from migrations; there are two or three in a whole run. Pinning
-//! both threads to one CPU removes it, and pinning them to different CPUs
-//! brings it back. The cause is below what the guest can see.
+//! the main thread, outside the pool, as a library caller might.
+//!
+//! Why it matters: a render called from outside a pool is handed to the
+//! workers while the caller sleeps. On one thread, on this project's 2-vCPU
+//! VM, that made renders bimodal: when the sleeping caller and the worker
+//! sat on different CPUs, the worker ran 5–15 % slower (at commit 581e815,
+//! `-- 40 1 handoff` gave +17.2 % for the grid against +10.5 % inside the
+//! pool, with bare glass's median at 69.8 ms against 64.6). It was not
+//! migrations: there were two or three in a whole run. Pinning both
+//! threads to one CPU removed it, pinning them to different CPUs brought
+//! it back; its cause is below what the guest can see. Since then a render
+//! called from outside a one-worker pool runs on the calling thread
+//! (`render_tiles`), and `handoff` on one thread measures that.
 
 use irid::render::material::Material;
 use irid::render::thickness::ThicknessField;
