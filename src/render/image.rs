@@ -209,38 +209,11 @@ mod tests {
     /// width that is not a whole number of tiles.
     #[test]
     fn caller_and_pool_render_the_same_image() {
-        let text = r#"
-            [render]
-            width = 37
-            height = 21
-            [camera]
-            position = [0.0, 1.5, 4.0]
-            look_at = [0.0, 0.8, 0.0]
-            fov_deg = 40.0
-            [[lights]]
-            kind = "point"
-            position = [2.0, 4.0, 2.0]
-            color = [20.0, 20.0, 20.0]
-            [materials.glass]
-            kind = "dielectric"
-            ior = 1.5
-            [materials.floor]
-            kind = "diffuse"
-            albedo = [0.5, 0.5, 0.5]
-            checker = { albedo = [0.1, 0.1, 0.1], size = 0.5 }
-            [[objects]]
-            shape = "sphere"
-            material = "glass"
-            center = [0.0, 1.0, 0.0]
-            radius = 1.0
-            [[objects]]
-            shape = "plane"
-            material = "floor"
-            point = [0.0, 0.0, 0.0]
-            normal = [0.0, 1.0, 0.0]
-        "#;
-        let scene =
-            crate::render::Scene::from_toml_str(text, std::path::Path::new("."), "t").unwrap();
+        // The paper's timing scene with bare glass: no tables to bake.
+        let scene = crate::render::Scene::builtin("two-layer-noise")
+            .unwrap()
+            .unwrap()
+            .without_films(|_| unreachable!("two-layer-noise coats glass"));
         let tracer: Tracer<crate::render::LutFilm> = Tracer {
             scene: &scene,
             films: &[],
