@@ -292,9 +292,9 @@ unsafe fn signed_avx2(key: u32, px: f32, py: f32, pz: f32) -> f32 {
 /// on `two-layer-noise` a 3-D grid at a 60 nm budget (a few kB) added 2 to
 /// 4 points less to the render than the same grid at 2 nm (1.8 MB). A
 /// sphere's surface grid holds only nodes a hit can read, 190 kB there,
-/// and added 3 points less than the 3-D grid. A bricked 3-D grid storing only the bricks the surface passes
-/// through was tried for meshes and rendered 3 % slower than the dense one:
-/// its extra lookup lies on the hit's dependency chain.
+/// and added 3 points less than the 3-D grid. A bricked 3-D grid storing
+/// only the bricks the surface passes through rendered 3 % slower than the
+/// dense one: its extra lookup lies on the hit's dependency chain.
 #[derive(Clone, Debug)]
 pub struct ThicknessGrid {
     layout: GridLayout,
@@ -350,10 +350,12 @@ struct BoxGrid {
 #[derive(Clone, Debug)]
 struct SphereGrid {
     center: Vec3A,
-    /// (side − 1) / 2: face coordinate u maps to grid coordinate
-    /// (u + 1) · half_span.
+    /// (side − 1) / 2, the grid coordinate of the face's centre: face
+    /// coordinate u maps to grid coordinate (u / FACE_HALF_WIDTH + 1) ·
+    /// half_span.
     half_span: f32,
-    /// Face coordinate per scene unit.
+    /// Grid units per scene unit along a minor axis:
+    /// half_span / (FACE_HALF_WIDTH · radius).
     to_grid: f32,
     /// The largest grid coordinate a lookup may take: just short of the
     /// last node.
@@ -527,13 +529,14 @@ impl SphereGrid {
         step: f32,
     ) -> Option<(GridLayout, Vec<f32>)> {
         use rayon::prelude::*;
+        let radius = radius.abs();
         // Face coordinates are the two minor coordinates over the radius,
         // which on a face stay within ±1/√2 (|u|, |v| ≤ major, u² + v² +
         // major² = 1). Arc length per unit of u is at most √3 times the
         // radius (where the surface is steepest, at a cube corner), so a
         // node every step / (√3 · radius) of u is one at least every
         // `step` on the surface.
-        let intervals = (2.0 * FACE_HALF_WIDTH * 3f32.sqrt() * radius.abs() / step).ceil();
+        let intervals = (2.0 * FACE_HALF_WIDTH * 3f32.sqrt() * radius / step).ceil();
         if !intervals.is_finite() || 6.0 * (intervals + 1.0).powi(2) > MAX_GRID_NODES as f32 {
             return None;
         }
