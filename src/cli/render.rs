@@ -86,8 +86,8 @@ pub fn check_threads(n: usize) -> Result<()> {
 /// or `RAYON_NUM_THREADS`). Inside, not from outside: a render called from
 /// a thread outside the pool is handed to the workers while the caller
 /// sleeps, and on one thread that hand-off made renders bimodal, up to 15 %
-/// slower when the two threads sat on different CPUs (`cargo bench --bench
-/// film_cost -- 40 1 handoff`).
+/// slower when the two threads sat on different CPUs (see
+/// benches/film_cost.rs).
 pub fn with_threads<T: Send>(threads: Option<usize>, f: impl FnOnce() -> T + Send) -> Result<T> {
     if let Some(n) = threads {
         check_threads(n)?;
