@@ -28,9 +28,10 @@
 //! called from outside a one-worker pool runs on the calling thread
 //! (`render_tiles`), and `handoff` on one thread measures that.
 
-use irid::render::material::Material;
-use irid::render::thickness::ThicknessField;
-use irid::render::{self, FilmMode, RenderOptions, Scene};
+mod common;
+
+use common::TimingScene;
+use irid::render::{self, FilmMode, RenderOptions};
 use std::time::Instant;
 
 fn main() {
@@ -50,28 +51,20 @@ fn main() {
             .expect("thread pool");
     }
 
-    let scene = Scene::builtin("two-layer-noise").unwrap().unwrap();
-    let cache = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("render-bench-cache");
-    let opts = RenderOptions::new(FilmMode::lut(&cache));
-    let grid = render::prepare_films(&scene, &opts.film).unwrap();
-    let exact = render::prepare_films(&scene, &FilmMode::lut_exact_noise(&cache)).unwrap();
-    let mut uniform = scene.clone();
-    for m in uniform.materials.iter_mut() {
-        if let Material::Film(f) = m {
-            f.thickness = ThicknessField::Uniform {
-                thickness_nm: 350.0,
-            };
-        }
-    }
-    let uniform_films = render::prepare_films(&uniform, &opts.film).unwrap();
-    let plain = scene.without_films(|_| unreachable!("two-layer-noise coats glass"));
-    let plain_films = render::prepare_films(&plain, &opts.film).unwrap();
+    let timing = TimingScene::load();
+    let (cache, scene, uniform, plain) =
+        (&timing.cache, &timing.scene, &timing.uniform, &timing.plain);
+    let opts = RenderOptions::new(FilmMode::lut(cache));
+    let grid = render::prepare_films(scene, &opts.film).unwrap();
+    let exact = render::prepare_films(scene, &FilmMode::lut_exact_noise(cache)).unwrap();
+    let uniform_films = render::prepare_films(uniform, &opts.film).unwrap();
+    let plain_films = render::prepare_films(plain, &opts.film).unwrap();
 
     let variants = [
-        ("LUT, thickness grid", &scene, &grid),
-        ("LUT, noise at every hit", &scene, &exact),
-        ("LUT, one thickness", &uniform, &uniform_films),
-        ("bare glass", &plain, &plain_films),
+        ("LUT, thickness grid", scene, &grid),
+        ("LUT, noise at every hit", scene, &exact),
+        ("LUT, one thickness", uniform, &uniform_films),
+        ("bare glass", plain, &plain_films),
     ];
     let mut times = vec![Vec::with_capacity(rounds); variants.len()];
     let mut run_rounds = || {

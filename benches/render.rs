@@ -5,40 +5,33 @@
 //! before timing. Then the parts of a LUT film hit on their own: the
 //! thickness (noise evaluated, or read from the grid) and the table lookup.
 
+mod common;
+
+use common::TimingScene;
 use criterion::{black_box, criterion_group, criterion_main, Criterion, Throughput};
 use glam::Vec3;
 use irid::color::Sampling;
 use irid::render::material::Material;
 use irid::render::scene::Shape;
-use irid::render::thickness::{ThicknessField, ThicknessGrid};
-use irid::render::{self, FilmMode, FilmShading, LutFilm, RenderOptions, Scene, Side};
+use irid::render::thickness::ThicknessGrid;
+use irid::render::{self, FilmMode, FilmShading, LutFilm, RenderOptions, Side};
 
 fn bench(c: &mut Criterion) {
-    let scene = Scene::builtin("two-layer-noise").unwrap().unwrap();
-    let cache = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("render-bench-cache");
-    let lut = RenderOptions::new(FilmMode::lut(&cache));
-    let lut_films = render::prepare_films(&scene, &lut.film).unwrap();
-    let plain = scene.without_films(|_| unreachable!("two-layer-noise coats glass"));
-    let plain_films = render::prepare_films(&plain, &lut.film).unwrap();
+    let timing = TimingScene::load();
+    let (cache, scene, uniform, plain) =
+        (&timing.cache, &timing.scene, &timing.uniform, &timing.plain);
+    let lut = RenderOptions::new(FilmMode::lut(cache));
+    let lut_films = render::prepare_films(scene, &lut.film).unwrap();
+    let plain_films = render::prepare_films(plain, &lut.film).unwrap();
     let direct = RenderOptions::new(FilmMode::Direct {
         sampling: Sampling::Uniform(41),
     });
-    let direct_films = render::prepare_films(&scene, &direct.film).unwrap();
-    // The same film at one thickness: the tables as they are, no noise
-    // and so no thickness grid.
-    let mut uniform = scene.clone();
-    for m in uniform.materials.iter_mut() {
-        if let Material::Film(f) = m {
-            f.thickness = ThicknessField::Uniform {
-                thickness_nm: 350.0,
-            };
-        }
-    }
-    let uniform_films = render::prepare_films(&uniform, &lut.film).unwrap();
+    let direct_films = render::prepare_films(scene, &direct.film).unwrap();
+    let uniform_films = render::prepare_films(uniform, &lut.film).unwrap();
     // The noise film with its field evaluated at every hit, as before
     // thickness grids (and as direct mode does).
     let exact_noise_films =
-        render::prepare_films(&scene, &FilmMode::lut_exact_noise(&cache)).unwrap();
+        render::prepare_films(scene, &FilmMode::lut_exact_noise(cache)).unwrap();
 
     // Renders are timed inside the pool, as `irid render` runs them (see
     // `benches/film_cost.rs` on renders handed to the pool from outside).
@@ -46,19 +39,19 @@ fn bench(c: &mut Criterion) {
     let mut g = c.benchmark_group("two-layer-noise 500x500 1spp");
     g.sample_size(10);
     g.bench_function("lut", |b| {
-        pool.install(|| b.iter(|| render::render_with(&scene, &lut_films, &lut)))
+        pool.install(|| b.iter(|| render::render_with(scene, &lut_films, &lut)))
     });
     g.bench_function("lut, noise evaluated at every hit", |b| {
-        pool.install(|| b.iter(|| render::render_with(&scene, &exact_noise_films, &lut)))
+        pool.install(|| b.iter(|| render::render_with(scene, &exact_noise_films, &lut)))
     });
     g.bench_function("lut, uniform 350 nm film", |b| {
-        pool.install(|| b.iter(|| render::render_with(&uniform, &uniform_films, &lut)))
+        pool.install(|| b.iter(|| render::render_with(uniform, &uniform_films, &lut)))
     });
     g.bench_function("plain glass (no film)", |b| {
-        pool.install(|| b.iter(|| render::render_with(&plain, &plain_films, &lut)))
+        pool.install(|| b.iter(|| render::render_with(plain, &plain_films, &lut)))
     });
     g.bench_function("direct uniform:41", |b| {
-        pool.install(|| b.iter(|| render::render_with(&scene, &direct_films, &direct)))
+        pool.install(|| b.iter(|| render::render_with(scene, &direct_films, &direct)))
     });
     g.finish();
 }
@@ -67,8 +60,7 @@ fn bench(c: &mut Criterion) {
 /// table lookup (front side: evenly spaced axes; back side: cos θ crowded
 /// around the critical angle), at pseudo-random points.
 fn film_hit(c: &mut Criterion) {
-    let scene = Scene::builtin("two-layer-noise").unwrap().unwrap();
-    let cache = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("render-bench-cache");
+    let TimingScene { cache, scene, .. } = TimingScene::load();
     let (lut, _, _) = LutFilm::prepare(&scene.films[0], &cache).unwrap();
     let Material::Film(film) = scene
         .materials

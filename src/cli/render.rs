@@ -167,7 +167,7 @@ pub fn run(args: Args) -> Result<ExitCode> {
     println!("films   {film}");
     let grids: Vec<_> = films.thickness_grids.iter().flatten().collect();
     if !grids.is_empty() {
-        let nodes: usize = grids.iter().map(|g| g.node_count()).sum();
+        let bytes: usize = grids.iter().map(|g| g.size_bytes()).sum();
         let worst = grids
             .iter()
             .map(|g| g.max_error_nm())
@@ -175,7 +175,7 @@ pub fn run(args: Args) -> Result<ExitCode> {
         println!(
             "noise   thickness baked to {} grid(s), {:.1} MB, max error {:.2} nm (exact noise with --film direct)",
             grids.len(),
-            (nodes * 4) as f64 / 1e6,
+            bytes as f64 / 1e6,
             worst
         );
     }

@@ -898,7 +898,7 @@ struct Check {
 /// interpolation of the stored coarse table `data` (the fine values at even
 /// indices, rounded as stored: see [`even_subgrid`]).
 fn measure(coarse: &Grid, fine: &Grid, values: &[f64], data: &[f32], channels: usize) -> Check {
-    let dims = fine.axes.clone().map(|a| a.nodes.len());
+    let dims = fine.axes.each_ref().map(|a| a.nodes.len());
     let coarse_dims = coarse.axes.each_ref().map(|a| a.nodes.len());
     // Interpolation weight of the right-hand coarse neighbour at each odd
     // fine index (1/2 on uniform segments, not on graded ones).
@@ -983,7 +983,7 @@ fn measure(coarse: &Grid, fine: &Grid, values: &[f64], data: &[f32], channels: u
 
 /// The coarse table: fine values at even indices, rounded as stored.
 fn even_subgrid(fine: &Grid, values: &[f64], channels: usize, half: bool) -> Vec<f32> {
-    let dims = fine.axes.clone().map(|a| a.nodes.len());
+    let dims = fine.axes.each_ref().map(|a| a.nodes.len());
     let mut out = Vec::with_capacity(values.len() / 4);
     for w in (0..dims[2]).step_by(2) {
         for c in (0..dims[1]).step_by(2) {

@@ -50,17 +50,6 @@ impl LutFilm {
         spec
     }
 
-    /// The table for light arriving from the ambient.
-    pub fn front(&self) -> &Lut {
-        &self.front
-    }
-
-    /// The table of the reversed stack, for light from the substrate side
-    /// (none for an opaque substrate).
-    pub fn back(&self) -> Option<&Lut> {
-        self.back.as_ref()
-    }
-
     /// Where the table for `spec` is cached.
     pub fn cache_path(film: &Film, side: Side, spec: &BakeSpec, cache_dir: &Path) -> PathBuf {
         let side = match side {

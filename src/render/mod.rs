@@ -127,15 +127,22 @@ pub struct PreparedFilms {
 pub fn prepare_films(scene: &Scene, mode: &FilmMode) -> Result<PreparedFilms> {
     let start = Instant::now();
     let (mut baked, mut cached) = (0, 0);
-    let shaders = match mode {
-        FilmMode::Direct { sampling } => FilmShaders::Direct(
-            scene
-                .films
-                .iter()
-                .map(|film| DirectFilm::new(film, *sampling))
-                .collect::<Result<_>>()?,
+    let (shaders, thickness_grids, bake_time) = match mode {
+        FilmMode::Direct { sampling } => (
+            FilmShaders::Direct(
+                scene
+                    .films
+                    .iter()
+                    .map(|film| DirectFilm::new(film, *sampling))
+                    .collect::<Result<_>>()?,
+            ),
+            Vec::new(),
+            Duration::ZERO,
         ),
-        FilmMode::Lut { cache_dir, .. } => {
+        FilmMode::Lut {
+            cache_dir,
+            thickness_grids,
+        } => {
             let mut tables = Vec::with_capacity(scene.films.len());
             for film in &scene.films {
                 let (lut, b, c) = LutFilm::prepare(film, cache_dir)?;
@@ -143,19 +150,13 @@ pub fn prepare_films(scene: &Scene, mode: &FilmMode) -> Result<PreparedFilms> {
                 cached += c;
                 tables.push(lut);
             }
-            FilmShaders::Lut(tables)
+            let grids = if *thickness_grids {
+                bake_thickness_grids(scene)
+            } else {
+                Vec::new()
+            };
+            (FilmShaders::Lut(tables), grids, start.elapsed())
         }
-    };
-    let thickness_grids = match mode {
-        FilmMode::Lut {
-            thickness_grids: true,
-            ..
-        } => bake_thickness_grids(scene),
-        _ => Vec::new(),
-    };
-    let bake_time = match mode {
-        FilmMode::Direct { .. } => Duration::ZERO,
-        FilmMode::Lut { .. } => start.elapsed(),
     };
     Ok(PreparedFilms {
         shaders,

@@ -276,7 +276,7 @@ unsafe fn signed_avx2(key: u32, px: f32, py: f32, pz: f32) -> f32 {
 
 /// A noise thickness field baked over one object: the field at the nodes
 /// of a regular grid, interpolated. A sphere's grid lies on its surface
-/// (six faces of a cube projected onto it, interpolated bilinearly);
+/// (six overlapping faces, interpolated bilinearly: see [`SphereGrid`]);
 /// other bounded shapes get a 3-D grid over their bounding box,
 /// interpolated trilinearly.
 ///
@@ -416,9 +416,14 @@ impl ThicknessGrid {
         (grid.max_error_nm <= GRID_MAX_ERROR_NM).then_some(grid)
     }
 
-    /// Nodes in the grid (four bytes each).
+    /// Nodes in the grid.
     pub fn node_count(&self) -> usize {
         self.nodes.len()
+    }
+
+    /// Memory the nodes take.
+    pub fn size_bytes(&self) -> usize {
+        std::mem::size_of_val(&self.nodes[..])
     }
 
     /// The largest |grid − exact field| the bake measured at points on the
@@ -501,8 +506,7 @@ impl BoxGrid {
         let g = ((p.extend(0.0) - self.origin) * self.inv_step)
             .max(Vec4::ZERO)
             .min(self.max_coord);
-        let cell = truncate(g);
-        let f = g - Vec4::new(cell[0] as f32, cell[1] as f32, cell[2] as f32, 0.0);
+        let (cell, f) = cell_and_fraction(g);
         let [nx, ny, _] = self.dims;
         let (row, plane) = (nx, nx * ny);
         let base = cell[0] as usize + row * cell[1] as usize + plane * cell[2] as usize;
@@ -588,13 +592,12 @@ impl SphereGrid {
         let g = (d * self.to_grid + Vec3A::splat(self.half_span))
             .max(Vec3A::ZERO)
             .min(Vec3A::splat(self.max_coord));
-        let g = g.extend(0.0);
-        let cell = truncate(g);
-        let frac = (g - Vec4::new(cell[0] as f32, cell[1] as f32, cell[2] as f32, 0.0)).to_array();
+        let (cell, frac) = cell_and_fraction(g.extend(0.0));
+        let frac = frac.to_array();
         // The face's (u, v) are the next two axes after its major one;
         // `& 3` keeps the indices visibly inside the four lanes.
-        let ku = if axis == 2 { 0 } else { axis + 1 } & 3;
-        let kv = if axis == 0 { 2 } else { axis - 1 } & 3;
+        let ku = (if axis == 2 { 0 } else { axis + 1 }) & 3;
+        let kv = (if axis == 0 { 2 } else { axis - 1 }) & 3;
         let (i, j) = (cell[ku] as usize, cell[kv] as usize);
         let (fs, ft) = (frac[ku], frac[kv]);
         let row = self.side;
@@ -604,6 +607,15 @@ impl SphereGrid {
         let v = |k: usize| unsafe { *span.get_unchecked(k) };
         lerp(lerp(v(0), v(1), fs), lerp(v(row), v(row + 1), fs), ft)
     }
+}
+
+/// Grid coordinates (each ≥ 0, below 2³¹) split into their cell, the
+/// integer part, and the position inside it.
+#[inline(always)]
+fn cell_and_fraction(g: Vec4) -> ([i32; 4], Vec4) {
+    let cell = truncate(g);
+    let inside = g - Vec4::new(cell[0] as f32, cell[1] as f32, cell[2] as f32, 0.0);
+    (cell, inside)
 }
 
 #[inline(always)]
