@@ -291,7 +291,7 @@ unsafe fn signed_avx2(key: u32, px: f32, py: f32, pz: f32) -> f32 {
 /// What a grid costs a render is much where its nodes sit in the cache:
 /// on `two-layer-noise` a 3-D grid at a 60 nm budget (a few kB) added 2 to
 /// 4 points less to the render than the same grid at 2 nm (1.8 MB). A
-/// sphere's surface grid holds only nodes a hit can read, 190 kB there,
+/// sphere's surface grid holds only nodes a hit can read, 194 kB there,
 /// and added 3 points less than the 3-D grid. A bricked 3-D grid storing
 /// only the bricks the surface passes through rendered 3 % slower than the
 /// dense one: its extra lookup lies on the hit's dependency chain.
