@@ -114,7 +114,11 @@ impl StackSpec {
 }
 
 impl MediumSpec {
-    fn resolve(&self, field: &str, base_dir: &Path, finite: bool) -> Result<Material> {
+    /// The material this medium describes, loading a table relative to
+    /// `base_dir`. `field` names it in errors (`ambient`, `layers[2]`);
+    /// `finite` says whether it is a layer, which must carry a thickness
+    /// (the ambient and substrate must not).
+    pub fn resolve(&self, field: &str, base_dir: &Path, finite: bool) -> Result<Material> {
         let forms: Vec<&str> = [
             ("n", self.n.is_some()),
             ("material", self.material.is_some()),

@@ -1,0 +1,39 @@
+"""irid: exact thin-film optics (the transfer-matrix method) on numpy arrays.
+
+- ``coherent(n, d, angles, wavelengths)``: R and T over a wavelength x angle
+  grid with the arguments and result of tmm-faster's ``calc_coherent``.
+- ``Stack``: a multilayer from any stack-file material form (or
+  ``Stack.load(path)``); ``solve`` gives R, T and the complex amplitudes,
+  ``color`` the reflected and transmitted colour.
+- ``Material`` / ``material(name)``: refractive-index models and the
+  built-in library; ``.index(wavelengths_nm)``.
+- ``bake(stack, ...) -> Lut``: a lookup table over a layer's thickness and
+  the angle, saved as OpenEXR; ``Lut.sample`` interpolates it as a renderer does.
+
+Computation runs on rayon threads with the GIL released
+(``RAYON_NUM_THREADS`` sets their number). Bad input raises ``ValueError``,
+files that cannot be read or written ``OSError``, each with the one-line
+message the ``irid`` command prints.
+"""
+
+from ._irid import (
+    Lut,
+    Material,
+    Stack,
+    __version__,
+    bake,
+    coherent,
+    material,
+    materials,
+)
+
+__all__ = [
+    "Lut",
+    "Material",
+    "Stack",
+    "__version__",
+    "bake",
+    "coherent",
+    "material",
+    "materials",
+]

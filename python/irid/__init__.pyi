@@ -1,0 +1,132 @@
+"""Type stubs of the irid module (the native extension irid._irid)."""
+
+import os
+from typing import Any, Dict, List, Mapping, Optional, Sequence, Tuple, Union
+
+import numpy as np
+import numpy.typing as npt
+
+__version__: str
+
+ArrayLike = npt.ArrayLike
+PathLike = Union[str, "os.PathLike[str]"]
+
+#: Any medium form of a stack file: n, (n, k), n + kj, a built-in name, a dict
+#: of stack-file keys (n, material, cauchy, sellmeier, table, name) or a Material.
+MediumForm = Union[float, complex, Tuple[float, float], str, Mapping[str, Any], "Material"]
+#: A layer: (form, thickness_nm), or a dict of stack-file keys with thickness_nm.
+LayerForm = Union[Tuple[MediumForm, float], Mapping[str, Any]]
+
+def coherent(
+    n: ArrayLike,
+    d: ArrayLike,
+    angles: ArrayLike,
+    wavelengths: ArrayLike,
+) -> Dict[str, npt.NDArray[np.float64]]:
+    """R and T of a coherent multilayer at every wavelength and angle, with the
+    arguments and result of tmm-faster's ``calc_coherent``.
+
+    n: complex n + ik (k > 0 absorbs, k < 0 is gain), shape (wavelengths,
+    media), ambient first; a 1-D n is the same at every wavelength.
+    d: thicknesses in nm, inf for the ambient and the substrate.
+    angles: degrees in [0, 90]; wavelengths: nm.
+    Returns R_s, R_p, T_s, T_p, R_avg, T_avg, each (wavelengths, angles).
+    """
+
+def material(name: str) -> Material:
+    """The built-in material called ``name`` (case-insensitive, aliases such as "Au")."""
+
+def materials() -> List[str]:
+    """The names of the built-in materials."""
+
+class Material:
+    """A refractive-index model: constant, built-in, Cauchy, Sellmeier or table."""
+
+    def __init__(self, form: Optional[MediumForm] = None, **fields: Any) -> None: ...
+    @property
+    def name(self) -> str: ...
+    @property
+    def range_nm(self) -> Tuple[float, float]:
+        """The wavelength range (nm) over which the index is defined."""
+    def index(self, wavelengths_nm: ArrayLike) -> Any:
+        """Complex n + ik at each wavelength (nm): an array of the input's
+        shape, or a complex number for a number."""
+
+class Stack:
+    """A planar multilayer: lossless ambient, layers from the top down, substrate."""
+
+    def __init__(
+        self,
+        ambient: Optional[MediumForm] = None,
+        layers: Optional[Sequence[LayerForm]] = None,
+        substrate: Optional[MediumForm] = None,
+    ) -> None: ...
+    @staticmethod
+    def load(path: PathLike) -> Stack:
+        """Reads a stack file (TOML); table paths are relative to its folder."""
+    @staticmethod
+    def from_toml(text: str, base_dir: PathLike = ".") -> Stack:
+        """Parses stack-file text; table paths are relative to ``base_dir``."""
+    @property
+    def ambient(self) -> Material: ...
+    @property
+    def substrate(self) -> Material: ...
+    @property
+    def layers(self) -> List[Tuple[Material, float]]: ...
+    def solve(
+        self,
+        wavelengths_nm: ArrayLike,
+        angles_deg: ArrayLike,
+        thickness_nm: Optional[ArrayLike] = None,
+        layer: int = 1,
+    ) -> Dict[str, npt.NDArray[Any]]:
+        """Rs, Rp, Ts, Tp, R, T (float64) and rs, rp, ts, tp (complex128), each
+        (wavelengths, angles), or (thicknesses, wavelengths, angles) with
+        ``thickness_nm`` setting layer ``layer`` (1-based)."""
+    def color(
+        self,
+        angles_deg: ArrayLike,
+        sampling: str = "exact",
+        white: str = "d65",
+    ) -> Dict[str, npt.NDArray[np.float64]]:
+        """angle_deg, reflectance_rgb, transmittance_rgb (linear sRGB),
+        reflectance_xyz, transmittance_xyz, each (angles, 3) but angle_deg."""
+
+def bake(
+    stack: Stack,
+    thickness_nm: Optional[Union[float, Tuple[float, float]]] = None,
+    layer: int = 1,
+    max_error: Optional[float] = None,
+    *,
+    resolution: Optional[Sequence[int]] = None,
+    cos_theta: Optional[Union[float, Tuple[float, float]]] = None,
+    kind: str = "rgb",
+    sampling: str = "exact",
+    wavelengths_nm: Optional[Tuple[float, float]] = None,
+    half: bool = False,
+    validation_points: int = 20000,
+    check: bool = True,
+) -> Lut:
+    """Bakes a lookup table over a layer's thickness and cos θ, as ``irid bake``."""
+
+class Lut:
+    """A baked lookup table (OpenEXR with irid's JSON header)."""
+
+    @staticmethod
+    def load(path: PathLike) -> Lut: ...
+    def save(self, path: PathLike) -> None: ...
+    @property
+    def header(self) -> Dict[str, Any]: ...
+    @property
+    def kind(self) -> str: ...
+    @property
+    def data(self) -> npt.NDArray[np.float32]: ...
+    def sample(
+        self,
+        thickness_nm: ArrayLike,
+        cos_theta: ArrayLike,
+        wavelength_nm: Optional[ArrayLike] = None,
+    ) -> Tuple[npt.NDArray[np.float32], npt.NDArray[np.float32]]:
+        """(R, T) at broadcast points: rgb tables give (..., 3) linear sRGB."""
+    def validate(self, points: int = 20000, seed: int = 1) -> Dict[str, Any]:
+        """The table against the solver at random points, as ``irid validate --json``."""

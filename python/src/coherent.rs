@@ -1,0 +1,197 @@
+//! `irid.coherent`: the drop-in for tmm-faster's `calc_coherent`.
+
+use num_complex::Complex64 as C64;
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+use rayon::prelude::*;
+
+use irid::optics::{solve_batch, Material, Response, MAX_THICKNESS_NM, WAVELENGTH_RANGE_NM};
+
+use crate::arrays::{array, real_list, values};
+use crate::invalid;
+
+/// Checks everything the solver relies on, naming the entry at fault in
+/// tmm-faster's terms (`n[i, j]`: wavelength i, medium j; `d[j]`).
+fn check(
+    indices: &[C64],
+    media: usize,
+    d: &[f64],
+    angles_deg: &[f64],
+    wavelengths_nm: &[f64],
+) -> PyResult<()> {
+    if media < 2 {
+        return Err(invalid(
+            "n",
+            format!("needs at least 2 media (ambient and substrate), got {media}"),
+        ));
+    }
+    if d.len() != media {
+        return Err(invalid(
+            "d",
+            format!("n has {media} media per wavelength but d has {} entries", d.len()),
+        ));
+    }
+    if d[0] != f64::INFINITY || d[media - 1] != f64::INFINITY {
+        return Err(invalid(
+            "d",
+            format!(
+                "the first and last entries (ambient and substrate) must be inf, got {} and {}",
+                d[0],
+                d[media - 1]
+            ),
+        ));
+    }
+    for (j, &t) in d.iter().enumerate().take(media - 1).skip(1) {
+        if !(0.0..=MAX_THICKNESS_NM).contains(&t) {
+            return Err(invalid(
+                format!("d[{j}]"),
+                format!("a layer thickness must be finite, ≥ 0 and ≤ {MAX_THICKNESS_NM:e} nm, got {t}"),
+            ));
+        }
+    }
+    if let Some(a) = angles_deg.iter().find(|a| !(0.0..=90.0).contains(*a)) {
+        return Err(invalid("angles", format!("{a} is outside [0, 90] degrees")));
+    }
+    let (lo, hi) = WAVELENGTH_RANGE_NM;
+    if let Some(w) = wavelengths_nm.iter().find(|w| !(lo..=hi).contains(*w)) {
+        return Err(invalid(
+            "wavelengths",
+            format!("{w} nm is outside {lo:e}–{hi:e} nm"),
+        ));
+    }
+    for (i, row) in indices.chunks_exact(media).enumerate() {
+        for (j, z) in row.iter().enumerate() {
+            Material::constant(z.re, z.im)
+                .check()
+                .map_err(|e| invalid(format!("n[{i}, {j}]"), e.to_string()))?;
+        }
+        if row[0].im != 0.0 {
+            return Err(invalid(
+                format!("n[{i}, 0]"),
+                format!("the ambient must be lossless (imaginary part 0), got {}", row[0]),
+            ));
+        }
+        if row[media - 1].im < 0.0 {
+            return Err(invalid(
+                format!("n[{i}, {}]", media - 1),
+                format!(
+                    "gain (imaginary part < 0) is only allowed in finite layers, not in the substrate, got {}",
+                    row[media - 1]
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// cos θ of an angle in degrees, exactly 0 at 90° (grazing incidence, where
+/// no power enters the stack) rather than cos(π/2) ≈ 6e-17.
+fn cos_deg(angle_deg: f64) -> f64 {
+    if angle_deg == 90.0 {
+        0.0
+    } else {
+        angle_deg.to_radians().cos()
+    }
+}
+
+/// Solves every (wavelength, angle) pair, wavelength-major, on rayon's
+/// threads: each task takes a run of wavelengths to the batched solver.
+pub fn solve_grid(
+    indices: &[C64],
+    thicknesses_nm: &[f64],
+    wavelengths_nm: &[f64],
+    cos_theta0: &[f64],
+) -> Vec<Response> {
+    let media = thicknesses_nm.len() + 2;
+    let angles = cos_theta0.len();
+    let mut out = vec![Response::default(); wavelengths_nm.len() * angles];
+    if out.is_empty() {
+        return out;
+    }
+    // A few tasks per thread balance the load; each still holds enough
+    // points to amortize the hand-off.
+    let tasks = 4 * rayon::current_num_threads();
+    let rows = wavelengths_nm.len().div_ceil(tasks).max(1);
+    out.par_chunks_mut(rows * angles)
+        .zip(indices.par_chunks(rows * media))
+        .zip(wavelengths_nm.par_chunks(rows))
+        .for_each(|((out, indices), wavelengths_nm)| {
+            solve_batch(indices, thicknesses_nm, wavelengths_nm, cos_theta0, out)
+        });
+    out
+}
+
+/// R and T of a coherent multilayer at every wavelength and angle, with the
+/// arguments and result of tmm-faster's `calc_coherent`.
+///
+/// n: complex indices n + ik (k > 0 absorbs, k < 0 is gain), shape
+/// (wavelengths, media), ambient first; a 1-D n is the same at every
+/// wavelength. d: thicknesses in nm, inf for the ambient and the substrate.
+/// angles: incidence in the ambient, degrees in [0, 90]. wavelengths: vacuum
+/// wavelengths in nm.
+///
+/// Returns a dict of float64 arrays of shape (wavelengths, angles): R_s, R_p,
+/// T_s, T_p, R_avg, T_avg (the unpolarized means). T is the power flux into
+/// the substrate, Re(n cos θ) for s and Re(n conj(cos θ)) for p over the
+/// incident flux, as in Byrnes' tmm: right for absorbing substrates too.
+#[pyfunction]
+#[pyo3(signature = (n, d, angles, wavelengths))]
+pub fn coherent<'py>(
+    py: Python<'py>,
+    n: &Bound<'py, PyAny>,
+    d: &Bound<'py, PyAny>,
+    angles: &Bound<'py, PyAny>,
+    wavelengths: &Bound<'py, PyAny>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let wavelengths_nm = real_list(wavelengths, "wavelengths")?;
+    let angles_deg = real_list(angles, "angles")?;
+    let d = real_list(d, "d")?;
+    let (mut indices, shape) = values::<C64>(n, "complex128", "n")?;
+    let media = match shape.as_slice() {
+        [m] => {
+            // One set of media for every wavelength.
+            let row = indices.clone();
+            indices = row.repeat(wavelengths_nm.len());
+            *m
+        }
+        [w, m] if *w == wavelengths_nm.len() => *m,
+        _ => {
+            return Err(invalid(
+                "n",
+                format!(
+                    "expected shape (wavelengths, media) = ({}, {}), got {shape:?}",
+                    wavelengths_nm.len(),
+                    d.len()
+                ),
+            ))
+        }
+    };
+    check(&indices, media, &d, &angles_deg, &wavelengths_nm)?;
+    let thicknesses_nm = &d[1..media - 1];
+    let cos_theta0: Vec<f64> = angles_deg.iter().map(|&a| cos_deg(a)).collect();
+    let columns = py.allow_threads(|| {
+        let out = solve_grid(&indices, thicknesses_nm, &wavelengths_nm, &cos_theta0);
+        let mut columns: [Vec<f64>; 6] = Default::default();
+        for c in columns.iter_mut() {
+            c.reserve_exact(out.len());
+        }
+        for r in &out {
+            columns[0].push(r.rs);
+            columns[1].push(r.rp);
+            columns[2].push(r.ts);
+            columns[3].push(r.tp);
+            columns[4].push(r.r());
+            columns[5].push(r.t());
+        }
+        columns
+    });
+    let shape = [wavelengths_nm.len(), angles_deg.len()];
+    let result = PyDict::new(py);
+    for (key, column) in ["R_s", "R_p", "T_s", "T_p", "R_avg", "T_avg"]
+        .into_iter()
+        .zip(columns)
+    {
+        result.set_item(key, array(py, column, &shape)?)?;
+    }
+    Ok(result)
+}

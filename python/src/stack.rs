@@ -1,0 +1,473 @@
+//! `irid.Material`, `irid.material`, `irid.materials` and `irid.Stack`.
+
+use std::path::{Path, PathBuf};
+
+use num_complex::Complex64 as C64;
+use pyo3::prelude::*;
+use pyo3::types::{PyComplex, PyDict, PyList, PyString, PyTuple};
+use rayon::prelude::*;
+
+use irid::color::{stack_colours, Sampling, SpectralIntegrator};
+use irid::optics::spec::{IndexSpec, MediumSpec};
+use irid::optics::{
+    library, solve, solve_amplitudes, Layer, Material, Stack, StackGrid, MAX_THICKNESS_NM,
+};
+
+use crate::arrays::{array, real_list, reals};
+use crate::{invalid, py_error};
+
+/// A refractive-index model: a constant n + ik, a built-in material, a
+/// Cauchy or Sellmeier formula, or a table.
+///
+/// Material(form) takes any medium form of a stack file: a number n, a pair
+/// (n, k) or a complex n + kj (k > 0 absorbs, k < 0 is gain), a built-in
+/// name ("gold"), or a dict with one of the keys n, material, cauchy
+/// ([A, B] or [A, B, C], λ in µm), sellmeier ({"b": [...], "c": [...]},
+/// optional "a"), table (a refractiveindex.info CSV path), and an optional
+/// name. The same keys are accepted as keyword arguments:
+/// Material(cauchy=[1.45, 0.0036]).
+#[pyclass(name = "Material", module = "irid", frozen)]
+#[derive(Clone)]
+pub struct PyMaterial {
+    pub material: Material,
+}
+
+#[pymethods]
+impl PyMaterial {
+    #[new]
+    #[pyo3(signature = (form=None, **fields))]
+    fn new(form: Option<&Bound<'_, PyAny>>, fields: Option<&Bound<'_, PyDict>>) -> PyResult<Self> {
+        let material = match (form, fields) {
+            (Some(form), None) => medium(form, "material", None)?,
+            (None, Some(fields)) => medium(fields.as_any(), "material", None)?,
+            (Some(_), Some(_)) => {
+                return Err(invalid(
+                    "material",
+                    "give either one form or keyword fields, not both",
+                ))
+            }
+            (None, None) => {
+                return Err(invalid(
+                    "material",
+                    "give a form (a number, (n, k), a name or a dict) or keyword fields",
+                ))
+            }
+        };
+        Ok(PyMaterial { material })
+    }
+
+    /// The label used in messages and table headers.
+    #[getter]
+    fn name(&self) -> String {
+        self.material.name.clone()
+    }
+
+    /// The wavelength range (nm) over which the index is defined.
+    #[getter]
+    fn range_nm(&self) -> (f64, f64) {
+        self.material.range_nm()
+    }
+
+    /// The complex index n + ik at each wavelength (nm); same shape as the input.
+    fn index<'py>(
+        &self,
+        py: Python<'py>,
+        wavelengths_nm: &Bound<'py, PyAny>,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let (wavelengths, shape) = reals(wavelengths_nm, "wavelengths_nm")?;
+        let values = wavelengths
+            .iter()
+            .map(|&w| self.material.index_at(w))
+            .collect::<irid::Result<Vec<C64>>>()
+            .map_err(|e| invalid(self.material.name.clone(), e.to_string()))?;
+        let out = array(py, values, &shape)?;
+        if shape.is_empty() {
+            // A number in, a number out.
+            return out.get_item(PyTuple::empty(py));
+        }
+        Ok(out.into_any())
+    }
+
+    fn __repr__(&self) -> String {
+        format!("irid.Material({:?})", self.material.name)
+    }
+}
+
+/// The built-in material called `name` (case-insensitive, with aliases
+/// such as "Au" or "SiO2"); ValueError names the built-ins if unknown.
+#[pyfunction]
+pub fn material(name: &str) -> PyResult<PyMaterial> {
+    let material = library::builtin(name).ok_or_else(|| {
+        invalid(
+            "material",
+            format!(
+                "unknown material '{name}' (built-in: {})",
+                library::names().join(", ")
+            ),
+        )
+    })?;
+    Ok(PyMaterial { material })
+}
+
+/// The names of the built-in materials.
+#[pyfunction]
+pub fn materials() -> Vec<&'static str> {
+    library::names().to_vec()
+}
+
+/// One medium of a stack from any of its Python forms. `thickness_nm` is a
+/// layer's thickness given beside the form (`(form, thickness)`).
+fn medium(obj: &Bound<'_, PyAny>, field: &str, layer_thickness: Option<f64>) -> PyResult<Material> {
+    let finite = field.starts_with("layers");
+    if let Ok(m) = obj.downcast::<PyMaterial>() {
+        return Ok(m.get().material.clone());
+    }
+    let mut spec = if let Ok(dict) = obj.downcast::<PyDict>() {
+        let json: String = obj
+            .py()
+            .import("json")?
+            .getattr("dumps")?
+            .call1((dict,))
+            .and_then(|j| j.extract())
+            .map_err(|e| invalid(field, format!("not a stack-file medium ({e})")))?;
+        let spec: MediumSpec =
+            serde_json::from_str(&json).map_err(|e| invalid(field, e.to_string()))?;
+        if layer_thickness.is_some() && spec.thickness_nm.is_some() {
+            return Err(invalid(
+                format!("{field}.thickness_nm"),
+                "given twice (in the dict and beside it)",
+            ));
+        }
+        spec
+    } else if let Ok(name) = obj.downcast::<PyString>() {
+        MediumSpec {
+            material: Some(name.to_str()?.to_string()),
+            ..MediumSpec::default()
+        }
+    } else if let Ok(z) = obj.downcast::<PyComplex>() {
+        index_spec(z.real(), z.imag())
+    } else if obj.is_instance_of::<pyo3::types::PyBool>() {
+        return Err(invalid(field, "a bool is not a refractive index"));
+    } else if let Ok(n) = obj.extract::<f64>() {
+        index_spec(n, 0.0)
+    } else if let Ok((n, k)) = obj.extract::<(f64, f64)>() {
+        index_spec(n, k)
+    } else {
+        return Err(invalid(
+            field,
+            format!(
+                "expected a number n, a pair (n, k), a complex n + kj, a material name, \
+                 a dict of stack-file keys or an irid.Material, got {}",
+                obj.repr()?
+            ),
+        ));
+    };
+    if finite && spec.thickness_nm.is_none() {
+        spec.thickness_nm = layer_thickness;
+    }
+    spec.resolve(field, Path::new(""), finite)
+        .map_err(py_error)
+}
+
+fn index_spec(n: f64, k: f64) -> MediumSpec {
+    MediumSpec {
+        n: Some(IndexSpec { n, k }),
+        ..MediumSpec::default()
+    }
+}
+
+/// One layer: `(form, thickness_nm)` or a dict carrying its `thickness_nm`.
+fn layer(obj: &Bound<'_, PyAny>, field: &str) -> PyResult<Layer> {
+    if obj.is_instance_of::<PyDict>() {
+        let thickness_nm = obj
+            .get_item("thickness_nm")
+            .ok()
+            .and_then(|t| t.extract::<f64>().ok())
+            .unwrap_or(f64::NAN);
+        let material = medium(obj, field, None)?;
+        return Ok(Layer {
+            material,
+            thickness_nm,
+        });
+    }
+    let pair = obj
+        .downcast::<PyTuple>()
+        .map(|t| t.as_any().clone())
+        .or_else(|_| obj.downcast::<PyList>().map(|l| l.as_any().clone()))
+        .ok()
+        .filter(|p| p.len().ok() == Some(2));
+    let Some(pair) = pair else {
+        return Err(invalid(
+            field,
+            format!(
+                "expected (material, thickness_nm) or a dict with thickness_nm, got {}",
+                obj.repr()?
+            ),
+        ));
+    };
+    let thickness_nm: f64 = pair.get_item(1)?.extract().map_err(|_| {
+        invalid(
+            format!("{field}.thickness_nm"),
+            "must be a number (nm)".to_string(),
+        )
+    })?;
+    let material = medium(&pair.get_item(0)?, field, Some(thickness_nm))?;
+    Ok(Layer {
+        material,
+        thickness_nm,
+    })
+}
+
+/// A planar multilayer: a lossless ambient, layers from the top (ambient
+/// side) down, and a semi-infinite substrate.
+///
+/// Stack(ambient=1.0, layers=[(material, thickness_nm), ...], substrate=1.0)
+/// takes every medium form irid.Material takes; Stack.load(path) reads a
+/// stack file (TOML).
+#[pyclass(name = "Stack", module = "irid", frozen)]
+#[derive(Clone)]
+pub struct PyStack {
+    pub stack: Stack,
+}
+
+#[pymethods]
+impl PyStack {
+    #[new]
+    #[pyo3(signature = (ambient=None, layers=None, substrate=None))]
+    fn new(
+        ambient: Option<&Bound<'_, PyAny>>,
+        layers: Option<&Bound<'_, PyAny>>,
+        substrate: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<Self> {
+        let vacuum = || Material::constant(1.0, 0.0);
+        let ambient = ambient.map_or_else(|| Ok(vacuum()), |a| medium(a, "ambient", None))?;
+        let substrate = substrate.map_or_else(|| Ok(vacuum()), |s| medium(s, "substrate", None))?;
+        let mut list = Vec::new();
+        if let Some(layers) = layers {
+            for (i, item) in layers
+                .try_iter()
+                .map_err(|_| invalid("layers", "must be a list of (material, thickness_nm)"))?
+                .enumerate()
+            {
+                list.push(layer(&item?, &format!("layers[{}]", i + 1))?);
+            }
+        }
+        let stack = Stack {
+            ambient,
+            layers: list,
+            substrate,
+        };
+        stack.validate().map_err(py_error)?;
+        Ok(PyStack { stack })
+    }
+
+    /// Reads a stack file (TOML); table paths in it are relative to its folder.
+    #[staticmethod]
+    fn load(path: PathBuf) -> PyResult<Self> {
+        Ok(PyStack {
+            stack: Stack::load(&path).map_err(py_error)?,
+        })
+    }
+
+    /// Parses stack-file text; table paths are relative to `base_dir`.
+    #[staticmethod]
+    #[pyo3(signature = (text, base_dir=PathBuf::from(".")))]
+    fn from_toml(text: &str, base_dir: PathBuf) -> PyResult<Self> {
+        Ok(PyStack {
+            stack: Stack::from_toml_str(text, &base_dir, "stack").map_err(py_error)?,
+        })
+    }
+
+    #[getter]
+    fn ambient(&self) -> PyMaterial {
+        PyMaterial {
+            material: self.stack.ambient.clone(),
+        }
+    }
+
+    #[getter]
+    fn substrate(&self) -> PyMaterial {
+        PyMaterial {
+            material: self.stack.substrate.clone(),
+        }
+    }
+
+    /// The layers as (Material, thickness_nm), from the top down.
+    #[getter]
+    fn layers(&self) -> Vec<(PyMaterial, f64)> {
+        self.stack
+            .layers
+            .iter()
+            .map(|l| {
+                (
+                    PyMaterial {
+                        material: l.material.clone(),
+                    },
+                    l.thickness_nm,
+                )
+            })
+            .collect()
+    }
+
+    /// R, T and the complex amplitudes at every wavelength (nm) and angle of
+    /// incidence (degrees in [0, 90)), for unpolarized light from the ambient.
+    ///
+    /// Returns a dict of arrays of shape (wavelengths, angles), or
+    /// (thicknesses, wavelengths, angles) when `thickness_nm` lists
+    /// thicknesses for layer `layer` (counted from 1 at the ambient side):
+    /// Rs, Rp, Ts, Tp, R, T (float64; R and T the unpolarized means) and
+    /// rs, rp, ts, tp (complex128; r referred to the top interface, t the
+    /// ratio of the forward amplitude at the substrate's interface to the
+    /// incident one, in Byrnes' tmm's convention).
+    #[pyo3(signature = (wavelengths_nm, angles_deg, thickness_nm=None, layer=1))]
+    fn solve<'py>(
+        &self,
+        py: Python<'py>,
+        wavelengths_nm: &Bound<'py, PyAny>,
+        angles_deg: &Bound<'py, PyAny>,
+        thickness_nm: Option<&Bound<'py, PyAny>>,
+        layer: usize,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        let wavelengths = real_list(wavelengths_nm, "wavelengths_nm")?;
+        let angles = real_list(angles_deg, "angles_deg")?;
+        if let Some(a) = angles.iter().find(|a| !(**a >= 0.0 && **a < 90.0)) {
+            return Err(invalid(
+                "angles_deg",
+                format!("{a} is outside [0, 90) degrees"),
+            ));
+        }
+        let thicknesses = match thickness_nm {
+            None => None,
+            Some(t) => {
+                let list = real_list(t, "thickness_nm")?;
+                check_layer(&self.stack, layer)?;
+                if let Some(t) = list.iter().find(|t| !(0.0..=MAX_THICKNESS_NM).contains(*t)) {
+                    return Err(invalid(
+                        "thickness_nm",
+                        format!("must be finite, ≥ 0 and ≤ {MAX_THICKNESS_NM:e}, got {t}"),
+                    ));
+                }
+                Some(list)
+            }
+        };
+        let grid = StackGrid::new(&self.stack, &wavelengths).map_err(py_error)?;
+        let cos_theta0: Vec<f64> = angles.iter().map(|a| a.to_radians().cos()).collect();
+        let per_thickness = wavelengths.len() * angles.len();
+        let runs = thicknesses.clone().unwrap_or_else(|| vec![f64::NAN]);
+        let points = py.allow_threads(|| {
+            let mut points = vec![Point::default(); runs.len() * per_thickness];
+            points
+                .par_chunks_mut(angles.len().max(1))
+                .enumerate()
+                .for_each(|(row, out)| {
+                    let (run, i) = (row / wavelengths.len().max(1), row % wavelengths.len().max(1));
+                    let mut d = grid.thicknesses_nm().to_vec();
+                    if thicknesses.is_some() {
+                        d[layer - 1] = runs[run];
+                    }
+                    let n = grid.indices_at(i);
+                    let wl = wavelengths[i];
+                    for (p, &c) in out.iter_mut().zip(&cos_theta0) {
+                        let r = solve(n, &d, wl, c);
+                        let a = solve_amplitudes(n, &d, wl, c);
+                        p.power = [r.rs, r.rp, r.ts, r.tp, r.r(), r.t()];
+                        p.amplitudes = [a.rs, a.rp, a.ts, a.tp];
+                    }
+                });
+            points
+        });
+        let shape: Vec<usize> = match &thicknesses {
+            Some(t) => vec![t.len(), wavelengths.len(), angles.len()],
+            None => vec![wavelengths.len(), angles.len()],
+        };
+        let result = PyDict::new(py);
+        for (k, key) in ["Rs", "Rp", "Ts", "Tp", "R", "T"].into_iter().enumerate() {
+            let column = points.iter().map(|p| p.power[k]).collect();
+            result.set_item(key, array(py, column, &shape)?)?;
+        }
+        for (k, key) in ["rs", "rp", "ts", "tp"].into_iter().enumerate() {
+            let column: Vec<C64> = points.iter().map(|p| p.amplitudes[k]).collect();
+            result.set_item(key, array(py, column, &shape)?)?;
+        }
+        Ok(result)
+    }
+
+    /// The reflected and transmitted colour at each angle (degrees in
+    /// [0, 90)) for unpolarized light from the ambient, as `irid color`.
+    ///
+    /// sampling: "exact" (1 nm over 360–830 nm), "uniform:N" (380–780 nm)
+    /// or "rgb3". white: the illuminant, "d65".
+    /// Returns a dict: angle_deg (A,), reflectance_rgb, transmittance_rgb
+    /// (linear sRGB, (A, 3)), reflectance_xyz, transmittance_xyz (CIE XYZ,
+    /// Y = 1 for a perfect reflector, (A, 3)).
+    #[pyo3(signature = (angles_deg, sampling="exact", white="d65"))]
+    fn color<'py>(
+        &self,
+        py: Python<'py>,
+        angles_deg: &Bound<'py, PyAny>,
+        sampling: &str,
+        white: &str,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        let angles = real_list(angles_deg, "angles_deg")?;
+        let sampling: Sampling = sampling.parse().map_err(py_error)?;
+        if !white.trim().eq_ignore_ascii_case("d65") {
+            return Err(invalid(format!("white '{white}'"), "expected d65"));
+        }
+        let colours = py
+            .allow_threads(|| {
+                let integrator = SpectralIntegrator::new(sampling);
+                stack_colours(&self.stack, &integrator, &angles)
+            })
+            .map_err(py_error)?;
+        let result = PyDict::new(py);
+        result.set_item("angle_deg", array(py, angles.clone(), &[angles.len()])?)?;
+        let triples = |f: fn(&irid::color::FilmColour) -> [f64; 3]| -> Vec<f64> {
+            colours.iter().flat_map(f).collect()
+        };
+        let shape = [colours.len(), 3];
+        result.set_item("reflectance_rgb", array(py, triples(|c| c.reflectance_rgb), &shape)?)?;
+        result.set_item(
+            "transmittance_rgb",
+            array(py, triples(|c| c.transmittance_rgb), &shape)?,
+        )?;
+        result.set_item("reflectance_xyz", array(py, triples(|c| c.reflectance_xyz), &shape)?)?;
+        result.set_item(
+            "transmittance_xyz",
+            array(py, triples(|c| c.transmittance_xyz), &shape)?,
+        )?;
+        Ok(result)
+    }
+
+    fn __repr__(&self) -> String {
+        let layers: Vec<String> = self
+            .stack
+            .layers
+            .iter()
+            .map(|l| format!("({:?}, {})", l.material.name, l.thickness_nm))
+            .collect();
+        format!(
+            "irid.Stack(ambient={:?}, layers=[{}], substrate={:?})",
+            self.stack.ambient.name,
+            layers.join(", "),
+            self.stack.substrate.name
+        )
+    }
+}
+
+/// `layer` must name one of the stack's layers (1-based).
+pub fn check_layer(stack: &Stack, layer: usize) -> PyResult<()> {
+    let n = stack.layers.len();
+    if !(1..=n).contains(&layer) {
+        return Err(invalid(
+            "layer",
+            format!("must be between 1 and {n} (the stack's layers), got {layer}"),
+        ));
+    }
+    Ok(())
+}
+
+#[derive(Clone, Copy, Default)]
+struct Point {
+    power: [f64; 6],
+    amplitudes: [C64; 4],
+}

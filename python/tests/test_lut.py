@@ -1,0 +1,126 @@
+"""irid.bake and irid.Lut: the same tables as `irid bake`, sampled as an
+independent bilinear interpolation of the stored nodes does, validated as
+`irid validate` does."""
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+import irid
+
+
+@pytest.fixture(scope="module")
+def soap(luts):
+    return irid.Stack.load(luts / "soap-film.toml")
+
+
+@pytest.fixture(scope="module")
+def table(soap):
+    return irid.bake(soap, thickness_nm=(0, 1000), resolution=(96, 24), validation_points=2000)
+
+
+def bilinear(lut, t, c):
+    """The table's nodes interpolated in numpy: linear in each axis value
+    between the listed nodes, clamped at the ends."""
+    axes = {a["name"]: np.array(a["nodes"]) for a in lut.header["axes"]}
+    tn, cn = axes["thickness_nm"], axes["cos_theta"]
+    data = lut.data.astype(np.float64)  # (cos, thickness, 6)
+
+    def locate(nodes, x):
+        x = np.clip(x, nodes[0], nodes[-1])
+        i = np.clip(np.searchsorted(nodes, x, side="right") - 1, 0, max(len(nodes) - 2, 0))
+        if len(nodes) == 1:
+            return i, np.zeros_like(x), i
+        f = (x - nodes[i]) / (nodes[i + 1] - nodes[i])
+        return i, f, i + 1
+
+    i, fx, i1 = locate(tn, t)
+    j, fy, j1 = locate(cn, c)
+    fx, fy = fx[:, None], fy[:, None]
+    lo = data[j, i] * (1 - fx) + data[j, i1] * fx
+    hi = data[j1, i] * (1 - fx) + data[j1, i1] * fx
+    v = lo * (1 - fy) + hi * fy
+    return v[:, :3], v[:, 3:]
+
+
+def test_sample_matches_independent_bilinear(table):
+    rng = np.random.default_rng(5)
+    t = np.concatenate([rng.uniform(-50, 1050, 4000), [0.0, 1000.0]])
+    c = np.concatenate([rng.uniform(-0.1, 1.1, 4000), [1.0, 0.0]])
+    r, tr = table.sample(t, c)
+    assert r.shape == tr.shape == (4002, 3) and r.dtype == np.float32
+    want_r, want_t = bilinear(table, t, c)
+    np.testing.assert_allclose(r, want_r, rtol=0, atol=2e-6)
+    np.testing.assert_allclose(tr, want_t, rtol=0, atol=2e-6)
+
+
+def test_sample_broadcasts(table):
+    t = np.linspace(0, 1000, 7)[:, None]
+    c = np.linspace(0.2, 1.0, 5)[None, :]
+    r, tr = table.sample(t, c)
+    assert r.shape == (7, 5, 3)
+    r1, _ = table.sample(t[3, 0], c[0, 2])
+    np.testing.assert_array_equal(r[3, 2], r1)
+
+
+def test_nodes_hold_the_exact_colour(table, soap):
+    axes = {a["name"]: a["nodes"] for a in table.header["axes"]}
+    for ti in [0, 17, 95]:
+        th = axes["thickness_nm"][ti]
+        film = irid.Stack(ambient=soap.ambient, layers=[(soap.layers[0][0], th)], substrate=soap.substrate)
+        for cj in [3, 23]:
+            cos = axes["cos_theta"][cj]
+            want = film.color([math.degrees(math.acos(cos))])
+            r, tr = table.sample(th, cos)
+            np.testing.assert_allclose(r, want["reflectance_rgb"][0], atol=2e-6)
+            np.testing.assert_allclose(tr, want["transmittance_rgb"][0], atol=2e-6)
+
+
+def test_same_table_as_the_cli(tmp_path, table, luts, irid_cli):
+    path = tmp_path / "cli.exr"
+    run = irid_cli("bake", luts / "soap-film.toml", "--thickness", "0:1000", "--resolution", "96,24",
+                   "--validate-points", "2000", "-o", path)
+    assert run.returncode == 0, run.stderr
+    cli = irid.Lut.load(path)
+    assert cli.header == table.header
+    np.testing.assert_array_equal(cli.data, table.data)
+
+
+def test_save_load_and_validate_as_the_cli(tmp_path, table, irid_cli):
+    path = tmp_path / "py.exr"
+    table.save(path)
+    again = irid.Lut.load(path)
+    assert again.header == table.header and again.kind == "rgb"
+    np.testing.assert_array_equal(again.data, table.data)
+    mine = again.validate(3000, seed=9)
+    run = irid_cli("validate", path, "--points", 3000, "--seed", 9, "--json")
+    assert run.returncode == 0, run.stderr
+    assert mine == json.loads(run.stdout)
+    assert mine["points"] == 3000 and max(mine["max_abs"]) < 0.05
+    # The header's validation is the same computation with the bake's seed.
+    assert table.validate(2000) == table.header["error"]["validation"]
+
+
+def test_error_target_is_met(soap):
+    lut = irid.bake(soap, thickness_nm=(0, 400), max_error=1e-2, validation_points=1000)
+    h = lut.header
+    assert h["error"]["target_max_abs"] == 1e-2
+    assert h["error"]["bake_check"]["max_abs_all"] <= 1e-2
+    assert max(lut.validate(1000, seed=3)["max_abs"]) <= 1e-2
+
+
+def test_spectral_table(soap):
+    lut = irid.bake(soap, thickness_nm=(100, 600), resolution=(11, 6, 9), kind="spectral",
+                    wavelengths_nm=(400, 720), validation_points=0)
+    assert lut.kind == "spectral" and lut.data.shape == (9, 6, 11, 2)
+    axes = {a["name"]: np.array(a["nodes"]) for a in lut.header["axes"]}
+    t, c, w = axes["thickness_nm"], axes["cos_theta"], axes["wavelength_nm"]
+    T, C, W = np.meshgrid(t, c, w, indexing="ij")
+    r, tr = lut.sample(T, C, W)
+    assert r.shape == (11, 6, 9)
+    ref = soap.solve(w, np.degrees(np.arccos(c)), thickness_nm=t)
+    # ref: (thickness, wavelength, angle) -> (thickness, angle, wavelength)
+    np.testing.assert_allclose(r, ref["R"].transpose(0, 2, 1), atol=1e-6)
+    np.testing.assert_allclose(tr, ref["T"].transpose(0, 2, 1), atol=1e-6)
