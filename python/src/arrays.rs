@@ -1,17 +1,30 @@
 //! Conversions between Python values and the flat vectors the library takes.
 
-use numpy::{Element, PyArray1, PyArrayDyn, PyArrayMethods, PyReadonlyArrayDyn, PyUntypedArrayMethods};
+use numpy::{
+    Element, PyArray1, PyArrayDyn, PyArrayMethods, PyReadonlyArrayDyn, PyUntypedArrayMethods,
+};
 use pyo3::prelude::*;
-use pyo3::types::PyTuple;
+use pyo3::types::{IntoPyDict, PyTuple};
 
 use crate::invalid;
 
 /// A numpy array of `obj` with `dtype`, C-contiguous: numbers, lists and
 /// arrays of any shape are accepted as numpy accepts them.
-fn contiguous<'py>(obj: &Bound<'py, PyAny>, dtype: &str, what: &str) -> PyResult<Bound<'py, PyAny>> {
-    let np = obj.py().import("numpy")?;
-    np.getattr("ascontiguousarray")?
-        .call1((obj, np.getattr(dtype)?))
+fn contiguous<'py>(
+    obj: &Bound<'py, PyAny>,
+    dtype: &str,
+    what: &str,
+) -> PyResult<Bound<'py, PyAny>> {
+    let py = obj.py();
+    let np = py.import("numpy")?;
+    // asarray keeps a number 0-dimensional (ascontiguousarray makes it 1-D).
+    let kwargs = [
+        ("dtype", np.getattr(dtype)?),
+        ("order", "C".into_pyobject(py)?.into_any()),
+    ]
+    .into_py_dict(py)?;
+    np.getattr("asarray")?
+        .call((obj,), Some(&kwargs))
         .map_err(|e| invalid(what, format!("not an array of numbers ({e})")))
 }
 
@@ -76,7 +89,10 @@ pub fn array<'py, T: Element>(
 }
 
 /// A JSON document as Python objects (dicts, lists, numbers, strings).
-pub fn json_to_py<'py>(py: Python<'py>, value: &impl serde::Serialize) -> PyResult<Bound<'py, PyAny>> {
+pub fn json_to_py<'py>(
+    py: Python<'py>,
+    value: &impl serde::Serialize,
+) -> PyResult<Bound<'py, PyAny>> {
     let text = serde_json::to_string(value).map_err(|e| invalid("json", e.to_string()))?;
     py.import("json")?.getattr("loads")?.call1((text,))
 }

@@ -28,7 +28,10 @@ fn check(
     if d.len() != media {
         return Err(invalid(
             "d",
-            format!("n has {media} media per wavelength but d has {} entries", d.len()),
+            format!(
+                "n has {media} media per wavelength but d has {} entries",
+                d.len()
+            ),
         ));
     }
     if d[0] != f64::INFINITY || d[media - 1] != f64::INFINITY {
@@ -45,7 +48,9 @@ fn check(
         if !(0.0..=MAX_THICKNESS_NM).contains(&t) {
             return Err(invalid(
                 format!("d[{j}]"),
-                format!("a layer thickness must be finite, ≥ 0 and ≤ {MAX_THICKNESS_NM:e} nm, got {t}"),
+                format!(
+                    "a layer thickness must be finite, ≥ 0 and ≤ {MAX_THICKNESS_NM:e} nm, got {t}"
+                ),
             ));
         }
     }
@@ -68,7 +73,10 @@ fn check(
         if row[0].im != 0.0 {
             return Err(invalid(
                 format!("n[{i}, 0]"),
-                format!("the ambient must be lossless (imaginary part 0), got {}", row[0]),
+                format!(
+                    "the ambient must be lossless (imaginary part 0), got {}",
+                    row[0]
+                ),
             ));
         }
         if row[media - 1].im < 0.0 {

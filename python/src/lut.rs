@@ -21,7 +21,10 @@ fn range(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<(f64, f64)> {
         [lo, hi] => Ok((*lo, *hi)),
         other => Err(invalid(
             what,
-            format!("expected a number or (min, max), got {} values", other.len()),
+            format!(
+                "expected a number or (min, max), got {} values",
+                other.len()
+            ),
         )),
     }
 }
@@ -245,7 +248,12 @@ impl PyLut {
     /// of per-channel max/mean/p99 absolute errors, CIEDE2000, the worst
     /// point and the hard regions.
     #[pyo3(signature = (points=20_000, seed=VALIDATION_SEED))]
-    fn validate<'py>(&self, py: Python<'py>, points: usize, seed: u64) -> PyResult<Bound<'py, PyAny>> {
+    fn validate<'py>(
+        &self,
+        py: Python<'py>,
+        points: usize,
+        seed: u64,
+    ) -> PyResult<Bound<'py, PyAny>> {
         let stats = py
             .allow_threads(|| validate(&self.lut, points, seed))
             .map_err(py_error)?;

@@ -165,8 +165,7 @@ fn medium(obj: &Bound<'_, PyAny>, field: &str, layer_thickness: Option<f64>) -> 
     if finite && spec.thickness_nm.is_none() {
         spec.thickness_nm = layer_thickness;
     }
-    spec.resolve(field, Path::new(""), finite)
-        .map_err(py_error)
+    spec.resolve(field, Path::new(""), finite).map_err(py_error)
 }
 
 fn index_spec(n: f64, k: f64) -> MediumSpec {
@@ -360,7 +359,10 @@ impl PyStack {
                 .par_chunks_mut(angles.len().max(1))
                 .enumerate()
                 .for_each(|(row, out)| {
-                    let (run, i) = (row / wavelengths.len().max(1), row % wavelengths.len().max(1));
+                    let (run, i) = (
+                        row / wavelengths.len().max(1),
+                        row % wavelengths.len().max(1),
+                    );
                     let mut d = grid.thicknesses_nm().to_vec();
                     if thicknesses.is_some() {
                         d[layer - 1] = runs[run];
@@ -425,12 +427,18 @@ impl PyStack {
             colours.iter().flat_map(f).collect()
         };
         let shape = [colours.len(), 3];
-        result.set_item("reflectance_rgb", array(py, triples(|c| c.reflectance_rgb), &shape)?)?;
+        result.set_item(
+            "reflectance_rgb",
+            array(py, triples(|c| c.reflectance_rgb), &shape)?,
+        )?;
         result.set_item(
             "transmittance_rgb",
             array(py, triples(|c| c.transmittance_rgb), &shape)?,
         )?;
-        result.set_item("reflectance_xyz", array(py, triples(|c| c.reflectance_xyz), &shape)?)?;
+        result.set_item(
+            "reflectance_xyz",
+            array(py, triples(|c| c.reflectance_xyz), &shape)?,
+        )?;
         result.set_item(
             "transmittance_xyz",
             array(py, triples(|c| c.transmittance_xyz), &shape)?,
