@@ -94,9 +94,9 @@ class Stack:
 
 def bake(
     stack: Stack,
-    thickness_nm: Optional[Union[float, Tuple[float, float]]] = None,
+    thickness_nm: Optional[Union[float, Tuple[float, float]]] = None,  # None: (0, 1000)
     layer: int = 1,
-    max_error: Optional[float] = None,
+    max_error: Optional[float] = None,  # None: 1e-3 unless resolution is given
     *,
     resolution: Optional[Sequence[int]] = None,
     cos_theta: Optional[Union[float, Tuple[float, float]]] = None,

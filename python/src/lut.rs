@@ -14,6 +14,10 @@ use crate::arrays::{array, broadcast_reals, json_to_py, real_list};
 use crate::stack::{check_layer, PyStack};
 use crate::{invalid, py_error};
 
+/// The thickness range of `irid.bake` when none is given: interference
+/// colours fade out within the first micrometre of a film.
+const DEFAULT_THICKNESS_NM: (f64, f64) = (0.0, 1000.0);
+
 /// A `(min, max)` pair from a number (both ends) or a two-element sequence.
 fn range(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<(f64, f64)> {
     match real_list(obj, what)?.as_slice() {
@@ -33,7 +37,7 @@ fn range(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<(f64, f64)> {
 /// angle of incidence, as `irid bake` does.
 ///
 /// thickness_nm: (min, max) in nm of layer `layer` (counted from 1 at the
-/// ambient side), or one number, or None for the layer's own thickness.
+/// ambient side), or one number for a single thickness; default (0, 1000).
 /// max_error: the largest absolute error allowed in any channel (default
 /// 1e-3 when no resolution is given); resolution: fixed node counts
 /// (thickness, angle) or (thickness, angle, wavelength) instead.
@@ -69,12 +73,11 @@ pub fn bake(
     spec.layer = layer;
     if !spec.stack.layers.is_empty() {
         check_layer(&spec.stack, layer)?;
-        let own = spec.stack.layers[layer - 1].thickness_nm;
-        spec.thickness_nm = (own, own);
     }
-    if let Some(t) = thickness_nm {
-        spec.thickness_nm = range(t, "thickness_nm")?;
-    }
+    spec.thickness_nm = match thickness_nm {
+        Some(t) => range(t, "thickness_nm")?,
+        None => DEFAULT_THICKNESS_NM,
+    };
     spec.cos_theta = match cos_theta {
         Some(c) => range(c, "cos_theta")?,
         None => (DEFAULT_COS_MIN, 1.0),
