@@ -106,6 +106,7 @@ def main():
 
     import irid
 
+    load = os.getloadavg()
     step = 4 if args.quick else 20
     wavelengths = np.arange(380.0, 781.0, 20.0 if args.quick else 1.0)
     angles = np.arange(0.0, 90.0, 10.0 if args.quick else 1.0)
@@ -143,8 +144,11 @@ def main():
         f"- Date: {datetime.datetime.now(datetime.timezone.utc):%Y-%m-%d %H:%M} UTC; "
         f"{os.cpu_count()} logical cores, CPU {cpu}",
         f"- Threads: irid {args.threads} (rayon), tmm-faster {args.threads} (OpenMP); tmm and colour-science one core",
+        f"- Load average when the run started: {load[0]:.1f} (other work on the machine slows every peer)"
+        + ("; other work slows the peers unequally (tmm-faster's OpenMP threads spin while they wait), "
+           "so an idle machine gives the fairer ratio" if load[0] > args.threads else ""),
         f"- Versions: {peers}",
-        f"- Command: `python tools/bench_python.py {' '.join(sys.argv[1:])}`".replace(" `", " `").rstrip(),
+        f"- Command: `python tools/bench_python.py {' '.join(sys.argv[1:])}`",
         "",
         "`irid.coherent(n, d, angles, wavelengths)` and `tmm_faster.calc_coherent` with the same "
         f"arguments, in one Python process: wavelengths {wavelengths[0]:g}:{wavelengths[-1]:g}:"
