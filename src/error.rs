@@ -52,6 +52,37 @@ impl Error {
 
 pub type Result<T, E = Error> = std::result::Result<T, E>;
 
+/// `text` with every control character (NUL, ESC, newline, DEL, C1 codes)
+/// written as a Rust-style escape (`\u{1b}`), so that a name echoed from a
+/// file can neither move the cursor, recolour the terminal nor split a
+/// one-line message.
+pub fn escape(text: &str) -> std::borrow::Cow<'_, str> {
+    if !text.chars().any(char::is_control) {
+        return std::borrow::Cow::Borrowed(text);
+    }
+    let mut out = String::with_capacity(text.len() + 8);
+    for c in text.chars() {
+        if c.is_control() {
+            out.push_str(&format!("\\u{{{:x}}}", u32::from(c)));
+        } else {
+            out.push(c);
+        }
+    }
+    std::borrow::Cow::Owned(out)
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn control_characters_are_escaped() {
+        assert_eq!(super::escape("glass"), "glass");
+        assert_eq!(
+            super::escape("a\u{1b}[31mred\0\n\u{7f}\u{9b}é"),
+            "a\\u{1b}[31mred\\u{0}\\u{a}\\u{7f}\\u{9b}é"
+        );
+    }
+}
+
 /// A TOML parse error as a malformed-file error: where it is (line and
 /// column, 1-based) and what is wrong.
 pub(crate) fn toml_error(origin: &str, e: &toml::de::Error, text: &str) -> Error {
