@@ -71,8 +71,27 @@ pub fn escape(text: &str) -> std::borrow::Cow<'_, str> {
     std::borrow::Cow::Owned(out)
 }
 
+/// A number for a message: as written (`1.5`, `650`) in the usual range,
+/// in exponent form (`1e-320`) outside it rather than hundreds of digits.
+pub fn short_number(x: f64) -> String {
+    if x == 0.0 || !x.is_finite() || (1e-4..1e16).contains(&x.abs()) {
+        format!("{x}")
+    } else {
+        format!("{x:e}")
+    }
+}
+
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn numbers_print_short() {
+        assert_eq!(super::short_number(1.5), "1.5");
+        assert_eq!(super::short_number(-650.0), "-650");
+        assert_eq!(super::short_number(1e-320), "1e-320");
+        assert_eq!(super::short_number(-2.5e300), "-2.5e300");
+        assert_eq!(super::short_number(0.0), "0");
+    }
+
     #[test]
     fn control_characters_are_escaped() {
         assert_eq!(super::escape("glass"), "glass");
