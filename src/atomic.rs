@@ -58,7 +58,10 @@ pub fn write_set_with(outputs: Vec<(PathBuf, Writer<'_>)>, named: bool) -> Resul
     let mut seen: Vec<(PathBuf, std::ffi::OsString)> = Vec::new();
     for (path, _) in &outputs {
         let (dir, name) = split(path)?;
-        let key = (dir.canonicalize().unwrap_or(dir.clone()), name.to_os_string());
+        let key = (
+            dir.canonicalize().unwrap_or(dir.clone()),
+            name.to_os_string(),
+        );
         if seen.contains(&key) {
             return Err(Error::invalid(
                 path.display().to_string(),
@@ -295,8 +298,7 @@ extern "C" fn remove_pending_and_reraise(signal: libc::c_int) {
             unsafe { libc::unlink(p) };
         }
     }
-    if let (Some(previous), Some(k)) = (PREVIOUS.get(), SIGNALS.iter().position(|&s| s == signal))
-    {
+    if let (Some(previous), Some(k)) = (PREVIOUS.get(), SIGNALS.iter().position(|&s| s == signal)) {
         // SAFETY: restores the disposition saved at installation, then
         // delivers the signal to it (by default: the process ends).
         unsafe {
@@ -314,7 +316,8 @@ fn install_handlers() {
             let mut old: [libc::sigaction; 2] = std::mem::zeroed();
             for (k, &signal) in SIGNALS.iter().enumerate() {
                 let mut action: libc::sigaction = std::mem::zeroed();
-                action.sa_sigaction = remove_pending_and_reraise as extern "C" fn(libc::c_int) as usize;
+                action.sa_sigaction =
+                    remove_pending_and_reraise as extern "C" fn(libc::c_int) as usize;
                 libc::sigemptyset(&mut action.sa_mask);
                 libc::sigaction(signal, &action, &mut old[k]);
             }
@@ -337,7 +340,12 @@ impl Registered {
         let raw = c.into_raw();
         for (k, slot) in PENDING.iter().enumerate() {
             if slot
-                .compare_exchange(std::ptr::null_mut(), raw, Ordering::SeqCst, Ordering::SeqCst)
+                .compare_exchange(
+                    std::ptr::null_mut(),
+                    raw,
+                    Ordering::SeqCst,
+                    Ordering::SeqCst,
+                )
                 .is_ok()
             {
                 return Registered(Some(k));
@@ -396,13 +404,19 @@ mod tests {
 
             // The same file twice, and a directory as target, are refused.
             let twice = write_set_with(
-                vec![(target.clone(), bytes(b"a")), (dir.path().join("./out.txt"), bytes(b"b"))],
+                vec![
+                    (target.clone(), bytes(b"a")),
+                    (dir.path().join("./out.txt"), bytes(b"b")),
+                ],
                 named,
             );
             assert!(twice.unwrap_err().to_string().contains("named twice"));
             std::fs::create_dir(dir.path().join("sub")).unwrap();
             let into_dir = write_set_with(
-                vec![(other.clone(), bytes(b"a")), (dir.path().join("sub"), bytes(b"b"))],
+                vec![
+                    (other.clone(), bytes(b"a")),
+                    (dir.path().join("sub"), bytes(b"b")),
+                ],
                 named,
             );
             assert!(into_dir.is_err());
@@ -421,9 +435,8 @@ mod tests {
             let dir = tempfile::tempdir().unwrap();
             let name = format!("{}.exr", "n".repeat(NAME_MAX - 4));
             let target = dir.path().join(&name);
-            let writer: Writer = Box::new(|tmp: &Path| {
-                std::fs::write(tmp, b"x").map_err(|e| Error::io(tmp, e))
-            });
+            let writer: Writer =
+                Box::new(|tmp: &Path| std::fs::write(tmp, b"x").map_err(|e| Error::io(tmp, e)));
             write_set_with(vec![(target.clone(), writer)], named).unwrap();
             assert_eq!(listing(dir.path()), [name]);
         }
@@ -444,7 +457,12 @@ mod tests {
             std::fs::write(dir.path().join(name), b"x").unwrap();
         }
         write(&dir.path().join("t.exr"), b"new").unwrap();
-        let mut want = vec![live.clone(), ".12-x.tmp.a".into(), "keep.exr".into(), "t.exr".into()];
+        let mut want = vec![
+            live.clone(),
+            ".12-x.tmp.a".into(),
+            "keep.exr".into(),
+            "t.exr".into(),
+        ];
         want.sort();
         assert_eq!(listing(dir.path()), want);
         assert_eq!(temporary_owner(b".42-7.tmp.x"), Some(42));

@@ -40,16 +40,61 @@ fn env_count(name: &str, default: u64) -> u64 {
 
 /// Numbers that have broken parsers and solvers before.
 const EVIL_NUMBERS: &[&str] = &[
-    "0", "-0", "-1", "1e-320", "1e-300", "1e-100", "1e-7", "1e-38", "4e-45", "1e38", "3.5e38",
-    "1e39", "1e300", "1.8e308", "nan", "inf", "-inf", "65536", "65537", "4294967296",
-    "18446744073709551615", "9223372036854775807", "2147483648", "1048577", "16777217",
-    "67108865", "1e12", "1e13", "0.5", "1", "2", "3",
+    "0",
+    "-0",
+    "-1",
+    "1e-320",
+    "1e-300",
+    "1e-100",
+    "1e-7",
+    "1e-38",
+    "4e-45",
+    "1e38",
+    "3.5e38",
+    "1e39",
+    "1e300",
+    "1.8e308",
+    "nan",
+    "inf",
+    "-inf",
+    "65536",
+    "65537",
+    "4294967296",
+    "18446744073709551615",
+    "9223372036854775807",
+    "2147483648",
+    "1048577",
+    "16777217",
+    "67108865",
+    "1e12",
+    "1e13",
+    "0.5",
+    "1",
+    "2",
+    "3",
 ];
 
 /// Tokens that change structure.
 const EVIL_TOKENS: &[&str] = &[
-    "[", "]", "{", "}", ",", "=", "\"", "\n", "[[layers]]\n", "[[objects]]\n", "\u{1b}[31m",
-    "\0", "#", "f 1\n", "f 1 2\n", "v 0 0 0\n", "f 1 1 1\n", "f -1 -2 -3\n", "vn 0 0 0\n",
+    "[",
+    "]",
+    "{",
+    "}",
+    ",",
+    "=",
+    "\"",
+    "\n",
+    "[[layers]]\n",
+    "[[objects]]\n",
+    "\u{1b}[31m",
+    "\0",
+    "#",
+    "f 1\n",
+    "f 1 2\n",
+    "v 0 0 0\n",
+    "f 1 1 1\n",
+    "f -1 -2 -3\n",
+    "vn 0 0 0\n",
 ];
 
 /// One mutation of `text`: a number replaced by an evil one, a token
@@ -116,7 +161,8 @@ const STACKS: &[&str] = &[
 
 const CSV: &str = "wl,n,k\n0.40,1.50,0.01\n0.50,1.45,0.02\n0.60,1.40,0.00\n0.80,1.38,0.00\n";
 
-const OBJ: &str = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nvn 0 0 1\nf 1 2 3\nf 1 2 4\nf 1 3 4\nf 2 3 4\n";
+const OBJ: &str =
+    "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nvn 0 0 1\nf 1 2 3\nf 1 2 4\nf 1 3 4\nf 2 3 4\n";
 
 const SCENES: &[&str] = &[
     "name = \"f\"\n[render]\nwidth = 8\nheight = 8\nspp = 1\nmax_depth = 3\n[camera]\nposition = [0.0, 1.0, 5.0]\nlook_at = [0.0, 0.0, 0.0]\nfov_deg = 40.0\n[materials.grey]\nkind = \"diffuse\"\nalbedo = [0.8, 0.8, 0.8]\n[[objects]]\nshape = \"obj\"\nmaterial = \"grey\"\npath = \"m.obj\"\n[[objects]]\nshape = \"gem\"\nmaterial = \"grey\"\nradius = 0.5\n",
@@ -141,7 +187,11 @@ fn stack_case(text: &[u8], dir: &Path) -> Result<(), Finding> {
     for (wl, cos) in [(500.0, 1.0), (400.0, 0.3), (700.0, 0.01)] {
         if let Ok(r) = stack.response(wl, cos) {
             if !finite_all(&[r.r(), r.t()]) {
-                return Err(format!("response at {wl} nm, cos {cos}: R {} T {}", r.r(), r.t()));
+                return Err(format!(
+                    "response at {wl} nm, cos {cos}: R {} T {}",
+                    r.r(),
+                    r.t()
+                ));
             }
         }
     }
@@ -153,7 +203,9 @@ fn csv_case(text: &[u8]) -> Result<(), Finding> {
     let Ok(table) = IndexTable::parse_csv(&text, "m.csv") else {
         return Ok(());
     };
-    table.check().map_err(|e| format!("parsed but fails its own check: {e}"))?;
+    table
+        .check()
+        .map_err(|e| format!("parsed but fails its own check: {e}"))?;
     Ok(())
 }
 
@@ -340,7 +392,8 @@ fn table_case(parts: &TableParts, base: &[u8], dir: &Path, rng: &mut Pcg64) -> R
             let c = rng.random_range(0..evil.channels.len());
             let values = &mut evil.channels[c].1;
             let i = rng.random_range(0..values.len());
-            values[i] = [f32::NAN, f32::INFINITY, -f32::INFINITY, 1e30, -1e30][rng.random_range(0..5)];
+            values[i] =
+                [f32::NAN, f32::INFINITY, -f32::INFINITY, 1e30, -1e30][rng.random_range(0..5)];
             write_table(&path, &evil, &serde_json::to_string(&evil.header).unwrap());
         }
         _ => write_table(&path, parts, &evil_header(parts, rng)),
@@ -351,14 +404,28 @@ fn table_case(parts: &TableParts, base: &[u8], dir: &Path, rng: &mut Pcg64) -> R
     if lut.data().iter().any(|v| !v.is_finite()) {
         return Err("a table with non-finite values loaded".into());
     }
-    let probes = [0.0f32, 0.5, 1.0, -1.0, 1e30, f32::NAN, f32::INFINITY, 350.0, 550.0];
+    let probes = [
+        0.0f32,
+        0.5,
+        1.0,
+        -1.0,
+        1e30,
+        f32::NAN,
+        f32::INFINITY,
+        350.0,
+        550.0,
+    ];
     for _ in 0..16 {
         let mut pick = || probes[rng.random_range(0..probes.len())];
         let (t, c, w) = (pick(), pick(), pick());
         match lut.kind() {
             Kind::Rgb => {
                 let s = lut.sample_rgb(t, c);
-                if s.reflectance.iter().chain(&s.transmittance).any(|v| !v.is_finite()) {
+                if s.reflectance
+                    .iter()
+                    .chain(&s.transmittance)
+                    .any(|v| !v.is_finite())
+                {
                     return Err(format!("sample_rgb({t}, {c}) is not finite: {s:?}"));
                 }
             }
@@ -372,7 +439,10 @@ fn table_case(parts: &TableParts, base: &[u8], dir: &Path, rng: &mut Pcg64) -> R
     }
     if let Ok(stats) = irid::lut::validate(&lut, 8, rng.random()) {
         if !finite_all(&stats.max_abs) {
-            return Err(format!("validation succeeded with max_abs {:?}", stats.max_abs));
+            return Err(format!(
+                "validation succeeded with max_abs {:?}",
+                stats.max_abs
+            ));
         }
     }
     Ok(())
@@ -386,7 +456,11 @@ fn spec_case(rng: &mut Pcg64) -> Result<(), Finding> {
     let big = |rng: &mut Pcg64| -> usize {
         [0, 1, 2, 65536, 65537, usize::MAX, 1 << 32, 1 << 26][rng.random_range(0..8)]
     };
-    spec.kind = if rng.random() { Kind::Spectral } else { Kind::Rgb };
+    spec.kind = if rng.random() {
+        Kind::Spectral
+    } else {
+        Kind::Rgb
+    };
     spec.check = rng.random();
     spec.half = rng.random();
     spec.resolution = if rng.random() {
@@ -425,7 +499,10 @@ fn fuzz_parsers_in_process() {
         wavelength: 6,
     };
     spec.check = false;
-    irid::lut::bake(&spec).unwrap().write(&spectral_path).unwrap();
+    irid::lut::bake(&spec)
+        .unwrap()
+        .write(&spectral_path)
+        .unwrap();
     let spectral = (
         table_parts(&spectral_path),
         std::fs::read(&spectral_path).unwrap(),
@@ -445,11 +522,17 @@ fn fuzz_parsers_in_process() {
         let mut input = Vec::new();
         let outcome = catch_unwind(AssertUnwindSafe(|| match target {
             0 => {
-                input = mutate(STACKS[rng.random_range(0..STACKS.len())].as_bytes(), &mut rng);
+                input = mutate(
+                    STACKS[rng.random_range(0..STACKS.len())].as_bytes(),
+                    &mut rng,
+                );
                 stack_case(&input, dir.path())
             }
             1 => {
-                input = mutate(SCENES[rng.random_range(0..SCENES.len())].as_bytes(), &mut rng);
+                input = mutate(
+                    SCENES[rng.random_range(0..SCENES.len())].as_bytes(),
+                    &mut rng,
+                );
                 scene_case(&input, dir.path())
             }
             2 => {
@@ -482,7 +565,8 @@ fn fuzz_parsers_in_process() {
             .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
             .filter(|n| !["m.csv", "m.obj", "t.exr"].contains(&n.as_str()))
             .collect();
-        let finding = finding.or_else(|| (!left.is_empty()).then(|| format!("left files {left:?}")));
+        let finding =
+            finding.or_else(|| (!left.is_empty()).then(|| format!("left files {left:?}")));
         if let Some(f) = finding {
             failures.push(format!(
                 "case {case} (seed {case_seed}, target {target}): {f}\n  input: {:?}",
@@ -510,12 +594,73 @@ fn fuzz_numeric_flags_through_the_binary() {
         &["eval", "s.toml", "--wavelengths", "#", "--angles", "#"],
         &["eval", "s.toml", "--wavelengths", "#:#:#", "--json"],
         &["color", "s.toml", "--angles", "#"],
-        &["bake", "s.toml", "-o", "o.exr", "--resolution", "#,#", "--no-check"],
-        &["bake", "s.toml", "-o", "o.exr", "--max-error", "#", "--thickness", "#:#"],
-        &["bake", "s.toml", "-o", "o.exr", "--kind", "spectral", "--resolution", "#,#,#", "--no-check", "--validate-points", "#"],
+        &[
+            "bake",
+            "s.toml",
+            "-o",
+            "o.exr",
+            "--resolution",
+            "#,#",
+            "--no-check",
+        ],
+        &[
+            "bake",
+            "s.toml",
+            "-o",
+            "o.exr",
+            "--max-error",
+            "#",
+            "--thickness",
+            "#:#",
+        ],
+        &[
+            "bake",
+            "s.toml",
+            "-o",
+            "o.exr",
+            "--kind",
+            "spectral",
+            "--resolution",
+            "#,#,#",
+            "--no-check",
+            "--validate-points",
+            "#",
+        ],
         &["validate", "t.exr", "--points", "#", "--seed", "#"],
-        &["render", "bubbles-uniform", "-o", "o.png", "--width", "#", "--height", "#", "--spp", "1", "--film", "direct", "--sampling", "rgb3"],
-        &["render", "bubbles-uniform", "-o", "o.png", "--width", "8", "--height", "8", "--spp", "#", "--max-depth", "#", "--film", "direct", "--sampling", "uniform:#"],
+        &[
+            "render",
+            "bubbles-uniform",
+            "-o",
+            "o.png",
+            "--width",
+            "#",
+            "--height",
+            "#",
+            "--spp",
+            "1",
+            "--film",
+            "direct",
+            "--sampling",
+            "rgb3",
+        ],
+        &[
+            "render",
+            "bubbles-uniform",
+            "-o",
+            "o.png",
+            "--width",
+            "8",
+            "--height",
+            "8",
+            "--spp",
+            "#",
+            "--max-depth",
+            "#",
+            "--film",
+            "direct",
+            "--sampling",
+            "uniform:#",
+        ],
     ];
     let mut failures = Vec::new();
     for case in 0..cases {

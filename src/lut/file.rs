@@ -93,7 +93,12 @@ impl Lut {
             .own_attributes
             .other
             .get(&Text::from(ATTRIBUTE))
-            .or_else(|| exr_header.shared_attributes.other.get(&Text::from(ATTRIBUTE)))
+            .or_else(|| {
+                exr_header
+                    .shared_attributes
+                    .other
+                    .get(&Text::from(ATTRIBUTE))
+            })
             .ok_or_else(|| {
                 bad(format!(
                     "no '{ATTRIBUTE}' header attribute: not an irid table"
@@ -163,7 +168,10 @@ impl Lut {
             crate::limits::product(&[v, names.len() as u64], per_value)?
                 .checked_add(v.checked_mul(nodes_extra)?)
         });
-        crate::limits::check_allocation(&format!("{}: loading the table", path.display()), estimate)?;
+        crate::limits::check_allocation(
+            &format!("{}: loading the table", path.display()),
+            estimate,
+        )?;
 
         let image = read()
             .no_deep_data()

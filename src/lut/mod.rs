@@ -256,7 +256,11 @@ impl BakeSpec {
         };
         let values = crate::limits::product(&[evaluated, channels], 8)?;
         let stored = crate::limits::product(&[table, channels], 4)?;
-        let simd = if self.kind == Kind::Rgb { table.checked_mul(32)? } else { 0 };
+        let simd = if self.kind == Kind::Rgb {
+            table.checked_mul(32)?
+        } else {
+            0
+        };
         values.checked_add(stored)?.checked_add(simd)
     }
 

@@ -141,11 +141,7 @@ pub(crate) fn check_header(header: &Header) -> Result<(usize, usize), String> {
             crate::error::escape(&header.y_axis)
         ));
     }
-    let ranges = [
-        (0.0, MAX_THICKNESS_NM),
-        (0.0, 1.0),
-        WAVELENGTH_RANGE_NM,
-    ];
+    let ranges = [(0.0, MAX_THICKNESS_NM), (0.0, 1.0), WAVELENGTH_RANGE_NM];
     for (axis, (lo, hi)) in header.axes.iter().zip(ranges) {
         check_axis(axis, lo, hi)?;
     }

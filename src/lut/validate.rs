@@ -224,7 +224,9 @@ impl Totals {
             critical,
             max: vec![0.0; channels],
             sum: vec![0.0; channels],
-            quantile: (0..channels).map(|_| QuantileHistogram::default()).collect(),
+            quantile: (0..channels)
+                .map(|_| QuantileHistogram::default())
+                .collect(),
             de_all: true,
             de_max: [0.0; 2],
             de_sum: [0.0; 2],
@@ -256,7 +258,10 @@ impl Totals {
         }
         let w = max_or_nan(&p.abs[..self.channels]);
         // The last of equal maxima, as Iterator::max_by picks.
-        if self.worst.is_none_or(|(best, _)| !w.total_cmp(&best).is_lt()) {
+        if self
+            .worst
+            .is_none_or(|(best, _)| !w.total_cmp(&best).is_lt())
+        {
             self.worst = Some((w, p.at));
         }
         let c = p.cos_theta;

@@ -123,15 +123,15 @@ impl Material {
             }
             Dispersion::Table(t) => {
                 let index = t.index_at(wavelength_nm).ok_or_else(|| {
-                Error::invalid(
-                    format!("material {}", self.name),
-                    format!(
-                        "wavelength {wavelength_nm} nm is outside its table ({}–{} nm)",
-                        self.range_nm().0,
-                        self.range_nm().1
-                    ),
-                )
-            })?;
+                    Error::invalid(
+                        format!("material {}", self.name),
+                        format!(
+                            "wavelength {wavelength_nm} nm is outside its table ({}–{} nm)",
+                            self.range_nm().0,
+                            self.range_nm().1
+                        ),
+                    )
+                })?;
                 // Rows are checked, but between two rows whose k differ in
                 // sign the interpolated index can pass near zero.
                 if !index_in_range(index.re, index.im) {
