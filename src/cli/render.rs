@@ -1,5 +1,6 @@
 //! `irid render`: render a scene file or a built-in scene to PNG (and EXR).
 
+use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::time::Instant;
@@ -131,6 +132,15 @@ pub fn run(args: Args) -> Result<ExitCode> {
         }
     };
     // Fail before a long render, not after it.
+    if let Some(exr) = &args.exr {
+        if same_file(&output, exr) {
+            bail!(
+                "-o {} and --exr {}: the PNG and the EXR must be different files",
+                output.display(),
+                exr.display()
+            );
+        }
+    }
     for path in std::iter::once(&output).chain(args.exr.as_ref()) {
         let dir = path.parent().filter(|d| !d.as_os_str().is_empty());
         if dir.is_some_and(|d| !d.is_dir()) {
@@ -143,17 +153,24 @@ pub fn run(args: Args) -> Result<ExitCode> {
     opts.spp = args.spp;
     opts.max_depth = args.max_depth;
     opts.seed = args.seed;
-    opts.progress = true;
+    render::check_image_size(&scene, &opts)?;
 
     let (films, image, render_s) = with_threads(args.threads, || -> Result<_> {
         let films = render::prepare_films(&scene, &opts.film)?;
-        let (image, render_s) = timed(|| render::render_with(&scene, &films, &opts));
+        let bar = progress_bar("rendering {bar:40} {percent:>3}% {elapsed} (eta {eta})");
+        let (image, render_s) = timed(|| {
+            render::render_with_progress(&scene, &films, &opts, &|f| {
+                if let Some(bar) = &bar {
+                    bar.set_position((f * 1000.0) as u64);
+                }
+            })
+        });
+        if let Some(bar) = &bar {
+            bar.finish_and_clear();
+        }
         Ok((films, image, render_s))
     })??;
-    image.write_png(&output)?;
-    if let Some(exr) = &args.exr {
-        image.write_exr(exr)?;
-    }
+    image.write_outputs(&output, args.exr.as_deref())?;
     let film = match &opts.film {
         FilmMode::Lut { .. } => format!(
             "lut: {} table(s) baked, {} from cache, {:.3} s",
@@ -194,6 +211,20 @@ pub fn run(args: Args) -> Result<ExitCode> {
     Ok(ExitCode::SUCCESS)
 }
 
+/// Whether two output paths name the same file (the same name in the same
+/// directory, however spelled).
+fn same_file(a: &Path, b: &Path) -> bool {
+    let key = |p: &Path| {
+        let dir = p.parent().filter(|d| !d.as_os_str().is_empty());
+        let dir = dir.unwrap_or(Path::new("."));
+        (
+            dir.canonicalize().unwrap_or(dir.to_path_buf()),
+            p.file_name().map(|n| n.to_os_string()),
+        )
+    };
+    key(a) == key(b)
+}
+
 /// A scene name made safe as a file name.
 pub fn file_stem(name: &str) -> String {
     let stem = Path::new(name)
@@ -209,4 +240,16 @@ pub fn file_stem(name: &str) -> String {
             }
         })
         .collect()
+}
+
+/// A progress bar over 1000 steps on stderr, when stderr is a terminal.
+pub fn progress_bar(template: &str) -> Option<indicatif::ProgressBar> {
+    std::io::stderr().is_terminal().then(|| {
+        let bar = indicatif::ProgressBar::new(1000);
+        bar.set_style(
+            indicatif::ProgressStyle::with_template(template)
+                .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+        );
+        bar
+    })
 }
