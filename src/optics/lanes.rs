@@ -15,8 +15,9 @@
 //! - grazing incidence (cos θ0 ≤ 0), which has its own closed form;
 //! - a layer at or near its own critical angle (the scalar solver's field
 //!   form, [`near_critical`](super::solver) there);
-//! and, for one layer of one lane only, the one-way phase factor of a layer
-//! whose decay underflows (e^x below 2^−1022) or whose phase exceeds the
+//!
+//! For one layer of one lane only, the one-way phase factor of a layer whose
+//! decay underflows (e^x below 2^−1022) or whose phase exceeds the
 //! reduction's exact range ([`PHASE_LIMIT`]) is computed with the C library.
 //!
 //! Gain layers and evanescent gaps need nothing of their own: the branch
@@ -107,29 +108,17 @@ pub(crate) struct Portable([f64; LANES]);
 impl Portable {
     #[inline(always)]
     fn zip(self, o: Self, f: impl Fn(f64, f64) -> f64) -> Self {
-        let mut r = [0.0; LANES];
-        for i in 0..LANES {
-            r[i] = f(self.0[i], o.0[i]);
-        }
-        Portable(r)
+        Portable(std::array::from_fn(|i| f(self.0[i], o.0[i])))
     }
 
     #[inline(always)]
     fn map(self, f: impl Fn(f64) -> f64) -> Self {
-        let mut r = [0.0; LANES];
-        for i in 0..LANES {
-            r[i] = f(self.0[i]);
-        }
-        Portable(r)
+        Portable(self.0.map(f))
     }
 
     #[inline(always)]
     fn test(self, o: Self, f: impl Fn(f64, f64) -> bool) -> [bool; LANES] {
-        let mut m = [false; LANES];
-        for i in 0..LANES {
-            m[i] = f(self.0[i], o.0[i]);
-        }
-        m
+        std::array::from_fn(|i| f(self.0[i], o.0[i]))
     }
 
     /// The integer k that `sum` = x + ROUND_MAGIC holds in its low bits.
@@ -499,7 +488,7 @@ fn sin_cos_lanes<V: Lanes>(a: V) -> (V, V) {
         .sub(k.mul(V::splat(PIO2_2)))
         .sub(k.mul(V::splat(PIO2_3)));
     let r2 = r.mul(r);
-    let sign = |k: usize| if k % 2 == 0 { 1.0 } else { -1.0 };
+    let sign = |k: usize| if k.is_multiple_of(2) { 1.0 } else { -1.0 };
     // sin r = r + r³ Σ_{k≥1} (−1)^k r^{2k−2}/(2k+1)!, to k = 8.
     let mut s = V::splat(INV_FACTORIAL[17]);
     for k in (1..8).rev() {
@@ -590,7 +579,7 @@ fn solve_lanes<V: Lanes>(
     let one = V::splat(1.0);
     // Lanes whose answer the scalar solver gives instead: grazing here,
     // near-critical layers below.
-    let mut scalar = cos_theta0.map(|c| !(c > 0.0));
+    let mut scalar = cos_theta0.map(|c| c.is_nan() || c <= 0.0);
     let cos = V::from_array(cos_theta0.map(|c| c.min(1.0)));
     let n0 = medium(0).0.re;
     let beta_sq = n0.mul(n0).mul(one.sub(cos).mul(one.add(cos)));
