@@ -31,7 +31,7 @@ use std::time::{Duration, Instant};
 pub use self::image::Image;
 pub use film::{DirectFilm, FilmRgb, FilmShading, Side};
 pub use lut_film::LutFilm;
-pub use output::ColourDifference;
+pub use output::ColorDifference;
 pub use scene::Scene;
 pub use scene_file::builtin_names;
 
