@@ -4,7 +4,7 @@
 //! so the two modes share every other line of the renderer.
 
 /// Linear-sRGB reflectance and transmittance of a film at one point.
-pub use crate::lut::FilmRgb;
+use crate::lut::FilmRgb;
 
 use std::cell::RefCell;
 
