@@ -7,7 +7,7 @@ use pyo3::prelude::*;
 use pyo3::types::{PyComplex, PyDict, PyList, PyString, PyTuple};
 use rayon::prelude::*;
 
-use irid::color::{stack_colours, Sampling, SpectralIntegrator};
+use irid::color::{stack_colors, Sampling, SpectralIntegrator};
 use irid::optics::spec::{IndexSpec, MediumSpec};
 use irid::optics::{
     library, solve, solve_amplitudes, Layer, Material, Stack, StackGrid, MAX_THICKNESS_NM,
@@ -418,12 +418,12 @@ impl PyStack {
         let colours = py
             .allow_threads(|| {
                 let integrator = SpectralIntegrator::new(sampling);
-                stack_colours(&self.stack, &integrator, &angles)
+                stack_colors(&self.stack, &integrator, &angles)
             })
             .map_err(py_error)?;
         let result = PyDict::new(py);
         result.set_item("angle_deg", array(py, angles.clone(), &[angles.len()])?)?;
-        let triples = |f: fn(&irid::color::FilmColour) -> [f64; 3]| -> Vec<f64> {
+        let triples = |f: fn(&irid::color::FilmColor) -> [f64; 3]| -> Vec<f64> {
             colours.iter().flat_map(f).collect()
         };
         let shape = [colours.len(), 3];
