@@ -92,15 +92,13 @@ pub fn bake_with_progress(spec: &BakeSpec, progress: &(dyn Fn(f64) + Sync)) -> R
         // The coarse table as it would be stored: the check interpolates it.
         let data = even_subgrid(&fine, &values, prep.channels, spec.half);
         let check = measure(&coarse, &fine, &values, &data, prep.channels);
-        if std::env::var_os("IRID_DEBUG").is_some() {
-            eprintln!(
-                "grid {:?} check {:.3e} worst at {:?} eval {eval_s:.3}s measure {:.3}s",
-                coarse.axes.each_ref().map(|a| a.nodes.len()),
-                check.max_all,
-                [0, 1, 2].map(|a| fine.axes[a].nodes[check.worst_at[a]]),
-                clock.elapsed().as_secs_f64() - eval_s,
-            );
-        }
+        log::debug!(
+            "bake round {round}: grid {:?} check {:.3e} worst at {:?} eval {eval_s:.3}s measure {:.3}s",
+            coarse.axes.each_ref().map(|a| a.nodes.len()),
+            check.max_all,
+            [0, 1, 2].map(|a| fine.axes[a].nodes[check.worst_at[a]]),
+            clock.elapsed().as_secs_f64() - eval_s,
+        );
         match target {
             Some(e) if check.max_all > e => refine_to_share(&mut axes, &coarse, &check, e),
             _ => {
