@@ -28,6 +28,9 @@
 //! called from outside a one-worker pool runs on the calling thread
 //! (`render_tiles`), and `handoff` on one thread measures that.
 
+// Not an API: criterion's macros generate undocumented public functions.
+#![allow(missing_docs)]
+
 mod common;
 
 use common::TimingScene;

@@ -2,6 +2,9 @@
 //! shipped stack and at the hard angles), the file round trip, bad files,
 //! and the `bake`/`info`/`validate` commands.
 
+// Not an API: a test crate has no public API to document.
+#![allow(missing_docs)]
+
 mod common;
 
 use std::path::{Path, PathBuf};

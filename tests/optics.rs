@@ -3,6 +3,9 @@
 //! cases of issue 2 (thick absorbers, frustrated TIR, deep mirrors, grazing
 //! incidence, gain, 1000 layers).
 
+// Not an API: a test crate has no public API to document.
+#![allow(missing_docs)]
+
 use num_complex::Complex64 as C64;
 use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg64;

