@@ -81,27 +81,6 @@ pub fn short_number(x: f64) -> String {
     }
 }
 
-#[cfg(test)]
-mod tests {
-    #[test]
-    fn numbers_print_short() {
-        assert_eq!(super::short_number(1.5), "1.5");
-        assert_eq!(super::short_number(-650.0), "-650");
-        assert_eq!(super::short_number(1e-320), "1e-320");
-        assert_eq!(super::short_number(-2.5e300), "-2.5e300");
-        assert_eq!(super::short_number(0.0), "0");
-    }
-
-    #[test]
-    fn control_characters_are_escaped() {
-        assert_eq!(super::escape("glass"), "glass");
-        assert_eq!(
-            super::escape("a\u{1b}[31mred\0\n\u{7f}\u{9b}é"),
-            "a\\u{1b}[31mred\\u{0}\\u{a}\\u{7f}\\u{9b}é"
-        );
-    }
-}
-
 /// A TOML parse error as a malformed-file error: where it is (line and
 /// column, 1-based) and what is wrong.
 pub(crate) fn toml_error(origin: &str, e: &toml::de::Error, text: &str) -> Error {
@@ -128,5 +107,26 @@ pub(crate) fn toml_message(e: &toml::de::Error, text: &str) -> String {
         "unexpected end of file (a value or bracket is missing)".to_string()
     } else {
         "invalid TOML syntax".to_string()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn numbers_print_short() {
+        assert_eq!(super::short_number(1.5), "1.5");
+        assert_eq!(super::short_number(-650.0), "-650");
+        assert_eq!(super::short_number(1e-320), "1e-320");
+        assert_eq!(super::short_number(-2.5e300), "-2.5e300");
+        assert_eq!(super::short_number(0.0), "0");
+    }
+
+    #[test]
+    fn control_characters_are_escaped() {
+        assert_eq!(super::escape("glass"), "glass");
+        assert_eq!(
+            super::escape("a\u{1b}[31mred\0\n\u{7f}\u{9b}é"),
+            "a\\u{1b}[31mred\\u{0}\\u{a}\\u{7f}\\u{9b}é"
+        );
     }
 }

@@ -248,9 +248,9 @@ impl Totals {
         }
         match p.de {
             Some(d) => {
-                for k in 0..2 {
-                    self.de_max[k] = self.de_max[k].max(d[k]);
-                    self.de_sum[k] += d[k];
+                for (k, &de) in d.iter().enumerate() {
+                    self.de_max[k] = self.de_max[k].max(de);
+                    self.de_sum[k] += de;
                 }
                 self.de_count += 1;
             }

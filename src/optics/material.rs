@@ -98,7 +98,7 @@ impl Material {
             Dispersion::Cauchy { a, b, c } => {
                 let l2 = um * um;
                 let n = a + b / l2 + c / (l2 * l2);
-                if !(n >= MIN_INDEX && n <= MAX_INDEX) {
+                if !(MIN_INDEX..=MAX_INDEX).contains(&n) {
                     return Err(Error::invalid(
                         format!("material {}", self.name),
                         format!(
@@ -111,7 +111,7 @@ impl Material {
             Dispersion::Sellmeier { a, b, c } => {
                 let l2 = um * um;
                 let n2 = a + b.iter().zip(c).map(|(b, c)| b * l2 / (l2 - c)).sum::<f64>();
-                if !(n2 >= MIN_INDEX * MIN_INDEX && n2 <= MAX_INDEX * MAX_INDEX) {
+                if !(MIN_INDEX * MIN_INDEX..=MAX_INDEX * MAX_INDEX).contains(&n2) {
                     return Err(Error::invalid(
                         format!("material {}", self.name),
                         format!(
