@@ -236,8 +236,9 @@ fn check_axis(axis: &super::Axis, lo: f64, hi: f64) -> Result<(), String> {
         ));
     }
     if let Some(k) = nodes.windows(2).position(|w| {
-        let gap = w[1] as f32 - w[0] as f32;
-        gap.is_nan() || gap < MIN_NODE_SPACING_F32
+        (w[1] as f32 - w[0] as f32)
+            .partial_cmp(&MIN_NODE_SPACING_F32)
+            .is_none_or(|o| o.is_lt())
     }) {
         return Err(format!(
             "axis {name} nodes {} and {} ({:e} and {:e}) are closer than the f32 sampler resolves (equal as f32, or less than {MIN_NODE_SPACING_F32:e} apart)",

@@ -255,9 +255,9 @@ impl Totals {
         }
         match p.de {
             Some(d) => {
-                for (k, d) in d.iter().enumerate() {
-                    self.de_max[k] = self.de_max[k].max(*d);
-                    self.de_sum[k] += d;
+                for (k, &de) in d.iter().enumerate() {
+                    self.de_max[k] = self.de_max[k].max(de);
+                    self.de_sum[k] += de;
                 }
                 self.de_count += 1;
             }
