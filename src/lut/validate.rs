@@ -14,7 +14,7 @@ use super::sample::{channel_names, Lut};
 use super::Kind;
 use crate::color::{delta_e2000_rgb, Sampling, SpectralIntegrator};
 use crate::error::{Error, Result};
-use crate::optics::{solve, StackGrid};
+use crate::optics::{solve, Response, StackGrid};
 
 /// Error of a table against the solver. Arrays named `*_abs` have one
 /// entry per channel (in `channels` order); `*_de2000` have two entries,
@@ -129,19 +129,26 @@ pub fn validate(lut: &Lut, points: usize, seed: u64) -> Result<ErrorStats> {
                         base_thicknesses.clone(),
                         vec![0.0; wavelengths.len()],
                         vec![0.0; wavelengths.len()],
+                        vec![Response::default(); color_grid.wavelengths_nm().len()],
                         Vec::new(),
                     )
                 },
-                |(thick, spec_r, spec_t, idx), &[t, c, w]| -> Result<PointError> {
+                |(thick, spec_r, spec_t, spectrum, idx), &[t, c, w]| -> Result<PointError> {
                     if layer > 0 {
                         thick[layer - 1] = f64::from(t);
                     }
                     let cos = f64::from(c);
                     let mut color = |table_r: &[f64; 3], table_t: &[f64; 3]| {
-                        for (k, (wl, n)) in color_grid.iter().enumerate() {
-                            let resp = solve(n, thick, wl, cos);
-                            spec_r[k] = resp.r();
-                            spec_t[k] = resp.t();
+                        // The whole spectrum of this point at once, four
+                        // wavelengths per vector, indices laid out up front.
+                        color_grid.solve_spectrum(thick, cos, spectrum);
+                        for ((resp, r), t) in spectrum
+                            .iter()
+                            .zip(spec_r.iter_mut())
+                            .zip(spec_t.iter_mut())
+                        {
+                            *r = resp.r();
+                            *t = resp.t();
                         }
                         let (r, t) = (integrator.rgb(spec_r), integrator.rgb(spec_t));
                         (
