@@ -3,6 +3,9 @@
 //! over a wavelength × angle grid, scalar and four lanes at a time. The stacks are the ones
 //! `tools/time_tmm.py` times in Python `tmm`.
 
+// Not an API: criterion's macros generate undocumented public functions.
+#![allow(missing_docs)]
+
 use std::time::{Duration, Instant};
 
 use criterion::{black_box, criterion_group, criterion_main, Criterion, Throughput};

@@ -285,6 +285,7 @@ static PENDING: [AtomicPtr<libc::c_char>; 64] =
 struct Previous([libc::sigaction; 2]);
 // SAFETY: written once before the handler is installed, then only read.
 unsafe impl Sync for Previous {}
+// SAFETY: as for Sync: the saved dispositions are plain data, never mutated after the first write.
 unsafe impl Send for Previous {}
 static PREVIOUS: std::sync::OnceLock<Previous> = std::sync::OnceLock::new();
 const SIGNALS: [libc::c_int; 2] = [libc::SIGINT, libc::SIGTERM];

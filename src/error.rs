@@ -3,31 +3,50 @@
 
 use std::path::PathBuf;
 
+/// Everything the library can fail with. Each variant carries what was at
+/// fault (a flag or field name, or a file path) and why, and displays as
+/// one line, `what: why`; the library never panics on bad input.
 #[derive(Debug, thiserror::Error)]
 pub enum Error {
     /// A value supplied by the user is out of its allowed domain.
     #[error("{what}: {why}")]
-    InvalidInput { what: String, why: String },
+    InvalidInput {
+        /// The value at fault: a flag, a field (`layers[2].material`), a name.
+        what: String,
+        /// What is wrong with it and what is expected.
+        why: String,
+    },
 
     /// An f16 table (`--half`) cannot hold a value the stack reaches (a
     /// gain film near its resonances): it would be stored as infinity.
     #[error("--half: {why}")]
-    HalfOverflow { why: String },
+    HalfOverflow {
+        /// Which channel overflows where (thickness, angle) and what to do.
+        why: String,
+    },
 
     /// A file could not be read or written.
     #[error("{path}: {source}")]
     Io {
+        /// The file or folder.
         path: PathBuf,
+        /// What the operating system reported.
         #[source]
         source: std::io::Error,
     },
 
     /// A file was read but its content is malformed.
     #[error("{path}: {why}")]
-    Malformed { path: PathBuf, why: String },
+    Malformed {
+        /// The file (or, for an inline text, the name it was given).
+        path: PathBuf,
+        /// Where in it and what is wrong (`line 3, column 7: ...`).
+        why: String,
+    },
 }
 
 impl Error {
+    /// An [`Error::InvalidInput`]: `what` is at fault because `why`.
     pub fn invalid(what: impl Into<String>, why: impl Into<String>) -> Self {
         Error::InvalidInput {
             what: what.into(),
@@ -35,6 +54,7 @@ impl Error {
         }
     }
 
+    /// An [`Error::Malformed`]: the file at `path` is wrong because `why`.
     pub fn malformed(path: impl Into<PathBuf>, why: impl Into<String>) -> Self {
         Error::Malformed {
             path: path.into(),
@@ -42,6 +62,7 @@ impl Error {
         }
     }
 
+    /// An [`Error::Io`]: reading or writing `path` failed with `source`.
     pub fn io(path: impl Into<PathBuf>, source: std::io::Error) -> Self {
         Error::Io {
             path: path.into(),
@@ -50,6 +71,7 @@ impl Error {
     }
 }
 
+/// The library's result type, with [`Error`] as the error.
 pub type Result<T, E = Error> = std::result::Result<T, E>;
 
 /// `text` with every control character (NUL, ESC, newline, DEL, C1 codes)

@@ -7,6 +7,7 @@
 
 pub mod analytic;
 pub mod atomic;
+#[cfg(feature = "bench")]
 pub mod bench;
 pub mod color;
 pub mod error;

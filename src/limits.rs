@@ -74,8 +74,20 @@ pub fn parse_bytes(text: &str) -> Option<u64> {
     n.checked_mul(1u64 << shift).filter(|&b| b > 0)
 }
 
-/// Physical memory in bytes, from the operating system.
+/// Physical memory in bytes, from the operating system, or the control
+/// group's limit when that is lower (a container sees the host's memory).
 fn physical_memory() -> Option<u64> {
+    let cgroup = std::fs::read_to_string("/sys/fs/cgroup/memory.max")
+        .ok()
+        .and_then(|t| t.trim().parse::<u64>().ok());
+    let machine = machine_memory();
+    match (machine, cgroup) {
+        (Some(m), Some(c)) => Some(m.min(c)),
+        (m, c) => m.or(c),
+    }
+}
+
+fn machine_memory() -> Option<u64> {
     #[cfg(unix)]
     {
         // SAFETY: sysconf has no preconditions; it returns -1 on error.

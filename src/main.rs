@@ -12,7 +12,8 @@ mod cli;
 #[command(
     name = "irid",
     version,
-    about = "Exact thin-film iridescence: bake, sample, validate, render"
+    about = "Exact thin-film iridescence: bake, sample, validate, render",
+    after_help = "Environment: RUST_LOG=debug (or IRID_DEBUG=1) prints the library's diagnostics, such as each bake refinement round; IRID_CACHE_DIR sets where `irid render` keeps the tables it bakes."
 )]
 struct Cli {
     #[command(subcommand)]
@@ -41,6 +42,7 @@ enum Command {
 
 fn main() -> ExitCode {
     restore_sigpipe();
+    cli::logger::install();
     let cli = match parse() {
         Ok(cli) => cli,
         // --help and --version are not errors.

@@ -214,8 +214,8 @@ fn tiny_render(scene: &Scene) -> Result<(), Finding> {
     let mut opts = RenderOptions::new(FilmMode::Direct {
         sampling: "rgb3".parse().unwrap(),
     });
-    opts.width = Some(6);
-    opts.height = Some(6);
+    opts.width = Some(4);
+    opts.height = Some(4);
     opts.spp = Some(1);
     opts.max_depth = Some(2);
     if let Ok(image) = irid::render::render(scene, &opts) {
@@ -437,7 +437,7 @@ fn table_case(parts: &TableParts, base: &[u8], dir: &Path, rng: &mut Pcg64) -> R
             }
         }
     }
-    if let Ok(stats) = irid::lut::validate(&lut, 8, rng.random()) {
+    if let Ok(stats) = irid::lut::validate(&lut, 2, rng.random()) {
         if !finite_all(&stats.max_abs) {
             return Err(format!(
                 "validation succeeded with max_abs {:?}",
@@ -567,6 +567,14 @@ fn fuzz_parsers_in_process() {
             .collect();
         let finding =
             finding.or_else(|| (!left.is_empty()).then(|| format!("left files {left:?}")));
+        if (case + 1) % 10_000 == 0 {
+            eprintln!(
+                "fuzz: {} cases in {:.0} s, {} findings so far",
+                case + 1,
+                start.elapsed().as_secs_f64(),
+                failures.len()
+            );
+        }
         if let Some(f) = finding {
             failures.push(format!(
                 "case {case} (seed {case_seed}, target {target}): {f}\n  input: {:?}",

@@ -269,3 +269,34 @@ fn meshes_without_a_usable_triangle() {
         refused("mesh_short_faces", &args, &["vertex_face.obj"]);
     }
 }
+
+/// `irid info` prints names from the table's header with control
+/// characters escaped.
+#[test]
+fn info_escapes_names_from_the_header() {
+    let dir = Scratch::new("hostile-info");
+    let mut stack = irid::optics::Stack::from_toml_str(
+        "ambient = { n = 1.0 }\nsubstrate = { n = 1.5 }\n[[layers]]\nn = 1.33\nthickness_nm = 300\n",
+        dir.path(),
+        "s",
+    )
+    .unwrap();
+    stack.substrate.name = "glass\u{1b}[2J\u{7}".into();
+    let mut spec = irid::lut::BakeSpec::new(stack);
+    spec.resolution = irid::lut::Resolution::Nodes {
+        thickness: 1,
+        angle: 4,
+        wavelength: 1,
+    };
+    spec.check = false;
+    let path = dir.path().join("t.exr");
+    irid::lut::bake(&spec).unwrap().write(&path).unwrap();
+    let run = irid_in(dir.path(), ["info", "t.exr"]);
+    assert!(run.success(), "{run:?}");
+    assert!(
+        run.stdout.contains("glass\\u{1b}[2J\\u{7}"),
+        "{}",
+        run.stdout
+    );
+    assert!(!run.stdout.contains('\u{1b}') && !run.stdout.contains('\u{7}'));
+}

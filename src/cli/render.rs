@@ -42,9 +42,10 @@ pub struct Args {
     /// baking it to a grid (exact, slower).
     #[arg(long)]
     pub exact_noise: bool,
-    /// Where baked tables are cached.
-    #[arg(long, default_value = "luts/cache")]
-    pub cache: PathBuf,
+    /// Where baked tables are cached [default: $IRID_CACHE_DIR, else the
+    /// user's cache folder: $XDG_CACHE_HOME/irid or ~/.cache/irid on Linux].
+    #[arg(long)]
+    pub cache: Option<PathBuf>,
     /// Worker threads [default: all cores].
     #[arg(long)]
     pub threads: Option<usize>,
@@ -101,7 +102,8 @@ pub fn with_threads<T: Send>(threads: Option<usize>, f: impl FnOnce() -> T + Sen
 }
 
 pub fn run(args: Args) -> Result<ExitCode> {
-    let mode = match film_mode(&args.film, args.sampling.as_deref(), &args.cache)? {
+    let cache = cache_dir(args.cache.as_deref())?;
+    let mode = match film_mode(&args.film, args.sampling.as_deref(), &cache)? {
         FilmMode::Lut { cache_dir, .. } if args.exact_noise => FilmMode::lut_exact_noise(cache_dir),
         mode => mode,
     };
@@ -252,4 +254,24 @@ pub fn progress_bar(template: &str) -> Option<indicatif::ProgressBar> {
         );
         bar
     })
+}
+
+/// Where tables baked on demand are kept: `--cache DIR` if given, else
+/// `$IRID_CACHE_DIR` if set, else the user's cache folder for irid (the
+/// platform's convention: `$XDG_CACHE_HOME/irid` or `~/.cache/irid` on
+/// Linux, `~/Library/Caches/irid` on macOS, `%LOCALAPPDATA%\irid\cache` on
+/// Windows).
+pub fn cache_dir(flag: Option<&Path>) -> Result<PathBuf> {
+    if let Some(dir) = flag {
+        return Ok(dir.to_path_buf());
+    }
+    if let Some(dir) = std::env::var_os("IRID_CACHE_DIR").filter(|d| !d.is_empty()) {
+        return Ok(PathBuf::from(dir));
+    }
+    match directories::ProjectDirs::from("", "", "irid") {
+        Some(dirs) => Ok(dirs.cache_dir().to_path_buf()),
+        None => bail!(
+            "no user cache folder (no home directory): give --cache DIR or set IRID_CACHE_DIR"
+        ),
+    }
 }

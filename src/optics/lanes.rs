@@ -241,6 +241,7 @@ mod avx2 {
     impl Avx2 {
         #[inline(always)]
         fn rounded(sum: Self) -> __m256i {
+            // SAFETY: AVX2 is present; see the note above `impl Avx2`.
             unsafe {
                 _mm256_sub_epi64(
                     _mm256_castpd_si256(sum.0),
@@ -254,68 +255,84 @@ mod avx2 {
         type Mask = __m256d;
         #[inline(always)]
         fn splat(x: f64) -> Self {
+            // SAFETY: AVX2 is present; see the note above `impl Avx2`.
             unsafe { Avx2(_mm256_set1_pd(x)) }
         }
         #[inline(always)]
         fn from_array(a: [f64; LANES]) -> Self {
+            // SAFETY: AVX2 is present; see the note above `impl Avx2`.
             unsafe { Avx2(_mm256_loadu_pd(a.as_ptr())) }
         }
         #[inline(always)]
         fn to_array(self) -> [f64; LANES] {
             let mut a = [0.0; LANES];
+            // SAFETY: AVX2 is present; see the note above `impl Avx2`.
             unsafe { _mm256_storeu_pd(a.as_mut_ptr(), self.0) };
             a
         }
         #[inline(always)]
         fn add(self, o: Self) -> Self {
+            // SAFETY: AVX2 is present; see the note above `impl Avx2`.
             unsafe { Avx2(_mm256_add_pd(self.0, o.0)) }
         }
         #[inline(always)]
         fn sub(self, o: Self) -> Self {
+            // SAFETY: AVX2 is present; see the note above `impl Avx2`.
             unsafe { Avx2(_mm256_sub_pd(self.0, o.0)) }
         }
         #[inline(always)]
         fn mul(self, o: Self) -> Self {
+            // SAFETY: AVX2 is present; see the note above `impl Avx2`.
             unsafe { Avx2(_mm256_mul_pd(self.0, o.0)) }
         }
         #[inline(always)]
         fn div(self, o: Self) -> Self {
+            // SAFETY: AVX2 is present; see the note above `impl Avx2`.
             unsafe { Avx2(_mm256_div_pd(self.0, o.0)) }
         }
         #[inline(always)]
         fn sqrt(self) -> Self {
+            // SAFETY: AVX2 is present; see the note above `impl Avx2`.
             unsafe { Avx2(_mm256_sqrt_pd(self.0)) }
         }
         #[inline(always)]
         fn abs(self) -> Self {
+            // SAFETY: AVX2 is present; see the note above `impl Avx2`.
             unsafe { Avx2(_mm256_andnot_pd(_mm256_set1_pd(-0.0), self.0)) }
         }
         #[inline(always)]
         fn neg(self) -> Self {
+            // SAFETY: AVX2 is present; see the note above `impl Avx2`.
             unsafe { Avx2(_mm256_xor_pd(_mm256_set1_pd(-0.0), self.0)) }
         }
         #[inline(always)]
         fn lt(self, o: Self) -> Self::Mask {
+            // SAFETY: AVX2 is present; see the note above `impl Avx2`.
             unsafe { _mm256_cmp_pd::<_CMP_LT_OQ>(self.0, o.0) }
         }
         #[inline(always)]
         fn ge(self, o: Self) -> Self::Mask {
+            // SAFETY: AVX2 is present; see the note above `impl Avx2`.
             unsafe { _mm256_cmp_pd::<_CMP_GE_OQ>(self.0, o.0) }
         }
         #[inline(always)]
         fn eq(self, o: Self) -> Self::Mask {
+            // SAFETY: AVX2 is present; see the note above `impl Avx2`.
             unsafe { _mm256_cmp_pd::<_CMP_EQ_OQ>(self.0, o.0) }
         }
         #[inline(always)]
         fn select(m: Self::Mask, a: Self, b: Self) -> Self {
+            // SAFETY: AVX2 is present; see the note above `impl Avx2`.
             unsafe { Avx2(_mm256_blendv_pd(b.0, a.0, m)) }
         }
         #[inline(always)]
         fn bits(m: Self::Mask) -> u32 {
+            // SAFETY: AVX2 is present; see the note above `impl Avx2`.
             unsafe { _mm256_movemask_pd(m) as u32 }
         }
         #[inline(always)]
         fn exp2_of_rounded(sum: Self) -> Self {
+            // SAFETY: AVX2 is present; see the note above `impl Avx2`.
             unsafe {
                 let n = Self::rounded(sum);
                 let e = _mm256_slli_epi64::<52>(_mm256_add_epi64(n, _mm256_set1_epi64x(1023)));
@@ -324,6 +341,7 @@ mod avx2 {
         }
         #[inline(always)]
         fn quadrant(sum: Self, sin_r: Self, cos_r: Self) -> (Self, Self) {
+            // SAFETY: AVX2 is present; see the note above `impl Avx2`.
             unsafe {
                 let k = Self::rounded(sum);
                 let one = _mm256_set1_epi64x(1);

