@@ -1,6 +1,5 @@
 //! `irid bake STACK.toml -o OUT.exr`: a lookup table of the stack's response.
 
-use std::io::IsTerminal;
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Instant;
@@ -37,6 +36,11 @@ pub struct Args {
     /// Spectral integration of the rgb kind: exact (1 nm), uniform:N, rgb3.
     #[arg(long, default_value = "exact")]
     pub sampling: String,
+    /// What (1, 1, 1) is in the rgb kind: d65 (a perfect reflector under
+    /// D65) or e (a flat spectrum, as Blender Cycles and glTF viewers); see
+    /// docs/color.md.
+    #[arg(long, default_value = "d65")]
+    pub white: String,
     /// Wavelength range MIN:MAX in nm of the spectral kind.
     #[arg(long, default_value = "380:780")]
     pub wavelengths: String,
@@ -82,6 +86,10 @@ pub fn run(args: Args) -> Result<ExitCode> {
         .parse::<Sampling>()
         .map_err(|e| anyhow!("--{e}"))?;
     spec.wavelength_nm = parse_range("--wavelengths", &args.wavelengths)?;
+    spec.white = args
+        .white
+        .parse::<irid::color::White>()
+        .map_err(|e| anyhow!("--{e}"))?;
     spec.half = args.half;
     spec.validation_points = args.validate_points;
     spec.resolution = match (&args.resolution, args.max_error) {
@@ -96,14 +104,7 @@ pub fn run(args: Args) -> Result<ExitCode> {
     // Flag errors first; what fails after them comes from the stack (a
     // material undefined at some wavelength), so name its file.
     spec.validate()?;
-    let bar = std::io::stderr().is_terminal().then(|| {
-        let bar = indicatif::ProgressBar::new(1000);
-        bar.set_style(
-            indicatif::ProgressStyle::with_template("baking {bar:40} {percent:>3}% {elapsed}")
-                .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
-        );
-        bar
-    });
+    let bar = super::render::progress_bar("baking {bar:40} {percent:>3}% {elapsed}");
     let started = Instant::now();
     let mut lut = bake_with_progress(&spec, &|f| {
         if let Some(bar) = &bar {

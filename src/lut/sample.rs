@@ -4,7 +4,7 @@ use glam::Vec4;
 
 use super::axis::Locator;
 use super::header::{
-    readable_version, Header, COS_AXIS, FORMAT_VERSION, OLDEST_READABLE_VERSION, THICKNESS_AXIS,
+    readable_version, Header, COS_AXIS, OLDEST_READABLE_VERSION, WHITE_E_VERSION, THICKNESS_AXIS,
     WAVELENGTH_AXIS,
 };
 use super::Kind;
@@ -56,21 +56,21 @@ impl RgbNodes {
         if kind != Kind::Rgb {
             return RgbNodes::None;
         }
-        let colour = |v: &[f32]| Vec4::new(v[0], v[1], v[2], 0.0);
+        let color = |v: &[f32]| Vec4::new(v[0], v[1], v[2], 0.0);
         let nodes = data.chunks_exact(6);
-        let white = data.get(..6).map(|v| colour(v) + colour(&v[3..]));
+        let white = data.get(..6).map(|v| color(v) + color(&v[3..]));
         let lossless = white.filter(|&white| {
             nodes.clone().all(|v| {
-                let sum = colour(v) + colour(&v[3..]);
+                let sum = color(v) + color(&v[3..]);
                 sum.is_finite() && (sum - white).abs().max_element() <= LOSSLESS_TOLERANCE
             })
         });
         match lossless {
             Some(white) => RgbNodes::Lossless {
-                reflectance: nodes.map(colour).collect(),
+                reflectance: nodes.map(color).collect(),
                 white,
             },
-            None => RgbNodes::Full(nodes.map(|v| [colour(v), colour(&v[3..])]).collect()),
+            None => RgbNodes::Full(nodes.map(|v| [color(v), color(&v[3..])]).collect()),
         }
     }
 }
@@ -111,7 +111,7 @@ impl Lut {
     pub(crate) fn from_parts(header: Header, data: Vec<f32>) -> Result<Lut, String> {
         if !readable_version(header.version.into()) {
             return Err(format!(
-                "format version {} (this irid reads versions {OLDEST_READABLE_VERSION} to {FORMAT_VERSION})",
+                "format version {} (this irid reads versions {OLDEST_READABLE_VERSION} to {WHITE_E_VERSION})",
                 header.version
             ));
         }

@@ -24,8 +24,7 @@ pub fn gpu() -> Option<Gpu> {
     let instance = wgpu::Instance::new(desc);
     let adapter = pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
         power_preference: wgpu::PowerPreference::HighPerformance,
-        force_fallback_adapter: false,
-        compatible_surface: None,
+        ..Default::default()
     }));
     let adapter = match adapter {
         Ok(a) => a,
@@ -494,7 +493,7 @@ pub fn run(
             timeout: None,
         })
         .expect("poll");
-    let data = slice.get_mapped_range();
+    let data = slice.get_mapped_range().expect("mapped results");
     let floats: &[f32] = bytemuck::cast_slice(&data);
     let out = floats
         .chunks_exact(6)
