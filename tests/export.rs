@@ -69,11 +69,23 @@ fn every_example_stack_exports() {
     for stack in &stacks {
         let name = stack.file_stem().unwrap().to_string_lossy().into_owned();
         let out = scratch.path().join(&name);
-        let mut args = vec!["export", stack.to_str().unwrap(), "-o", out.to_str().unwrap()];
+        let mut args = vec![
+            "export",
+            stack.to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+        ];
         // The gain film reflects up to 2 in the range its table covers, where
         // f16 steps by 2e-3: a 1e-3 target is out of f16's reach there.
         let target = if name == "gain-on-gold" {
-            args.extend(["--angles", "0.2:1", "--thickness", "200:300", "--max-error", "3e-3"]);
+            args.extend([
+                "--angles",
+                "0.2:1",
+                "--thickness",
+                "200:300",
+                "--max-error",
+                "3e-3",
+            ]);
             3e-3
         } else {
             1e-3
@@ -339,7 +351,11 @@ fn white_e_is_flat_and_recorded_in_tables() {
     assert_eq!(back.header().color.white, White::E);
     assert_eq!(back.header().version, irid::lut::WHITE_E_VERSION);
     let stats = irid::lut::validate(&back, 2000, 3).unwrap();
-    assert!(stats.max_abs.iter().all(|&e| e <= 1e-3), "{:?}", stats.max_abs);
+    assert!(
+        stats.max_abs.iter().all(|&e| e <= 1e-3),
+        "{:?}",
+        stats.max_abs
+    );
     // The D65 table of the same spec keeps version 2 and no white field.
     spec.white = White::D65;
     let d65 = irid::lut::bake(&spec).unwrap();

@@ -4,8 +4,8 @@ use glam::Vec4;
 
 use super::axis::Locator;
 use super::header::{
-    readable_version, Header, COS_AXIS, OLDEST_READABLE_VERSION, WHITE_E_VERSION, THICKNESS_AXIS,
-    WAVELENGTH_AXIS,
+    readable_version, Header, COS_AXIS, OLDEST_READABLE_VERSION, THICKNESS_AXIS, WAVELENGTH_AXIS,
+    WHITE_E_VERSION,
 };
 use super::Kind;
 

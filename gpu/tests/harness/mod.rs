@@ -155,15 +155,14 @@ pub fn glsl_program(generated: &str) -> Source {
         if line.starts_with("#version") || line.starts_with("precision ") {
             continue;
         }
-        let line = line.replace(
-            "layout(std140, binding = 3) uniform",
-            "layout(std140, set = 0, binding = 3) uniform",
-        );
-        let line = if line.starts_with("uniform IridParams") {
-            format!("layout(std140, set = 0, binding = 3) {line}")
-        } else {
-            line
-        };
+        // The parameter block at set 0, binding 3 (GLSL 4.50 gives the
+        // binding, ES 3.00 none).
+        let line = line
+            .replace("layout(std140, binding = 3) uniform", "layout(std140) uniform")
+            .replace(
+                "layout(std140) uniform",
+                "layout(std140, set = 0, binding = 3) uniform",
+            );
         body.push_str(&line);
         body.push('\n');
     }

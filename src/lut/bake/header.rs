@@ -6,8 +6,8 @@ use super::grid::Grid;
 use super::sweep::Prepared;
 use crate::lut::axis::Axis;
 use crate::lut::header::{
-    BakeCheck, Channel, ColorInfo, ErrorInfo, Header, BAKE_CHECK_METRIC, COS_AXIS, FORMAT_NAME,
-    version_for, THICKNESS_AXIS, WAVELENGTH_AXIS,
+    version_for, BakeCheck, Channel, ColorInfo, ErrorInfo, Header, BAKE_CHECK_METRIC, COS_AXIS,
+    FORMAT_NAME, THICKNESS_AXIS, WAVELENGTH_AXIS,
 };
 use crate::lut::sample::channel_names;
 use crate::lut::{BakeSpec, Kind};
