@@ -21,6 +21,7 @@ fn film_json(dir: &Path) -> serde_json::Value {
 
 /// The channel names, sample type and size of an EXR texture.
 fn exr_layout(path: &Path) -> (Vec<String>, bool, (usize, usize)) {
+    use exr::prelude::{ReadChannels, ReadLayers};
     let image = exr::prelude::read()
         .no_deep_data()
         .largest_resolution_level()
