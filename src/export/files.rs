@@ -19,8 +19,9 @@ pub const FILM_FORMAT: &str = "irid-film";
 pub const FILM_VERSION: u32 = 1;
 
 /// The PNGs' scale: texel value = PNG value / 65535 × scale. 1 when every
-/// value lies in [0, 1] (a passive stack), else the largest value rounded
-/// up to a multiple of 1/16.
+/// value lies in [0, 1], else the largest value rounded up to a multiple of
+/// 1/16 (a gain film, or a passive one whose saturated colours exceed 1 in
+/// a channel: the sRGB matching functions have negative lobes).
 pub(super) fn png_scale(export: &Export) -> f64 {
     let largest = [&export.reflectance, &export.transmittance]
         .iter()
