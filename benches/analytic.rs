@@ -1,6 +1,9 @@
 //! The single-film analytic model renderers ship (Belcour & Barla 2017, and
 //! the glTF reference variant): one shading evaluation to linear sRGB.
 
+// Not an API: criterion's macros generate undocumented public functions.
+#![allow(missing_docs)]
+
 use criterion::{black_box, criterion_group, criterion_main, Criterion};
 use irid::analytic::{AnalyticFilm, Variant};
 use num_complex::Complex64 as C64;

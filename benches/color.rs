@@ -1,6 +1,9 @@
 //! Spectral integration: a sampled spectrum to linear sRGB (a dot product per
 //! channel against precomputed weights).
 
+// Not an API: criterion's macros generate undocumented public functions.
+#![allow(missing_docs)]
+
 use criterion::{black_box, criterion_group, criterion_main, Criterion};
 use irid::color::{Sampling, SpectralIntegrator};
 

@@ -28,6 +28,9 @@
 //! runs on the calling thread (`render_tiles`), and `handoff` on one
 //! thread measures that (see docs/performance.md).
 
+// Not an API: criterion's macros generate undocumented public functions.
+#![allow(missing_docs)]
+
 mod common;
 
 use common::TimingScene;

@@ -1,6 +1,9 @@
 //! Table speed: one sampler lookup (bilinear rgb, trilinear spectral), the
 //! baker's cost per (node, wavelength), and a whole small bake.
 
+// Not an API: criterion's macros generate undocumented public functions.
+#![allow(missing_docs)]
+
 use criterion::{black_box, criterion_group, criterion_main, Criterion, Throughput};
 use irid::color::Sampling;
 use irid::lut::{bake, BakeSpec, Kind, Resolution};

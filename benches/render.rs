@@ -5,6 +5,9 @@
 //! before timing. Then the parts of a LUT film hit on their own: the
 //! thickness (noise evaluated, or read from the grid) and the table lookup.
 
+// Not an API: criterion's macros generate undocumented public functions.
+#![allow(missing_docs)]
+
 mod common;
 
 use common::TimingScene;
@@ -13,7 +16,7 @@ use glam::Vec3;
 use irid::color::Sampling;
 use irid::render::material::Material;
 use irid::render::scene::Shape;
-use irid::render::thickness::ThicknessGrid;
+use irid::render::thickness::{Perlin, ThicknessGrid};
 use irid::render::{self, FilmMode, FilmShading, LutFilm, RenderOptions, Side};
 
 fn bench(c: &mut Criterion) {
@@ -96,6 +99,20 @@ fn film_hit(c: &mut Criterion) {
                 .sum::<f32>()
         })
     });
+    // The noise alone, through its AVX2 copy and through the portable code
+    // (what the unsafe AVX2 function gains).
+    let perlin = Perlin::new(7);
+    let portable = Perlin::new(7).portable();
+    for (name, noise) in [("noise, avx2", &perlin), ("noise, portable", &portable)] {
+        g.bench_function(name, |b| {
+            b.iter(|| {
+                points
+                    .iter()
+                    .map(|(p, _, _)| noise.signed(black_box(*p * 4.0)))
+                    .sum::<f32>()
+            })
+        });
+    }
     let sphere = scene
         .objects
         .iter()

@@ -7,10 +7,12 @@
 
 pub mod analytic;
 pub mod atomic;
+#[cfg(feature = "bench")]
 pub mod bench;
 pub mod color;
 pub mod error;
 pub mod export;
+pub mod limits;
 pub mod lut;
 pub mod optics;
 pub mod render;

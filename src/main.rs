@@ -12,7 +12,8 @@ mod cli;
 #[command(
     name = "irid",
     version,
-    about = "Exact thin-film iridescence: bake, sample, validate, render"
+    about = "Exact thin-film iridescence: bake, sample, validate, render",
+    after_help = "Environment: RUST_LOG=debug (or IRID_DEBUG=1) prints the library's diagnostics, such as each bake refinement round; IRID_CACHE_DIR sets where `irid render` keeps the tables it bakes."
 )]
 struct Cli {
     #[command(subcommand)]
@@ -43,6 +44,7 @@ enum Command {
 
 fn main() -> ExitCode {
     restore_sigpipe();
+    cli::logger::install();
     let cli = match parse() {
         Ok(cli) => cli,
         // --help and --version are not errors.
@@ -51,7 +53,7 @@ fn main() -> ExitCode {
             return ExitCode::SUCCESS;
         }
         Err(e) => {
-            eprintln!("irid: {}", clap_line(&e));
+            eprintln!("irid: {}", irid::error::escape(&clap_line(&e)));
             return ExitCode::from(2);
         }
     };
@@ -145,5 +147,7 @@ fn one_line(e: &anyhow::Error) -> String {
         }
         line.push_str(&text);
     }
-    line.replace('\n', " ")
+    // Messages of other libraries may span lines; names echoed from files
+    // may hold any control character (escaped, never sent to the terminal).
+    irid::error::escape(&line.replace('\n', " ")).into_owned()
 }

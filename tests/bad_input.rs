@@ -1,6 +1,9 @@
 //! Bad input never panics: the binary prints one line naming what is wrong,
 //! exits with code 2 and leaves no output file behind.
 
+// Not an API: a test crate has no public API to document.
+#![allow(missing_docs)]
+
 mod common;
 
 use std::path::Path;

@@ -2,6 +2,9 @@
 //! promised structure, every figure is a number, and the LUT's error falls
 //! as its resolution rises on every stack.
 
+// Not an API: a test crate has no public API to document.
+#![allow(missing_docs)]
+
 mod common;
 
 use std::collections::BTreeMap;

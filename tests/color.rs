@@ -1,5 +1,8 @@
 //! Colour: CIE integration, sampling strategies, Lab and CIEDE2000.
 
+// Not an API: a test crate has no public API to document.
+#![allow(missing_docs)]
+
 mod common;
 
 use common::{irid, Scratch};

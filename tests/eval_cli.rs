@@ -1,6 +1,9 @@
 //! `irid eval` run as a program: output formats, and bad input giving one
 //! `irid: ...` line that names the file and field, exit code 2, no panic.
 
+// Not an API: a test crate has no public API to document.
+#![allow(missing_docs)]
+
 mod common;
 
 use common::{irid, Scratch};

@@ -2,6 +2,9 @@
 //! shipped stack and at the hard angles), the file round trip, bad files,
 //! and the `bake`/`info`/`validate` commands.
 
+// Not an API: a test crate has no public API to document.
+#![allow(missing_docs)]
+
 mod common;
 
 use std::path::{Path, PathBuf};
@@ -397,7 +400,7 @@ fn bad_files_give_clear_errors() {
         let nodes = j["axes"][1]["nodes"].as_array_mut().unwrap();
         nodes.pop();
     });
-    expect(&mismatch, "values");
+    expect(&mismatch, "header's axes give");
 
     let channels = dir.join("channels.exr");
     rewrite_header(&good, &channels, |j| j["kind"] = "spectral".into());

@@ -2,6 +2,9 @@
 //! built-in scene, determinism, the physics the pictures must show, and the
 //! command line's handling of bad scene files.
 
+// Not an API: a test crate has no public API to document.
+#![allow(missing_docs)]
+
 mod common;
 
 use std::path::{Path, PathBuf};

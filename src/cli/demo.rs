@@ -19,9 +19,10 @@ pub struct Args {
     /// Where the images go.
     #[arg(long, default_value = "out")]
     pub out: PathBuf,
-    /// Where baked tables are cached.
-    #[arg(long, default_value = "luts/cache")]
-    pub cache: PathBuf,
+    /// Where baked tables are cached [default: $IRID_CACHE_DIR, else the
+    /// user's cache folder: $XDG_CACHE_HOME/irid or ~/.cache/irid on Linux].
+    #[arg(long)]
+    pub cache: Option<PathBuf>,
     /// The direct reference (exact, 1 nm) renders at this fraction of each
     /// scene's width and height, to keep the demo short.
     #[arg(long, default_value_t = 0.5)]
@@ -44,7 +45,8 @@ pub fn run(args: Args) -> Result<ExitCode> {
 }
 
 fn run_all(args: &Args) -> Result<ExitCode> {
-    let lut = FilmMode::lut(&args.cache);
+    let cache = super::render::cache_dir(args.cache.as_deref())?;
+    let lut = FilmMode::lut(&cache);
     let exact = FilmMode::Direct {
         sampling: Sampling::Exact,
     };
@@ -91,7 +93,7 @@ fn run_all(args: &Args) -> Result<ExitCode> {
     }
     println!(
         "(bake s is 0 when every table came from the cache in {})",
-        args.cache.display()
+        cache.display()
     );
 
     // The paper's timing scene: LUT vs the paper's direct 41-wavelength

@@ -42,9 +42,10 @@ pub struct Args {
     /// baking it to a grid (exact, slower).
     #[arg(long)]
     pub exact_noise: bool,
-    /// Where baked tables are cached.
-    #[arg(long, default_value = "luts/cache")]
-    pub cache: PathBuf,
+    /// Where baked tables are cached [default: $IRID_CACHE_DIR, else the
+    /// user's cache folder: $XDG_CACHE_HOME/irid or ~/.cache/irid on Linux].
+    #[arg(long)]
+    pub cache: Option<PathBuf>,
     /// Worker threads [default: all cores].
     #[arg(long)]
     pub threads: Option<usize>,
@@ -101,7 +102,8 @@ pub fn with_threads<T: Send>(threads: Option<usize>, f: impl FnOnce() -> T + Sen
 }
 
 pub fn run(args: Args) -> Result<ExitCode> {
-    let mode = match film_mode(&args.film, args.sampling.as_deref(), &args.cache)? {
+    let cache = cache_dir(args.cache.as_deref())?;
+    let mode = match film_mode(&args.film, args.sampling.as_deref(), &cache)? {
         FilmMode::Lut { cache_dir, .. } if args.exact_noise => FilmMode::lut_exact_noise(cache_dir),
         mode => mode,
     };
@@ -132,6 +134,15 @@ pub fn run(args: Args) -> Result<ExitCode> {
         }
     };
     // Fail before a long render, not after it.
+    if let Some(exr) = &args.exr {
+        if same_file(&output, exr) {
+            bail!(
+                "-o {} and --exr {}: the PNG and the EXR must be different files",
+                output.display(),
+                exr.display()
+            );
+        }
+    }
     for path in std::iter::once(&output).chain(args.exr.as_ref()) {
         let dir = path.parent().filter(|d| !d.as_os_str().is_empty());
         if dir.is_some_and(|d| !d.is_dir()) {
@@ -144,6 +155,7 @@ pub fn run(args: Args) -> Result<ExitCode> {
     opts.spp = args.spp;
     opts.max_depth = args.max_depth;
     opts.seed = args.seed;
+    render::check_image_size(&scene, &opts)?;
 
     let (films, image, render_s) = with_threads(args.threads, || -> Result<_> {
         let films = render::prepare_films(&scene, &opts.film)?;
@@ -160,10 +172,7 @@ pub fn run(args: Args) -> Result<ExitCode> {
         }
         Ok((films, image, render_s))
     })??;
-    image.write_png(&output)?;
-    if let Some(exr) = &args.exr {
-        image.write_exr(exr)?;
-    }
+    image.write_outputs(&output, args.exr.as_deref())?;
     let film = match &opts.film {
         FilmMode::Lut { .. } => format!(
             "lut: {} table(s) baked, {} from cache, {:.3} s",
@@ -204,6 +213,20 @@ pub fn run(args: Args) -> Result<ExitCode> {
     Ok(ExitCode::SUCCESS)
 }
 
+/// Whether two output paths name the same file (the same name in the same
+/// directory, however spelled).
+fn same_file(a: &Path, b: &Path) -> bool {
+    let key = |p: &Path| {
+        let dir = p.parent().filter(|d| !d.as_os_str().is_empty());
+        let dir = dir.unwrap_or(Path::new("."));
+        (
+            dir.canonicalize().unwrap_or(dir.to_path_buf()),
+            p.file_name().map(|n| n.to_os_string()),
+        )
+    };
+    key(a) == key(b)
+}
+
 /// A scene name made safe as a file name.
 pub fn file_stem(name: &str) -> String {
     let stem = Path::new(name)
@@ -231,4 +254,24 @@ pub fn progress_bar(template: &str) -> Option<indicatif::ProgressBar> {
         );
         bar
     })
+}
+
+/// Where tables baked on demand are kept: `--cache DIR` if given, else
+/// `$IRID_CACHE_DIR` if set, else the user's cache folder for irid (the
+/// platform's convention: `$XDG_CACHE_HOME/irid` or `~/.cache/irid` on
+/// Linux, `~/Library/Caches/irid` on macOS, `%LOCALAPPDATA%\irid\cache` on
+/// Windows).
+pub fn cache_dir(flag: Option<&Path>) -> Result<PathBuf> {
+    if let Some(dir) = flag {
+        return Ok(dir.to_path_buf());
+    }
+    if let Some(dir) = std::env::var_os("IRID_CACHE_DIR").filter(|d| !d.is_empty()) {
+        return Ok(PathBuf::from(dir));
+    }
+    match directories::ProjectDirs::from("", "", "irid") {
+        Some(dirs) => Ok(dirs.cache_dir().to_path_buf()),
+        None => bail!(
+            "no user cache folder (no home directory): give --cache DIR or set IRID_CACHE_DIR"
+        ),
+    }
 }

@@ -1,9 +1,14 @@
 //! A planar multilayer: a lossless ambient, finite layers from the top down,
 //! and a semi-infinite substrate that may absorb.
 
+// Not every public item here is documented yet: the crate-wide
+// missing_docs lint (Cargo.toml) is waived for this file until it is.
+#![allow(missing_docs)]
+
 use num_complex::Complex64 as C64;
 use serde::{Deserialize, Serialize};
 
+use super::lanes;
 use super::material::Material;
 use super::solver::{self, Response};
 use crate::error::{Error, Result};
@@ -27,16 +32,28 @@ fn check_wavelength(wavelength_nm: f64) -> Result<()> {
     }
 }
 
+/// One film of a stack: a material and its physical thickness.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Layer {
+    /// The film's complex index n + ik (k > 0 absorbs, k < 0 is gain).
     pub material: Material,
+    /// Physical thickness in nanometres, 0 to [`MAX_THICKNESS_NM`].
     pub thickness_nm: f64,
 }
 
+/// A planar multilayer seen from its ambient side: light arrives through the
+/// `ambient` (lossless, semi-infinite), crosses the `layers` top down and
+/// enters the semi-infinite `substrate`, which may absorb. Indices are
+/// n + ik with k > 0 absorbing, fields vary as e^{-iωt}, and angles are
+/// measured in the ambient from the normal. [`Stack::validate`] checks
+/// these constraints; the stack file format is `docs/stack-format.md`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Stack {
+    /// The medium the light comes from (air, water, glass): must be lossless.
     pub ambient: Material,
+    /// The films from the ambient side down; may be empty (a bare interface).
     pub layers: Vec<Layer>,
+    /// The medium below the last layer: may absorb (a metal), not amplify.
     pub substrate: Material,
 }
 
@@ -136,6 +153,8 @@ pub struct StackGrid {
     /// Wavelength-major: the N + 2 indices of wavelength i at [i(N+2), (i+1)(N+2)).
     indices: Vec<C64>,
     thicknesses_nm: Vec<f64>,
+    /// The same indices laid out for the four-lane solver.
+    spectrum: lanes::Spectrum,
 }
 
 impl StackGrid {
@@ -151,6 +170,7 @@ impl StackGrid {
             indices.extend_from_slice(&row);
         }
         Ok(StackGrid {
+            spectrum: lanes::Spectrum::new(&indices, media, wavelengths_nm),
             wavelengths_nm: wavelengths_nm.to_vec(),
             indices,
             thicknesses_nm: stack.thicknesses_nm(),
@@ -190,6 +210,36 @@ impl StackGrid {
     pub fn set_thickness_nm(&mut self, layer: usize, thickness_nm: f64) {
         debug_assert!((0.0..=MAX_THICKNESS_NM).contains(&thickness_nm));
         self.thicknesses_nm[layer] = thickness_nm;
+    }
+
+    /// R and T at every wavelength at one angle, with the N layer
+    /// thicknesses given (e.g. the stack's own with one varied), into `out`
+    /// (one per wavelength): the spectrum of one point, the batched solver's
+    /// fastest entry (indices and 2π/λ are laid out once, in [`StackGrid::new`]).
+    /// Allocates nothing.
+    ///
+    /// # Panics
+    /// If `thicknesses_nm` or `out` has the wrong length.
+    pub fn solve_spectrum(&self, thicknesses_nm: &[f64], cos_theta0: f64, out: &mut [Response]) {
+        self.solve_spectrum_on(lanes::Path::Best, thicknesses_nm, cos_theta0, out);
+    }
+
+    /// [`StackGrid::solve_spectrum`] on a chosen copy of the kernel.
+    pub fn solve_spectrum_on(
+        &self,
+        path: lanes::Path,
+        thicknesses_nm: &[f64],
+        cos_theta0: f64,
+        out: &mut [Response],
+    ) {
+        lanes::solve_spectrum_on(
+            path,
+            &self.spectrum,
+            &self.indices,
+            thicknesses_nm,
+            cos_theta0,
+            out,
+        );
     }
 
     /// R and T at every (wavelength, cos θ0) pair, wavelength-major, into

@@ -1,6 +1,10 @@
 //! Rendered images: linear RGB in memory, tiled parallel rendering, and
 //! the comparison of two renders.
 
+// Not every public item here is documented yet: the crate-wide
+// missing_docs lint (Cargo.toml) is waived for this file until it is.
+#![allow(missing_docs)]
+
 use glam::Vec3;
 use rayon::prelude::*;
 

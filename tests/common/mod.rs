@@ -9,10 +9,16 @@ use std::ops::Deref;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-/// The `irid` binary, to run in the crate's root unless told otherwise.
+/// The `irid` binary, to run in the crate's root unless told otherwise,
+/// with tables baked on demand kept in the build's scratch folder rather
+/// than the user's cache.
 pub fn command() -> Command {
     let mut cmd = Command::new(env!("CARGO_BIN_EXE_irid"));
     cmd.current_dir(env!("CARGO_MANIFEST_DIR"));
+    cmd.env(
+        "IRID_CACHE_DIR",
+        Path::new(env!("CARGO_TARGET_TMPDIR")).join("cli-cache"),
+    );
     cmd
 }
 

@@ -86,21 +86,20 @@ pub fn bake_with_progress(spec: &BakeSpec, progress: &(dyn Fn(f64) + Sync)) -> R
         let coarse = Grid::new(&axes, spec.kind);
         let fine = Grid::new(&axes.clone().map(|a| doubled(&a)), spec.kind);
         within_limits(&coarse, &fine, wavelength_work, round, target)?;
+        within_budget(&coarse, &fine, prep.channels, target)?;
         let clock = std::time::Instant::now();
         let values = prep.eval(&fine, previous.as_ref(), progress)?;
         let eval_s = clock.elapsed().as_secs_f64();
         // The coarse table as it would be stored: the check interpolates it.
         let data = even_subgrid(&fine, &values, prep.channels, spec.half);
         let check = measure(&coarse, &fine, &values, &data, prep.channels);
-        if std::env::var_os("IRID_DEBUG").is_some() {
-            eprintln!(
-                "grid {:?} check {:.3e} worst at {:?} eval {eval_s:.3}s measure {:.3}s",
-                coarse.axes.each_ref().map(|a| a.nodes.len()),
-                check.max_all,
-                [0, 1, 2].map(|a| fine.axes[a].nodes[check.worst_at[a]]),
-                clock.elapsed().as_secs_f64() - eval_s,
-            );
-        }
+        log::debug!(
+            "bake round {round}: grid {:?} check {:.3e} worst at {:?} eval {eval_s:.3}s measure {:.3}s",
+            coarse.axes.each_ref().map(|a| a.nodes.len()),
+            check.max_all,
+            [0, 1, 2].map(|a| fine.axes[a].nodes[check.worst_at[a]]),
+            clock.elapsed().as_secs_f64() - eval_s,
+        );
         match target {
             Some(e) if check.max_all > e => refine_to_share(&mut axes, &coarse, &check, e),
             _ => {
@@ -159,6 +158,27 @@ fn within_limits(
             ),
         ),
     })
+}
+
+/// Refuses a round whose memory would exceed the budget (see
+/// [`crate::limits`]): the exact values at the fine grid's nodes (f64) and
+/// the last round's, about a quarter as many, kept for reuse; the coarse
+/// table as stored (f32) and the sampler's layout of it (32 bytes a node).
+fn within_budget(coarse: &Grid, fine: &Grid, channels: usize, target: Option<f64>) -> Result<()> {
+    let (fine_n, coarse_n) = (fine.total() as u64, coarse.total() as u64);
+    let estimate = crate::limits::product(&[fine_n, channels as u64], 10).and_then(|v| {
+        v.checked_add(crate::limits::product(
+            &[coarse_n],
+            4 * channels as u64 + 32,
+        )?)
+    });
+    let what = match target {
+        Some(target) => {
+            format!("max-error {target:e}: a grid of {coarse_n} nodes checked at {fine_n}")
+        }
+        None => format!("resolution: a grid of {coarse_n} nodes checked at {fine_n}"),
+    };
+    crate::limits::check_allocation(&what, estimate)
 }
 
 /// Validates a table that meets `target` at the check's points against the

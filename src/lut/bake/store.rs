@@ -41,6 +41,8 @@ pub(super) fn representable(
     })
 }
 
+// Used by the bench (and its tests); a library built without it has no use.
+#[cfg(any(feature = "bench", test))]
 impl Lut {
     /// This table with every value rounded to f16, for a caller that has the
     /// f32 table and wants the f16 one too without baking again: the values a

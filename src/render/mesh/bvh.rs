@@ -1,5 +1,9 @@
 //! The mesh and its bounding-volume hierarchy.
 
+// Not every public item here is documented yet: the crate-wide
+// missing_docs lint (Cargo.toml) is waived for this file until it is.
+#![allow(missing_docs)]
+
 use glam::{Mat3, Vec3};
 
 use crate::error::{Error, Result};
@@ -74,6 +78,12 @@ impl Mesh {
                 normal: n.normalize(),
                 idx: *tri,
             });
+        }
+        if triangles.is_empty() {
+            return Err(Error::invalid(
+                "mesh",
+                "has no usable triangle: every face has zero area (coincident or collinear vertices)",
+            ));
         }
         let mut mesh = Mesh {
             triangles,
