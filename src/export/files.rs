@@ -16,6 +16,7 @@ use crate::error::{Error, Result};
 
 /// film.json's `format` and `version`.
 pub const FILM_FORMAT: &str = "irid-film";
+/// See [`FILM_FORMAT`].
 pub const FILM_VERSION: u32 = 1;
 
 /// The PNGs' scale: texel value = PNG value / 65535 × scale. 1 when every

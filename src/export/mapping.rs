@@ -8,9 +8,13 @@ use serde::{Deserialize, Serialize};
 /// each as f32 ([`Mapping::params_f32`]).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Mapping {
+    /// The thickness range (nm) the u axis spans.
     pub thickness_min_nm: f64,
+    /// See `thickness_min_nm`.
     pub thickness_max_nm: f64,
+    /// The cos θ range the v axis spans.
     pub cos_min: f64,
+    /// See `cos_min`.
     pub cos_max: f64,
     /// The cos θ towards which angle nodes crowd quadratically: a
     /// dense-side stack's critical angle strictly inside the range, or
@@ -20,7 +24,9 @@ pub struct Mapping {
     /// The mapped angle coordinate of `cos_crit`, k / (size_v − 1): always
     /// on a node (0 when crowding towards grazing or uniform).
     pub y_crit: f64,
+    /// Texels along u (thickness).
     pub size_u: usize,
+    /// Texels along v (angle).
     pub size_v: usize,
     /// 1: thickness nodes uniform; 2: node i at t_min + span · (i / (N − 1))²,
     /// crowding towards t_min (where a thin film at grazing incidence
@@ -168,10 +174,12 @@ impl Mapping {
         }
     }
 
+    /// The thickness nodes (nm), one per texel column.
     pub fn thickness_nodes(&self) -> Vec<f64> {
         (0..self.size_u).map(|i| self.thickness_at(i)).collect()
     }
 
+    /// The cos θ nodes, one per texel row.
     pub fn cos_nodes(&self) -> Vec<f64> {
         (0..self.size_v).map(|j| self.cos_at(j)).collect()
     }
@@ -224,8 +232,11 @@ impl Mapping {
 /// An RGBA texture, row-major, row 0 at v = 0 (as uploaded from the file).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Texture {
+    /// Texels per row.
     pub width: usize,
+    /// Rows.
     pub height: usize,
+    /// RGBA per texel, row-major.
     pub texels: Vec<[f32; 4]>,
 }
 

@@ -59,14 +59,18 @@ pub const POINTS_SEED: u64 = 15;
 /// What to export.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ExportSpec {
+    /// The stack to export.
     pub stack: Stack,
     /// The layer whose thickness is the u axis, from 1 at the ambient side
     /// (ignored for a stack without layers).
     pub layer: usize,
+    /// The thickness range (nm) of the u axis.
     pub thickness_nm: (f64, f64),
     /// cos θ in the ambient.
     pub cos_theta: (f64, f64),
+    /// Spectral integration.
     pub sampling: Sampling,
+    /// What (1, 1, 1) is (docs/color.md).
     pub white: White,
     /// The largest absolute error allowed in any channel of what the GPU
     /// computes (bilinear filtering of f16 texels), at every measured point.
@@ -164,18 +168,26 @@ const F16_HALF_ULP_AT_ONE: f64 = 1.0 / 4096.0;
 /// T.g, T.b; `*_delta_e00` two: reflectance and transmittance colour.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct ExportError {
+    /// Largest absolute error per channel.
     pub max_abs: [f64; 6],
+    /// 99th percentile of the absolute error per channel.
     pub p99_abs: [f64; 6],
+    /// Mean absolute error per channel.
     pub mean_abs: [f64; 6],
+    /// Largest CIEDE2000, reflected and transmitted colour.
     pub max_delta_e00: [f64; 2],
+    /// Mean CIEDE2000, reflected and transmitted colour.
     pub mean_delta_e00: [f64; 2],
+    /// How many points were measured.
     pub points: usize,
+    /// The PCG64 seed of the points.
     pub seed: u64,
     /// (thickness nm, cos θ) of the largest error over channels.
     pub worst_point: [f64; 2],
 }
 
 impl ExportError {
+    /// The largest of `max_abs`.
     pub fn max_all(&self) -> f64 {
         self.max_abs.iter().fold(0.0, |a, &b| a.max(b))
     }
@@ -184,10 +196,13 @@ impl ExportError {
 /// A finished export: the two textures, their mapping and measured errors.
 #[derive(Clone, Debug)]
 pub struct Export {
+    /// What was exported.
     pub spec: ExportSpec,
+    /// Where (thickness, cos θ) lands in the textures.
     pub mapping: Mapping,
-    /// f16 values (held in f32), RGBA with A = 1.
+    /// The reflectance texture: f16 values (held in f32), RGBA with A = 1.
     pub reflectance: Texture,
+    /// The transmittance texture, likewise.
     pub transmittance: Texture,
     /// What the GPU computes: bilinear with f32 weights on f16 texels.
     pub error: ExportError,
