@@ -8,8 +8,8 @@ use glam::Vec4;
 
 use super::axis::Locator;
 use super::header::{
-    readable_version, Header, COS_AXIS, FORMAT_VERSION, OLDEST_READABLE_VERSION, THICKNESS_AXIS,
-    WAVELENGTH_AXIS,
+    readable_version, Header, COS_AXIS, OLDEST_READABLE_VERSION, THICKNESS_AXIS, WAVELENGTH_AXIS,
+    WHITE_E_VERSION,
 };
 use super::Kind;
 use crate::optics::{MAX_THICKNESS_NM, WAVELENGTH_RANGE_NM};
@@ -119,7 +119,7 @@ pub const MIN_NODE_SPACING_F32: f32 = 1e-30;
 pub(crate) fn check_header(header: &Header) -> Result<(usize, usize), String> {
     if !readable_version(header.version.into()) {
         return Err(format!(
-            "format version {} (this irid reads versions {OLDEST_READABLE_VERSION} to {FORMAT_VERSION})",
+            "format version {} (this irid reads versions {OLDEST_READABLE_VERSION} to {WHITE_E_VERSION})",
             header.version
         ));
     }
