@@ -14,5 +14,6 @@ pub mod lut;
 pub mod optics;
 pub mod render;
 mod simd;
+pub mod web;
 
 pub use error::{Error, Result};

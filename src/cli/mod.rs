@@ -7,5 +7,6 @@ pub mod color;
 pub mod demo;
 pub mod eval;
 pub mod info;
+pub mod preview;
 pub mod render;
 pub mod validate;
