@@ -83,19 +83,19 @@ after(async () => {
   if (root) fs.rmSync(root, { recursive: true, force: true });
 });
 
-async function open(query = '', init) {
+async function open(query = '', init, url = `${baseUrl}/preview/index.html`) {
   const page = await browser.newPage({ viewport: { width: 1100, height: 760 }, deviceScaleFactor: 1 });
   const errors = [];
   page.on('pageerror', (e) => errors.push(e.message));
   if (init) await page.addInitScript(init);
-  await page.goto(`${baseUrl}/preview/index.html${query}`);
+  await page.goto(`${url}${query}`);
   await page.waitForFunction(() => document.body.dataset.state && document.body.dataset.state !== 'loading', null, { timeout: 60000 });
   page.errors = errors;
   return page;
 }
 
-async function ready(query = '') {
-  const page = await open(query);
+async function ready(query = '', url = undefined) {
+  const page = await open(query, undefined, url);
   const state = await page.evaluate(() => document.body.dataset.state);
   const message = await page.textContent('#message');
   assert.equal(state, 'ready', `the page reports: ${message}`);
@@ -224,6 +224,20 @@ test('the EXR textures give the same chart as the 16-bit PNGs', async () => {
   console.log(`chart reflectance from EXR: ΔE00 mean ${r.mean.toFixed(3)}, max ${r.max.toFixed(3)} over ${r.points} points`);
   assert.ok(r.mean <= 0.5, `mean ΔE00 ${r.mean}`);
   await page.close();
+});
+
+test('the preview opens from file:// (embedded exports) and draws what the page draws from fetched files', async () => {
+  const local = await ready('', `file://${path.join(root, 'preview', 'index.html')}`);
+  const name = await local.evaluate(() => window.irid.preview.current.label);
+  await local.selectOption('#mode', 'chart-r');
+  const fromFile = await pixels(local);
+  await local.close();
+  const served = await ready(`?export=exports/${name}/`);
+  assert.equal(await served.evaluate(() => window.irid.preview.current.name), `exports/${name}/`);
+  await served.selectOption('#mode', 'chart-r');
+  const fromServer = await pixels(served);
+  await served.close();
+  assert.equal(Buffer.compare(Buffer.from(fromServer.data), Buffer.from(fromFile.data)), 0);
 });
 
 /** Mean absolute difference of two RGBA8 images over a centred box. */
