@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # CI: the browser preview (web/) in headless Chromium. Installs what is
 # missing (Debian's chromium, node and npm; playwright-core from
-# tools/web/package-lock.json), builds irid, exports two stacks, writes a
+# tools/web/package-lock.json), builds irid, exports three stacks, writes a
 # preview of them with `irid preview`, and runs tools/web/test_web.mjs.
 # Exits non-zero on any failure.
 set -euo pipefail
@@ -22,11 +22,15 @@ irid="$PWD/target/release/irid"
 work="$(mktemp -d)"
 trap 'rm -rf "$work"' EXIT
 
-# The first export is the one the test checks against `irid color`; the
-# second (a film on gold, opaque) gives the page's export menu a choice.
+# Three exports: a free-standing film with the 16-bit PNGs (the page reads
+# them first; the test also reads its EXRs), an absorbing film on gold
+# (opaque), and a film seen from its dense side (the warped angle axis).
+# The test compares each one's chart with `irid color` on its stack file.
 "$irid" export luts/soap-film.toml --thickness 100:1000 --png -o "$work/soap-film" --quiet
 "$irid" export luts/two-layer.toml --layer 1 --thickness 50:600 -o "$work/two-layer" --quiet
-"$irid" preview "$work/soap-film" "$work/two-layer" -o "$work/preview"
+"$irid" export tools/web/dense-side.toml --thickness 100:800 -o "$work/dense-side" --quiet
+"$irid" preview "$work/soap-film" "$work/two-layer" "$work/dense-side" -o "$work/preview"
 
-IRID_PREVIEW="$work/preview" IRID_STACK="$PWD/luts/soap-film.toml" IRID_BIN="$irid" \
+IRID_PREVIEW="$work/preview" IRID_BIN="$irid" \
+    IRID_STACKS="soap-film=luts/soap-film.toml,two-layer=luts/two-layer.toml,dense-side=tools/web/dense-side.toml" \
     node --test tools/web/test_web.mjs
