@@ -347,7 +347,7 @@ test('screenshot', async (t) => {
   await page.close();
 });
 
-test('a missing export, a damaged one, and no WebGL2 each show a message', async () => {
+test('a missing export, damaged ones, and no WebGL2 each show a message', async () => {
   const dir = firstExportDir();
   const film = readFilm(dir);
 
@@ -371,6 +371,13 @@ test('a missing export, a damaged one, and no WebGL2 each show a message', async
   page = await open('?export=../truncated/');
   const message = await page.textContent('#message');
   assert.match(message, new RegExp(`${texture.replace('.', '\\.')}: .*(truncated|inflate|decompress)`));
+  await page.close();
+
+  const badShader = path.join(root, 'bad-shader');
+  fs.cpSync(path.join(root, dir), badShader, { recursive: true });
+  fs.writeFileSync(path.join(badShader, 'irid_film_es.glsl'), 'IridFilm irid_film(float t, float c) { return oops; }\n');
+  page = await open('?export=../bad-shader/');
+  assert.match(await page.textContent('#message'), /bad-shader\/irid_film_es\.glsl: does not compile/);
   await page.close();
 
   page = await open('', () => {
