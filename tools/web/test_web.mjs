@@ -36,7 +36,7 @@ if (!PREVIEW || STACKS.size === 0) {
 }
 
 const MIME = {
-  '.html': 'text/html', '.js': 'text/javascript', '.css': 'text/css', '.json': 'application/json',
+  '.html': 'text/html', '.js': 'text/javascript', '.mjs': 'text/javascript', '.css': 'text/css', '.json': 'application/json',
   '.png': 'image/png', '.exr': 'image/x-exr', '.glsl': 'text/plain',
 };
 
@@ -69,6 +69,11 @@ function firstExportDir() {
 before(async () => {
   root = fs.mkdtempSync(path.join(os.tmpdir(), 'irid-web-'));
   fs.cpSync(PREVIEW, path.join(root, 'preview'), { recursive: true });
+  // The three.js recipe's page, and three.js from tools/web/node_modules.
+  const here = path.dirname(fileURLToPath(import.meta.url));
+  fs.mkdirSync(path.join(root, 'tools'));
+  for (const f of ['three_film.mjs', 'three_check.html']) fs.copyFileSync(path.join(here, f), path.join(root, 'tools', f));
+  fs.cpSync(path.join(here, 'node_modules/three/build'), path.join(root, 'three'), { recursive: true });
   server = serve(root);
   await new Promise((resolve) => server.listen(0, '127.0.0.1', resolve));
   baseUrl = `http://127.0.0.1:${server.address().port}`;
@@ -330,6 +335,43 @@ test('frame time: the film shader against the same scene with constant R and T',
   // A bound for software rendering, not a goal: a frame within 2 s.
   assert.ok(median(film) < 2000, `${median(film)} ms per frame`);
   await page.close();
+});
+
+test('the three.js recipe (three_film.mjs) shows R at normal incidence', async () => {
+  const dir = firstExportDir();
+  const name = path.basename(dir);
+  const film = readFilm(dir);
+  const page = await browser.newPage();
+  const errors = [];
+  page.on('pageerror', (e) => errors.push(e.message));
+  page.on('console', (m) => { if (m.type() === 'error') errors.push(m.text()); });
+  await page.goto(`${baseUrl}/tools/three_check.html?export=/${dir}/`);
+  await page.waitForFunction(() => document.body.dataset.state, null, { timeout: 60000 });
+  assert.equal(await page.evaluate(() => document.body.dataset.state), 'ready',
+    await page.evaluate(() => document.body.dataset.error));
+  const [t0, t1] = film.domain.thickness_nm;
+  const thicknesses = [0.1, 0.3, 0.5, 0.7, 0.9].map((f) => t0 + f * (t1 - t0));
+  const text = fs.readFileSync(STACKS.get(name), 'utf8');
+  const tmp = fs.mkdtempSync(path.join(os.tmpdir(), 'irid-web-three-'));
+  const differences = [];
+  const shown = [];
+  try {
+    for (const t of thicknesses) {
+      const rgb8 = await page.evaluate((x) => window.threeCheck.centre(x), t);
+      shown.push(rgb8.join(','));
+      const out = execFileSync(IRID, ['color', stackWithThickness(text, film.layer, t, tmp), '--json', '--angles', '0'], { encoding: 'utf8' });
+      const exact = JSON.parse(out)[0].reflectance_rgb.map((v) => Math.min(1, Math.max(0, v)));
+      differences.push(deltaE00(linearSrgbToLab(exact), linearSrgbToLab(rgb8.map(srgb8ToLinear))));
+    }
+  } finally {
+    fs.rmSync(tmp, { recursive: true, force: true });
+  }
+  await page.close();
+  assert.deepEqual(errors, []);
+  assert.equal(new Set(shown).size, thicknesses.length, `the thickness uniform changes nothing: ${shown.join(' ')}`);
+  const mean = differences.reduce((a, b) => a + b, 0) / differences.length;
+  console.log(`three.js recipe, ${name}, R at normal incidence: ΔE00 mean ${mean.toFixed(3)}, max ${Math.max(...differences).toFixed(3)} over ${differences.length} thicknesses`);
+  assert.ok(mean <= 1, `mean ΔE00 ${mean}`);
 });
 
 test('screenshot', async (t) => {
