@@ -129,12 +129,13 @@ fn read_export(dir: &Path) -> Result<Export> {
     let texture = film
         .get("texture")
         .ok_or_else(|| Error::malformed(&film_path, "no \"texture\""))?;
-    // The page prefers the 16-bit PNGs and falls back to the EXRs.
-    let listed = match texture.get("png") {
-        Some(png) if png.is_object() => png,
+    // The page reads the EXRs, and the 16-bit PNGs only when no EXR is listed.
+    let listed = match texture.get("files") {
+        Some(files) if files.is_object() => files,
         _ => texture
-            .get("files")
-            .ok_or_else(|| Error::malformed(&film_path, "no \"texture.files\""))?,
+            .get("png")
+            .filter(|png| png.is_object())
+            .ok_or_else(|| Error::malformed(&film_path, "lists no texture files"))?,
     };
     let mut used = vec!["film.json".to_string(), "irid_film_es.glsl".to_string()];
     for which in ["reflectance", "transmittance"] {

@@ -10,23 +10,21 @@ use common::{irid_in, Scratch};
 
 /// A folder shaped like an export: the preview copies files and reads only
 /// film.json's format and texture names, so the textures need not decode.
-fn fake_export(dir: &Path, name: &str, png: bool) {
+/// Without `exr`, film.json lists the PNGs only.
+fn fake_export(dir: &Path, name: &str, exr: bool) {
     let d = dir.join(name);
     fs::create_dir_all(&d).unwrap();
-    let png_entry = if png {
-        r#"{"reflectance": "reflectance.png", "transmittance": "transmittance.png", "scale": 1.0}"#
+    let files = if exr {
+        r#"{"reflectance": "reflectance.exr", "transmittance": "transmittance.exr"}"#
     } else {
         "null"
     };
-    fs::write(
-        d.join("film.json"),
-        format!(
-            r#"{{"format": "irid-film", "version": 1, "texture": {{"width": 2, "height": 2,
-              "files": {{"reflectance": "reflectance.exr", "transmittance": "transmittance.exr"}},
-              "png": {png_entry}}}}}"#
-        ),
-    )
-    .unwrap();
+    let png =
+        r#"{"reflectance": "reflectance.png", "transmittance": "transmittance.png", "scale": 1.0}"#;
+    let film = format!(
+        r#"{{"format": "irid-film", "version": 1, "texture": {{"width": 2, "height": 2, "files": {files}, "png": {png}}}}}"#
+    );
+    fs::write(d.join("film.json"), film).unwrap();
     fs::write(
         d.join("irid_film_es.glsl"),
         "IridFilm irid_film(float t, float c);\n",
@@ -39,10 +37,8 @@ fn fake_export(dir: &Path, name: &str, png: bool) {
         [0x76, 0x2f, 0x31, 0x01, 1, 254],
     )
     .unwrap();
-    if png {
-        fs::write(d.join("reflectance.png"), [137, 80, 78, 71, 0]).unwrap();
-        fs::write(d.join("transmittance.png"), [137, 80, 78, 71, 1]).unwrap();
-    }
+    fs::write(d.join("reflectance.png"), [137, 80, 78, 71, 0]).unwrap();
+    fs::write(d.join("transmittance.png"), [137, 80, 78, 71, 1]).unwrap();
 }
 
 /// The JSON array `exports.js` assigns to `window.IRID_EXPORTS`.
@@ -90,8 +86,9 @@ fn writes_the_page_the_exports_and_their_embedded_copy() {
     assert_eq!(list.len(), 2);
     assert_eq!(list[0]["name"], "soap");
     assert_eq!(list[1]["name"], "soap-2");
-    // The first embeds the PNGs (the page prefers them), the second the EXRs;
-    // text files as text, the rest base64; files the page does not read stay out.
+    // The first embeds the EXRs (the page reads them), the second, which
+    // lists none, the PNGs; text files as text, the rest base64; files the
+    // page does not read stay out.
     let first = list[0]["files"].as_object().unwrap();
     let mut keys: Vec<&str> = first.keys().map(String::as_str).collect();
     keys.sort();
@@ -100,18 +97,19 @@ fn writes_the_page_the_exports_and_their_embedded_copy() {
         [
             "film.json",
             "irid_film_es.glsl",
-            "reflectance.png",
-            "transmittance.png"
+            "reflectance.exr",
+            "transmittance.exr"
         ]
     );
     assert_eq!(
         first["film.json"]["text"].as_str().unwrap(),
         fs::read_to_string(dir.path().join("soap/film.json")).unwrap()
     );
-    assert_eq!(first["reflectance.png"]["base64"], "iVBORwA=");
+    assert_eq!(first["reflectance.exr"]["base64"], "di8xAQD/");
+    assert_eq!(first["transmittance.exr"]["base64"], "di8xAQH+");
     let second = list[1]["files"].as_object().unwrap();
-    assert_eq!(second["reflectance.exr"]["base64"], "di8xAQD/");
-    assert_eq!(second["transmittance.exr"]["base64"], "di8xAQH+");
+    assert_eq!(second["reflectance.png"]["base64"], "iVBORwA=");
+    assert!(!second.contains_key("reflectance.exr"));
     assert!(!second.contains_key("irid_film.wgsl"));
 
     // A second run replaces the earlier preview whole.
@@ -132,7 +130,7 @@ fn writes_the_page_the_exports_and_their_embedded_copy() {
 fn bad_exports_and_destinations_are_one_line_errors() {
     let dir = Scratch::new("preview-bad");
     let d = dir.path();
-    fake_export(d, "soap", false);
+    fake_export(d, "soap", true);
 
     irid_in(d, ["preview", "missing", "-o", "out"])
         .assert_one_line_error("missing export", &["missing/film.json"]);
@@ -147,7 +145,7 @@ fn bad_exports_and_destinations_are_one_line_errors() {
     irid_in(d, ["preview", "broken", "-o", "out"])
         .assert_one_line_error("another format", &["broken/film.json", "irid-film"]);
 
-    fake_export(d, "escape", false);
+    fake_export(d, "escape", true);
     let film = fs::read_to_string(d.join("escape/film.json")).unwrap();
     fs::write(
         d.join("escape/film.json"),
@@ -157,7 +155,7 @@ fn bad_exports_and_destinations_are_one_line_errors() {
     irid_in(d, ["preview", "escape", "-o", "out"])
         .assert_one_line_error("a path in film.json", &["not a plain file name"]);
 
-    fake_export(d, "incomplete", false);
+    fake_export(d, "incomplete", true);
     fs::remove_file(d.join("incomplete/transmittance.exr")).unwrap();
     irid_in(d, ["preview", "incomplete", "-o", "out"])
         .assert_one_line_error("a texture missing", &["incomplete/transmittance.exr"]);

@@ -10,7 +10,8 @@
 (function (ns) {
   'use strict';
 
-  // The sampler's parameters, in the order of the export's IridParams.
+  // Parameters every export has (docs/gpu.md); the sampler's block may
+  // hold more, each filled from film.json's params by name.
   const PARAM_NAMES = [
     'thickness_min_nm', 'thickness_max_nm', 'cos_min', 'cos_max',
     'cos_crit', 'y_crit', 'size_u', 'size_v',
@@ -105,20 +106,27 @@
       || d.cos_theta[0] < 0 || d.cos_theta[1] > 1) {
       fail('domain ranges are empty or out of order');
     }
-    if (!film.params || !PARAM_NAMES.every((n) => isNumber(film.params[n]))) {
-      fail(`params must hold the numbers ${PARAM_NAMES.join(', ')}`);
+    if (!film.params || typeof film.params !== 'object' || !Object.values(film.params).every(isNumber)
+      || !PARAM_NAMES.every((n) => n in film.params)) {
+      fail(`params must be numbers, among them ${PARAM_NAMES.join(', ')}`);
     }
     if (typeof film.white !== 'string') fail('white must be a string');
   }
 
-  /** RGBA Float32Array of one texture, from the 16-bit PNG if listed, else the EXR. */
+  /**
+   * RGBA Float32Array of one texture: from the half-float EXR, which holds
+   * the values as the GPU samples them (negative ones, for colours outside
+   * the sRGB gamut, included); from the 16-bit PNG only when film.json
+   * lists no EXR (PNGs clamp at 0).
+   */
   async function loadTexture(source, film, which) {
     const { width, height } = film.texture;
     const png = film.texture.png;
+    const exr = film.texture.files && film.texture.files[which];
     let image;
     let data;
     let kind;
-    if (png && png[which]) {
+    if (!exr && png && png[which]) {
       const file = png[which];
       const scale = png.scale;
       if (!isNumber(scale) || scale <= 0) throw new Error(`${source.name}film.json: texture.png.scale must be a positive number`);
@@ -128,7 +136,7 @@
       for (let i = 0; i < data.length; i++) data[i] = (i & 3) === 3 ? 1 : (image.data[i] / 65535) * scale;
       kind = `PNG16 (${file})`;
     } else {
-      const file = film.texture.files && film.texture.files[which];
+      const file = exr;
       if (typeof file !== 'string') throw new Error(`${source.name}film.json: texture.files.${which} is missing`);
       image = await ns.decodeExr(await source.bytes(file), `${source.name}${file}`);
       data = image.data;
@@ -361,16 +369,11 @@ void main() {
       const view = new DataView(data);
       const indices = gl.getActiveUniformBlockParameter(program, blockIndex, gl.UNIFORM_BLOCK_ACTIVE_UNIFORM_INDICES);
       const offsets = gl.getActiveUniforms(program, indices, gl.UNIFORM_OFFSET);
-      const found = new Set();
       indices.forEach((index, i) => {
         const name = gl.getActiveUniform(program, index).name.split('.').pop();
-        if (name in values) {
-          view.setFloat32(offsets[i], values[name], true);
-          found.add(name);
-        }
+        if (!(name in values)) throw new Error(`${what}: film.json's params lack ${name}, which the sampler reads`);
+        view.setFloat32(offsets[i], values[name], true);
       });
-      const missing = PARAM_NAMES.filter((n) => !found.has(n));
-      if (missing.length) throw new Error(`${what}: the parameter block lacks ${missing.join(', ')}`);
       const buffer = gl.createBuffer();
       gl.bindBuffer(gl.UNIFORM_BUFFER, buffer);
       gl.bufferData(gl.UNIFORM_BUFFER, data, gl.STATIC_DRAW);
@@ -378,7 +381,7 @@ void main() {
       program.iridParams = buffer;
     } else {
       let bound = 0;
-      for (const name of PARAM_NAMES) {
+      for (const name of Object.keys(values)) {
         const location = [`irid_params.${name}`, `irid_${name}`, name]
           .map((n) => program.uniform(n)).find((l) => l !== null);
         if (location) {
@@ -558,7 +561,11 @@ void main() {
       ['layer', `${f.layer ?? '—'} of ${f.stack && Array.isArray(f.stack.layers) ? f.stack.layers.length : '?'}`],
       ['thickness', `${f.domain.thickness_nm[0]} – ${f.domain.thickness_nm[1]} nm`],
       ['angle', `${deg(f.domain.cos_theta[1]).toFixed(1)}° – ${deg(f.domain.cos_theta[0]).toFixed(1)}°`],
-      ['critical angle', f.params.cos_crit < 0 ? 'none' : `${deg(f.params.cos_crit).toFixed(2)}°`],
+      // cos_crit < 0: angle nodes uniform in cos θ; = cos_min: crowded
+      // towards grazing; inside the domain: a dense side's critical angle.
+      ['angle nodes', f.params.cos_crit < 0 ? 'uniform in cos θ'
+        : f.params.cos_crit <= f.domain.cos_theta[0] ? 'crowded towards grazing'
+          : `on the critical angle ${deg(f.params.cos_crit).toFixed(2)}°`],
       ['texture', `${f.texture.width} × ${f.texture.height}, ${exp.reflectance.kind}`],
       ['opaque', f.opaque ? 'yes (T drawn black)' : 'no'],
     ];

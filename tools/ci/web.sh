@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # CI: the browser preview (web/) in headless Chromium. Installs what is
-# missing (Debian's chromium, node and npm; playwright-core from
+# missing (Debian's chromium, node and npm; playwright-core and three from
 # tools/web/package-lock.json), builds irid, exports three stacks, writes a
 # preview of them with `irid preview`, and runs tools/web/test_web.mjs.
 # Exits non-zero on any failure.
