@@ -89,8 +89,8 @@ def block(run):
         "",
         f"![speed against error, every method]({run}/speed-vs-error.png)",
         "",
-        f"Medians over the six stacks of `luts/` (a method marked \"(3 stacks)\" applies "
-        f"to one-film stacks only); errors against the exact 1 nm reference at 10 000 random "
+        f"Medians over the bench's six stacks (the examples in `luts/`, the mirror seen from "
+        f"both sides; a method marked \"(3 stacks)\" applies to one-film stacks only); errors against the exact 1 nm reference at 10 000 random "
         f"points; one evaluation is one thickness and angle to linear sRGB, on one thread. "
         f"Measured {date} on {machine}.",
     ]
@@ -105,13 +105,14 @@ def block(run):
                 vals = [float(row[k].rstrip("x")) for row in general]
                 ratios[peer] = (min(vals), max(vals))
         points = general[0][header.index("points")]
+        npoints = f"{int(points):,}".replace(",", " ")
         names = {"tmm": "Byrnes' tmm"}
         parts = [f"{lo:g}–{hi:g}× than {names.get(peer, peer)}" for peer, (lo, hi) in ratios.items()]
         parts[0] = parts[0].replace("× than", "× faster than", 1)
         listed = ", ".join(parts[:-1]) + " and " + parts[-1] if len(parts) > 1 else parts[0]
         out += [
             "",
-            f"Against other transfer-matrix codes on the same {int(points):,}-point "
+            f"Against other transfer-matrix codes on the same {npoints}-point "
             f"wavelength × angle grids, irid is {listed}, and agrees with Byrnes' tmm "
             f"to 1e-9 at every point ([peers.md]({peers_path})).",
         ]

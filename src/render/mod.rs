@@ -29,9 +29,9 @@ use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
 pub use self::image::Image;
-pub use film::{DirectFilm, FilmRgb, FilmShading, Side};
+pub use film::{DirectFilm, FilmShading, Side};
 pub use lut_film::LutFilm;
-pub use output::ColourDifference;
+pub use output::ColorDifference;
 pub use scene::Scene;
 pub use scene_file::builtin_names;
 

@@ -50,7 +50,7 @@ fn sweep_matches_exact_phase() {
 /// only zeros to the one weight), so folding the integration into the
 /// bake gives what integrating each spectrum would.
 #[test]
-fn rgb_weights_are_the_colour_of_an_impulse() {
+fn rgb_weights_are_the_color_of_an_impulse() {
     use crate::color::Sampling;
     for sampling in [
         Sampling::Exact,
