@@ -158,7 +158,10 @@ pub fn glsl_program(generated: &str) -> Source {
         // The parameter block at set 0, binding 3 (GLSL 4.50 gives the
         // binding, ES 3.00 none).
         let line = line
-            .replace("layout(std140, binding = 3) uniform", "layout(std140) uniform")
+            .replace(
+                "layout(std140, binding = 3) uniform",
+                "layout(std140) uniform",
+            )
             .replace(
                 "layout(std140) uniform",
                 "layout(std140, set = 0, binding = 3) uniform",
