@@ -17,6 +17,7 @@ pub mod lut;
 pub mod optics;
 pub mod render;
 mod simd;
+pub mod web;
 
 pub use error::{Error, Result};
 

@@ -40,6 +40,8 @@ enum Command {
     Render(cli::render::Args),
     /// Bake, render every built-in scene into out/, and report times and colour error.
     Demo(cli::demo::Args),
+    /// Write a browser (WebGL2) preview of exports into a folder.
+    Preview(cli::preview::Args),
 }
 
 fn main() -> ExitCode {
@@ -67,6 +69,7 @@ fn main() -> ExitCode {
         Command::Validate(args) => cli::validate::run(args),
         Command::Render(args) => cli::render::run(args),
         Command::Demo(args) => cli::demo::run(args),
+        Command::Preview(args) => cli::preview::run(args),
     };
     match result {
         Ok(code) => code,

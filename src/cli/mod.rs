@@ -25,5 +25,6 @@ pub mod eval;
 pub mod export;
 pub mod info;
 pub mod logger;
+pub mod preview;
 pub mod render;
 pub mod validate;

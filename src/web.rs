@@ -1,0 +1,263 @@
+//! The browser preview: writes a folder holding the WebGL2 page of `web/`
+//! and one or more exports (`irid export` folders), ready to open.
+//!
+//! The page's assets are compiled into the binary, so a preview never mixes
+//! a page and an irid of different versions. The exports are copied into
+//! `exports/NAME/` (the page can fetch them when the folder is served) and
+//! embedded in `exports.js`, base64 for the textures, because a page opened
+//! from `file://` may run scripts but not fetch files.
+
+use std::fs;
+use std::path::{Path, PathBuf};
+
+use serde_json::{json, Map, Value};
+
+use crate::error::{Error, Result};
+
+/// The page's files, as `web/` holds them.
+const ASSETS: [(&str, &str); 5] = [
+    ("index.html", include_str!("../web/index.html")),
+    ("style.css", include_str!("../web/style.css")),
+    ("png16.js", include_str!("../web/png16.js")),
+    ("exr.js", include_str!("../web/exr.js")),
+    ("preview.js", include_str!("../web/preview.js")),
+];
+
+/// The file a preview folder is recognised by (and may be replaced for).
+const MARKER: &str = "exports.js";
+
+/// One export, read and checked.
+struct Export {
+    name: String,
+    /// Every regular file of the export folder, by file name.
+    files: Vec<(String, Vec<u8>)>,
+    /// The files the page reads: film.json, the sampler, two textures.
+    used: Vec<String>,
+}
+
+/// What [`write_preview`] wrote.
+#[derive(Debug)]
+pub struct Preview {
+    pub index: PathBuf,
+    pub exports: Vec<String>,
+}
+
+/// Writes a preview of `exports` (export folders) into `out`. `out` must not
+/// exist, be empty, or be an earlier preview (which is replaced whole). The
+/// preview is assembled beside `out` and moved into place at the end, so a
+/// failure leaves no half-written folder.
+pub fn write_preview(exports: &[PathBuf], out: &Path) -> Result<Preview> {
+    if exports.is_empty() {
+        return Err(Error::invalid("exports", "give at least one export folder"));
+    }
+    let mut read = Vec::new();
+    for dir in exports {
+        let mut export = read_export(dir)?;
+        // Two folders of the same name (a/film, b/film) get film, film-2, ...
+        let base = export.name.clone();
+        let mut k = 2;
+        while read.iter().any(|e: &Export| e.name == export.name) {
+            export.name = format!("{base}-{k}");
+            k += 1;
+        }
+        read.push(export);
+    }
+    check_destination(out)?;
+
+    let parent = match out.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    let file_name = out
+        .file_name()
+        .ok_or_else(|| Error::invalid(out.display().to_string(), "names no folder"))?;
+    let staging = parent.join(format!(
+        ".{}.partial-{}",
+        file_name.to_string_lossy(),
+        std::process::id()
+    ));
+    let result = assemble(&read, &staging).and_then(|()| {
+        if out.exists() {
+            fs::remove_dir_all(out).map_err(|e| Error::io(out, e))?;
+        }
+        fs::rename(&staging, out).map_err(|e| Error::io(out, e))
+    });
+    if result.is_err() {
+        let _ = fs::remove_dir_all(&staging);
+    }
+    result?;
+    Ok(Preview {
+        index: out.join("index.html"),
+        exports: read.into_iter().map(|e| e.name).collect(),
+    })
+}
+
+fn check_destination(out: &Path) -> Result<()> {
+    if !out.exists() {
+        return Ok(());
+    }
+    if !out.is_dir() {
+        return Err(Error::invalid(
+            out.display().to_string(),
+            "exists and is not a folder",
+        ));
+    }
+    let empty = fs::read_dir(out)
+        .map_err(|e| Error::io(out, e))?
+        .next()
+        .is_none();
+    if empty || out.join(MARKER).is_file() {
+        return Ok(());
+    }
+    Err(Error::invalid(
+        out.display().to_string(),
+        "exists and holds files that are not an irid preview; give a new or empty folder",
+    ))
+}
+
+fn read_export(dir: &Path) -> Result<Export> {
+    let film_path = dir.join("film.json");
+    let text = fs::read_to_string(&film_path).map_err(|e| Error::io(&film_path, e))?;
+    let film: Value = serde_json::from_str(&text)
+        .map_err(|e| Error::malformed(&film_path, format!("not valid JSON: {e}")))?;
+    if film.get("format").and_then(Value::as_str) != Some("irid-film") {
+        return Err(Error::malformed(
+            &film_path,
+            "not an irid export (its \"format\" is not \"irid-film\")",
+        ));
+    }
+    let texture = film
+        .get("texture")
+        .ok_or_else(|| Error::malformed(&film_path, "no \"texture\""))?;
+    // The page reads the EXRs, and the 16-bit PNGs only when no EXR is listed.
+    let listed = match texture.get("files") {
+        Some(files) if files.is_object() => files,
+        _ => texture
+            .get("png")
+            .filter(|png| png.is_object())
+            .ok_or_else(|| Error::malformed(&film_path, "lists no texture files"))?,
+    };
+    let mut used = vec!["film.json".to_string(), "irid_film_es.glsl".to_string()];
+    for which in ["reflectance", "transmittance"] {
+        let name = listed
+            .get(which)
+            .and_then(Value::as_str)
+            .ok_or_else(|| Error::malformed(&film_path, format!("no texture file for {which}")))?;
+        // film.json names files beside it, never elsewhere.
+        if name.is_empty() || name.contains(['/', '\\']) || name == ".." {
+            return Err(Error::malformed(
+                &film_path,
+                format!("texture file {name:?} is not a plain file name"),
+            ));
+        }
+        used.push(name.to_string());
+    }
+
+    let mut files = Vec::new();
+    for entry in fs::read_dir(dir).map_err(|e| Error::io(dir, e))? {
+        let entry = entry.map_err(|e| Error::io(dir, e))?;
+        let path = entry.path();
+        if !path.is_file() {
+            continue;
+        }
+        let bytes = fs::read(&path).map_err(|e| Error::io(&path, e))?;
+        files.push((entry.file_name().to_string_lossy().into_owned(), bytes));
+    }
+    files.sort();
+    for name in &used {
+        if !files.iter().any(|(f, _)| f == name) {
+            return Err(Error::io(
+                dir.join(name),
+                std::io::Error::from(std::io::ErrorKind::NotFound),
+            ));
+        }
+    }
+    let name = fs::canonicalize(dir)
+        .ok()
+        .and_then(|p| p.file_name().map(|n| n.to_string_lossy().into_owned()))
+        .filter(|n| !n.is_empty())
+        .unwrap_or_else(|| "export".to_string());
+    Ok(Export { name, files, used })
+}
+
+fn assemble(exports: &[Export], staging: &Path) -> Result<()> {
+    if staging.exists() {
+        fs::remove_dir_all(staging).map_err(|e| Error::io(staging, e))?;
+    }
+    fs::create_dir_all(staging).map_err(|e| Error::io(staging, e))?;
+    let write =
+        |path: PathBuf, bytes: &[u8]| fs::write(&path, bytes).map_err(|e| Error::io(&path, e));
+    for (name, text) in ASSETS {
+        write(staging.join(name), text.as_bytes())?;
+    }
+    let mut embedded = Vec::new();
+    for export in exports {
+        let dir = staging.join("exports").join(&export.name);
+        fs::create_dir_all(&dir).map_err(|e| Error::io(&dir, e))?;
+        let mut files = Map::new();
+        for (name, bytes) in &export.files {
+            write(dir.join(name), bytes)?;
+            if !export.used.contains(name) {
+                continue;
+            }
+            let item = match std::str::from_utf8(bytes) {
+                Ok(text) if name.ends_with(".json") || name.ends_with(".glsl") => {
+                    json!({ "text": text })
+                }
+                _ => json!({ "base64": base64(bytes) }),
+            };
+            files.insert(name.clone(), item);
+        }
+        embedded.push(json!({ "name": export.name, "files": files }));
+    }
+    let script = format!(
+        "// Written by irid preview: the exports, embedded so that index.html also opens from file://.\n\
+         window.IRID_EXPORTS = {};\n",
+        Value::Array(embedded)
+    );
+    write(staging.join(MARKER), script.as_bytes())
+}
+
+/// Standard base64 (RFC 4648, with padding).
+fn base64(bytes: &[u8]) -> String {
+    const ALPHABET: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    let mut out = String::with_capacity(bytes.len().div_ceil(3) * 4);
+    for chunk in bytes.chunks(3) {
+        let b = [
+            chunk[0],
+            chunk.get(1).copied().unwrap_or(0),
+            chunk.get(2).copied().unwrap_or(0),
+        ];
+        let n = (u32::from(b[0]) << 16) | (u32::from(b[1]) << 8) | u32::from(b[2]);
+        for (i, shift) in [18, 12, 6, 0].into_iter().enumerate() {
+            if i <= chunk.len() {
+                out.push(char::from(ALPHABET[((n >> shift) & 63) as usize]));
+            } else {
+                out.push('=');
+            }
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::base64;
+
+    #[test]
+    fn base64_matches_rfc_4648_vectors() {
+        let cases = [
+            ("", ""),
+            ("f", "Zg=="),
+            ("fo", "Zm8="),
+            ("foo", "Zm9v"),
+            ("foob", "Zm9vYg=="),
+            ("fooba", "Zm9vYmE="),
+            ("foobar", "Zm9vYmFy"),
+        ];
+        for (input, expected) in cases {
+            assert_eq!(base64(input.as_bytes()), expected);
+        }
+        assert_eq!(base64(&[0xff, 0xfe, 0x00]), "//4A");
+    }
+}

@@ -1,0 +1,36 @@
+#!/usr/bin/env bash
+# CI: the browser preview (web/) in headless Chromium. Installs what is
+# missing (Debian's chromium, node and npm; playwright-core and three from
+# tools/web/package-lock.json), builds irid, exports three stacks, writes a
+# preview of them with `irid preview`, and runs tools/web/test_web.mjs.
+# Exits non-zero on any failure.
+set -euo pipefail
+cd "$(dirname "$0")/../.."
+
+missing=()
+command -v chromium >/dev/null || missing+=(chromium)
+command -v node >/dev/null || missing+=(nodejs)
+command -v npm >/dev/null || missing+=(npm)
+if [ ${#missing[@]} -gt 0 ]; then
+    apt-get update -qq
+    DEBIAN_FRONTEND=noninteractive apt-get install -y -qq "${missing[@]}"
+fi
+(cd tools/web && npm ci --no-audit --no-fund --loglevel=error)
+
+cargo build --release
+irid="$PWD/target/release/irid"
+work="$(mktemp -d)"
+trap 'rm -rf "$work"' EXIT
+
+# Three exports: a free-standing film with the 16-bit PNGs (the page reads
+# them first; the test also reads its EXRs), an absorbing film on gold
+# (opaque), and a film seen from its dense side (the warped angle axis).
+# The test compares each one's chart with `irid color` on its stack file.
+"$irid" export luts/soap-film.toml --thickness 100:1000 --png -o "$work/soap-film" --quiet
+"$irid" export luts/two-layer.toml --layer 1 --thickness 50:600 -o "$work/two-layer" --quiet
+"$irid" export tools/web/dense-side.toml --thickness 100:800 -o "$work/dense-side" --quiet
+"$irid" preview "$work/soap-film" "$work/two-layer" "$work/dense-side" -o "$work/preview"
+
+IRID_PREVIEW="$work/preview" IRID_BIN="$irid" \
+    IRID_STACKS="soap-film=luts/soap-film.toml,two-layer=luts/two-layer.toml,dense-side=tools/web/dense-side.toml" \
+    node --test tools/web/test_web.mjs

@@ -1,0 +1,432 @@
+// The WebGL2 preview in a real browser: Debian's chromium, headless, driven
+// by playwright-core, the page served from 127.0.0.1.
+//
+// Environment:
+//   IRID_PREVIEW     a folder written by `irid preview` (required)
+//   IRID_STACKS      NAME=STACK.toml,... : the stack file each export NAME of
+//                    the preview was made from (required for at least one:
+//                    the reference colours come from `irid color` on it)
+//   IRID_BIN         irid (default: target/release/irid of this repository)
+//   IRID_SCREENSHOT  where to write a screenshot of the page (optional)
+//   CHROMIUM         the browser (default /usr/bin/chromium)
+//
+// Run: node --test tools/web/test_web.mjs
+
+import { test, before, after } from 'node:test';
+import assert from 'node:assert/strict';
+import { execFileSync } from 'node:child_process';
+import fs from 'node:fs';
+import http from 'node:http';
+import os from 'node:os';
+import path from 'node:path';
+import { fileURLToPath } from 'node:url';
+import { chromium } from 'playwright-core';
+import { srgb8ToLinear, linearSrgbToLab, deltaE00 } from './colour.mjs';
+
+const REPO = path.resolve(path.dirname(fileURLToPath(import.meta.url)), '../..');
+const PREVIEW = process.env.IRID_PREVIEW;
+const STACKS = new Map((process.env.IRID_STACKS || '').split(',').filter(Boolean).map((pair) => {
+  const at = pair.indexOf('=');
+  return [pair.slice(0, at), path.resolve(pair.slice(at + 1))];
+}));
+const IRID = process.env.IRID_BIN || path.join(REPO, 'target/release/irid');
+const CHROMIUM = process.env.CHROMIUM || '/usr/bin/chromium';
+if (!PREVIEW || STACKS.size === 0) {
+  throw new Error('set IRID_PREVIEW (a folder written by `irid preview`) and IRID_STACKS (NAME=STACK.toml,...)');
+}
+
+const MIME = {
+  '.html': 'text/html', '.js': 'text/javascript', '.mjs': 'text/javascript', '.css': 'text/css', '.json': 'application/json',
+  '.png': 'image/png', '.exr': 'image/x-exr', '.glsl': 'text/plain',
+};
+
+let root;
+let server;
+let baseUrl;
+let browser;
+
+function serve(dir) {
+  return http.createServer((req, res) => {
+    const url = new URL(req.url, 'http://127.0.0.1');
+    const file = path.join(dir, decodeURIComponent(url.pathname));
+    if (!file.startsWith(dir + path.sep) || !fs.existsSync(file) || !fs.statSync(file).isFile()) {
+      res.writeHead(404).end('not found');
+      return;
+    }
+    res.writeHead(200, { 'content-type': MIME[path.extname(file)] || 'application/octet-stream' });
+    fs.createReadStream(file).pipe(res);
+  });
+}
+
+/** The first export named in IRID_STACKS, as a folder under `root`. */
+function firstExportDir() {
+  const name = [...STACKS.keys()][0];
+  const dir = path.join('preview', 'exports', name);
+  assert.ok(fs.existsSync(path.join(root, dir, 'film.json')), `the preview holds no export ${name}`);
+  return dir;
+}
+
+before(async () => {
+  root = fs.mkdtempSync(path.join(os.tmpdir(), 'irid-web-'));
+  fs.cpSync(PREVIEW, path.join(root, 'preview'), { recursive: true });
+  // The three.js recipe's page, and three.js from tools/web/node_modules.
+  const here = path.dirname(fileURLToPath(import.meta.url));
+  fs.mkdirSync(path.join(root, 'tools'));
+  for (const f of ['three_film.mjs', 'three_check.html']) fs.copyFileSync(path.join(here, f), path.join(root, 'tools', f));
+  fs.cpSync(path.join(here, 'node_modules/three/build'), path.join(root, 'three'), { recursive: true });
+  server = serve(root);
+  await new Promise((resolve) => server.listen(0, '127.0.0.1', resolve));
+  baseUrl = `http://127.0.0.1:${server.address().port}`;
+  browser = await chromium.launch({
+    executablePath: CHROMIUM,
+    headless: true,
+    // WebGL2 without a GPU: ANGLE on SwiftShader.
+    args: ['--no-sandbox', '--no-first-run', '--disable-background-networking', '--disable-component-update',
+      '--disable-sync', '--disable-quic', '--use-angle=swiftshader', '--enable-unsafe-swiftshader'],
+  });
+});
+
+after(async () => {
+  await browser?.close();
+  server?.close();
+  if (root) fs.rmSync(root, { recursive: true, force: true });
+});
+
+async function open(query = '', init, url = `${baseUrl}/preview/index.html`) {
+  const page = await browser.newPage({ viewport: { width: 1100, height: 760 }, deviceScaleFactor: 1 });
+  const errors = [];
+  page.on('pageerror', (e) => errors.push(e.message));
+  if (init) await page.addInitScript(init);
+  await page.goto(`${url}${query}`);
+  await page.waitForFunction(() => document.body.dataset.state && document.body.dataset.state !== 'loading', null, { timeout: 60000 });
+  page.errors = errors;
+  return page;
+}
+
+async function ready(query = '', url = undefined) {
+  const page = await open(query, undefined, url);
+  const state = await page.evaluate(() => document.body.dataset.state);
+  const message = await page.textContent('#message');
+  assert.equal(state, 'ready', `the page reports: ${message}`);
+  await page.waitForFunction(() => Number(document.body.dataset.frames) >= 1);
+  assert.deepEqual(page.errors, []);
+  return page;
+}
+
+async function setControl(page, id, value) {
+  await page.$eval(`#${id}`, (el, v) => {
+    el.value = v;
+    el.dispatchEvent(new Event('input', { bubbles: true }));
+  }, String(value));
+}
+
+/** The canvas as {width, height, data: RGBA8 rows bottom to top}. */
+async function pixels(page) {
+  const { width, height, base64 } = await page.evaluate(() => window.irid.pixels());
+  return { width, height, data: new Uint8Array(Buffer.from(base64, 'base64')) };
+}
+
+/** The stack file with layer `layer`'s thickness set, in a temporary file. */
+function stackWithThickness(text, layer, thickness, dir) {
+  let seen = 0;
+  const out = text.replace(/^(\s*thickness_nm\s*=\s*)[^#\n]+/gm, (m, lead) => {
+    seen++;
+    return seen === layer ? `${lead}${thickness}` : m;
+  });
+  assert.ok(seen >= layer, `the stack file has no layer ${layer}`);
+  const file = path.join(dir, `stack-${thickness}.toml`);
+  fs.writeFileSync(file, out);
+  return file;
+}
+
+/** The page's chart pixels against `irid color` at the same (thickness, angle). */
+async function compareChart(page, film, quantity, stackFile) {
+  await page.selectOption('#mode', quantity === 'reflectance' ? 'chart-r' : 'chart-t');
+  const image = await pixels(page);
+  const { width, height, data } = image;
+  // The chart's mapping, restated from the page's contract: pixel centres,
+  // thickness linear in x, angle linear in y from acos(cos_max) at the bottom.
+  const [t0, t1] = film.domain.thickness_nm;
+  const angleLo = Math.acos(film.domain.cos_theta[1]);
+  const angleHi = Math.acos(film.domain.cos_theta[0]);
+  const columns = 24;
+  const rows = 10;
+  const text = fs.readFileSync(stackFile, 'utf8');
+  const tmp = fs.mkdtempSync(path.join(os.tmpdir(), 'irid-web-stack-'));
+  const differences = [];
+  try {
+    for (let i = 0; i < columns; i++) {
+      const px = Math.floor(((i + 0.5) / columns) * width);
+      const thickness = t0 + ((px + 0.5) / width) * (t1 - t0);
+      const pys = [];
+      const angles = [];
+      for (let j = 0; j < rows; j++) {
+        const py = Math.floor(((j + 0.5) / rows) * height);
+        const theta = angleLo + ((py + 0.5) / height) * (angleHi - angleLo);
+        const deg = (theta * 180) / Math.PI;
+        if (deg >= 90) continue;
+        pys.push(py);
+        angles.push(deg);
+      }
+      const stack = stackWithThickness(text, film.layer, thickness, tmp);
+      const out = execFileSync(IRID, ['color', stack, '--json', '--angles', angles.map((a) => a.toPrecision(17)).join(',')], { encoding: 'utf8' });
+      const colours = JSON.parse(out);
+      assert.equal(colours.length, angles.length);
+      colours.forEach((c, k) => {
+        const o = (pys[k] * width + px) * 4; // readPixels rows run bottom to top
+        const shown = [0, 1, 2].map((ch) => srgb8ToLinear(data[o + ch]));
+        // The page can only show [0, 1]: the reference is clamped likewise.
+        const exact = c[`${quantity}_rgb`].map((v) => Math.min(1, Math.max(0, v)));
+        differences.push(deltaE00(linearSrgbToLab(exact), linearSrgbToLab(shown)));
+      });
+    }
+  } finally {
+    fs.rmSync(tmp, { recursive: true, force: true });
+  }
+  const mean = differences.reduce((s, d) => s + d, 0) / differences.length;
+  const max = Math.max(...differences);
+  return { mean, max, points: differences.length };
+}
+
+function readFilm(dir) {
+  return JSON.parse(fs.readFileSync(path.join(root, dir, 'film.json'), 'utf8'));
+}
+
+test('CIEDE2000 reproduces Sharma, Wu and Dalal (2005)', () => {
+  const pairs = [
+    [[50, 2.6772, -79.7751], [50, 0, -82.7485], 2.0425],
+    [[50, 0, 0], [50, -1, 2], 2.3669],
+    [[50, 2.5, 0], [73, 25, -18], 27.1492],
+    [[60.2574, -34.0099, 36.2677], [60.4626, -34.1751, 39.4387], 1.2644],
+    [[22.7233, 20.0904, -46.694], [23.0331, 14.973, -42.5619], 2.0373],
+  ];
+  for (const [a, b, expected] of pairs) assert.ok(Math.abs(deltaE00(a, b) - expected) < 5e-5, `${a} ${b}`);
+  assert.ok(Math.abs(srgb8ToLinear(255) - 1) < 1e-12 && srgb8ToLinear(0) === 0);
+});
+
+test('the page opens, draws, and its charts match irid color (ΔE00 after 8-bit sRGB encoding)', async () => {
+  const page = await ready();
+  const labels = await page.evaluate(() => window.irid.preview.exports.map((e) => e.label));
+  for (const [name, stackFile] of STACKS) {
+    const index = labels.indexOf(name);
+    assert.ok(index >= 0, `the page offers no export ${name} (it offers ${labels.join(', ')})`);
+    await page.selectOption('#export', String(index));
+    const film = readFilm(path.join('preview', 'exports', name));
+    if (film.white !== 'd65') {
+      throw new Error(`${name}: the reference (irid color) is D65 linear sRGB; this export's white is ${film.white}`);
+    }
+    for (const quantity of ['reflectance', 'transmittance']) {
+      const r = await compareChart(page, film, quantity, stackFile);
+      console.log(`${name} chart ${quantity}: ΔE00 mean ${r.mean.toFixed(3)}, max ${r.max.toFixed(3)} over ${r.points} points`);
+      assert.ok(r.mean <= 0.5, `${name} ${quantity}: mean ΔE00 ${r.mean}`);
+    }
+  }
+  await page.close();
+});
+
+test('the 16-bit PNGs, read when film.json lists no EXR, give the chart too', async () => {
+  const dir = firstExportDir();
+  const film = readFilm(dir);
+  if (!film.texture.png) return; // exported without --png: nothing to read
+  const pngOnly = path.join(root, 'png-only');
+  fs.cpSync(path.join(root, dir), pngOnly, { recursive: true });
+  fs.writeFileSync(path.join(pngOnly, 'film.json'), JSON.stringify({ ...film, texture: { ...film.texture, files: null } }));
+  for (const f of Object.values(film.texture.files)) fs.rmSync(path.join(pngOnly, f), { force: true });
+  const page = await ready('?export=../png-only/');
+  assert.match(await page.textContent('#info'), /PNG16/);
+  const r = await compareChart(page, film, 'reflectance', STACKS.get(path.basename(dir)));
+  console.log(`${path.basename(dir)} chart reflectance from the PNGs: ΔE00 mean ${r.mean.toFixed(3)}, max ${r.max.toFixed(3)} over ${r.points} points`);
+  assert.ok(r.mean <= 0.5, `mean ΔE00 ${r.mean}`);
+  await page.close();
+});
+
+test('the preview opens from file:// (embedded exports) and draws what the page draws from fetched files', async () => {
+  const local = await ready('', `file://${path.join(root, 'preview', 'index.html')}`);
+  const name = await local.evaluate(() => window.irid.preview.current.label);
+  await local.selectOption('#mode', 'chart-r');
+  const fromFile = await pixels(local);
+  await local.close();
+  const served = await ready(`?export=exports/${name}/`);
+  assert.equal(await served.evaluate(() => window.irid.preview.current.name), `exports/${name}/`);
+  await served.selectOption('#mode', 'chart-r');
+  const fromServer = await pixels(served);
+  await served.close();
+  assert.equal(Buffer.compare(Buffer.from(fromServer.data), Buffer.from(fromFile.data)), 0);
+});
+
+/** Mean absolute difference of two RGBA8 images over a centred box. */
+function boxDifference(a, b, size) {
+  let sum = 0;
+  let n = 0;
+  const x0 = (a.width - size) >> 1;
+  const y0 = (a.height - size) >> 1;
+  for (let y = y0; y < y0 + size; y++) {
+    for (let x = x0; x < x0 + size; x++) {
+      for (let ch = 0; ch < 3; ch++) {
+        const o = (y * a.width + x) * 4 + ch;
+        sum += Math.abs(a.data[o] - b.data[o]);
+        n++;
+      }
+    }
+  }
+  return sum / n;
+}
+
+test('the sphere is drawn, and the thickness control changes it', async () => {
+  const page = await ready();
+  await page.selectOption('#mode', 'object');
+  const first = await pixels(page);
+  // Not blank: the centre shows many colours, not the background alone.
+  const colours = new Set();
+  let lit = 0;
+  const size = 160;
+  for (let y = (first.height - size) >> 1, i = 0; i < size; y++, i++) {
+    for (let x = (first.width - size) >> 1, j = 0; j < size; x++, j++) {
+      const o = (y * first.width + x) * 4;
+      colours.add((first.data[o] << 16) | (first.data[o + 1] << 8) | first.data[o + 2]);
+      if (first.data[o] + first.data[o + 1] + first.data[o + 2] > 30) lit++;
+    }
+  }
+  assert.ok(colours.size > 200, `only ${colours.size} colours at the centre`);
+  assert.ok(lit > 0.5 * size * size, `only ${lit} lit pixels at the centre`);
+
+  // Rendering is deterministic: the same controls give the same pixels, so
+  // any difference below comes from the control changed.
+  const [tMin, tMax] = await page.evaluate(() => window.irid.preview.current.film.domain.thickness_nm);
+  await setControl(page, 'thickness', tMin + 0.2 * (tMax - tMin));
+  const thin = await pixels(page);
+  assert.equal(boxDifference(thin, await pixels(page), size), 0, 'two draws of the same scene differ');
+  await setControl(page, 'thickness', tMin + 0.8 * (tMax - tMin));
+  const thick = await pixels(page);
+  const change = boxDifference(thin, thick, size);
+  console.log(`thickness at 20 % → 80 % of the range: mean |Δ| ${change.toFixed(2)} of 255 over the centre's RGB`);
+  assert.ok(change > 1, `moving the thickness changes the centre by ${change} only`);
+
+  await page.selectOption('#thickness-mode', 'noise');
+  const noise = await pixels(page);
+  assert.ok(boxDifference(thick, noise, size) > 1, 'noise thickness looks like the uniform one');
+  await page.selectOption('#object', 'torus');
+  const torus = await pixels(page);
+  assert.ok(boxDifference(noise, torus, size) > 1, 'the torus looks like the sphere');
+  assert.deepEqual(page.errors, []);
+  await page.close();
+});
+
+test('frame time: the film shader against the same scene with constant R and T', async () => {
+  const page = await ready();
+  await page.selectOption('#mode', 'object');
+  const film = [];
+  const plain = [];
+  // Alternating rounds, so that both see the same load on a shared machine.
+  for (let round = 0; round < 9; round++) {
+    film.push(await page.evaluate(() => window.irid.timeFrames(10, false)));
+    plain.push(await page.evaluate(() => window.irid.timeFrames(10, true)));
+  }
+  const median = (xs) => [...xs].sort((a, b) => a - b)[xs.length >> 1];
+  const renderer = await page.evaluate(() => {
+    const gl = document.getElementById('canvas').getContext('webgl2');
+    const e = gl.getExtension('WEBGL_debug_renderer_info');
+    return gl.getParameter(e ? e.UNMASKED_RENDERER_WEBGL : gl.RENDERER);
+  });
+  const size = await page.evaluate(() => [window.irid.preview.gl.canvas.width, window.irid.preview.gl.canvas.height]);
+  console.log(`frame time ${size[0]}×${size[1]} (${renderer}): film ${median(film).toFixed(1)} ms, `
+    + `constant R/T ${median(plain).toFixed(1)} ms, ratio ${(median(film) / median(plain)).toFixed(2)} (medians of 9 alternating rounds of 10 frames)`);
+  // A bound for software rendering, not a goal: a frame within 2 s.
+  assert.ok(median(film) < 2000, `${median(film)} ms per frame`);
+  await page.close();
+});
+
+test('the three.js recipe (three_film.mjs) shows R at normal incidence', async () => {
+  const dir = firstExportDir();
+  const name = path.basename(dir);
+  const film = readFilm(dir);
+  const page = await browser.newPage();
+  const errors = [];
+  page.on('pageerror', (e) => errors.push(e.message));
+  page.on('console', (m) => { if (m.type() === 'error') errors.push(m.text()); });
+  await page.goto(`${baseUrl}/tools/three_check.html?export=/${dir}/`);
+  await page.waitForFunction(() => document.body.dataset.state, null, { timeout: 60000 });
+  assert.equal(await page.evaluate(() => document.body.dataset.state), 'ready',
+    await page.evaluate(() => document.body.dataset.error));
+  const [t0, t1] = film.domain.thickness_nm;
+  const thicknesses = [0.1, 0.3, 0.5, 0.7, 0.9].map((f) => t0 + f * (t1 - t0));
+  const text = fs.readFileSync(STACKS.get(name), 'utf8');
+  const tmp = fs.mkdtempSync(path.join(os.tmpdir(), 'irid-web-three-'));
+  const differences = [];
+  const shown = [];
+  try {
+    for (const t of thicknesses) {
+      const rgb8 = await page.evaluate((x) => window.threeCheck.centre(x), t);
+      shown.push(rgb8.join(','));
+      const out = execFileSync(IRID, ['color', stackWithThickness(text, film.layer, t, tmp), '--json', '--angles', '0'], { encoding: 'utf8' });
+      const exact = JSON.parse(out)[0].reflectance_rgb.map((v) => Math.min(1, Math.max(0, v)));
+      differences.push(deltaE00(linearSrgbToLab(exact), linearSrgbToLab(rgb8.map(srgb8ToLinear))));
+    }
+  } finally {
+    fs.rmSync(tmp, { recursive: true, force: true });
+  }
+  await page.close();
+  assert.deepEqual(errors, []);
+  assert.equal(new Set(shown).size, thicknesses.length, `the thickness uniform changes nothing: ${shown.join(' ')}`);
+  const mean = differences.reduce((a, b) => a + b, 0) / differences.length;
+  console.log(`three.js recipe, ${name}, R at normal incidence: ΔE00 mean ${mean.toFixed(3)}, max ${Math.max(...differences).toFixed(3)} over ${differences.length} thicknesses`);
+  assert.ok(mean <= 1, `mean ΔE00 ${mean}`);
+});
+
+test('screenshot', async (t) => {
+  const out = process.env.IRID_SCREENSHOT;
+  if (!out) {
+    t.skip('IRID_SCREENSHOT not set');
+    return;
+  }
+  const page = await ready();
+  await page.selectOption('#mode', 'object');
+  await page.selectOption('#thickness-mode', 'noise');
+  await page.evaluate(() => window.irid.draw());
+  fs.mkdirSync(path.dirname(out), { recursive: true });
+  await page.screenshot({ path: out, clip: { x: 0, y: 0, width: 1100, height: 560 } });
+  await page.close();
+});
+
+test('a missing export, damaged ones, and no WebGL2 each show a message', async () => {
+  const dir = firstExportDir();
+  const film = readFilm(dir);
+
+  let page = await open('?export=../no-such-export/');
+  assert.equal(await page.evaluate(() => document.body.dataset.state), 'error');
+  assert.match(await page.textContent('#message'), /no-such-export\/film\.json: not found/);
+  await page.close();
+
+  const badJson = path.join(root, 'bad-json');
+  fs.cpSync(path.join(root, dir), badJson, { recursive: true });
+  fs.writeFileSync(path.join(badJson, 'film.json'), '{"format": "irid-film", "version": 1,');
+  page = await open('?export=../bad-json/');
+  assert.match(await page.textContent('#message'), /film\.json: not valid JSON/);
+  await page.close();
+
+  const truncated = path.join(root, 'truncated');
+  fs.cpSync(path.join(root, dir), truncated, { recursive: true });
+  const texture = film.texture.files.reflectance;
+  const bytes = fs.readFileSync(path.join(truncated, texture));
+  fs.writeFileSync(path.join(truncated, texture), bytes.subarray(0, bytes.length >> 1));
+  page = await open('?export=../truncated/');
+  const message = await page.textContent('#message');
+  assert.match(message, new RegExp(`${texture.replace('.', '\\.')}: .*(truncated|inflate|decompress)`));
+  await page.close();
+
+  const badShader = path.join(root, 'bad-shader');
+  fs.cpSync(path.join(root, dir), badShader, { recursive: true });
+  fs.writeFileSync(path.join(badShader, 'irid_film_es.glsl'), 'IridFilm irid_film(float t, float c) { return oops; }\n');
+  page = await open('?export=../bad-shader/');
+  assert.match(await page.textContent('#message'), /bad-shader\/irid_film_es\.glsl: does not compile/);
+  await page.close();
+
+  page = await open('', () => {
+    const original = HTMLCanvasElement.prototype.getContext;
+    HTMLCanvasElement.prototype.getContext = function (kind, ...rest) {
+      return kind === 'webgl2' ? null : original.call(this, kind, ...rest);
+    };
+  });
+  assert.match(await page.textContent('#message'), /does not offer WebGL2/);
+  await page.close();
+});

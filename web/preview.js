@@ -1,0 +1,882 @@
+// The irid preview: an exported film (film.json, its two textures and its
+// GLSL ES sampler irid_film_es.glsl) on a sphere or torus under a procedural
+// environment, and the film's colour chart, in plain WebGL2.
+//
+// Exports come from `window.IRID_EXPORTS` (embedded by `irid preview` in
+// exports.js, which lets the page open from file://) or from `?export=DIR/`
+// parameters (fetched; needs the page to be served over http).
+//
+// A classic script (not a module) so that the page also opens from file://.
+(function (ns) {
+  'use strict';
+
+  // Parameters every export has (docs/gpu.md); the sampler's block may
+  // hold more, each filled from film.json's params by name.
+  const PARAM_NAMES = [
+    'thickness_min_nm', 'thickness_max_nm', 'cos_min', 'cos_max',
+    'cos_crit', 'y_crit', 'size_u', 'size_v',
+  ];
+  const ENVIRONMENTS = { sky: 0, studio: 1, white: 2 };
+  const CHART_QUANTITY = { 'chart-r': 0, 'chart-t': 1 };
+
+  // ---------------------------------------------------------------- sources
+
+  function base64ToBytes(text) {
+    const bin = atob(text);
+    const out = new Uint8Array(bin.length);
+    for (let i = 0; i < bin.length; i++) out[i] = bin.charCodeAt(i);
+    return out;
+  }
+
+  /** An export read over http from a folder URL. */
+  function fetchedSource(dir) {
+    const base = dir.endsWith('/') ? dir : `${dir}/`;
+    const get = async (file) => {
+      let response;
+      try {
+        response = await fetch(new URL(base + file, location.href));
+      } catch (e) {
+        const hint = location.protocol === 'file:'
+          ? ' (a page opened from file:// cannot read other files: serve the folder, e.g. `python3 -m http.server`)'
+          : '';
+        throw new Error(`${base}${file}: cannot be read${hint}`);
+      }
+      if (!response.ok) throw new Error(`${base}${file}: ${response.status === 404 ? 'not found' : `HTTP ${response.status}`}`);
+      return response;
+    };
+    return {
+      name: base,
+      label: base.replace(/\/$/, '').split('/').pop() || base,
+      async text(file) { return (await get(file)).text(); },
+      async bytes(file) { return new Uint8Array(await (await get(file)).arrayBuffer()); },
+    };
+  }
+
+  /** An export embedded in exports.js: {name, files: {file: {text} | {base64}}}. */
+  function embeddedSource(entry) {
+    const file = (f) => {
+      const item = entry.files && entry.files[f];
+      if (!item) throw new Error(`${entry.name}/${f}: not in the embedded export`);
+      return item;
+    };
+    return {
+      name: `${entry.name}/`,
+      label: entry.name,
+      async text(f) {
+        const item = file(f);
+        return item.text !== undefined ? item.text : new TextDecoder().decode(base64ToBytes(item.base64));
+      },
+      async bytes(f) {
+        const item = file(f);
+        return item.base64 !== undefined ? base64ToBytes(item.base64) : new TextEncoder().encode(item.text);
+      },
+    };
+  }
+
+  function exportSources() {
+    const params = new URLSearchParams(location.search);
+    const dirs = params.getAll('export').filter((d) => d !== '');
+    if (dirs.length) return dirs.map(fetchedSource);
+    if (Array.isArray(window.IRID_EXPORTS) && window.IRID_EXPORTS.length) {
+      return window.IRID_EXPORTS.map(embeddedSource);
+    }
+    return [];
+  }
+
+  // ---------------------------------------------------------------- export
+
+  function isNumber(x) { return typeof x === 'number' && Number.isFinite(x); }
+
+  function checkFilm(film, where) {
+    const fail = (why) => { throw new Error(`${where}film.json: ${why}`); };
+    if (!film || typeof film !== 'object') fail('not an object');
+    if (film.format !== 'irid-film') fail(`format is ${JSON.stringify(film.format)}, not "irid-film"`);
+    if (film.version !== 1) fail(`version ${JSON.stringify(film.version)} is not 1 (written by another irid?)`);
+    const tex = film.texture;
+    if (!tex || !Number.isInteger(tex.width) || !Number.isInteger(tex.height) || tex.width < 1 || tex.height < 1) {
+      fail('texture.width and texture.height must be positive integers');
+    }
+    const d = film.domain;
+    if (!d || !Array.isArray(d.thickness_nm) || !Array.isArray(d.cos_theta)
+      || ![...d.thickness_nm, ...d.cos_theta].every(isNumber)
+      || d.thickness_nm.length !== 2 || d.cos_theta.length !== 2) {
+      fail('domain.thickness_nm and domain.cos_theta must be [min, max] pairs');
+    }
+    if (!(d.thickness_nm[0] <= d.thickness_nm[1]) || !(d.cos_theta[0] < d.cos_theta[1])
+      || d.cos_theta[0] < 0 || d.cos_theta[1] > 1) {
+      fail('domain ranges are empty or out of order');
+    }
+    if (!film.params || typeof film.params !== 'object' || !Object.values(film.params).every(isNumber)
+      || !PARAM_NAMES.every((n) => n in film.params)) {
+      fail(`params must be numbers, among them ${PARAM_NAMES.join(', ')}`);
+    }
+    if (typeof film.white !== 'string') fail('white must be a string');
+  }
+
+  /**
+   * RGBA Float32Array of one texture: from the half-float EXR, which holds
+   * the values as the GPU samples them (negative ones, for colours outside
+   * the sRGB gamut, included); from the 16-bit PNG only when film.json
+   * lists no EXR (PNGs clamp at 0).
+   */
+  async function loadTexture(source, film, which) {
+    const { width, height } = film.texture;
+    const png = film.texture.png;
+    const exr = film.texture.files && film.texture.files[which];
+    let image;
+    let data;
+    let kind;
+    if (!exr && png && png[which]) {
+      const file = png[which];
+      const scale = png.scale;
+      if (!isNumber(scale) || scale <= 0) throw new Error(`${source.name}film.json: texture.png.scale must be a positive number`);
+      image = await ns.decodePng16(await source.bytes(file), `${source.name}${file}`);
+      data = new Float32Array(image.data.length);
+      // texel = PNG value / 65535 × scale, in RGB; A is 1.
+      for (let i = 0; i < data.length; i++) data[i] = (i & 3) === 3 ? 1 : (image.data[i] / 65535) * scale;
+      kind = `PNG16 (${file})`;
+    } else {
+      const file = exr;
+      if (typeof file !== 'string') throw new Error(`${source.name}film.json: texture.files.${which} is missing`);
+      image = await ns.decodeExr(await source.bytes(file), `${source.name}${file}`);
+      data = image.data;
+      kind = `EXR half (${file})`;
+    }
+    if (image.width !== width || image.height !== height) {
+      throw new Error(`${source.name}${which}: ${image.width}×${image.height} pixels, film.json says ${width}×${height}`);
+    }
+    for (let i = 0; i < data.length; i++) {
+      if (!Number.isFinite(data[i])) throw new Error(`${source.name}${which}: non-finite value at texel ${i >> 2}`);
+    }
+    return { data, kind };
+  }
+
+  async function loadExport(source) {
+    const text = await source.text('film.json');
+    let film;
+    try {
+      film = JSON.parse(text);
+    } catch (e) {
+      throw new Error(`${source.name}film.json: not valid JSON (${e.message})`);
+    }
+    checkFilm(film, source.name);
+    const sampler = await source.text('irid_film_es.glsl');
+    if (!/irid_film\s*\(/.test(sampler)) throw new Error(`${source.name}irid_film_es.glsl: defines no irid_film()`);
+    const reflectance = await loadTexture(source, film, 'reflectance');
+    const transmittance = await loadTexture(source, film, 'transmittance');
+    return { name: source.name, label: source.label, film, sampler, reflectance, transmittance };
+  }
+
+  // ---------------------------------------------------------------- shaders
+
+  const HEADER = `#version 300 es
+precision highp float;
+precision highp int;
+precision highp sampler2D;
+`;
+
+  const COMMON = `
+vec3 irid_encode_srgb(vec3 linear) {
+  vec3 c = clamp(linear, 0.0, 1.0);
+  return mix(c * 12.92, 1.055 * pow(c, vec3(1.0 / 2.4)) - 0.055, step(vec3(0.0031308), c));
+}
+
+// A procedural environment: a sky with a sun over a ground plane, a dark
+// studio with two soft boxes, or uniform white (where a film shows R + T).
+uniform int u_environment;
+vec3 irid_environment(vec3 d) {
+  if (u_environment == 2) return vec3(1.0);
+  if (u_environment == 1) {
+    vec3 c = vec3(0.02);
+    float box1 = smoothstep(0.08, 0.0, abs(d.x - 0.55)) * smoothstep(0.5, 0.3, abs(d.y - 0.2));
+    float box2 = smoothstep(0.05, 0.0, abs(d.z + 0.6)) * smoothstep(0.6, 0.4, abs(d.y - 0.1));
+    float top = smoothstep(0.85, 0.95, d.y);
+    return c + vec3(4.0) * box1 + vec3(2.5, 2.6, 3.0) * box2 + vec3(0.8) * top;
+  }
+  vec3 sun = normalize(vec3(0.45, 0.55, 0.7));
+  float s = max(dot(d, sun), 0.0);
+  vec3 c;
+  if (d.y >= 0.0) {
+    c = mix(vec3(0.75, 0.85, 1.0), vec3(0.15, 0.35, 0.85), pow(d.y, 0.45));
+  } else {
+    float checker = mod(floor(d.x / max(-d.y, 0.02) * 2.0) + floor(d.z / max(-d.y, 0.02) * 2.0), 2.0);
+    // The checker fades towards the horizon, where it would alias.
+    checker = mix(0.5, checker, smoothstep(0.0, -0.12, d.y));
+    c = mix(vec3(0.10, 0.09, 0.08), vec3(0.22, 0.20, 0.17), checker) * (0.6 + 0.4 * smoothstep(0.0, -0.4, d.y));
+  }
+  return c + vec3(1.0, 0.95, 0.85) * (pow(s, 900.0) * 60.0 + pow(s, 16.0) * 0.25);
+}
+`;
+
+  const FULLSCREEN_VS = `#version 300 es
+out vec2 v_ndc;
+void main() {
+  vec2 p = vec2(float((gl_VertexID << 1) & 2), float(gl_VertexID & 2)) * 2.0 - 1.0;
+  v_ndc = p;
+  gl_Position = vec4(p, 0.0, 1.0);
+}`;
+
+  const BACKGROUND_FS = `${HEADER}${COMMON}
+uniform mat4 u_inverse_view_proj;
+uniform vec3 u_eye;
+uniform float u_exposure;
+in vec2 v_ndc;
+out vec4 o_color;
+void main() {
+  vec4 p = u_inverse_view_proj * vec4(v_ndc, 1.0, 1.0);
+  vec3 d = normalize(p.xyz / p.w - u_eye);
+  o_color = vec4(irid_encode_srgb(irid_environment(d) * exp2(u_exposure)), 1.0);
+}`;
+
+  const OBJECT_VS = `#version 300 es
+layout(location = 0) in vec3 a_position;
+layout(location = 1) in vec3 a_normal;
+uniform mat4 u_view_proj;
+out vec3 v_position;
+out vec3 v_normal;
+void main() {
+  v_position = a_position;
+  v_normal = a_normal;
+  gl_Position = u_view_proj * vec4(a_position, 1.0);
+}`;
+
+  // Classic gradient noise (Perlin 2002: quintic fade, 12 edge gradients),
+  // hashed with integer arithmetic so it does not depend on sin() precision.
+  const NOISE = `
+uint irid_hash(uvec3 p) {
+  uint h = p.x * 0x8da6b343u ^ p.y * 0xd8163841u ^ p.z * 0xcb1ab31fu;
+  h ^= h >> 16; h *= 0x7feb352du; h ^= h >> 15; h *= 0x846ca68bu; h ^= h >> 16;
+  return h;
+}
+float irid_grad(ivec3 cell, vec3 f) {
+  uint h = irid_hash(uvec3(cell)) & 15u;
+  float u = h < 8u ? f.x : f.y;
+  float v = h < 4u ? f.y : (h == 12u || h == 14u ? f.x : f.z);
+  return ((h & 1u) == 0u ? u : -u) + ((h & 2u) == 0u ? v : -v);
+}
+float irid_perlin(vec3 p) {
+  ivec3 i = ivec3(floor(p));
+  vec3 f = fract(p);
+  vec3 w = f * f * f * (f * (f * 6.0 - 15.0) + 10.0);
+  float x00 = mix(irid_grad(i, f), irid_grad(i + ivec3(1, 0, 0), f - vec3(1, 0, 0)), w.x);
+  float x10 = mix(irid_grad(i + ivec3(0, 1, 0), f - vec3(0, 1, 0)), irid_grad(i + ivec3(1, 1, 0), f - vec3(1, 1, 0)), w.x);
+  float x01 = mix(irid_grad(i + ivec3(0, 0, 1), f - vec3(0, 0, 1)), irid_grad(i + ivec3(1, 0, 1), f - vec3(1, 0, 1)), w.x);
+  float x11 = mix(irid_grad(i + ivec3(0, 1, 1), f - vec3(0, 1, 1)), irid_grad(i + ivec3(1, 1, 1), f - vec3(1, 1, 1)), w.x);
+  return mix(mix(x00, x10, w.y), mix(x01, x11, w.y), w.z);
+}
+`;
+
+  const OBJECT_FS = (sampler, baseline) => `${HEADER}${baseline ? '' : sampler}
+${COMMON}${NOISE}
+uniform vec3 u_eye;
+uniform float u_exposure;
+uniform int u_thickness_mode;      // 0 uniform, 1 noise
+uniform float u_thickness_nm;
+uniform vec2 u_thickness_range_nm; // noise: [min, max]
+uniform float u_noise_scale;
+uniform bool u_opaque;
+in vec3 v_position;
+in vec3 v_normal;
+out vec4 o_color;
+void main() {
+  vec3 n = normalize(v_normal);
+  vec3 v = normalize(u_eye - v_position);
+  float cos_theta = clamp(dot(n, v), 0.0, 1.0);
+  float t = u_thickness_nm;
+  if (u_thickness_mode == 1) {
+    float k = clamp(0.5 + 0.75 * irid_perlin(v_position * u_noise_scale), 0.0, 1.0);
+    t = mix(u_thickness_range_nm.x, u_thickness_range_nm.y, k);
+  }
+${baseline
+    ? '  // The frame-time baseline: the same shading with constant R and T.\n  vec3 r = vec3(0.04) * (1.0 + 1e-9 * t); vec3 tr = vec3(0.96);'
+    : '  IridFilm film = irid_film(t, cos_theta);\n  vec3 r = film.reflectance; vec3 tr = film.transmittance;'}
+  vec3 c = r * irid_environment(reflect(-v, n));
+  // A film that transmits is drawn as a thin shell: what lies behind it,
+  // straight through, weighted by T.
+  if (!u_opaque) c += tr * irid_environment(-v);
+  o_color = vec4(irid_encode_srgb(c * exp2(u_exposure)), 1.0);
+}`;
+
+  // The chart: thickness along x (left to right, domain min to max), angle
+  // along y (bottom to top, acos(cos_max) to acos(cos_min)), each pixel's
+  // centre sampled. Output: the linear colour clamped to [0, 1], sRGB-encoded.
+  const CHART_FS = (sampler) => `${HEADER}${sampler}
+${COMMON}
+uniform vec2 u_resolution;
+uniform vec2 u_chart_thickness_nm;
+uniform vec2 u_chart_angle_rad;
+uniform int u_quantity;
+out vec4 o_color;
+void main() {
+  vec2 p = gl_FragCoord.xy / u_resolution;
+  float t = mix(u_chart_thickness_nm.x, u_chart_thickness_nm.y, p.x);
+  float theta = mix(u_chart_angle_rad.x, u_chart_angle_rad.y, p.y);
+  IridFilm film = irid_film(t, cos(theta));
+  vec3 c = u_quantity == 0 ? film.reflectance : film.transmittance;
+  o_color = vec4(irid_encode_srgb(c), 1.0);
+}`;
+
+  function compile(gl, type, source, what) {
+    const shader = gl.createShader(type);
+    gl.shaderSource(shader, source);
+    gl.compileShader(shader);
+    if (!gl.getShaderParameter(shader, gl.COMPILE_STATUS) && !gl.isContextLost()) {
+      const log = gl.getShaderInfoLog(shader);
+      gl.deleteShader(shader);
+      throw new Error(`${what}: does not compile:\n${log}`);
+    }
+    return shader;
+  }
+
+  function link(gl, vs, fs, what) {
+    const program = gl.createProgram();
+    gl.attachShader(program, compile(gl, gl.VERTEX_SHADER, vs, what));
+    gl.attachShader(program, compile(gl, gl.FRAGMENT_SHADER, fs, what));
+    gl.linkProgram(program);
+    if (!gl.getProgramParameter(program, gl.LINK_STATUS) && !gl.isContextLost()) {
+      throw new Error(`${what}: does not link:\n${gl.getProgramInfoLog(program)}`);
+    }
+    const locations = new Map();
+    program.uniform = (name) => {
+      if (!locations.has(name)) locations.set(name, gl.getUniformLocation(program, name));
+      return locations.get(name);
+    };
+    return program;
+  }
+
+  /** The sampler's own text, ready to paste after the page's #version line. */
+  function samplerBody(text) {
+    return text.replace(/^\s*#version[^\n]*\n/m, '').replace(/^\s*precision\s+[^\n]*;\s*$/gm, '');
+  }
+
+  // The export's parameters: the uniform block the sampler declares (at
+  // binding 0 here), or plain uniforms. Texture units 0 and 1 hold R and T.
+  function bindFilm(gl, program, exp, what) {
+    gl.useProgram(program);
+    const values = exp.film.params;
+    // The block's name is the generator's choice: find it by its members.
+    let blockIndex = gl.INVALID_INDEX;
+    const blocks = gl.getProgramParameter(program, gl.ACTIVE_UNIFORM_BLOCKS);
+    for (let b = 0; b < blocks; b++) {
+      const members = gl.getActiveUniformBlockParameter(program, b, gl.UNIFORM_BLOCK_ACTIVE_UNIFORM_INDICES);
+      if (Array.from(members).some((i) => PARAM_NAMES.includes(gl.getActiveUniform(program, i).name.split('.').pop()))) {
+        blockIndex = b;
+      }
+    }
+    if (blockIndex !== gl.INVALID_INDEX) {
+      const size = gl.getActiveUniformBlockParameter(program, blockIndex, gl.UNIFORM_BLOCK_DATA_SIZE);
+      const data = new ArrayBuffer(size);
+      const view = new DataView(data);
+      const indices = gl.getActiveUniformBlockParameter(program, blockIndex, gl.UNIFORM_BLOCK_ACTIVE_UNIFORM_INDICES);
+      const offsets = gl.getActiveUniforms(program, indices, gl.UNIFORM_OFFSET);
+      indices.forEach((index, i) => {
+        const name = gl.getActiveUniform(program, index).name.split('.').pop();
+        if (!(name in values)) throw new Error(`${what}: film.json's params lack ${name}, which the sampler reads`);
+        view.setFloat32(offsets[i], values[name], true);
+      });
+      const buffer = gl.createBuffer();
+      gl.bindBuffer(gl.UNIFORM_BUFFER, buffer);
+      gl.bufferData(gl.UNIFORM_BUFFER, data, gl.STATIC_DRAW);
+      gl.uniformBlockBinding(program, blockIndex, 0);
+      program.iridParams = buffer;
+    } else {
+      let bound = 0;
+      for (const name of Object.keys(values)) {
+        const location = [`irid_params.${name}`, `irid_${name}`, name]
+          .map((n) => program.uniform(n)).find((l) => l !== null);
+        if (location) {
+          gl.uniform1f(location, values[name]);
+          bound++;
+        }
+      }
+      if (bound === 0) throw new Error(`${what}: declares neither a uniform block nor uniforms for ${PARAM_NAMES.join(', ')}`);
+      program.iridParams = null;
+    }
+    const r = program.uniform('irid_reflectance');
+    const t = program.uniform('irid_transmittance');
+    if (r === null && t === null) throw new Error(`${what}: declares no sampler irid_reflectance or irid_transmittance`);
+    if (r !== null) gl.uniform1i(r, 0);
+    if (t !== null) gl.uniform1i(t, 1);
+  }
+
+  function makeTexture(gl, width, height, data) {
+    const texture = gl.createTexture();
+    gl.bindTexture(gl.TEXTURE_2D, texture);
+    gl.pixelStorei(gl.UNPACK_FLIP_Y_WEBGL, false);
+    gl.pixelStorei(gl.UNPACK_ALIGNMENT, 1);
+    // Row 0 of the file is v near 0: uploaded as is, it lands at t = 0.
+    gl.texImage2D(gl.TEXTURE_2D, 0, gl.RGBA16F, width, height, 0, gl.RGBA, gl.FLOAT, data);
+    gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_MIN_FILTER, gl.LINEAR);
+    gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_MAG_FILTER, gl.LINEAR);
+    gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_WRAP_S, gl.CLAMP_TO_EDGE);
+    gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_WRAP_T, gl.CLAMP_TO_EDGE);
+    return texture;
+  }
+
+  // ---------------------------------------------------------------- meshes
+
+  function sphereMesh(stacks, slices) {
+    const positions = [];
+    const indices = [];
+    for (let i = 0; i <= stacks; i++) {
+      const phi = (Math.PI * i) / stacks;
+      for (let j = 0; j <= slices; j++) {
+        const theta = (2 * Math.PI * j) / slices;
+        positions.push(Math.sin(phi) * Math.cos(theta), Math.cos(phi), Math.sin(phi) * Math.sin(theta));
+      }
+    }
+    for (let i = 0; i < stacks; i++) {
+      for (let j = 0; j < slices; j++) {
+        const a = i * (slices + 1) + j;
+        const b = a + slices + 1;
+        indices.push(a, a + 1, b, b, a + 1, b + 1);
+      }
+    }
+    return { positions, normals: positions.slice(), indices };
+  }
+
+  const TORUS_TILT = 1.0; // radians
+
+  function torusMesh(major, minor, rings, sides) {
+    const positions = [];
+    const normals = [];
+    const indices = [];
+    for (let i = 0; i <= rings; i++) {
+      const u = (2 * Math.PI * i) / rings;
+      for (let j = 0; j <= sides; j++) {
+        const v = (2 * Math.PI * j) / sides;
+        const n = [Math.cos(v) * Math.cos(u), Math.sin(v), Math.cos(v) * Math.sin(u)];
+        const p = [major * Math.cos(u) + minor * n[0], minor * n[1], major * Math.sin(u) + minor * n[2]];
+        // Tilted about x so that a camera near the horizon sees the hole.
+        const tilt = (w) => [w[0], w[1] * Math.cos(TORUS_TILT) - w[2] * Math.sin(TORUS_TILT), w[1] * Math.sin(TORUS_TILT) + w[2] * Math.cos(TORUS_TILT)];
+        normals.push(...tilt(n));
+        positions.push(...tilt(p));
+      }
+    }
+    for (let i = 0; i < rings; i++) {
+      for (let j = 0; j < sides; j++) {
+        const a = i * (sides + 1) + j;
+        const b = a + sides + 1;
+        indices.push(a, a + 1, b, b, a + 1, b + 1); // counter-clockwise seen from outside
+      }
+    }
+    return { positions, normals, indices };
+  }
+
+  function uploadMesh(gl, mesh) {
+    const vao = gl.createVertexArray();
+    gl.bindVertexArray(vao);
+    const attribute = (location, values) => {
+      const buffer = gl.createBuffer();
+      gl.bindBuffer(gl.ARRAY_BUFFER, buffer);
+      gl.bufferData(gl.ARRAY_BUFFER, new Float32Array(values), gl.STATIC_DRAW);
+      gl.enableVertexAttribArray(location);
+      gl.vertexAttribPointer(location, 3, gl.FLOAT, false, 0, 0);
+    };
+    attribute(0, mesh.positions);
+    attribute(1, mesh.normals);
+    const indexBuffer = gl.createBuffer();
+    gl.bindBuffer(gl.ELEMENT_ARRAY_BUFFER, indexBuffer);
+    gl.bufferData(gl.ELEMENT_ARRAY_BUFFER, new Uint32Array(mesh.indices), gl.STATIC_DRAW);
+    gl.bindVertexArray(null);
+    return { vao, count: mesh.indices.length };
+  }
+
+  // ---------------------------------------------------------------- matrices (column-major)
+
+  function perspective(fovY, aspect, near, far) {
+    const f = 1 / Math.tan(fovY / 2);
+    return [f / aspect, 0, 0, 0, 0, f, 0, 0, 0, 0, (far + near) / (near - far), -1, 0, 0, (2 * far * near) / (near - far), 0];
+  }
+
+  function lookAt(eye, target, up) {
+    const sub = (a, b) => a.map((x, i) => x - b[i]);
+    const norm = (a) => { const l = Math.hypot(...a); return a.map((x) => x / l); };
+    const cross = (a, b) => [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]];
+    const dot = (a, b) => a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+    const z = norm(sub(eye, target));
+    const x = norm(cross(up, z));
+    const y = cross(z, x);
+    return [x[0], y[0], z[0], 0, x[1], y[1], z[1], 0, x[2], y[2], z[2], 0, -dot(x, eye), -dot(y, eye), -dot(z, eye), 1];
+  }
+
+  function multiply(a, b) {
+    const out = new Array(16).fill(0);
+    for (let c = 0; c < 4; c++) {
+      for (let r = 0; r < 4; r++) {
+        for (let k = 0; k < 4; k++) out[c * 4 + r] += a[k * 4 + r] * b[c * 4 + k];
+      }
+    }
+    return out;
+  }
+
+  function invert(m) {
+    // Gauss-Jordan on a 4×8 block; the matrices here are well conditioned.
+    const a = [];
+    for (let r = 0; r < 4; r++) {
+      a.push([0, 1, 2, 3].map((c) => m[c * 4 + r]).concat([0, 1, 2, 3].map((c) => (c === r ? 1 : 0))));
+    }
+    for (let c = 0; c < 4; c++) {
+      let pivot = c;
+      for (let r = c + 1; r < 4; r++) if (Math.abs(a[r][c]) > Math.abs(a[pivot][c])) pivot = r;
+      [a[c], a[pivot]] = [a[pivot], a[c]];
+      const p = a[c][c];
+      for (let k = 0; k < 8; k++) a[c][k] /= p;
+      for (let r = 0; r < 4; r++) {
+        if (r === c) continue;
+        const f = a[r][c];
+        for (let k = 0; k < 8; k++) a[r][k] -= f * a[c][k];
+      }
+    }
+    const out = new Array(16);
+    for (let r = 0; r < 4; r++) for (let c = 0; c < 4; c++) out[c * 4 + r] = a[r][4 + c];
+    return out;
+  }
+
+  // ---------------------------------------------------------------- page
+
+  const $ = (id) => document.getElementById(id);
+
+  function showMessage(text) {
+    const box = $('message');
+    box.textContent = text;
+    box.hidden = false;
+    document.body.dataset.state = 'error';
+  }
+
+  function hideMessage() {
+    $('message').hidden = true;
+  }
+
+  function formatList(values, digits) {
+    return Array.isArray(values) ? values.map((x) => (isNumber(x) ? x.toFixed(digits) : String(x))).join(' / ') : '—';
+  }
+
+  function describe(exp) {
+    const f = exp.film;
+    const deg = (c) => (Math.acos(Math.min(1, Math.max(-1, c))) * 180) / Math.PI;
+    const rows = [
+      ['export', exp.label],
+      ['white', f.white],
+      ['layer', `${f.layer ?? '—'} of ${f.stack && Array.isArray(f.stack.layers) ? f.stack.layers.length : '?'}`],
+      ['thickness', `${f.domain.thickness_nm[0]} – ${f.domain.thickness_nm[1]} nm`],
+      ['angle', `${deg(f.domain.cos_theta[1]).toFixed(1)}° – ${deg(f.domain.cos_theta[0]).toFixed(1)}°`],
+      // cos_crit < 0: angle nodes uniform in cos θ; = cos_min: crowded
+      // towards grazing; inside the domain: a dense side's critical angle.
+      ['angle nodes', f.params.cos_crit < 0 ? 'uniform in cos θ'
+        : f.params.cos_crit <= f.domain.cos_theta[0] ? 'crowded towards grazing'
+          : `on the critical angle ${deg(f.params.cos_crit).toFixed(2)}°`],
+      ['texture', `${f.texture.width} × ${f.texture.height}, ${exp.reflectance.kind}`],
+      ['opaque', f.opaque ? 'yes (T drawn black)' : 'no'],
+    ];
+    const e = f.error || {};
+    rows.push(['max ΔE00 R / T', formatList(e.max_delta_e00, 3)]);
+    rows.push(['mean ΔE00 R / T', formatList(e.mean_delta_e00, 4)]);
+    rows.push(['max |error| R', formatList(Array.isArray(e.max_abs) ? e.max_abs.slice(0, 3) : null, 5)]);
+    rows.push(['max |error| T', formatList(Array.isArray(e.max_abs) ? e.max_abs.slice(3, 6) : null, 5)]);
+    if (isNumber(e.points)) rows.push(['checked at', `${e.points} points`]);
+    const info = $('info');
+    info.replaceChildren();
+    for (const [k, v] of rows) {
+      const dt = document.createElement('dt');
+      dt.textContent = k;
+      const dd = document.createElement('dd');
+      dd.textContent = v;
+      info.append(dt, dd);
+    }
+  }
+
+  class Preview {
+    constructor(gl) {
+      this.gl = gl;
+      this.exports = [];
+      this.current = null;
+      this.yaw = 0.6;
+      this.pitch = 0.12;
+      this.distance = 4.2;
+      this.frames = 0;
+      this.pending = false;
+      this.meshes = { sphere: uploadMesh(gl, sphereMesh(64, 128)), torus: uploadMesh(gl, torusMesh(0.72, 0.34, 128, 64)) };
+      this.empty = gl.createVertexArray();
+      this.background = link(gl, FULLSCREEN_VS, BACKGROUND_FS, 'background shader');
+    }
+
+    /** Compiles the export's programs and uploads its textures once. */
+    prepare(exp) {
+      if (exp.gpu) return;
+      const gl = this.gl;
+      const body = samplerBody(exp.sampler);
+      const what = `${exp.name}irid_film_es.glsl`;
+      const object = link(gl, OBJECT_VS, OBJECT_FS(body, false), what);
+      const chart = link(gl, FULLSCREEN_VS, CHART_FS(body), what);
+      const baseline = link(gl, OBJECT_VS, OBJECT_FS(body, true), 'baseline shader');
+      bindFilm(gl, object, exp, what);
+      bindFilm(gl, chart, exp, what);
+      const { width, height } = exp.film.texture;
+      exp.gpu = {
+        object, chart, baseline,
+        reflectance: makeTexture(gl, width, height, exp.reflectance.data),
+        transmittance: makeTexture(gl, width, height, exp.transmittance.data),
+      };
+    }
+
+    controls() {
+      return {
+        mode: $('mode').value,
+        object: $('object').value,
+        environment: $('environment').value,
+        thicknessMode: $('thickness-mode').value,
+        thickness: Number($('thickness').value),
+        thicknessMin: Number($('thickness-min').value),
+        thicknessMax: Number($('thickness-max').value),
+        noiseScale: Number($('noise-scale').value),
+        exposure: Number($('exposure').value),
+      };
+    }
+
+    camera(aspect) {
+      const eye = [
+        this.distance * Math.cos(this.pitch) * Math.sin(this.yaw),
+        this.distance * Math.sin(this.pitch),
+        this.distance * Math.cos(this.pitch) * Math.cos(this.yaw),
+      ];
+      const viewProj = multiply(perspective((35 * Math.PI) / 180, aspect, 0.1, 100), lookAt(eye, [0, 0, 0], [0, 1, 0]));
+      return { eye, viewProj, inverse: invert(viewProj) };
+    }
+
+    /** The chart's (thickness, angle) ranges, each pixel centre mapped linearly. */
+    chartRanges(exp) {
+      const d = exp.film.domain;
+      return { thickness: d.thickness_nm, angle: [Math.acos(d.cos_theta[1]), Math.acos(d.cos_theta[0])] };
+    }
+
+    /** Draws one frame now, with the current controls. */
+    draw(options = {}) {
+      const gl = this.gl;
+      const exp = this.current;
+      if (!exp) return;
+      const c = this.controls();
+      const canvas = gl.canvas;
+      gl.viewport(0, 0, canvas.width, canvas.height);
+      gl.activeTexture(gl.TEXTURE0);
+      gl.bindTexture(gl.TEXTURE_2D, exp.gpu.reflectance);
+      gl.activeTexture(gl.TEXTURE1);
+      gl.bindTexture(gl.TEXTURE_2D, exp.gpu.transmittance);
+      if (c.mode in CHART_QUANTITY) {
+        const program = exp.gpu.chart;
+        const ranges = this.chartRanges(exp);
+        gl.useProgram(program);
+        if (program.iridParams) gl.bindBufferBase(gl.UNIFORM_BUFFER, 0, program.iridParams);
+        gl.disable(gl.DEPTH_TEST);
+        gl.uniform2f(program.uniform('u_resolution'), canvas.width, canvas.height);
+        gl.uniform2f(program.uniform('u_chart_thickness_nm'), ranges.thickness[0], ranges.thickness[1]);
+        gl.uniform2f(program.uniform('u_chart_angle_rad'), ranges.angle[0], ranges.angle[1]);
+        gl.uniform1i(program.uniform('u_quantity'), CHART_QUANTITY[c.mode]);
+        gl.bindVertexArray(this.empty);
+        gl.drawArrays(gl.TRIANGLES, 0, 3);
+      } else {
+        const cam = this.camera(canvas.width / canvas.height);
+        const env = ENVIRONMENTS[c.environment];
+        const exposure = c.exposure;
+        gl.disable(gl.DEPTH_TEST);
+        gl.useProgram(this.background);
+        gl.uniformMatrix4fv(this.background.uniform('u_inverse_view_proj'), false, cam.inverse);
+        gl.uniform3fv(this.background.uniform('u_eye'), cam.eye);
+        gl.uniform1f(this.background.uniform('u_exposure'), exposure);
+        gl.uniform1i(this.background.uniform('u_environment'), env);
+        gl.bindVertexArray(this.empty);
+        gl.drawArrays(gl.TRIANGLES, 0, 3);
+
+        const program = options.baseline ? exp.gpu.baseline : exp.gpu.object;
+        gl.useProgram(program);
+        if (program.iridParams) gl.bindBufferBase(gl.UNIFORM_BUFFER, 0, program.iridParams);
+        gl.enable(gl.DEPTH_TEST);
+        gl.enable(gl.CULL_FACE);
+        gl.clear(gl.DEPTH_BUFFER_BIT);
+        gl.uniformMatrix4fv(program.uniform('u_view_proj'), false, cam.viewProj);
+        gl.uniform3fv(program.uniform('u_eye'), cam.eye);
+        gl.uniform1f(program.uniform('u_exposure'), exposure);
+        gl.uniform1i(program.uniform('u_environment'), env);
+        gl.uniform1i(program.uniform('u_thickness_mode'), c.thicknessMode === 'noise' ? 1 : 0);
+        gl.uniform1f(program.uniform('u_thickness_nm'), c.thickness);
+        gl.uniform2f(program.uniform('u_thickness_range_nm'), Math.min(c.thicknessMin, c.thicknessMax), Math.max(c.thicknessMin, c.thicknessMax));
+        gl.uniform1f(program.uniform('u_noise_scale'), c.noiseScale);
+        gl.uniform1i(program.uniform('u_opaque'), exp.film.opaque ? 1 : 0);
+        const mesh = this.meshes[c.object];
+        gl.bindVertexArray(mesh.vao);
+        gl.drawElements(gl.TRIANGLES, mesh.count, gl.UNSIGNED_INT, 0);
+        gl.bindVertexArray(null);
+      }
+      this.frames++;
+      document.body.dataset.frames = String(this.frames);
+    }
+
+    request() {
+      if (this.pending) return;
+      this.pending = true;
+      requestAnimationFrame(() => {
+        this.pending = false;
+        try {
+          this.draw();
+        } catch (e) {
+          showMessage(e.message);
+        }
+      });
+    }
+
+    select(exp) {
+      this.prepare(exp);
+      this.current = exp;
+      const [tMin, tMax] = exp.film.domain.thickness_nm;
+      for (const id of ['thickness', 'thickness-min', 'thickness-max']) {
+        const input = $(id);
+        input.min = String(tMin);
+        input.max = String(tMax);
+        input.disabled = tMin === tMax;
+      }
+      $('thickness').value = String((tMin + tMax) / 2);
+      $('thickness-min').value = String(tMin + 0.25 * (tMax - tMin));
+      $('thickness-max').value = String(tMin + 0.75 * (tMax - tMin));
+      const [cMin, cMax] = exp.film.domain.cos_theta;
+      const deg = (x) => ((Math.acos(x) * 180) / Math.PI).toFixed(1);
+      $('chart-x').textContent = `x: thickness ${tMin} → ${tMax} nm`;
+      $('chart-y').textContent = `y: angle ${deg(cMax)}° (bottom) → ${deg(cMin)}° (top)`;
+      describe(exp);
+      updateOutputs();
+      this.request();
+    }
+  }
+
+  function updateOutputs() {
+    $('thickness-out').value = `${Number($('thickness').value).toFixed(1)} nm`;
+    $('thickness-min-out').value = `${Number($('thickness-min').value).toFixed(1)} nm`;
+    $('thickness-max-out').value = `${Number($('thickness-max').value).toFixed(1)} nm`;
+    $('noise-scale-out').value = Number($('noise-scale').value).toFixed(2);
+    $('exposure-out').value = `${Number($('exposure').value).toFixed(2)} EV`;
+    const noise = $('thickness-mode').value === 'noise';
+    $('row-thickness').hidden = noise;
+    $('row-min').hidden = !noise;
+    $('row-max').hidden = !noise;
+    $('row-scale').hidden = !noise;
+    $('chart-axes').hidden = !($('mode').value in CHART_QUANTITY);
+  }
+
+  function attachOrbit(canvas, preview) {
+    let drag = null;
+    canvas.addEventListener('pointerdown', (e) => {
+      drag = { x: e.clientX, y: e.clientY };
+      canvas.setPointerCapture(e.pointerId);
+    });
+    canvas.addEventListener('pointermove', (e) => {
+      if (!drag) return;
+      preview.yaw -= (e.clientX - drag.x) * 0.01;
+      preview.pitch = Math.max(-1.5, Math.min(1.5, preview.pitch + (e.clientY - drag.y) * 0.01));
+      drag = { x: e.clientX, y: e.clientY };
+      preview.request();
+    });
+    const end = () => { drag = null; };
+    canvas.addEventListener('pointerup', end);
+    canvas.addEventListener('pointercancel', end);
+    canvas.addEventListener('wheel', (e) => {
+      e.preventDefault();
+      preview.distance = Math.max(2.0, Math.min(12, preview.distance * Math.exp(e.deltaY * 0.001)));
+      preview.request();
+    }, { passive: false });
+  }
+
+  /** Renders `frames` frames, each waited for, and returns milliseconds per frame. */
+  function timeFrames(preview, frames, baseline) {
+    const gl = preview.gl;
+    const pixel = new Uint8Array(4);
+    preview.draw({ baseline });
+    gl.readPixels(0, 0, 1, 1, gl.RGBA, gl.UNSIGNED_BYTE, pixel); // warm-up, synchronised
+    const start = performance.now();
+    for (let i = 0; i < frames; i++) {
+      preview.yaw += 0.01;
+      preview.draw({ baseline });
+      gl.readPixels(0, 0, 1, 1, gl.RGBA, gl.UNSIGNED_BYTE, pixel);
+    }
+    return (performance.now() - start) / frames;
+  }
+
+  async function start() {
+    document.body.dataset.state = 'loading';
+    const canvas = $('canvas');
+    const dpr = window.devicePixelRatio || 1;
+    canvas.width = Math.round(640 * dpr);
+    canvas.height = Math.round(480 * dpr);
+    const gl = canvas.getContext('webgl2', { antialias: true, preserveDrawingBuffer: true });
+    if (!gl) {
+      showMessage('This browser does not offer WebGL2, which the preview needs.\n'
+        + 'Try a current Firefox, Chrome, Edge or Safari, with hardware acceleration enabled.');
+      return;
+    }
+    canvas.addEventListener('webglcontextlost', (e) => {
+      e.preventDefault();
+      showMessage('The WebGL2 context was lost (the GPU was reset or ran out of memory). Reload the page.');
+    });
+    const preview = new Preview(gl);
+    const sources = exportSources();
+    if (!sources.length) {
+      showMessage('No export to show.\nWrite a preview with `irid preview EXPORT_DIR -o OUT_DIR` and open OUT_DIR/index.html, '
+        + 'or serve this folder and add ?export=path/to/export/ to the address.');
+      return;
+    }
+    const loaded = [];
+    const failures = [];
+    for (const source of sources) {
+      try {
+        const exp = await loadExport(source);
+        preview.prepare(exp);
+        loaded.push(exp);
+      } catch (e) {
+        failures.push(e.message);
+      }
+    }
+    if (!loaded.length) {
+      showMessage(`The export cannot be shown:\n${failures.join('\n')}`);
+      return;
+    }
+    preview.exports = loaded;
+    const select = $('export');
+    for (const [i, exp] of loaded.entries()) {
+      const option = document.createElement('option');
+      option.value = String(i);
+      option.textContent = exp.label;
+      select.append(option);
+    }
+    select.addEventListener('change', () => preview.select(loaded[Number(select.value)]));
+    for (const id of ['mode', 'object', 'environment', 'thickness-mode', 'thickness', 'thickness-min', 'thickness-max', 'noise-scale', 'exposure']) {
+      $(id).addEventListener('input', () => { updateOutputs(); preview.request(); });
+    }
+    attachOrbit(canvas, preview);
+    preview.select(loaded[0]);
+    if (failures.length) {
+      showMessage(`Some exports cannot be shown:\n${failures.join('\n')}`);
+      $('message').addEventListener('click', hideMessage);
+    } else {
+      hideMessage();
+      document.body.dataset.state = 'ready';
+    }
+
+    // For tests and the console: draw now and read the canvas back.
+    window.irid = {
+      preview,
+      draw(options) { preview.draw(options); },
+      pixels() {
+        preview.draw();
+        const data = new Uint8Array(canvas.width * canvas.height * 4);
+        gl.readPixels(0, 0, canvas.width, canvas.height, gl.RGBA, gl.UNSIGNED_BYTE, data);
+        // Rows bottom to top (readPixels order), RGBA8, base64: compact to hand over.
+        let text = '';
+        for (let i = 0; i < data.length; i += 0x8000) text += String.fromCharCode(...data.subarray(i, i + 0x8000));
+        return { width: canvas.width, height: canvas.height, base64: btoa(text) };
+      },
+      chartRanges() { return preview.chartRanges(preview.current); },
+      timeFrames(frames, baseline) { return timeFrames(preview, frames, baseline); },
+    };
+  }
+
+  ns.start = () => start().catch((e) => showMessage(`The preview failed: ${e.message}`));
+  ns.loadExport = loadExport;
+})((window.IridWeb = window.IridWeb || {}));
