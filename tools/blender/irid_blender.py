@@ -99,10 +99,10 @@ class Export:
                 f"irid export {where}: thickness range [{self.thickness_min_nm}, "
                 f"{self.thickness_max_nm}] nm is empty or negative"
             )
-        if not 0.0 <= self.cos_min < self.cos_max <= 1.0:
+        if not 0.0 <= self.cos_min <= self.cos_max <= 1.0:
             raise ExportError(
                 f"irid export {where}: cos θ range [{self.cos_min}, {self.cos_max}] is not "
-                "an increasing range inside [0, 1]"
+                "a range inside [0, 1]"
             )
         if self.cos_crit >= 0.0:
             if not self.cos_min < self.cos_crit < self.cos_max or not 0.0 < self.y_crit < 1.0:
@@ -327,6 +327,8 @@ def _load_image(export, table, name):
         image.alpha_mode = "CHANNEL_PACKED"
         # Reading the size loads the pixels: a damaged file shows here, not at render time.
         size = tuple(image.size)
+        if size == (0, 0):
+            raise ExportError(f"irid export {path}: Blender cannot read it (damaged or not an image)")
         if size != (export.size_u, export.size_v):
             raise ExportError(
                 f"irid export {path}: image is {size[0]}×{size[1]}, film.json says "
@@ -389,7 +391,9 @@ def _build_group(group, export, images, ior):
 
     # y: the export's angle warp, linear in cos θ or square-root around the
     # critical angle (a branch-free form: one of the two roots is zero).
-    if export.cos_crit < 0.0:
+    if export.cos_max == export.cos_min:
+        y = build.math("MULTIPLY", 4, 2, c, 0.0, label="y = 0 (one angle)")
+    elif export.cos_crit < 0.0:
         span = export.cos_max - export.cos_min
         y = build.math("MULTIPLY_ADD", 4, 2, c, 1.0 / span, -export.cos_min / span, label="y")
     else:
