@@ -148,6 +148,20 @@ class Export:
             return 0.0
         return min(1.0, max(0.0, (t - self.thickness_min_nm) / span))
 
+    def transmits(self):
+        """Whether light leaves through the substrate: the film transmits (film.json
+        "opaque" is false) into a lossless substrate. Into a metal the transmitted
+        power is absorbed, so no refraction lobe is drawn."""
+        if self.opaque:
+            return False
+        try:
+            return not _absorbs(self.stack["substrate"])
+        except (KeyError, TypeError, ValueError) as e:
+            raise ExportError(
+                f"irid export {self.directory}: the stack in film.json does not describe "
+                f"the substrate ({e})"
+            ) from None
+
     def relative_ior(self):
         """Substrate over ambient refractive index at IOR_WAVELENGTH_NM, from the stack."""
         try:
@@ -198,6 +212,18 @@ def _index_at(material, wavelength_nm):
     return float(n)
 
 
+def _absorbs(material):
+    """Whether a serialized irid material has k != 0 anywhere."""
+    dispersion = material["dispersion"]
+    if "constant" in dispersion:
+        return dispersion["constant"]["k"] != 0
+    if "table" in dispersion:
+        return any(k != 0 for k in dispersion["table"]["k"])
+    if "cauchy" in dispersion or "sellmeier" in dispersion:
+        return False
+    raise ValueError(f"unknown dispersion {sorted(dispersion)}")
+
+
 def _interp(x, xs, ys):
     if not xs or len(xs) != len(ys) or not xs[0] <= x <= xs[-1]:
         raise ValueError(f"{x} nm is outside the material's table")
@@ -246,7 +272,9 @@ def make_node_group(export_dir, name=None, ior=None):
     Raises ExportError for a bad export directory; nothing stays in the .blend
     when building fails."""
     export = export_dir if isinstance(export_dir, Export) else Export(export_dir)
-    if ior is None and not export.opaque:
+    if not export.transmits():
+        ior = None  # Glossy only: nothing leaves through the substrate
+    elif ior is None:
         ior = export.relative_ior()
     group_name = name or f"irid film {export.label}"
     created = []
@@ -272,8 +300,9 @@ def make_material(export_dir, thickness_nm=None, name=None, roughness=0.0, ior=N
     None leaves the group's Thickness socket (0-1 over the range, like glTF's
     iridescenceThicknessTexture) for an attribute or texture to drive
     (default 0.5). roughness: GGX roughness of both lobes. ior: relative
-    index of refraction for a transmitting film (default: substrate over
-    ambient at 550 nm, from the stack in film.json).
+    index of refraction when the film transmits into a lossless substrate
+    (default: substrate over ambient at 550 nm, from the stack in film.json);
+    over an absorbing substrate (a metal) the material has no refraction lobe.
 
     Raises ExportError (a ValueError) with one message for a missing file or
     a damaged film.json, ValueError for a thickness outside the export's
@@ -323,7 +352,7 @@ def _load_image(export, table, name):
         raise ExportError(f"irid export {path}: Blender cannot read it ({e})") from None
     try:
         image.name = name
-        image.colorspace_settings.name = "Non-Color"
+        image.colorspace_settings.name = _texture_colorspace(image)
         image.alpha_mode = "CHANNEL_PACKED"
         # Reading the size loads the pixels: a damaged file shows here, not at render time.
         size = tuple(image.size)
@@ -338,6 +367,18 @@ def _load_image(export, table, name):
         _remove(image)
         raise
     return image
+
+
+def _texture_colorspace(image):
+    """The export's colours are linear sRGB, i.e. linear Rec.709 primaries, with
+    no transfer curve. Tagged so, Blender converts them into the scene's
+    working space (Blender 5.0 offers ACEScg and Rec.2020, where film colours
+    outside Rec.709 keep their negative Rec.709 channels instead of being
+    clipped by the BSDF); in the default Rec.709 working space it is the same
+    as Non-Color. Blender builds without that colour space read them as
+    Non-Color (raw numbers)."""
+    names = image.colorspace_settings.bl_rna.properties["name"].enum_items.keys()
+    return "Linear Rec.709" if "Linear Rec.709" in names else "Non-Color"
 
 
 def _remove(block):
@@ -435,7 +476,7 @@ def _build_group(group, export, images, ior):
     glossy = build.node("ShaderNodeBsdfGlossy", 8.5, -1, label="film reflection", distribution="GGX")
     build.link(colours["reflectance"], glossy.inputs["Color"])
     build.link(inputs.outputs["Roughness"], glossy.inputs["Roughness"])
-    if export.opaque:
+    if ior is None:
         build.link(glossy.outputs["BSDF"], outputs.inputs["BSDF"])
         return
     refraction = build.node(

@@ -244,6 +244,10 @@ class Bench:
         settings.file_format = "OPEN_EXR"
         settings.color_depth = "32"
         settings.exr_codec = "ZIP"
+        # Renders are written in linear Rec.709 (irid's linear sRGB) whatever
+        # the working space.
+        settings.color_management = "OVERRIDE"
+        settings.linear_colorspace_settings.name = "Linear Rec.709"
 
         world = bpy.data.worlds.new("white")
         scene.world = world
@@ -260,6 +264,9 @@ class Bench:
             [(0, 1, 2, 3)],
         )
         self.plane = bpy.data.objects.new("plane", mesh)
+        # Keep the quad's diagonal edge away from the view: a refracted ray that
+        # starts on the edge between its two triangles can hit the plane again.
+        self.plane.location = (2000.0, 700.0, 0.0)
         scene.collection.objects.link(self.plane)
 
         camera = bpy.data.cameras.new("camera")
@@ -297,8 +304,15 @@ class Bench:
             raise ValueError(mode)
         tree.links.new(strength, background.inputs["Strength"])
 
-    def render(self, material, angle_deg):
-        """Linear RGB of every pixel, shape (H, W, 3)."""
+    def set_working_space(self, name):
+        """Blender 5.0's scene-linear working space: Linear Rec.709 (the default) or ACEScg."""
+        done = bpy.ops.wm.set_working_color_space(working_space=name, convert_colors=False)
+        if done != {"FINISHED"} or bpy.data.colorspace.working_space != name:
+            raise RuntimeError(f"cannot set the working colour space to {name}")
+
+    def render(self, material, angle_deg, samples=SAMPLES):
+        """Linear Rec.709 RGB of every pixel, shape (H, W, 3)."""
+        self.scene.cycles.samples = samples
         self.plane.data.materials.clear()
         self.plane.data.materials.append(material)
         theta = math.radians(angle_deg)
@@ -346,15 +360,27 @@ def emission_material(name, group, output, thickness_fraction):
     return material
 
 
-def principled_material(name, base_color, metallic, ior, film_thickness_nm, film_ior):
-    """Cycles' own thin film: a Principled BSDF with Thin Film inputs, no diffuse."""
+def principled_material(name, base_color, metallic, ior, film_thickness_nm, film_ior, workdir):
+    """Cycles' own thin film: a Principled BSDF with Thin Film inputs, no diffuse.
+    The base colour (linear Rec.709) goes through a one-texel image tagged
+    Linear Rec.709, so Blender converts it into the working space."""
     material = bpy.data.materials.new(name)
     if material.node_tree is None:
         material.use_nodes = True
     tree = material.node_tree
     tree.nodes.clear()
     bsdf = tree.nodes.new("ShaderNodeBsdfPrincipled")
-    bsdf.inputs["Base Color"].default_value = (*base_color, 1.0)
+    path = Path(workdir) / f"base-{len(bpy.data.images)}.exr"
+    texel = np.array([[[*base_color, 1.0]]], np.float32)
+    pixels = np.ascontiguousarray(texel)
+    with OpenEXR.File({"compression": OpenEXR.NO_COMPRESSION}, {"RGBA": pixels}) as f:
+        f.write(str(path))
+    image = bpy.data.images.load(str(path), check_existing=False)
+    image.colorspace_settings.name = "Linear Rec.709"
+    texture = tree.nodes.new("ShaderNodeTexImage")
+    texture.image = image
+    texture.interpolation = "Closest"
+    tree.links.new(texture.outputs["Color"], bsdf.inputs["Base Color"])
     bsdf.inputs["Metallic"].default_value = metallic
     bsdf.inputs["Roughness"].default_value = 0.0
     bsdf.inputs["IOR"].default_value = ior
@@ -561,62 +587,113 @@ def test_bad_input(results, workdir):
     results.check("bad input: a thickness outside the range", ok and after == before)
 
 
-def measure(results, bench, irid, workdir):
-    table = []
-    for case in CASES:
-        stack = REPO / case["stack"]
-        directory = irid.export(stack, workdir / f"export-{len(table)}", case["layer"], case["range"])
-        export = irid_blender.Export(directory)
-        text = stack.read_text()
-        nominal = float(
-            re.findall(r"^\s*thickness_nm\s*=\s*([0-9.eE+-]+)", text, re.M)[case["layer"] - 1]
+def test_addon(results, workdir):
+    """The add-on registers, and its import operator builds and assigns a material."""
+    directory = workdir / "synthetic-linear"
+    irid_blender.register()
+    try:
+        mesh = bpy.data.meshes.new("addon mesh")
+        mesh.from_pydata([(0, 0, 0), (1, 0, 0), (0, 1, 0)], [], [(0, 1, 2)])
+        obj = bpy.data.objects.new("addon object", mesh)
+        bpy.context.scene.collection.objects.link(obj)
+        bpy.context.view_layer.objects.active = obj
+        obj.select_set(True)
+        done = bpy.ops.import_scene.irid_film(
+            filepath=str(directory / "film.json"), thickness_nm=500.0
         )
-        t_min, t_max = case["range"]
-        checks = [("constant", nominal, None)]
-        checks.append(("socket", t_min + SOCKET_FRACTION * (t_max - t_min), SOCKET_FRACTION))
-        errors_r, errors_t = [], []
-        for how, thickness, fraction in checks:
-            stack_file = workdir / f"stack-{len(table)}-{how}.toml"
-            stack_file.write_text(stack_with_thickness(text, case["layer"], thickness))
-            exact_r, exact_t = irid.colours(stack_file, ANGLES_DEG)
-            if fraction is None:
-                material = irid_blender.make_material(directory, thickness_nm=thickness)
-            else:
-                material = irid_blender.make_material(directory)
-                film = next(n for n in material.node_tree.nodes if n.bl_idname == "ShaderNodeGroup")
-                film.inputs["Thickness"].default_value = fraction
-            if export.opaque:
-                bench.set_world("white")
-                for k, angle in enumerate(ANGLES_DEG):
-                    errors_r.append(delta_e2000_rgb(bench.render(material, angle), exact_r[k]))
-            else:
-                for mode, exact, errors in (
-                    ("reflection", exact_r, errors_r),
-                    ("transmission", exact_t, errors_t),
-                ):
-                    bench.set_world(mode)
-                    for k, angle in enumerate(ANGLES_DEG):
-                        errors.append(delta_e2000_rgb(bench.render(material, angle), exact[k]))
-        row = {"case": case["name"], "opaque": export.opaque}
-        for channel, errors in (("R", errors_r), ("T", errors_t)):
-            if not errors:
-                continue
-            e = np.concatenate([np.ravel(x) for x in errors])
-            row[f"irid_{channel}"] = (float(e.mean()), float(e.max()))
-            results.check(
-                f"{case['name']}: irid {channel} vs exact",
-                e.mean() <= MEAN_BOUND and e.max() <= MAX_BOUND,
-                f"(ΔE00 mean {e.mean():.3f}, max {e.max():.3f})",
-            )
-        if case.get("cycles"):
-            row["cycles_R"] = cycles_figures(bench, irid, workdir, case, nominal, stack, text)
-            print(f"      Cycles' Principled thin film R: ΔE00 mean {row['cycles_R'][0]:.3f}, "
-                  f"max {row['cycles_R'][1]:.3f} (reported, no bound)")
-        table.append(row)
+        material = mesh.materials[0] if mesh.materials else None
+        film = material and next(
+            (n for n in material.node_tree.nodes if n.bl_idname == "ShaderNodeGroup"), None
+        )
+        fraction = film.inputs["Thickness"].default_value if film else None
+        ok = done == {"FINISHED"} and fraction is not None and abs(fraction - 0.5) < 1e-6
+        results.check("add-on: File > Import > irid film assigns the material", ok,
+                      f"(operator {done}, thickness socket {fraction})")
+        bpy.data.objects.remove(obj)
+        bpy.data.meshes.remove(mesh)
+    finally:
+        irid_blender.unregister()
+
+
+WORKING_SPACES = ("ACEScg", "Linear Rec.709")
+# A transmitting film's material adds a Refraction lobe to the Glossy one;
+# Cycles picks one of them per sample, so those renders take many samples.
+TRANSMITTING_SAMPLES = 16384
+
+
+def measure(results, bench, irid, workdir):
+    """Every case in every working space: irid's material and, on the one-film
+    cases, Cycles' Principled thin film, against irid color."""
+    table = []
+    exports = {}
+    for space in WORKING_SPACES:
+        bench.set_working_space(space)
+        for n, case in enumerate(CASES):
+            stack = REPO / case["stack"]
+            if n not in exports:
+                exports[n] = irid.export(stack, workdir / f"export-{n}", case["layer"], case["range"])
+            row = measure_case(results, bench, irid, workdir, case, n, exports[n], space)
+            table.append(row)
     return table
 
 
-def cycles_figures(bench, irid, workdir, case, nominal, stack, text):
+def measure_case(results, bench, irid, workdir, case, n, directory, space):
+    stack = REPO / case["stack"]
+    export = irid_blender.Export(directory)
+    text = stack.read_text()
+    nominal = float(
+        re.findall(r"^\s*thickness_nm\s*=\s*([0-9.eE+-]+)", text, re.M)[case["layer"] - 1]
+    )
+    t_min, t_max = case["range"]
+    checks = [("constant", nominal, None)]
+    checks.append(("socket", t_min + SOCKET_FRACTION * (t_max - t_min), SOCKET_FRACTION))
+    transmits = export.transmits()
+    samples = TRANSMITTING_SAMPLES if transmits else SAMPLES
+    errors = {"R": [], "T": []}
+    in_gamut = True
+    for how, thickness, fraction in checks:
+        stack_file = workdir / f"stack-{n}-{how}.toml"
+        stack_file.write_text(stack_with_thickness(text, case["layer"], thickness))
+        exact = dict(zip("RT", irid.colours(stack_file, ANGLES_DEG)))
+        if fraction is None:
+            material = irid_blender.make_material(directory, thickness_nm=thickness)
+        else:
+            material = irid_blender.make_material(directory)
+            film = next(n for n in material.node_tree.nodes if n.bl_idname == "ShaderNodeGroup")
+            film.inputs["Thickness"].default_value = fraction
+        # An opaque film is lit by the whole white world; a transmitting one is
+        # rendered twice, lit only through reflection and only through refraction.
+        modes = (("reflection", "R"), ("transmission", "T")) if transmits else (("white", "R"),)
+        for mode, channel in modes:
+            bench.set_world(mode)
+            in_gamut = in_gamut and bool((exact[channel] >= 0).all())
+            for k, angle in enumerate(ANGLES_DEG):
+                rendered = bench.render(material, angle, samples)
+                errors[channel].append(delta_e2000_rgb(rendered, exact[channel][k]))
+    # Cycles clips negative BSDF colours: in the Rec.709 working space a film
+    # colour outside Rec.709 cannot be rendered, so the bound applies there only
+    # to stacks whose exact colours are inside it.
+    bounded = space != "Linear Rec.709" or in_gamut
+    row = {"case": case["name"], "space": space, "bounded": bounded}
+    for channel, values in errors.items():
+        if not values:
+            continue
+        e = np.concatenate([np.ravel(x) for x in values])
+        row[f"irid_{channel}"] = (float(e.mean()), float(e.max()))
+        name = f"{case['name']}, {space} working space: irid {channel} vs exact"
+        figures = f"(ΔE00 mean {e.mean():.3f}, max {e.max():.3f})"
+        if bounded:
+            results.check(name, e.mean() <= MEAN_BOUND and e.max() <= MAX_BOUND, figures)
+        else:
+            print(f"info  {name} {figures}: exact colours outside Rec.709, reported only")
+    if case.get("cycles"):
+        row["cycles_R"] = cycles_figures(bench, irid, workdir, case, nominal, stack)
+        print(f"info  {case['name']}, {space} working space: Cycles' Principled thin film R "
+              f"ΔE00 mean {row['cycles_R'][0]:.3f}, max {row['cycles_R'][1]:.3f} (no bound)")
+    return row
+
+
+def cycles_figures(bench, irid, workdir, case, nominal, stack):
     """Cycles' Principled thin film against exact reflectance at the nominal thickness."""
     spec = case["cycles"]
     exact_r, _ = irid.colours(stack, ANGLES_DEG)
@@ -625,12 +702,12 @@ def cycles_figures(bench, irid, workdir, case, nominal, stack, text):
         bare.write_text(f'ambient = {{ n = 1.0 }}\nsubstrate = {{ material = "{spec["metal"]}" }}\n')
         base, _ = irid.colours(bare, (0.0,))
         material = principled_material(
-            f"Cycles {case['name']}", tuple(base[0]), 1.0, 1.5, nominal, spec["film_ior"]
+            f"Cycles {case['name']}", tuple(base[0]), 1.0, 1.5, nominal, spec["film_ior"], workdir
         )
     else:
         material = principled_material(
             f"Cycles {case['name']}", (0.0, 0.0, 0.0), 0.0, spec["substrate_ior"], nominal,
-            spec["film_ior"],
+            spec["film_ior"], workdir,
         )
     bench.set_world("white")
     errors = [delta_e2000_rgb(bench.render(material, a), exact_r[k]) for k, a in enumerate(ANGLES_DEG)]
@@ -699,7 +776,7 @@ def render_picture(irid, workdir, png_path):
 
     spec = case["cycles"]
     cycles_material = principled_material(
-        "Cycles thin film on silver", tuple(base[0]), 1.0, 1.5, t_min, spec["film_ior"]
+        "Cycles thin film on silver", tuple(base[0]), 1.0, 1.5, t_min, spec["film_ior"], workdir
     )
     tree = cycles_material.node_tree
     to_nm = tree.nodes.new("ShaderNodeMath")
@@ -758,17 +835,21 @@ def format_table(table):
     angles = ", ".join(f"{a:g}°" for a in ANGLES_DEG)
     lines = [
         f"ΔE00 (CIEDE2000) against `irid color --white e`, at {angles}, at the stack's "
-        f"thickness and at {SOCKET_FRACTION:g} of the exported range through the Thickness socket; "
-        f"Cycles CPU, {SAMPLES} samples, roughness 0. Bound on irid: mean ≤ {MEAN_BOUND:g}, "
-        f"max ≤ {MAX_BOUND:g}.",
+        f"thickness and at {SOCKET_FRACTION:g} of the exported range through the Thickness "
+        f"socket; Cycles CPU, roughness 0, {SAMPLES} samples ({TRANSMITTING_SAMPLES} for a "
+        f"transmitting film), {RESOLUTION}×{RESOLUTION} pixels. Bound on irid: mean ≤ "
+        f"{MEAN_BOUND:g}, max ≤ {MAX_BOUND:g} (* where the exact colours fall outside Rec.709 "
+        "and the Rec.709 working space clips them: reported, not bounded).",
         "",
-        "| stack | irid R mean / max | irid T mean / max | Cycles thin film R mean / max |",
-        "| --- | --- | --- | --- |",
+        "| stack | working space | irid R mean / max | irid T mean / max | Cycles thin film R mean / max |",
+        "| --- | --- | --- | --- | --- |",
     ]
     fmt = lambda pair: "–" if pair is None else f"{pair[0]:.3f} / {pair[1]:.3f}"  # noqa: E731
     for row in table:
+        mark = "" if row["bounded"] else " *"
         lines.append(
-            f"| {row['case']} | {fmt(row.get('irid_R'))} | {fmt(row.get('irid_T'))} | "
+            f"| {row['case']} | {row['space']} | {fmt(row.get('irid_R'))}{mark} | "
+            f"{fmt(row.get('irid_T'))}{mark if row.get('irid_T') else ''} | "
             f"{fmt(row.get('cycles_R'))} |"
         )
     return "\n".join(lines) + "\n"
@@ -805,6 +886,7 @@ def main():
         test_orientation(results, workdir)
         test_mapping(results, bench, workdir)
         test_bad_input(results, workdir)
+        test_addon(results, workdir)
         table = measure(results, bench, irid, workdir)
         table_text = format_table(table)
         print()
