@@ -88,6 +88,12 @@ class Export:
         self.y_crit = number("y_crit")
         self.size_u = number("size_u")
         self.size_v = number("size_v")
+        self.thickness_power = number("thickness_power")
+        if self.thickness_power not in (1.0, 2.0):
+            raise ExportError(
+                f"irid export {where}: params.thickness_power = {self.thickness_power}, "
+                "expected 1 or 2"
+            )
         for key in ("size_u", "size_v"):
             value = getattr(self, key)
             if value < 1 or value != int(value):
@@ -104,11 +110,13 @@ class Export:
                 f"irid export {where}: cos θ range [{self.cos_min}, {self.cos_max}] is not "
                 "a range inside [0, 1]"
             )
+        # cos_crit < 0: angle nodes uniform in cos θ; otherwise they crowd towards
+        # cos_crit, a critical angle inside the range or cos_min (grazing).
         if self.cos_crit >= 0.0:
-            if not self.cos_min < self.cos_crit < self.cos_max or not 0.0 < self.y_crit < 1.0:
+            if not self.cos_min <= self.cos_crit < self.cos_max or not 0.0 <= self.y_crit < 1.0:
                 raise ExportError(
-                    f"irid export {where}: critical angle cos {self.cos_crit} (y {self.y_crit}) "
-                    f"is not inside the cos θ range [{self.cos_min}, {self.cos_max}]"
+                    f"irid export {where}: angle warp centre cos {self.cos_crit} (y {self.y_crit}) "
+                    f"is not inside the cos θ range [{self.cos_min}, {self.cos_max})"
                 )
         opaque = film.get("opaque")
         if not isinstance(opaque, bool):
@@ -412,10 +420,14 @@ def _build_group(group, export, images, ior):
     inputs = build.node("NodeGroupInput", 0, 0)
     outputs = build.node("NodeGroupOutput", 9, 0)
 
-    # u: thickness fraction x in [0, 1] to texel centres, u = (x (N_u - 1) + 0.5) / N_u.
+    # u: thickness fraction x in [0, 1], square-rooted when the thickness nodes
+    # crowd towards the minimum (thickness_power 2), to texel centres:
+    # u = (x (N_u - 1) + 0.5) / N_u.
     nu = export.size_u
     x = build.math("MULTIPLY", 1, 0, inputs.outputs["Thickness"], 1.0, label="x = clamp(thickness)")
     x.node.use_clamp = True
+    if export.thickness_power == 2.0:
+        x = build.math("SQRT", 1.5, 0, x, label="x = sqrt(x)")
     u = build.math("MULTIPLY_ADD", 2, 0, x, (nu - 1) / nu, 0.5 / nu, label="u")
 
     # cos θ: the incoming direction against the shading normal, either side.
@@ -430,8 +442,9 @@ def _build_group(group, export, images, ior):
     clamp.inputs["Max"].default_value = export.cos_max
     c = clamp.outputs["Result"]
 
-    # y: the export's angle warp, linear in cos θ or square-root around the
-    # critical angle (a branch-free form: one of the two roots is zero).
+    # y: the export's angle warp, linear in cos θ or square-root on each side
+    # of cos_crit (a branch-free form: one of the two roots is zero; with
+    # cos_crit = cos_min there is no side below).
     if export.cos_max == export.cos_min:
         y = build.math("MULTIPLY", 4, 2, c, 0.0, label="y = 0 (one angle)")
     elif export.cos_crit < 0.0:
@@ -442,13 +455,14 @@ def _build_group(group, export, images, ior):
         above = build.math(
             "MULTIPLY_ADD", 4, 2, c, 1.0 / (export.cos_max - cc), -cc / (export.cos_max - cc)
         )
-        below = build.math(
-            "MULTIPLY_ADD", 4, 3, c, -1.0 / (cc - export.cos_min), cc / (cc - export.cos_min)
-        )
         above = build.math("SQRT", 5, 2, build.math("MAXIMUM", 4.5, 2, above, 0.0))
-        below = build.math("SQRT", 5, 3, build.math("MAXIMUM", 4.5, 3, below, 0.0))
-        y = build.math("MULTIPLY_ADD", 5.5, 2, above, 1.0 - yc, yc)
-        y = build.math("MULTIPLY_ADD", 6, 2, below, -yc, y, label="y")
+        y = build.math("MULTIPLY_ADD", 5.5, 2, above, 1.0 - yc, yc, label="y")
+        if cc > export.cos_min:
+            below = build.math(
+                "MULTIPLY_ADD", 4, 3, c, -1.0 / (cc - export.cos_min), cc / (cc - export.cos_min)
+            )
+            below = build.math("SQRT", 5, 3, build.math("MAXIMUM", 4.5, 3, below, 0.0))
+            y = build.math("MULTIPLY_ADD", 6, 2, below, -yc, y, label="y")
     # v in the file's row order is (y (N_v - 1) + 0.5) / N_v; Blender puts the
     # file's first row at v = 1, so the texture is read at 1 - v.
     nv = export.size_v

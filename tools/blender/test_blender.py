@@ -160,7 +160,9 @@ def read_exr_rgb(path):
         return np.stack([np.asarray(channels[c].pixels, float) for c in "RGB"], -1)
 
 
-def write_synthetic_export(directory, size_u, size_v, cos_range, cos_crit, y_crit, opaque):
+def write_synthetic_export(
+    directory, size_u, size_v, cos_range, cos_crit, y_crit, opaque, thickness_power=1
+):
     """A film table for the mapping test: texel (i, j) holds reflectance
     (i / (N_u - 1), j / (N_v - 1), 0.25) and transmittance
     (1 - i / (N_u - 1), 1 - j / (N_v - 1), 0.75), so bilinear sampling gives
@@ -192,6 +194,7 @@ def write_synthetic_export(directory, size_u, size_v, cos_range, cos_crit, y_cri
             "y_crit": y_crit,
             "size_u": size_u,
             "size_v": size_v,
+            "thickness_power": thickness_power,
         },
         "white": "e",
         "stack": {
@@ -204,6 +207,12 @@ def write_synthetic_export(directory, size_u, size_v, cos_range, cos_crit, y_cri
         "opaque": opaque,
     }
     (directory / "film.json").write_text(json.dumps(film, indent=1))
+
+
+def expected_x(fraction, thickness_power):
+    """The export's thickness warp (docs/gpu.md), written out directly."""
+    x = min(max(fraction, 0.0), 1.0)
+    return math.sqrt(x) if thickness_power == 2 else x
 
 
 def expected_y(c, cos_min, cos_max, cos_crit, y_crit):
@@ -530,13 +539,17 @@ def test_orientation(results, workdir):
 def test_mapping(results, bench, workdir):
     cos_range = (math.cos(math.radians(89.0)), 1.0)
     variants = [
-        ("linear", 9, 7, -1.0, 0.0),
+        ("linear", 9, 7, -1.0, 0.0, 1),
         # Critical angle at cos 0.6, on the texel row k = 3 of 7: y_crit = 3 / 6.
-        ("critical", 9, 7, 0.6, 0.5),
+        ("critical", 9, 7, 0.6, 0.5, 1),
+        # Nodes crowding towards grazing incidence and towards the thinnest film.
+        ("grazing, square-root thickness", 9, 7, cos_range[0], 0.0, 2),
     ]
-    for label, size_u, size_v, cos_crit, y_crit in variants:
-        directory = workdir / f"synthetic-{label}"
-        write_synthetic_export(directory, size_u, size_v, cos_range, cos_crit, y_crit, False)
+    for label, size_u, size_v, cos_crit, y_crit, power in variants:
+        directory = workdir / f"synthetic-{label.replace(' ', '').replace(',', '-')}"
+        write_synthetic_export(
+            directory, size_u, size_v, cos_range, cos_crit, y_crit, False, power
+        )
         group = irid_blender.make_node_group(directory, name=f"synthetic {label}")
         worst = 0.0
         for fraction in (0.0, 0.37, 1.0):
@@ -546,11 +559,12 @@ def test_mapping(results, bench, workdir):
                 y = expected_y(math.cos(math.radians(angle)), *cos_range, cos_crit, y_crit)
                 r = bench.render(reflect, angle)
                 t = bench.render(transmit, angle)
-                want_r = np.array([fraction, y, 0.25])
-                want_t = np.array([1 - fraction, 1 - y, 0.75])
+                x = expected_x(fraction, power)
+                want_r = np.array([x, y, 0.25])
+                want_t = np.array([1 - x, 1 - y, 0.75])
                 worst = max(worst, np.abs(r - want_r).max(), np.abs(t - want_t).max())
         # Half-float texels hold 1/1024 steps near 1; float math nodes add ~1e-6.
-        results.check(f"mapping, {label} angle warp", worst < 2e-3,
+        results.check(f"mapping, {label} warp", worst < 2e-3,
                       f"(largest |rendered - closed form| {worst:.1e})")
 
 
