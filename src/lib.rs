@@ -10,6 +10,7 @@ pub mod atomic;
 pub mod bench;
 pub mod color;
 pub mod error;
+pub mod export;
 pub mod lut;
 pub mod optics;
 pub mod render;

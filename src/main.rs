@@ -25,10 +25,12 @@ enum Command {
     Eval(cli::eval::Args),
     /// Speed against error of every method; `--grid` times one stack for the peers.
     Bench(cli::bench::Args),
-    /// Reflected and transmitted colour of a stack under D65, per angle.
+    /// Reflected and transmitted colour of a stack (D65 or white E), per angle.
     Color(cli::color::Args),
     /// Bake a stack's response into an OpenEXR lookup table.
     Bake(cli::bake::Args),
+    /// GPU-ready textures, film.json and shaders for any renderer.
+    Export(cli::export::Args),
     /// Print a lookup table's header.
     Info(cli::info::Args),
     /// Measure a lookup table's error against the solver.
@@ -58,6 +60,7 @@ fn main() -> ExitCode {
         Command::Bench(args) => cli::bench::run(args),
         Command::Color(args) => cli::color::run(args),
         Command::Bake(args) => cli::bake::run(args),
+        Command::Export(args) => cli::export::run(args),
         Command::Info(args) => cli::info::run(args),
         Command::Validate(args) => cli::validate::run(args),
         Command::Render(args) => cli::render::run(args),

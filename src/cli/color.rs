@@ -1,11 +1,12 @@
-//! `irid color`: a stack's reflected and transmitted colour under D65, per angle.
+//! `irid color`: a stack's reflected and transmitted colour, per angle, in
+//! linear sRGB with the chosen white (D65 by default).
 
 use std::io::{IsTerminal, Write};
 use std::path::PathBuf;
 use std::process::ExitCode;
 
 use anyhow::{anyhow, Result};
-use irid::color::{linear_to_srgb8, stack_colours, Sampling, SpectralIntegrator};
+use irid::color::{linear_to_srgb8, stack_colours, Sampling, SpectralIntegrator, White};
 use irid::optics::Stack;
 
 use super::args::{check_angles, check_grid, parse_list};
@@ -20,6 +21,10 @@ pub struct Args {
     /// Wavelength sampling: exact (1 nm, 360-830 nm), uniform:N (380-780 nm), rgb3.
     #[arg(long, default_value = "exact")]
     pub sampling: String,
+    /// What (1, 1, 1) is: d65 (a perfect reflector under D65) or e (a flat
+    /// spectrum, as Blender Cycles and glTF viewers); see docs/color.md.
+    #[arg(long, default_value = "d65")]
+    pub white: String,
     /// One JSON array of {angle_deg, reflectance_rgb, transmittance_rgb,
     /// reflectance_xyz, transmittance_xyz} (linear sRGB; XYZ with Y = 1 for white).
     #[arg(long)]
@@ -28,10 +33,11 @@ pub struct Args {
 
 pub fn run(args: Args) -> Result<ExitCode> {
     let sampling: Sampling = args.sampling.parse().map_err(|e| anyhow!("--{e}"))?;
+    let white: White = args.white.parse().map_err(|e| anyhow!("--{e}"))?;
     let angles_deg = parse_list("--angles", &args.angles)?;
     check_angles("--angles", &angles_deg)?;
     let stack = Stack::load(&args.stack)?;
-    let integrator = SpectralIntegrator::new(sampling);
+    let integrator = SpectralIntegrator::with_white(sampling, white);
     check_grid(
         "--angles × --sampling wavelengths",
         &[angles_deg.len(), integrator.wavelengths_nm().len()],
@@ -60,8 +66,12 @@ pub fn run(args: Args) -> Result<ExitCode> {
     let triple = |v: [f64; 3]| format!("({:.4}, {:.4}, {:.4})", v[0], v[1], v[2]);
     writeln!(
         out,
-        "{}: D65, CIE 1931 2°, sampling {sampling}; linear sRGB with the sRGB-encoded hex",
-        args.stack.display()
+        "{}: {}, CIE 1931 2°, sampling {sampling}; linear sRGB with the sRGB-encoded hex",
+        args.stack.display(),
+        match white {
+            White::D65 => "D65",
+            White::E => "white E (flat spectrum = 1)",
+        }
     )?;
     // Visible width of a swatch, a space and a padded triple.
     let width = if swatches { 40 } else { 35 };

@@ -6,6 +6,7 @@ pub mod bench;
 pub mod color;
 pub mod demo;
 pub mod eval;
+pub mod export;
 pub mod info;
 pub mod render;
 pub mod validate;

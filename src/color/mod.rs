@@ -12,7 +12,7 @@ mod sampling;
 mod space;
 
 pub use film::{stack_colours, FilmColour};
-pub use sampling::{Sampling, SpectralIntegrator};
+pub use sampling::{Sampling, SpectralIntegrator, White};
 pub use space::{
     delta_e2000, delta_e2000_rgb, linear_srgb_to_xyz, linear_to_srgb8, white_xyz, xyz_to_lab,
     xyz_to_linear_srgb,

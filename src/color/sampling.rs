@@ -105,12 +105,69 @@ impl Sampling {
     }
 }
 
+/// What a perfect reflector's colour is made of, and so what (1, 1, 1) means
+/// in the linear sRGB a stack's colour is given in.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum White {
+    /// The spectrum under CIE D65, taken to linear sRGB through XYZ with the
+    /// tables' own D65 white: a perfect reflector is (1, 1, 1). irid's
+    /// default and its tracer's convention.
+    #[default]
+    D65,
+    /// The spectrum as it is (the equal-energy illuminant E), against the
+    /// CIE 1931 observer's linear-sRGB colour-matching functions, each
+    /// channel scaled so that a flat spectrum gives (1, 1, 1): the
+    /// convention of Blender Cycles and the glTF sample viewer.
+    E,
+}
+
+impl White {
+    /// How the white is named in headers and film.json.
+    pub fn name(self) -> &'static str {
+        match self {
+            White::D65 => "d65",
+            White::E => "e",
+        }
+    }
+
+    /// The illuminant, as a table header's `color.illuminant` spells it.
+    pub fn illuminant(self) -> &'static str {
+        match self {
+            White::D65 => "CIE D65",
+            White::E => "CIE E (equal energy), each sRGB channel normalized to a flat spectrum",
+        }
+    }
+
+    pub fn is_d65(&self) -> bool {
+        *self == White::D65
+    }
+}
+
+impl FromStr for White {
+    type Err = Error;
+    fn from_str(s: &str) -> Result<White> {
+        match s.trim() {
+            "d65" | "D65" => Ok(White::D65),
+            "e" | "E" => Ok(White::E),
+            _ => Err(Error::invalid(format!("white '{s}'"), "expected d65 or e")),
+        }
+    }
+}
+
+impl fmt::Display for White {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
 /// Turns spectra sampled at [`SpectralIntegrator::wavelengths_nm`] into XYZ or
 /// linear sRGB. All weights are computed once here; `xyz` and `rgb` are dot
 /// products with no allocation or interpolation.
 #[derive(Clone, Debug)]
 pub struct SpectralIntegrator {
     sampling: Sampling,
+    white: White,
     wavelengths_nm: Vec<f64>,
     /// Per channel (structure of arrays, so each dot product vectorizes).
     xyz_weights: [Vec<f64>; 3],
@@ -118,9 +175,33 @@ pub struct SpectralIntegrator {
 }
 
 impl SpectralIntegrator {
+    /// The integrator of irid's default white, D65.
     pub fn new(sampling: Sampling) -> SpectralIntegrator {
+        SpectralIntegrator::with_white(sampling, White::D65)
+    }
+
+    /// The integrator for a white convention. `rgb3` takes R, G and B at its
+    /// three wavelengths whatever the white.
+    pub fn with_white(sampling: Sampling, white: White) -> SpectralIntegrator {
         let wavelengths_nm = sampling.wavelengths_nm();
         let m = srgb();
+        if white == White::E && sampling != Sampling::Rgb3 {
+            // CMF to linear sRGB at each sample, each channel scaled so
+            // its weights sum to 1: a flat spectrum v gives (v, v, v).
+            let raw: Vec<[f64; 3]> = wavelengths_nm
+                .iter()
+                .map(|&w| mat_vec(&m.xyz_to_rgb, cmf_at(w)))
+                .collect();
+            let rgb = normalized_channels(&raw);
+            let xyz: Vec<[f64; 3]> = rgb.iter().map(|w| mat_vec(&m.rgb_to_xyz, *w)).collect();
+            return SpectralIntegrator {
+                sampling,
+                white,
+                wavelengths_nm,
+                xyz_weights: split_channels(&xyz),
+                rgb_weights: split_channels(&rgb),
+            };
+        }
         // Per-sample weight triples in both spaces.
         let (xyz, rgb): (Vec<[f64; 3]>, Vec<[f64; 3]>) = match sampling {
             Sampling::Rgb3 => wavelengths_nm
@@ -159,22 +240,14 @@ impl SpectralIntegrator {
                         mat_vec(&m.xyz_to_rgb, [c[0] * d, c[1] * d, c[2] * d])
                     })
                     .collect();
-                let mut sums = [0.0; 3];
-                for w in &raw {
-                    for c in 0..3 {
-                        sums[c] += w[c];
-                    }
-                }
-                let rgb: Vec<[f64; 3]> = raw
-                    .iter()
-                    .map(|w| [w[0] / sums[0], w[1] / sums[1], w[2] / sums[2]])
-                    .collect();
+                let rgb = normalized_channels(&raw);
                 let xyz = rgb.iter().map(|w| mat_vec(&m.rgb_to_xyz, *w)).collect();
                 (xyz, rgb)
             }
         };
         SpectralIntegrator {
             sampling,
+            white: White::D65,
             wavelengths_nm,
             xyz_weights: split_channels(&xyz),
             rgb_weights: split_channels(&rgb),
@@ -183,6 +256,10 @@ impl SpectralIntegrator {
 
     pub fn sampling(&self) -> Sampling {
         self.sampling
+    }
+
+    pub fn white(&self) -> White {
+        self.white
     }
 
     /// Where the spectrum must be sampled, ascending; `xyz`/`rgb` expect one
@@ -216,6 +293,19 @@ impl SpectralIntegrator {
     pub fn rgb(&self, spectrum: &[f64]) -> [f64; 3] {
         apply(&self.rgb_weights, spectrum)
     }
+}
+
+/// Weight triples with each channel scaled so that it sums to 1.
+fn normalized_channels(raw: &[[f64; 3]]) -> Vec<[f64; 3]> {
+    let mut sums = [0.0; 3];
+    for w in raw {
+        for c in 0..3 {
+            sums[c] += w[c];
+        }
+    }
+    raw.iter()
+        .map(|w| [w[0] / sums[0], w[1] / sums[1], w[2] / sums[2]])
+        .collect()
 }
 
 fn split_channels(w: &[[f64; 3]]) -> [Vec<f64>; 3] {

@@ -1,0 +1,51 @@
+//! Writes shaders/irid_film.glsl, irid_film_es.glsl and irid_film.hlsl from
+//! shaders/irid_film.wgsl (run from the repository root, or anywhere in it:
+//! the paths are the crate's):
+//!
+//!     cargo run -p irid-gpu --bin gen-shaders
+//!
+//! With `--check`, writes nothing and exits 1 when a committed file differs.
+
+use std::path::Path;
+use std::process::ExitCode;
+
+fn main() -> ExitCode {
+    let check = std::env::args().any(|a| a == "--check");
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shaders");
+    let wgsl = match std::fs::read_to_string(dir.join("irid_film.wgsl")) {
+        Ok(t) => t,
+        Err(e) => {
+            eprintln!("gen-shaders: {}: {e}", dir.join("irid_film.wgsl").display());
+            return ExitCode::from(2);
+        }
+    };
+    let files = match irid_gpu::generate::generate(&wgsl) {
+        Ok(f) => f,
+        Err(e) => {
+            eprintln!("gen-shaders: {e}");
+            return ExitCode::from(2);
+        }
+    };
+    let mut stale = false;
+    for (name, text) in files {
+        let path = dir.join(name);
+        let current = std::fs::read_to_string(&path).unwrap_or_default();
+        if current == text {
+            continue;
+        }
+        if check {
+            eprintln!("gen-shaders: {} is out of date", path.display());
+            stale = true;
+        } else if let Err(e) = std::fs::write(&path, &text) {
+            eprintln!("gen-shaders: {}: {e}", path.display());
+            return ExitCode::from(2);
+        } else {
+            println!("wrote {}", path.display());
+        }
+    }
+    if stale {
+        ExitCode::from(1)
+    } else {
+        ExitCode::SUCCESS
+    }
+}

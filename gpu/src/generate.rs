@@ -1,0 +1,277 @@
+//! The GLSL 4.50, GLSL ES 3.00 and HLSL forms of `shaders/irid_film.wgsl`,
+//! generated with naga's back ends and tidied into include-able code with
+//! the interface names of docs/gpu.md.
+//!
+//! naga writes whole shaders: its GLSL back end needs an entry point, names
+//! resources after their bindings (`_group_0_binding_0_fs`), and its HLSL
+//! back end reads samplers from a heap. The generator therefore compiles the
+//! WGSL with a small fragment entry point that calls `irid_film`, then drops
+//! that entry point and its inputs and outputs, gives every resource its
+//! WGSL name, and declares the HLSL sampler directly. Each step checks that
+//! it found what it replaces, so a change in naga's output stops the
+//! generator instead of producing a wrong file.
+
+use std::fmt::Write as _;
+
+use naga::back::{glsl, hlsl};
+
+/// The generated files, name and text, in the order docs/gpu.md lists them.
+pub fn generate(wgsl: &str) -> Result<Vec<(&'static str, String)>, String> {
+    let module = with_entry(wgsl)?;
+    Ok(vec![
+        (
+            "irid_film.glsl",
+            glsl_form(
+                &module,
+                glsl::Version::Desktop(450),
+                "GLSL 4.50 (OpenGL 4.5, Vulkan)",
+            )?,
+        ),
+        (
+            "irid_film_es.glsl",
+            glsl_form(
+                &module,
+                glsl::Version::Embedded {
+                    version: 300,
+                    is_webgl: true,
+                },
+                "GLSL ES 3.00 (WebGL2)",
+            )?,
+        ),
+        ("irid_film.hlsl", hlsl_form(&module)?),
+    ])
+}
+
+/// The entry point the generator compiles with (and removes again).
+const ENTRY: &str = "irid_generated_entry";
+
+struct Module {
+    module: naga::Module,
+    info: naga::valid::ModuleInfo,
+}
+
+fn with_entry(wgsl: &str) -> Result<Module, String> {
+    let source = format!(
+        "{wgsl}\n@fragment\nfn {ENTRY}(@location(0) at: vec2<f32>) -> @location(0) vec4<f32> {{\n    \
+         let film = irid_film(at.x, at.y);\n    \
+         return vec4<f32>(film.reflectance + film.transmittance, 1.0);\n}}\n"
+    );
+    let module = naga::front::wgsl::parse_str(&source).map_err(|e| e.emit_to_string(&source))?;
+    let info = naga::valid::Validator::new(
+        naga::valid::ValidationFlags::all(),
+        naga::valid::Capabilities::empty(),
+    )
+    .validate(&module)
+    .map_err(|e| format!("validation: {e:?}"))?;
+    Ok(Module { module, info })
+}
+
+fn header(form: &str) -> String {
+    format!(
+        "// irid_film, {form}: GENERATED from irid_film.wgsl by naga {} \
+         (cargo run -p irid-gpu --bin gen-shaders); do not edit.\n\
+         // Interface, bindings and upload: docs/gpu.md.\n",
+        NAGA_VERSION
+    )
+}
+
+/// The naga release the files come from (Cargo.lock pins it).
+pub const NAGA_VERSION: &str = "30";
+
+fn glsl_form(m: &Module, version: glsl::Version, form: &str) -> Result<String, String> {
+    let mut binding_map = glsl::BindingMap::default();
+    let desktop = matches!(version, glsl::Version::Desktop(_));
+    if desktop {
+        for binding in [0, 1, 3] {
+            binding_map.insert(naga::ResourceBinding { group: 0, binding }, binding as u8);
+        }
+    }
+    let options = glsl::Options {
+        version,
+        writer_flags: glsl::WriterFlags::empty(),
+        binding_map,
+        zero_initialize_workgroup_memory: false,
+    };
+    let pipeline = glsl::PipelineOptions {
+        shader_stage: naga::ShaderStage::Fragment,
+        entry_point: ENTRY.into(),
+        multiview: None,
+    };
+    let mut raw = String::new();
+    glsl::Writer::new(
+        &mut raw,
+        &m.module,
+        &m.info,
+        &options,
+        &pipeline,
+        naga::proc::BoundsCheckPolicies::default(),
+    )
+    .map_err(|e| format!("glsl: {e}"))?
+    .write()
+    .map_err(|e| format!("glsl: {e}"))?;
+
+    let mut text = raw;
+    for (from, to) in [
+        ("_group_0_binding_0_fs", "irid_reflectance"),
+        ("_group_0_binding_1_fs", "irid_transmittance"),
+        ("_group_0_binding_3_fs", "irid_params"),
+    ] {
+        text = replace_all(&text, from, to)?;
+    }
+    text = replace_all(&text, "IridParams_block_0Fragment", "IridParamsBlock")?;
+    let mut out = header(form);
+    if desktop {
+        out.push_str(
+            "// Prepend `#version 450` (or `#version 450 core`). Textures are combined samplers\n\
+             // (bilinear, clamp to edge, no mipmaps): irid_reflectance at binding 0,\n\
+             // irid_transmittance at 1; the IridParamsBlock uniform block at binding 3.\n",
+        );
+    } else {
+        out.push_str(
+            "// Prepend `#version 300 es`. Textures are combined samplers (bilinear, clamp to\n\
+             // edge, no mipmaps): bind with gl.uniform1i; the IridParamsBlock uniform block\n\
+             // with gl.uniformBlockBinding.\n",
+        );
+    }
+    let mut skipping_entry = false;
+    let mut kept_any = false;
+    for line in text.lines() {
+        if line.starts_with("#version") {
+            continue;
+        }
+        // The entry point's input and output variables.
+        if (line.contains(" in ")
+            || line.contains(" out ")
+            || line.starts_with("in ")
+            || line.starts_with("out "))
+            && line.contains("location")
+            || line.starts_with("smooth in ")
+        {
+            continue;
+        }
+        if line.starts_with("void main(") {
+            skipping_entry = true;
+            continue;
+        }
+        if skipping_entry {
+            if line == "}" {
+                skipping_entry = false;
+            }
+            continue;
+        }
+        kept_any = true;
+        out.push_str(line);
+        out.push('\n');
+    }
+    if !kept_any || out.contains("main(") || out.contains(ENTRY) {
+        return Err(format!(
+            "glsl: the entry point was not removed cleanly:\n{out}"
+        ));
+    }
+    Ok(tidy(out))
+}
+
+fn hlsl_form(m: &Module) -> Result<String, String> {
+    let mut binding_map = hlsl::BindingMap::default();
+    for (binding, register) in [(0, 0), (1, 1), (2, 0), (3, 0)] {
+        binding_map.insert(
+            naga::ResourceBinding { group: 0, binding },
+            hlsl::BindTarget {
+                space: 0,
+                register,
+                binding_array_size: None,
+                dynamic_storage_buffer_offsets_index: None,
+                restrict_indexing: false,
+            },
+        );
+    }
+    let mut sampler_buffer_binding_map = hlsl::SamplerIndexBufferBindingMap::default();
+    sampler_buffer_binding_map.insert(
+        hlsl::SamplerIndexBufferKey { group: 0 },
+        hlsl::BindTarget {
+            space: 0,
+            register: 2,
+            binding_array_size: None,
+            dynamic_storage_buffer_offsets_index: None,
+            restrict_indexing: false,
+        },
+    );
+    let options = hlsl::Options {
+        shader_model: hlsl::ShaderModel::V5_1,
+        binding_map,
+        sampler_buffer_binding_map,
+        fake_missing_bindings: false,
+        ..Default::default()
+    };
+    let pipeline = hlsl::PipelineOptions {
+        entry_point: Some((naga::ShaderStage::Fragment, ENTRY.into())),
+    };
+    let mut raw = String::new();
+    hlsl::Writer::new(&mut raw, &options, &pipeline)
+        .write(&m.module, &m.info, None)
+        .map_err(|e| format!("hlsl: {e}"))?;
+    let mut out = header("HLSL (Shader Model 5.1)");
+    out.push_str(
+        "// Textures at t0 and t1, the sampler (bilinear, clamp to edge) at s0, the\n\
+         // parameters in cbuffer irid_params at b0.\n\n",
+    );
+    let (mut sampler, mut skipping) = (false, false);
+    for line in raw.lines() {
+        // naga reads samplers through a heap and an index buffer (as wgpu's
+        // Direct3D 12 back end binds them): declare the sampler instead.
+        if line.contains("nagaSamplerHeap")
+            || line.contains("nagaComparisonSamplerHeap")
+            || line.contains("nagaGroup0SamplerIndexArray")
+        {
+            if line.starts_with("static const SamplerState irid_sampler ") {
+                out.push_str("SamplerState irid_sampler : register(s0);\n");
+                sampler = true;
+            }
+            continue;
+        }
+        if line.starts_with(&format!("struct FragmentInput_{ENTRY}"))
+            || line.starts_with(&format!("float4 {ENTRY}("))
+        {
+            skipping = true;
+            continue;
+        }
+        if skipping {
+            if line == "}" || line == "};" {
+                skipping = false;
+            }
+            continue;
+        }
+        out.push_str(line);
+        out.push('\n');
+    }
+    if !sampler || out.contains(ENTRY) || out.contains("naga") && !out.contains("by naga") {
+        return Err(format!("hlsl: unexpected output from naga:\n{raw}"));
+    }
+    Ok(tidy(out))
+}
+
+/// Replaces every `from` (which must occur) by `to`.
+fn replace_all(text: &str, from: &str, to: &str) -> Result<String, String> {
+    if !text.contains(from) {
+        return Err(format!("naga's output has no `{from}`:\n{text}"));
+    }
+    Ok(text.replace(from, to))
+}
+
+/// At most one blank line in a row, and one newline at the end.
+fn tidy(text: String) -> String {
+    let mut out = String::with_capacity(text.len());
+    let mut blank = 0;
+    for line in text.lines() {
+        if line.trim().is_empty() {
+            blank += 1;
+            if blank > 1 {
+                continue;
+            }
+        } else {
+            blank = 0;
+        }
+        let _ = writeln!(out, "{}", line.trim_end());
+    }
+    out.trim_end().to_string() + "\n"
+}

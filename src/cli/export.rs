@@ -1,0 +1,134 @@
+//! `irid export STACK.toml -o DIR`: GPU-ready textures of a stack's
+//! response, film.json and the shaders (see docs/gpu.md).
+
+use std::io::IsTerminal;
+use std::path::PathBuf;
+use std::process::ExitCode;
+use std::time::Instant;
+
+use anyhow::{anyhow, Context, Result};
+use irid::color::{Sampling, White};
+use irid::export::{export, write_dir, ExportSpec};
+use irid::optics::Stack;
+
+use super::args::parse_range;
+
+#[derive(clap::Args)]
+pub struct Args {
+    /// Stack file (TOML).
+    pub stack: PathBuf,
+    /// Output directory; written atomically (a temporary directory beside
+    /// it is renamed into place). An existing one is replaced only if it is
+    /// empty or an earlier export.
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// Thickness range MIN:MAX in nm of the varying layer [default: its
+    /// thickness in the stack file, a single texel column].
+    #[arg(long)]
+    pub thickness: Option<String>,
+    /// The varying layer, counted from 1 at the ambient side.
+    #[arg(long, default_value_t = 1)]
+    pub layer: usize,
+    /// cos θ range COS_MIN:COS_MAX in the ambient [default: cos 89°:1].
+    #[arg(long)]
+    pub angles: Option<String>,
+    /// Spectral integration: exact (1 nm), uniform:N, rgb3.
+    #[arg(long, default_value = "exact")]
+    pub sampling: String,
+    /// What (1, 1, 1) is: d65 (a perfect reflector under D65, irid's
+    /// default) or e (a flat spectrum, as Blender Cycles and glTF viewers).
+    #[arg(long, default_value = "d65")]
+    pub white: String,
+    /// Largest absolute error allowed in any channel of what the GPU
+    /// computes (bilinear filtering of f16 texels), against the solver.
+    #[arg(long, default_value_t = 1e-3)]
+    pub max_error: f64,
+    /// Random points at which that error is measured.
+    #[arg(long, default_value_t = irid::export::DEFAULT_POINTS)]
+    pub points: usize,
+    /// Also write 16-bit PNGs (for engines without OpenEXR import).
+    #[arg(long)]
+    pub png: bool,
+    /// Print nothing but errors.
+    #[arg(long, short)]
+    pub quiet: bool,
+}
+
+pub fn run(args: Args) -> Result<ExitCode> {
+    let stack = Stack::load(&args.stack)?;
+    let mut spec = ExportSpec::new(stack);
+    spec.layer = args.layer;
+    if let Some(layer) = spec.stack.layers.get(args.layer.wrapping_sub(1)) {
+        spec.thickness_nm = (layer.thickness_nm, layer.thickness_nm);
+    }
+    if let Some(t) = &args.thickness {
+        spec.thickness_nm = parse_range("--thickness", t)?;
+    }
+    if let Some(a) = &args.angles {
+        spec.cos_theta = parse_range("--angles", a)?;
+    }
+    spec.sampling = args
+        .sampling
+        .parse::<Sampling>()
+        .map_err(|e| anyhow!("--{e}"))?;
+    spec.white = args.white.parse::<White>().map_err(|e| anyhow!("--{e}"))?;
+    spec.max_error = args.max_error;
+    spec.points = args.points;
+    spec.png = args.png;
+    spec.validate()?;
+    if args.output.exists() && !args.output.is_dir() {
+        return Err(anyhow!(
+            "{}: exists and is not a directory",
+            args.output.display()
+        ));
+    }
+    let quiet = args.quiet;
+    // The sizes tried, as they are measured, when someone watches.
+    let watch =
+        !quiet && (std::io::stderr().is_terminal() || std::env::var_os("IRID_DEBUG").is_some());
+    let started = Instant::now();
+    let result = export(&spec, &|line| {
+        if watch {
+            eprintln!("  {line}");
+        }
+    })
+    .with_context(|| args.stack.display().to_string())?;
+    write_dir(&result, &args.output)?;
+    if !quiet {
+        let e = &result.error;
+        let m = &result.mapping;
+        println!(
+            "{}: {}×{} texels (thickness × angle), RGBA16F, {} KiB per texture, in {:.1} s",
+            args.output.display(),
+            m.size_u,
+            m.size_v,
+            m.size_u * m.size_v * 8 / 1024,
+            started.elapsed().as_secs_f64()
+        );
+        println!(
+            "GPU error (bilinear, f16) at {} random points: max {:.2e} (target {:.0e}), p99 {:.2e}, mean {:.2e}; ΔE00 max {:.3} / {:.3}, mean {:.4} / {:.4} (R / T)",
+            e.points,
+            e.max_all(),
+            spec.max_error,
+            e.p99_abs.iter().fold(0.0f64, |a, &b| a.max(b)),
+            e.mean_abs.iter().sum::<f64>() / 6.0,
+            e.max_delta_e00[0],
+            e.max_delta_e00[1],
+            e.mean_delta_e00[0],
+            e.mean_delta_e00[1],
+        );
+        println!(
+            "8-bit filter weights (some GPUs) add at most {:.2e}",
+            result.weights_8bit_extra
+        );
+        if let Some((scale, png)) = &result.png {
+            println!(
+                "PNG (16-bit, scale {scale}): max error {:.2e}, ΔE00 max {:.3} / {:.3}",
+                png.max_all(),
+                png.max_delta_e00[0],
+                png.max_delta_e00[1]
+            );
+        }
+    }
+    Ok(ExitCode::SUCCESS)
+}

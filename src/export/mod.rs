@@ -1,0 +1,835 @@
+//! GPU-ready tables: a stack's reflectance and transmittance on a texel grid
+//! that hardware bilinear filtering reads correctly, chosen so that what the
+//! GPU computes (bilinear, f16 texels) meets an error target, with the
+//! shaders that read it. `irid export` writes the result; the file set and
+//! the shader interface are specified in `docs/gpu.md`.
+//!
+//! The texture axes are uniform in the texture coordinates: thickness
+//! linearly, cos θ through a closed-form warp ([`Mapping`]) that puts a node
+//! exactly on a dense-side stack's critical angle and crowds nodes
+//! quadratically towards it, so the square-root kink of R there becomes a
+//! corner on a node.
+
+mod files;
+mod mapping;
+
+pub use files::{write_dir, FILM_FORMAT, FILM_VERSION};
+pub use mapping::{AngleWarp, Mapping, Texture, PARAM_NAMES};
+
+use rand::{Rng, SeedableRng};
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+
+use crate::color::{delta_e2000_rgb, Sampling, SpectralIntegrator, White};
+use crate::error::{Error, Result};
+use crate::optics::twoport::{Scratch, VaryingLayer};
+use crate::optics::{solve, Layer, Stack, StackGrid, MAX_THICKNESS_NM};
+
+/// The shaders, as committed in `shaders/` (the GLSL and HLSL forms are
+/// generated from the WGSL by `cargo run -p irid-gpu --bin gen-shaders`).
+pub const SHADERS: [(&str, &str); 4] = [
+    (
+        "irid_film.wgsl",
+        include_str!("../../shaders/irid_film.wgsl"),
+    ),
+    (
+        "irid_film.glsl",
+        include_str!("../../shaders/irid_film.glsl"),
+    ),
+    (
+        "irid_film_es.glsl",
+        include_str!("../../shaders/irid_film_es.glsl"),
+    ),
+    (
+        "irid_film.hlsl",
+        include_str!("../../shaders/irid_film.hlsl"),
+    ),
+];
+
+/// The largest texture side an export uses: WebGPU's default limit for 2D
+/// textures, which desktop GPUs exceed.
+pub const MAX_SIZE: usize = 8192;
+/// The largest finite f16 value: a table holding more is not representable.
+pub const F16_MAX: f64 = 65504.0;
+/// The random points of the default error measurement.
+pub const DEFAULT_POINTS: usize = 20_000;
+/// The seed of the measurement's PCG64 stream.
+pub const POINTS_SEED: u64 = 15;
+
+/// What to export.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ExportSpec {
+    pub stack: Stack,
+    /// The layer whose thickness is the u axis, from 1 at the ambient side
+    /// (ignored for a stack without layers).
+    pub layer: usize,
+    pub thickness_nm: (f64, f64),
+    /// cos θ in the ambient.
+    pub cos_theta: (f64, f64),
+    pub sampling: Sampling,
+    pub white: White,
+    /// The largest absolute error allowed in any channel of what the GPU
+    /// computes (bilinear filtering of f16 texels), at every measured point.
+    pub max_error: f64,
+    /// Random points at which that error is measured against the solver.
+    pub points: usize,
+    /// Also write 16-bit PNGs (and measure their quantization).
+    pub png: bool,
+}
+
+impl ExportSpec {
+    /// The defaults of `irid export`: layer 1 over its own thickness, cos θ
+    /// from cos 89° to 1, exact integration, D65, 1e-3, 20 000 points.
+    pub fn new(stack: Stack) -> ExportSpec {
+        let t = stack.layers.first().map_or(0.0, |l| l.thickness_nm);
+        ExportSpec {
+            stack,
+            layer: 1,
+            thickness_nm: (t, t),
+            cos_theta: (crate::lut::DEFAULT_COS_MIN, 1.0),
+            sampling: Sampling::Exact,
+            white: White::D65,
+            max_error: 1e-3,
+            points: DEFAULT_POINTS,
+            png: false,
+        }
+    }
+
+    /// Checks ranges and the stack; errors name the offending option.
+    pub fn validate(&self) -> Result<()> {
+        self.stack.validate()?;
+        let n = self.stack.layers.len();
+        if n > 0 && !(1..=n).contains(&self.layer) {
+            return Err(Error::invalid(
+                "layer",
+                format!(
+                    "must be between 1 and {n} (the stack's layers), got {}",
+                    self.layer
+                ),
+            ));
+        }
+        let (t0, t1) = self.thickness_nm;
+        if !(t0 >= 0.0 && t0 <= t1 && t1 <= MAX_THICKNESS_NM) {
+            return Err(Error::invalid(
+                "thickness",
+                format!("need 0 ≤ min ≤ max ≤ {MAX_THICKNESS_NM:e} nm, got {t0}:{t1}"),
+            ));
+        }
+        let (c0, c1) = self.cos_theta;
+        if !(c0 >= 0.0 && c1 <= 1.0 && c0 <= c1) {
+            return Err(Error::invalid(
+                "angles",
+                format!("cos θ range must satisfy 0 ≤ min ≤ max ≤ 1, got {c0}:{c1}"),
+            ));
+        }
+        if !(self.max_error > 0.0 && self.max_error.is_finite()) {
+            return Err(Error::invalid(
+                "max-error",
+                format!("must be a positive number, got {}", self.max_error),
+            ));
+        }
+        // f16 rounds a value near 1 by up to 2^-12: below twice that no
+        // grid of f16 texels can promise the target for a film that
+        // reflects or transmits nearly everything somewhere.
+        if self.max_error < 2.0 * F16_HALF_ULP_AT_ONE {
+            return Err(Error::invalid(
+                "max-error",
+                format!(
+                    "{} cannot be met with f16 texels, which round values near 1 by up to {:.2e}; use at least {:.0e}",
+                    self.max_error,
+                    F16_HALF_ULP_AT_ONE,
+                    5e-4
+                ),
+            ));
+        }
+        if !(1..=crate::lut::MAX_VALIDATION_POINTS).contains(&self.points) {
+            return Err(Error::invalid(
+                "points",
+                format!(
+                    "must be between 1 and {}, got {}",
+                    crate::lut::MAX_VALIDATION_POINTS,
+                    self.points
+                ),
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// Half a unit in the last place of f16 just below 1.
+const F16_HALF_ULP_AT_ONE: f64 = 1.0 / 4096.0;
+
+/// Error of what a GPU computes from the export against the exact solver,
+/// at random points. `*_abs` arrays have six entries: R.r, R.g, R.b, T.r,
+/// T.g, T.b; `*_delta_e00` two: reflectance and transmittance colour.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ExportError {
+    pub max_abs: [f64; 6],
+    pub p99_abs: [f64; 6],
+    pub mean_abs: [f64; 6],
+    pub max_delta_e00: [f64; 2],
+    pub mean_delta_e00: [f64; 2],
+    pub points: usize,
+    pub seed: u64,
+    /// (thickness nm, cos θ) of the largest error over channels.
+    pub worst_point: [f64; 2],
+}
+
+impl ExportError {
+    pub fn max_all(&self) -> f64 {
+        self.max_abs.iter().fold(0.0, |a, &b| a.max(b))
+    }
+}
+
+/// A finished export: the two textures, their mapping and measured errors.
+#[derive(Clone, Debug)]
+pub struct Export {
+    pub spec: ExportSpec,
+    pub mapping: Mapping,
+    /// f16 values (held in f32), RGBA with A = 1.
+    pub reflectance: Texture,
+    pub transmittance: Texture,
+    /// What the GPU computes: bilinear with f32 weights on f16 texels.
+    pub error: ExportError,
+    /// The 16-bit PNGs' scale (texel = PNG value / 65535 × scale) and the
+    /// error through them, when asked for.
+    pub png: Option<(f64, ExportError)>,
+    /// The most a filter with 1/256 weight steps adds to `error.max_abs`:
+    /// the largest neighbouring-texel step / 256.
+    pub weights_8bit_extra: f64,
+    /// True when the transmittance is zero everywhere.
+    pub opaque: bool,
+}
+
+impl Export {
+    /// `irid_film` as a GPU computes it from the f16 textures.
+    pub fn sample(&self, thickness_nm: f32, cos_theta: f32) -> ([f32; 3], [f32; 3]) {
+        let uv = self.mapping.uv(thickness_nm, cos_theta);
+        let r = self.reflectance.sample_bilinear(uv);
+        let t = self.transmittance.sample_bilinear(uv);
+        ([r[0], r[1], r[2]], [t[0], t[1], t[2]])
+    }
+}
+
+/// The stack with everything fixed for the whole export.
+struct Film {
+    /// A layerless stack gets a zero-thickness layer of the ambient, which
+    /// changes nothing optically.
+    stack: Stack,
+    layer: usize,
+    grid: StackGrid,
+    /// Linear-RGB weight of each integration wavelength.
+    weights: Vec<[f64; 3]>,
+    integrator: SpectralIntegrator,
+}
+
+impl Film {
+    fn new(spec: &ExportSpec) -> Result<Film> {
+        let mut stack = spec.stack.clone();
+        let layer = if stack.layers.is_empty() {
+            stack.layers.push(Layer {
+                material: stack.ambient.clone(),
+                thickness_nm: 0.0,
+            });
+            1
+        } else {
+            spec.layer
+        };
+        let integrator = SpectralIntegrator::with_white(spec.sampling, spec.white);
+        let grid = StackGrid::new(&stack, integrator.wavelengths_nm())?;
+        let [r, g, b] = integrator.rgb_weights();
+        let weights = r
+            .iter()
+            .zip(g)
+            .zip(b)
+            .map(|((&r, &g), &b)| [r, g, b])
+            .collect();
+        Ok(Film {
+            stack,
+            layer,
+            grid,
+            weights,
+            integrator,
+        })
+    }
+
+    /// Exact RGB of R and T at every node of `mapping`, row-major (row =
+    /// cos θ node), six values per node. On a uniform thickness axis the
+    /// layer's phase factor advances by one complex multiplication per node
+    /// and is recomputed exactly every [`PHASE_RESYNC`] nodes; otherwise it
+    /// is computed at every node.
+    fn eval(&self, mapping: &Mapping) -> Vec<[f64; 6]> {
+        let t_nodes = mapping.thickness_nodes();
+        let c_nodes = mapping.cos_nodes();
+        let n = t_nodes.len();
+        // Uniform nodes advance the phase by one multiplication each.
+        let uniform = mapping.thickness_power == 1.0;
+        let step = if n > 1 {
+            (mapping.thickness_max_nm - mapping.thickness_min_nm) / (n - 1) as f64
+        } else {
+            0.0
+        };
+        let mut out = vec![[0.0; 6]; n * c_nodes.len()];
+        out.par_chunks_mut(n).zip(&c_nodes).for_each_init(
+            || RowBuffers::new(n, self.grid.thicknesses_nm()),
+            |buf, (row, &cos)| {
+                row.fill([0.0; 6]);
+                for (i, w) in self.weights.iter().enumerate() {
+                    let indices = self.grid.indices_at(i);
+                    let wavelength = self.grid.wavelengths_nm()[i];
+                    let split = VaryingLayer::new(
+                        indices,
+                        self.grid.thicknesses_nm(),
+                        self.layer,
+                        wavelength,
+                        cos,
+                        &mut buf.scratch,
+                    );
+                    if split.is_degenerate() {
+                        // The layer at its own critical angle: no split.
+                        for (j, &t) in t_nodes.iter().enumerate() {
+                            buf.thicknesses[self.layer - 1] = t;
+                            let resp = solve(indices, &buf.thicknesses, wavelength, cos);
+                            buf.r[j] = resp.r();
+                            buf.t[j] = resp.t();
+                        }
+                    } else {
+                        if uniform {
+                            let delta = split.phase(step);
+                            let mut phase = split.phase(t_nodes[0]);
+                            for j in 0..n {
+                                if j % PHASE_RESYNC == 0 {
+                                    phase = split.phase(t_nodes[j]);
+                                }
+                                buf.re[j] = phase.re;
+                                buf.im[j] = phase.im;
+                                phase *= delta;
+                            }
+                        } else {
+                            for (j, &t) in t_nodes.iter().enumerate() {
+                                let phase = split.phase(t);
+                                buf.re[j] = phase.re;
+                                buf.im[j] = phase.im;
+                            }
+                        }
+                        split.responses(&buf.re, &buf.im, &mut buf.r, &mut buf.t);
+                    }
+                    for (o, (&r, &t)) in row.iter_mut().zip(buf.r.iter().zip(&buf.t)) {
+                        for c in 0..3 {
+                            o[c] += w[c] * r;
+                            o[3 + c] += w[c] * t;
+                        }
+                    }
+                }
+            },
+        );
+        out
+    }
+
+    /// Exact RGB of R and T at each (thickness, cos θ) point.
+    fn exact_at(&self, points: &[[f32; 2]]) -> Vec<[f64; 6]> {
+        let waves = self.grid.wavelengths_nm().len();
+        points
+            .par_iter()
+            .map_init(
+                || {
+                    (
+                        self.grid.thicknesses_nm().to_vec(),
+                        [vec![0.0; waves], vec![0.0; waves]],
+                    )
+                },
+                |(thick, spectra), p| self.exact(thick, spectra, f64::from(p[0]), f64::from(p[1])),
+            )
+            .collect()
+    }
+
+    /// Exact RGB of R and T at one point.
+    fn exact(
+        &self,
+        thicknesses: &mut [f64],
+        spectra: &mut [Vec<f64>; 2],
+        t: f64,
+        c: f64,
+    ) -> [f64; 6] {
+        thicknesses[self.layer - 1] = t;
+        for (k, (wl, n)) in self.grid.iter().enumerate() {
+            let resp = solve(n, thicknesses, wl, c);
+            spectra[0][k] = resp.r();
+            spectra[1][k] = resp.t();
+        }
+        let r = self.integrator.rgb(&spectra[0]);
+        let tr = self.integrator.rgb(&spectra[1]);
+        [r[0], r[1], r[2], tr[0], tr[1], tr[2]]
+    }
+}
+
+/// How often the stepped phase factor is recomputed exactly.
+const PHASE_RESYNC: usize = 64;
+
+struct RowBuffers {
+    scratch: Scratch,
+    thicknesses: Vec<f64>,
+    re: Vec<f64>,
+    im: Vec<f64>,
+    r: Vec<f64>,
+    t: Vec<f64>,
+}
+
+impl RowBuffers {
+    fn new(n: usize, thicknesses: &[f64]) -> RowBuffers {
+        RowBuffers {
+            scratch: Scratch::default(),
+            thicknesses: thicknesses.to_vec(),
+            re: vec![0.0; n],
+            im: vec![0.0; n],
+            r: vec![0.0; n],
+            t: vec![0.0; n],
+        }
+    }
+}
+
+/// The substrate's critical cos θ at 550 nm, when the stack is seen from
+/// its dense side (a lossless substrate optically thinner than the
+/// ambient): R has a square-root kink there.
+pub fn critical_cos(stack: &Stack) -> Option<f64> {
+    match (
+        stack.ambient.index_at(550.0),
+        stack.substrate.index_at(550.0),
+    ) {
+        (Ok(n0), Ok(ns)) if ns.im == 0.0 && ns.re < n0.re => {
+            Some((1.0 - (ns.re / n0.re).powi(2)).sqrt())
+        }
+        _ => None,
+    }
+}
+
+/// Rounds to f16 (through f32, as the bake does, so every machine agrees).
+fn to_f16(v: f64) -> f32 {
+    half::f16::from_f32(v as f32).to_f32()
+}
+
+/// The two f16 textures of `values` (six per node).
+fn textures(mapping: &Mapping, values: &[[f64; 6]]) -> (Texture, Texture) {
+    let make = |offset: usize| Texture {
+        width: mapping.size_u,
+        height: mapping.size_v,
+        texels: values
+            .iter()
+            .map(|v| {
+                [
+                    to_f16(v[offset]),
+                    to_f16(v[offset + 1]),
+                    to_f16(v[offset + 2]),
+                    1.0,
+                ]
+            })
+            .collect(),
+    };
+    (make(0), make(3))
+}
+
+/// Fails, naming where, when a value is not finite or beyond f16: a gain
+/// film whose range reaches (or crosses) a lasing pole.
+fn check_representable(mapping: &Mapping, values: &[[f64; 6]], gain: bool) -> Result<()> {
+    let Some(k) = values
+        .iter()
+        .position(|v| v.iter().any(|x| !(x.abs() <= F16_MAX)))
+    else {
+        return Ok(());
+    };
+    let (i, j) = (k % mapping.size_u, k / mapping.size_u);
+    let at = format!(
+        "thickness {:.3} nm, cos θ {:.6}",
+        mapping.thickness_at(i),
+        mapping.cos_at(j)
+    );
+    Err(if gain {
+        Error::invalid(
+            "gain film",
+            format!("R or T exceeds f16's largest value (65504) or is not finite at {at}: the range reaches a lasing pole; narrow --thickness or --angles"),
+        )
+    } else {
+        Error::invalid("export", format!("R or T is not finite at {at}"))
+    })
+}
+
+/// Interpolation error of the coarse nodes (even indices of `fine`, rounded
+/// to f16) at the fine grid's midpoints: along u only, along v only, and at
+/// cell centres.
+fn midpoint_errors(coarse: &Mapping, fine: &[[f64; 6]]) -> [f64; 3] {
+    let (nu, nv) = (2 * coarse.size_u - 1, 2 * coarse.size_v - 1);
+    let at = |i: usize, j: usize| &fine[j * nu + i];
+    let stored = |i: usize, j: usize| at(i, j).map(|x| f64::from(to_f16(x)));
+    let mut worst = [0.0f64; 3];
+    for j in 0..nv {
+        for i in 0..nu {
+            let kind = match (i % 2, j % 2) {
+                (0, 0) => continue,
+                (1, 0) => 0,
+                (0, 1) => 1,
+                _ => 2,
+            };
+            let (i0, i1) = (i - i % 2, i + i % 2);
+            let (j0, j1) = (j - j % 2, j + j % 2);
+            let (a, b, c, d) = (
+                stored(i0, j0),
+                stored(i1, j0),
+                stored(i0, j1),
+                stored(i1, j1),
+            );
+            let exact = at(i, j);
+            for k in 0..6 {
+                let interp = 0.25 * (a[k] + b[k] + c[k] + d[k]);
+                worst[kind] = worst[kind].max((interp - exact[k]).abs());
+            }
+        }
+    }
+    worst
+}
+
+/// Random points over the domain, drawn as f32 (what a shader receives),
+/// with the exact response at each.
+struct Reference {
+    points: Vec<[f32; 2]>,
+    exact: Vec<[f64; 6]>,
+}
+
+impl Reference {
+    fn new(film: &Film, spec: &ExportSpec) -> Reference {
+        let points = measurement_points(spec);
+        let exact = film.exact_at(&points);
+        Reference { points, exact }
+    }
+
+    /// The error of `sample` (what the GPU computes at a point) against the
+    /// exact values.
+    fn measure(&self, sample: impl Fn(f32, f32) -> [f64; 6] + Sync) -> ExportError {
+        let errors: Vec<([f64; 6], [f64; 2])> = self
+            .points
+            .par_iter()
+            .zip(&self.exact)
+            .map(|(p, exact)| {
+                let got = sample(p[0], p[1]);
+                let abs = std::array::from_fn(|k| (got[k] - exact[k]).abs());
+                let de = [
+                    delta_e2000_rgb([got[0], got[1], got[2]], [exact[0], exact[1], exact[2]]),
+                    delta_e2000_rgb([got[3], got[4], got[5]], [exact[3], exact[4], exact[5]]),
+                ];
+                (abs, de)
+            })
+            .collect();
+        let n = errors.len();
+        let mut out = ExportError {
+            max_abs: [0.0; 6],
+            p99_abs: [0.0; 6],
+            mean_abs: [0.0; 6],
+            max_delta_e00: [0.0; 2],
+            mean_delta_e00: [0.0; 2],
+            points: n,
+            seed: POINTS_SEED,
+            worst_point: [0.0; 2],
+        };
+        for k in 0..6 {
+            let mut e: Vec<f64> = errors.iter().map(|x| x.0[k]).collect();
+            e.sort_by(f64::total_cmp);
+            out.max_abs[k] = e[n - 1];
+            out.p99_abs[k] = e[((n as f64 * 0.99).ceil() as usize).clamp(1, n) - 1];
+            out.mean_abs[k] = e.iter().sum::<f64>() / n as f64;
+        }
+        for k in 0..2 {
+            // NaN (a colour the Lab conversion cannot take) counts as worst.
+            out.max_delta_e00[k] = errors.iter().map(|x| x.1[k]).fold(0.0, |a: f64, b| {
+                if b.is_nan() {
+                    f64::INFINITY
+                } else {
+                    a.max(b)
+                }
+            });
+            out.mean_delta_e00[k] = errors.iter().map(|x| x.1[k]).sum::<f64>() / n as f64;
+        }
+        let worst = errors
+            .iter()
+            .map(|x| x.0.iter().fold(0.0f64, |a, &b| a.max(b)))
+            .enumerate()
+            .max_by(|a, b| a.1.total_cmp(&b.1))
+            .map_or(0, |(k, _)| k);
+        out.worst_point = [
+            f64::from(self.points[worst][0]),
+            f64::from(self.points[worst][1]),
+        ];
+        out
+    }
+}
+
+/// The random points (thickness nm, cos θ) at which [`export`] measures
+/// the error: `spec.points` points uniform over the domain from a PCG64
+/// stream seeded with [`POINTS_SEED`], drawn as f32 (what a shader gets).
+pub fn measurement_points(spec: &ExportSpec) -> Vec<[f32; 2]> {
+    let mut rng = rand_pcg::Pcg64::seed_from_u64(POINTS_SEED);
+    let mut draw = |(lo, hi): (f64, f64)| (lo + rng.random::<f64>() * (hi - lo)) as f32;
+    (0..spec.points)
+        .map(|_| [draw(spec.thickness_nm), draw(spec.cos_theta)])
+        .collect()
+}
+
+/// The exact RGB reflectance and transmittance (R.r, R.g, R.b, T.r, T.g,
+/// T.b, in the spec's white and sampling) at each point, from irid's
+/// solver: what an export is measured against.
+pub fn exact_at(spec: &ExportSpec, points: &[[f32; 2]]) -> Result<Vec<[f64; 6]>> {
+    spec.validate()?;
+    Ok(Film::new(spec)?.exact_at(points))
+}
+
+/// Rounds of the size search before it gives up.
+const MAX_ROUNDS: usize = 16;
+/// The most fine-grid nodes × wavelengths one round evaluates (about a
+/// quarter of a minute of work on one core).
+const MAX_WORK: usize = 1 << 31;
+
+/// Chooses the texture size that meets `spec.max_error` as the GPU computes
+/// it, bakes it and measures it (see the module docs). `progress` receives
+/// one line per size tried.
+pub fn export(spec: &ExportSpec, progress: &dyn Fn(&str)) -> Result<Export> {
+    spec.validate()?;
+    let film = Film::new(spec)?;
+    let gain =
+        film.stack.layers.iter().any(|l| l.material.has_gain()) || film.stack.substrate.has_gain();
+    let (t_flat, c_flat) = (
+        spec.thickness_nm.0 == spec.thickness_nm.1,
+        spec.cos_theta.0 == spec.cos_theta.1,
+    );
+    let mut mapping = choose_warps(&film, spec, t_flat, c_flat, progress);
+    let reference = Reference::new(&film, spec);
+    let waves = film.grid.wavelengths_nm().len();
+    let target = spec.max_error;
+    for _round in 0..MAX_ROUNDS {
+        let (nu, nv) = (mapping.size_u, mapping.size_v);
+        let fine_map = mapping.resized(2 * nu - 1, 2 * nv - 1);
+        let work = fine_map.size_u * fine_map.size_v * waves;
+        if nu > MAX_SIZE || nv > MAX_SIZE || work > MAX_WORK {
+            break;
+        }
+        let fine = film.eval(&fine_map);
+        check_representable(&fine_map, &fine, gain)?;
+        let [e_u, e_v, e_c] = midpoint_errors(&mapping, &fine);
+        let coarse: Vec<[f64; 6]> = (0..nv)
+            .flat_map(|j| (0..nu).map(move |i| (i, j)))
+            .map(|(i, j)| fine[2 * j * fine_map.size_u + 2 * i])
+            .collect();
+        // f16 rounds each value by up to half its ulp: that part of the
+        // budget no grid can buy back.
+        let largest = coarse
+            .iter()
+            .flat_map(|v| v.iter())
+            .fold(0.0f64, |a, &b| a.max(b.abs()));
+        let rounding = f16_half_ulp(largest);
+        if rounding >= 0.9 * target {
+            return Err(Error::invalid(
+                "max-error",
+                format!(
+                    "{target} cannot be met with f16 texels: values reach {largest:.3}, which f16 rounds by up to {rounding:.2e}"
+                ),
+            ));
+        }
+        let budget = target - rounding;
+        progress(&format!(
+            "{nu}×{nv}: midpoint error {:.2e} (u) {:.2e} (v) {:.2e} (centre)",
+            e_u, e_v, e_c
+        ));
+        if e_u.max(e_v).max(e_c) <= target {
+            let (reflectance, transmittance) = textures(&mapping, &coarse);
+            let mut export = Export {
+                spec: spec.clone(),
+                mapping,
+                weights_8bit_extra: f64::from(
+                    reflectance
+                        .max_neighbour_step()
+                        .max(transmittance.max_neighbour_step()),
+                ) / 256.0,
+                opaque: transmittance
+                    .texels
+                    .iter()
+                    .all(|t| t[..3].iter().all(|&x| x == 0.0)),
+                reflectance,
+                transmittance,
+                error: reference.measure(|_, _| [0.0; 6]),
+                png: None,
+            };
+            export.error = reference.measure(|t, c| {
+                let (r, tr) = export.sample(t, c);
+                [r[0], r[1], r[2], tr[0], tr[1], tr[2]].map(f64::from)
+            });
+            progress(&format!(
+                "{nu}×{nv}: {} random points, max error {:.2e}",
+                spec.points,
+                export.error.max_all()
+            ));
+            let measured = export.error.max_all();
+            if measured <= target {
+                if spec.png {
+                    let scale = files::png_scale(&export);
+                    let quantized = files::png_textures(&export, scale);
+                    let error = reference.measure(|t, c| {
+                        let uv = export.mapping.uv(t, c);
+                        let r = quantized.0.sample_bilinear(uv);
+                        let tr = quantized.1.sample_bilinear(uv);
+                        [r[0], r[1], r[2], tr[0], tr[1], tr[2]].map(f64::from)
+                    });
+                    export.png = Some((scale, error));
+                }
+                return Ok(export);
+            }
+            // A feature between the midpoints: refine both axes.
+            let grow = ((measured / target).sqrt() * 1.1).clamp(1.15, 2.0);
+            mapping = mapping.resized(grown(nu, grow, t_flat), grown(nv, grow, c_flat));
+            continue;
+        }
+        // Bilinear error falls as h²: grow each axis by what its own
+        // midpoint error asks, aiming at half the budget each.
+        let share = 0.5 * budget;
+        let factor = |e: f64| ((e / share).sqrt() * 1.1).clamp(1.0, 4.0);
+        let (mut gu, mut gv) = (factor(e_u), factor(e_v));
+        if gu == 1.0 && gv == 1.0 {
+            // Only cell centres fail: both axes a little.
+            gu = factor(e_c).max(1.15);
+            gv = gu;
+        }
+        mapping = mapping.resized(grown(nu, gu, t_flat), grown(nv, gv, c_flat));
+    }
+    Err(Error::invalid(
+        "max-error",
+        format!(
+            "{target} is not reached within {MAX_SIZE}×{MAX_SIZE} texels{}",
+            if gain {
+                " (a gain film near a lasing pole? narrow --thickness or --angles)"
+            } else {
+                " (narrow --thickness or --angles)"
+            }
+        ),
+    ))
+}
+
+/// The axis warps for `spec`: a dense-side stack's critical angle inside
+/// the range always gets its node; otherwise each of uniform and crowded
+/// (thickness towards its minimum, angle towards grazing) is tried on a
+/// 129 × 129 grid, and the pair whose midpoint errors predict the fewest
+/// texels (bilinear error falls as h²) wins.
+fn choose_warps(
+    film: &Film,
+    spec: &ExportSpec,
+    t_flat: bool,
+    c_flat: bool,
+    progress: &dyn Fn(&str),
+) -> Mapping {
+    const PROBE: usize = 129;
+    let size = |flat: bool| if flat { 1 } else { PROBE };
+    let critical =
+        critical_cos(&film.stack).filter(|&cc| cc > spec.cos_theta.0 && cc < spec.cos_theta.1);
+    let angles = match critical {
+        Some(cc) => vec![AngleWarp::Critical(cc)],
+        None if c_flat => vec![AngleWarp::Uniform],
+        None => vec![AngleWarp::Uniform, AngleWarp::Grazing],
+    };
+    let powers: &[f64] = if t_flat { &[1.0] } else { &[1.0, 2.0] };
+    let candidates: Vec<Mapping> = powers
+        .iter()
+        .flat_map(|&p| {
+            angles.iter().map(move |&a| {
+                Mapping::new(
+                    spec.thickness_nm,
+                    spec.cos_theta,
+                    p,
+                    a,
+                    size(t_flat),
+                    size(c_flat),
+                )
+            })
+        })
+        .collect();
+    if candidates.len() == 1 {
+        return candidates[0].resized(start_size(t_flat), start_size(c_flat));
+    }
+    let share = 0.5 * spec.max_error;
+    let predicted = |m: &Mapping| {
+        let fine = film.eval(&m.resized(2 * m.size_u - 1, 2 * m.size_v - 1));
+        let [e_u, e_v, e_c] = midpoint_errors(m, &fine);
+        let e_u = e_u.max(0.5 * e_c);
+        let e_v = e_v.max(0.5 * e_c);
+        let n = |e: f64, flat: bool| {
+            if flat {
+                1.0
+            } else {
+                (PROBE as f64 * (e / share).sqrt()).max(2.0)
+            }
+        };
+        let texels = n(e_u, t_flat) * n(e_v, c_flat);
+        progress(&format!(
+            "warp: thickness power {}, angle {:?}: midpoint error {e_u:.2e} (u) {e_v:.2e} (v), predicts {texels:.0} texels",
+            m.thickness_power,
+            m.angle_warp()
+        ));
+        texels
+    };
+    let best = candidates
+        .iter()
+        .map(|m| (predicted(m), m))
+        .min_by(|a, b| a.0.total_cmp(&b.0))
+        .map(|(_, m)| *m)
+        .unwrap_or(candidates[0]);
+    best.resized(start_size(t_flat), start_size(c_flat))
+}
+
+/// The first size the search tries along an axis.
+fn start_size(flat: bool) -> usize {
+    if flat {
+        1
+    } else {
+        17
+    }
+}
+
+/// A new axis size: `n` grown by `factor` (by at least one texel when
+/// growing), 1 for a flat axis.
+fn grown(n: usize, factor: f64, flat: bool) -> usize {
+    if flat {
+        return 1;
+    }
+    if factor <= 1.0 {
+        return n;
+    }
+    let intervals = ((n - 1) as f64 * factor).ceil() as usize;
+    (intervals + 1).max(n + 1)
+}
+
+/// Half an f16 ulp at magnitude `v` (normal range).
+fn f16_half_ulp(v: f64) -> f64 {
+    if v < 6.2e-5 {
+        return 2f64.powi(-25);
+    }
+    let exponent = v.log2().floor();
+    2f64.powf(exponent - 11.0)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn half_ulp_matches_f16_rounding() {
+        for v in [0.3f64, 0.9, 1.0, 1.7, 3.0, 100.0] {
+            let bound = f16_half_ulp(v);
+            let mut worst = 0.0f64;
+            for k in 0..2000 {
+                let x = v * (1.0 + k as f64 * 1e-6);
+                if f16_half_ulp(x) == bound {
+                    worst = worst.max((f64::from(to_f16(x)) - x).abs());
+                }
+            }
+            // Through f32 first: that rounding (up to 6e-8 relative) adds on.
+            assert!(
+                worst <= bound + 1e-7 * v && worst > 0.5 * bound,
+                "{v}: {worst} vs {bound}"
+            );
+        }
+    }
+}

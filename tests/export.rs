@@ -1,0 +1,299 @@
+//! `irid export`: every example stack exports; the directory holds what
+//! docs/gpu.md promises (RGBA half EXRs, film.json, shaders, PNGs); the
+//! texel at every node is the exact response; bad input is one line and
+//! exit 2 with no directory left behind, half-written or not.
+
+mod common;
+
+use std::path::Path;
+
+use common::{irid_in, Scratch};
+use irid::export::{critical_cos, exact_at, export, ExportSpec, SHADERS};
+use irid::optics::Stack;
+
+fn luts() -> std::path::PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("luts")
+}
+
+fn film_json(dir: &Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(dir.join("film.json")).unwrap()).unwrap()
+}
+
+/// The channel names, sample type and size of an EXR texture.
+fn exr_layout(path: &Path) -> (Vec<String>, bool, (usize, usize)) {
+    let image = exr::prelude::read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .all_channels()
+        .first_valid_layer()
+        .all_attributes()
+        .from_file(path)
+        .unwrap();
+    let layer = &image.layer_data;
+    let names = layer
+        .channel_data
+        .list
+        .iter()
+        .map(|c| c.name.to_string())
+        .collect();
+    let half = layer
+        .channel_data
+        .list
+        .iter()
+        .all(|c| matches!(c.sample_data, exr::prelude::FlatSamples::F16(_)));
+    (names, half, (layer.size.width(), layer.size.height()))
+}
+
+/// Nothing but `keep` in `dir`: no temporary directory left behind.
+fn only(dir: &Path, keep: &[&str]) {
+    let mut names: Vec<String> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    let mut want: Vec<String> = keep.iter().map(|s| s.to_string()).collect();
+    want.sort();
+    assert_eq!(names, want);
+}
+
+#[test]
+fn every_example_stack_exports() {
+    let scratch = Scratch::new("export");
+    let mut stacks: Vec<_> = std::fs::read_dir(luts())
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|x| x == "toml"))
+        .collect();
+    stacks.sort();
+    assert!(stacks.len() >= 6);
+    for stack in &stacks {
+        let name = stack.file_stem().unwrap().to_string_lossy().into_owned();
+        let out = scratch.path().join(&name);
+        let run = irid_in(
+            scratch.path(),
+            [
+                "export",
+                stack.to_str().unwrap(),
+                "-o",
+                out.to_str().unwrap(),
+            ],
+        );
+        assert!(run.success(), "{name}: {}", run.stderr);
+        assert!(run.stdout.contains("texels"), "{name}: {}", run.stdout);
+        let film = film_json(&out);
+        assert_eq!(film["format"], "irid-film");
+        assert_eq!(film["version"], 1);
+        let (w, h) = (
+            film["texture"]["width"].as_u64().unwrap() as usize,
+            film["texture"]["height"].as_u64().unwrap() as usize,
+        );
+        for texture in ["reflectance.exr", "transmittance.exr"] {
+            let (channels, half, size) = exr_layout(&out.join(texture));
+            assert_eq!(
+                channels,
+                ["A", "B", "G", "R"],
+                "{name}: EXR lists channels sorted"
+            );
+            assert!(half, "{name}: {texture} is half float");
+            assert_eq!(size, (w, h), "{name}: {texture}");
+        }
+        for (file, text) in SHADERS {
+            assert_eq!(std::fs::read_to_string(out.join(file)).unwrap(), text);
+        }
+        assert_eq!(film["axes"]["thickness_nm"].as_array().unwrap().len(), w);
+        assert_eq!(film["axes"]["cos_theta"].as_array().unwrap().len(), h);
+        assert_eq!(film["params"]["size_u"].as_f64().unwrap() as usize, w);
+        assert_eq!(film["params"]["size_v"].as_f64().unwrap() as usize, h);
+        assert_eq!(film["white"], "d65");
+        let max: Vec<f64> = film["error"]["max_abs"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|v| v.as_f64().unwrap())
+            .collect();
+        assert_eq!(max.len(), 6);
+        assert!(max.iter().all(|&e| e <= 1e-3), "{name}: {max:?}");
+        assert_eq!(film["error"]["points"], 20_000);
+        assert!(film["texture"]["png"].is_null());
+    }
+    only(
+        scratch.path(),
+        &stacks
+            .iter()
+            .map(|s| s.file_stem().unwrap().to_str().unwrap())
+            .collect::<Vec<_>>(),
+    );
+}
+
+/// At every node the texel is the exact response rounded to f16, and
+/// film.json's axes list those nodes; between nodes what the GPU computes
+/// meets the target at fresh points too.
+#[test]
+fn texels_are_the_exact_response_at_the_listed_nodes() {
+    let text = "ambient = { n = 1.5 }\nsubstrate = { n = 1.0 }\n[[layers]]\nn = 1.33\nthickness_nm = 300.0\n";
+    let stack = Stack::from_toml_str(text, Path::new("."), "dense").unwrap();
+    let mut spec = ExportSpec::new(stack);
+    spec.thickness_nm = (0.0, 600.0);
+    spec.cos_theta = (0.05, 1.0);
+    spec.points = 5000;
+    let e = export(&spec, &|_| {}).unwrap();
+    assert_eq!(Some(e.mapping.cos_crit), critical_cos(&spec.stack));
+    let (nu, nv) = (e.mapping.size_u, e.mapping.size_v);
+    let nodes: Vec<(usize, usize)> = (0..nv)
+        .step_by(7)
+        .flat_map(|j| (0..nu).step_by(11).map(move |i| (i, j)))
+        .collect();
+    let points: Vec<[f32; 2]> = nodes
+        .iter()
+        .map(|&(i, j)| [e.mapping.thickness_at(i) as f32, e.mapping.cos_at(j) as f32])
+        .collect();
+    let exact = exact_at(&spec, &points).unwrap();
+    for (((i, j), p), x) in nodes.iter().zip(&points).zip(&exact) {
+        let texel = e.reflectance.texels[j * nu + i];
+        let (r, _) = e.sample(p[0], p[1]);
+        for k in 0..3 {
+            // f16 rounding, and the f32 node position's distance from the
+            // f64 one.
+            assert!(
+                (f64::from(texel[k]) - x[k]).abs() < 6e-4,
+                "node {i},{j}: {texel:?} vs {x:?}"
+            );
+            assert!(
+                (r[k] - texel[k]).abs() < 2e-4,
+                "node {i},{j}: sampled {r:?} vs texel {texel:?}"
+            );
+        }
+    }
+    // Fresh points (another seed's worth: every third of 3× as many).
+    let mut fresh = spec.clone();
+    fresh.points = 15_000;
+    let pts: Vec<[f32; 2]> = irid::export::measurement_points(&fresh)
+        .into_iter()
+        .skip(5000)
+        .collect();
+    let exact = exact_at(&spec, &pts).unwrap();
+    let mut worst = 0.0f64;
+    for (p, x) in pts.iter().zip(&exact) {
+        let (r, t) = e.sample(p[0], p[1]);
+        for k in 0..3 {
+            worst = worst.max((f64::from(r[k]) - x[k]).abs());
+            worst = worst.max((f64::from(t[k]) - x[3 + k]).abs());
+        }
+    }
+    assert!(worst <= 1e-3, "{worst}");
+}
+
+#[test]
+fn png_option_writes_16_bit_pngs_with_their_own_error() {
+    let scratch = Scratch::new("export");
+    let stack = luts().join("soap-film.toml");
+    let run = irid_in(
+        scratch.path(),
+        [
+            "export",
+            stack.to_str().unwrap(),
+            "-o",
+            "soap",
+            "--thickness",
+            "0:800",
+            "--png",
+            "--white",
+            "e",
+        ],
+    );
+    assert!(run.success(), "{}", run.stderr);
+    assert!(run.stdout.contains("PNG"), "{}", run.stdout);
+    let dir = scratch.path().join("soap");
+    let film = film_json(&dir);
+    assert_eq!(film["white"], "e");
+    assert_eq!(film["texture"]["png"]["scale"], 1.0);
+    let png = image::open(dir.join("reflectance.png")).unwrap();
+    assert_eq!(png.color(), image::ColorType::Rgba16);
+    assert_eq!(
+        png.width() as u64,
+        film["texture"]["width"].as_u64().unwrap()
+    );
+    let png_err = film["error"]["png"]["max_abs"].as_array().unwrap();
+    let exr_err = film["error"]["max_abs"].as_array().unwrap();
+    // 16-bit quantization (1.5e-5) is far below f16's rounding near 1.
+    for (p, x) in png_err.iter().zip(exr_err) {
+        assert!((p.as_f64().unwrap() - x.as_f64().unwrap()).abs() < 3e-4);
+    }
+}
+
+#[test]
+fn export_replaces_an_earlier_export_atomically_and_nothing_else() {
+    let scratch = Scratch::new("export");
+    let stack = luts().join("soap-film.toml");
+    let s = stack.to_str().unwrap();
+    let d = scratch.path();
+    assert!(irid_in(d, ["export", s, "-o", "out", "--thickness", "0:300"]).success());
+    let first = film_json(&d.join("out"));
+    assert!(irid_in(d, ["export", s, "-o", "out", "--thickness", "0:600"]).success());
+    let second = film_json(&d.join("out"));
+    assert_ne!(first["domain"], second["domain"]);
+    assert_eq!(second["domain"]["thickness_nm"][1], 600.0);
+    only(d, &["out"]);
+    // An empty directory is filled.
+    std::fs::create_dir(d.join("empty")).unwrap();
+    assert!(irid_in(d, ["export", s, "-o", "empty"]).success());
+    // A directory with other things is not deleted.
+    std::fs::create_dir(d.join("mine")).unwrap();
+    std::fs::write(d.join("mine/notes.txt"), "keep").unwrap();
+    irid_in(d, ["export", s, "-o", "mine"])
+        .assert_one_line_error("foreign dir", &["mine", "irid export"]);
+    assert_eq!(
+        std::fs::read_to_string(d.join("mine/notes.txt")).unwrap(),
+        "keep"
+    );
+    only(d, &["out", "empty", "mine"]);
+}
+
+#[test]
+fn bad_input_is_one_line_and_leaves_no_directory() {
+    let scratch = Scratch::new("export");
+    let d = scratch.path();
+    let soap = luts().join("soap-film.toml");
+    let soap = soap.to_str().unwrap();
+    let gain = luts().join("gain-on-gold.toml");
+    let gain = gain.to_str().unwrap();
+    std::fs::write(d.join("file"), "x").unwrap();
+    let cases: [(&[&str], &[&str]); 7] = [
+        (
+            &["export", soap, "-o", "file"],
+            &["file", "not a directory"],
+        ),
+        (
+            &["export", soap, "-o", "o", "--max-error", "1e-5"],
+            &["max-error", "f16"],
+        ),
+        (&["export", soap, "-o", "o", "--layer", "3"], &["layer"]),
+        (
+            &["export", soap, "-o", "o", "--thickness", "-5:10"],
+            &["thickness"],
+        ),
+        (
+            &["export", soap, "-o", "o", "--angles", "0:1.5"],
+            &["angles"],
+        ),
+        (&["export", soap, "-o", "o", "--white", "d50"], &["white"]),
+        (
+            &[
+                "export",
+                gain,
+                "-o",
+                "o",
+                "--thickness",
+                "0:1000",
+                "--angles",
+                "0:1",
+            ],
+            &["gain film", "lasing pole"],
+        ),
+    ];
+    for (args, names) in cases {
+        irid_in(d, args).assert_one_line_error(&format!("{args:?}"), names);
+    }
+    assert_eq!(std::fs::read_to_string(d.join("file")).unwrap(), "x");
+    only(d, &["file"]);
+}
