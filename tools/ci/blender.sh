@@ -11,7 +11,7 @@ cd "$(dirname "$0")/../.."
 missing=()
 for lib in libX11.so.6:libx11-6 libXrender.so.1:libxrender1 libXfixes.so.3:libxfixes3 \
            libXi.so.6:libxi6 libxkbcommon.so.0:libxkbcommon0; do
-    ldconfig -p | grep -q "${lib%%:*}" || missing+=("${lib##*:}")
+    ldconfig -p | grep "${lib%%:*}" >/dev/null || missing+=("${lib##*:}")
 done
 if [ "${#missing[@]}" -gt 0 ]; then
     apt-get update -qq
