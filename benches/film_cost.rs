@@ -17,16 +17,16 @@
 //! the main thread, outside the pool, as a library caller might.
 //!
 //! Why it matters: a render called from outside a pool is handed to the
-//! workers while the caller sleeps. On one thread, on this project's 2-vCPU
-//! VM, that made renders bimodal: when the sleeping caller and the worker
-//! sat on different CPUs, the worker ran 5–15 % slower (at commit 581e815,
-//! `-- 40 1 handoff` gave +17.2 % for the grid against +10.5 % inside the
-//! pool, with bare glass's median at 69.8 ms against 64.6). It was not
-//! migrations: there were two or three in a whole run. Pinning both
-//! threads to one CPU removed it, pinning them to different CPUs brought
-//! it back; its cause is below what the guest can see. Since then a render
-//! called from outside a one-worker pool runs on the calling thread
-//! (`render_tiles`), and `handoff` on one thread measures that.
+//! workers while the caller sleeps. On one thread, on a 2-vCPU VM, that
+//! made renders bimodal: when the sleeping caller and the worker sat on
+//! different CPUs, the worker ran 5–15 % slower (`-- 40 1 handoff` gave
+//! +17.2 % for the grid against +10.5 % inside the pool, with bare glass's
+//! median at 69.8 ms against 64.6). It was not migrations: there were two
+//! or three in a whole run. Pinning both threads to one CPU removed it,
+//! pinning them to different CPUs brought it back; its cause is below what
+//! the guest can see. So a render called from outside a one-worker pool
+//! runs on the calling thread (`render_tiles`), and `handoff` on one
+//! thread measures that (see docs/performance.md).
 
 mod common;
 

@@ -17,3 +17,9 @@ pub mod render;
 mod simd;
 
 pub use error::{Error, Result};
+
+/// The README's Rust examples, compiled and run as doctests so that the
+/// front page cannot drift from the library.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+pub struct ReadmeDoctests;

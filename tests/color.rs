@@ -4,7 +4,7 @@ mod common;
 
 use common::{irid, Scratch};
 use irid::color::{
-    delta_e2000, delta_e2000_rgb, linear_srgb_to_xyz, stack_colours, white_xyz, xyz_to_lab,
+    delta_e2000, delta_e2000_rgb, linear_srgb_to_xyz, stack_colors, white_xyz, xyz_to_lab,
     xyz_to_linear_srgb, Sampling, SpectralIntegrator,
 };
 use irid::optics::{Layer, Material, Stack};
@@ -165,16 +165,16 @@ fn ciede2000_matches_sharma_2005() {
 
 /// Reflected and transmitted linear sRGB of a free-standing soap film
 /// (n = 1.33 in air) under one sampling strategy, thickness-major.
-fn soap_film_colours(
+fn soap_film_colors(
     integ: &SpectralIntegrator,
     thicknesses_nm: &[f64],
     angles_deg: &[f64],
 ) -> Vec<([f64; 3], [f64; 3])> {
     let mut out = Vec::with_capacity(thicknesses_nm.len() * angles_deg.len());
     for &d in thicknesses_nm {
-        let colours = stack_colours(&soap_film(d), integ, angles_deg).unwrap();
+        let colors = stack_colors(&soap_film(d), integ, angles_deg).unwrap();
         out.extend(
-            colours
+            colors
                 .iter()
                 .map(|c| (c.reflectance_rgb, c.transmittance_rgb)),
         );
@@ -194,7 +194,7 @@ fn soap_film(thickness_nm: f64) -> Stack {
 }
 
 #[test]
-fn stack_colours_of_a_bare_interface() {
+fn stack_colors_of_a_bare_interface() {
     // Air on glass n = 1.5 at normal incidence: R = 0.04 and T = 0.96 at every
     // wavelength, so the colours are those greys in every strategy.
     let glass = Stack {
@@ -203,7 +203,7 @@ fn stack_colours_of_a_bare_interface() {
         substrate: Material::constant(1.5, 0.0),
     };
     for s in all_samplings() {
-        let c = stack_colours(&glass, &SpectralIntegrator::new(s), &[0.0, 60.0]).unwrap();
+        let c = stack_colors(&glass, &SpectralIntegrator::new(s), &[0.0, 60.0]).unwrap();
         assert_eq!(c.len(), 2);
         assert!(close(c[0].reflectance_rgb, [0.04; 3], 1e-12), "{s}: {c:?}");
         assert!(
@@ -217,7 +217,7 @@ fn stack_colours_of_a_bare_interface() {
     }
     let exact = SpectralIntegrator::new(Sampling::Exact);
     for bad in [90.0, -1.0, f64::NAN] {
-        let e = stack_colours(&glass, &exact, &[bad]).unwrap_err();
+        let e = stack_colors(&glass, &exact, &[bad]).unwrap_err();
         assert!(e.to_string().contains("angle"), "{e}");
     }
 }
@@ -248,7 +248,7 @@ fn stats(errors: impl Iterator<Item = f64>) -> Stats {
 fn sampling_error_on_a_soap_film() {
     let thicknesses_nm: Vec<f64> = (0..=500).map(|i| 2.0 * i as f64).collect();
     let angles_deg: Vec<f64> = (0..=8).map(|i| 10.0 * i as f64).collect();
-    let reference = soap_film_colours(
+    let reference = soap_film_colors(
         &SpectralIntegrator::new(Sampling::Exact),
         &thicknesses_nm,
         &angles_deg,
@@ -269,7 +269,7 @@ fn sampling_error_on_a_soap_film() {
         Sampling::Uniform(41),
         Sampling::Uniform(81),
     ] {
-        let got = soap_film_colours(&SpectralIntegrator::new(s), &thicknesses_nm, &angles_deg);
+        let got = soap_film_colors(&SpectralIntegrator::new(s), &thicknesses_nm, &angles_deg);
         let pairs = || got.iter().zip(&reference);
         let r = stats(pairs().map(|(g, e)| delta_e2000_rgb(g.0, e.0)));
         let t = stats(pairs().map(|(g, e)| delta_e2000_rgb(g.1, e.1)));
@@ -324,7 +324,7 @@ fn cli_json_matches_the_library() {
     let json: serde_json::Value = serde_json::from_str(&out.stdout).unwrap();
     let rows = json.as_array().unwrap();
     assert_eq!(rows.len(), 3);
-    let want = stack_colours(
+    let want = stack_colors(
         &soap_film(500.0),
         &SpectralIntegrator::new(Sampling::Uniform(81)),
         &[0.0, 40.0, 80.0],

@@ -15,7 +15,9 @@ peers are fed exactly those indices, so every implementation solves the same
 problem. Times are the best of --repeat runs; process start-up and I/O are
 outside every timed region.
 
-Usage: IRID_BIN=target/release/irid python tools/bench_peers.py [-o benches/results] [--quick]
+Usage: IRID_BIN=target/release/irid python tools/bench_peers.py -o RUN_DIR [--quick]
+RUN_DIR is the run's directory under benches/results/ (the one `irid bench`
+just wrote, benches/results/DATE-MACHINE), so peers.md sits beside report.md.
 Exits non-zero if a peer disagrees with irid by more than 1e-9.
 """
 
@@ -418,7 +420,7 @@ def write_report(path, args, general, bake, failures, findings, command):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("-o", "--out", default="benches/results", help="directory for peers.md")
+    ap.add_argument("-o", "--out", required=True, help="directory for peers.md: the run's benches/results/DATE-MACHINE")
     ap.add_argument("--quick", action="store_true", help="small grids (a smoke test, not a measurement)")
     ap.add_argument("--threads", type=int, default=THREADS_DEFAULT)
     ap.add_argument("--repeat", type=int, default=5)

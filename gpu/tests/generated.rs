@@ -25,7 +25,13 @@ fn committed_shaders_are_generated_from_the_wgsl() {
             "shaders/{name} is out of date: run `cargo run -p irid-gpu --bin gen-shaders`"
         );
         assert!(text.contains("GENERATED from irid_film.wgsl"), "{name}");
-        for interface in ["irid_film(", "irid_reflectance", "irid_transmittance", "irid_params", "IridFilm"] {
+        for interface in [
+            "irid_film(",
+            "irid_reflectance",
+            "irid_transmittance",
+            "irid_params",
+            "IridFilm",
+        ] {
             assert!(text.contains(interface), "{name} lacks {interface}");
         }
     }
@@ -38,10 +44,16 @@ fn committed_shaders_are_generated_from_the_wgsl() {
 /// glslangValidator, or None (with a note) when it is not installed and
 /// IRID_REQUIRE_GPU is not 1.
 fn glslang() -> Option<&'static str> {
-    let found = Command::new("glslangValidator").arg("--version").output().is_ok();
+    let found = Command::new("glslangValidator")
+        .arg("--version")
+        .output()
+        .is_ok();
     if !found {
         let required = std::env::var("IRID_REQUIRE_GPU").is_ok_and(|v| v == "1");
-        assert!(!required, "IRID_REQUIRE_GPU=1 but glslangValidator is missing (apt-get install glslang-tools)");
+        assert!(
+            !required,
+            "IRID_REQUIRE_GPU=1 but glslangValidator is missing (apt-get install glslang-tools)"
+        );
         eprintln!("glslangValidator not found: compile checks skipped");
         return None;
     }
@@ -89,7 +101,11 @@ fn glsl_compiles_for_opengl_vulkan_and_webgl2() {
     let path = dir.path().join("film.frag");
     std::fs::write(&path, &es).unwrap();
     let out = Command::new(tool).arg(&path).output().unwrap();
-    assert!(out.status.success(), "{}\n{es}", String::from_utf8_lossy(&out.stdout));
+    assert!(
+        out.status.success(),
+        "{}\n{es}",
+        String::from_utf8_lossy(&out.stdout)
+    );
 }
 
 #[test]
@@ -101,5 +117,10 @@ fn hlsl_compiles() {
          return float4(f.reflectance + f.transmittance, 1.0);\n}}\n",
         read("irid_film.hlsl")
     );
-    compiles(tool, "film.hlsl", &source, &["-D", "-V", "-S", "frag", "-e", "main"]);
+    compiles(
+        tool,
+        "film.hlsl",
+        &source,
+        &["-D", "-V", "-S", "frag", "-e", "main"],
+    );
 }

@@ -26,7 +26,7 @@ pub struct PlotPoint {
     pub mean_de2000: f64,
 }
 
-const FAMILY_COLOURS: [RGBColor; 4] = [
+const FAMILY_COLORS: [RGBColor; 4] = [
     RGBColor(31, 119, 180),
     RGBColor(214, 39, 40),
     RGBColor(44, 160, 44),
@@ -109,11 +109,11 @@ fn draw(
         .x_label_formatter(&|v| format_tick(*v))
         .y_label_formatter(&|v| format_tick(*v))
         .draw()?;
-    let colour_of = |family: usize| FAMILY_COLOURS[family % FAMILY_COLOURS.len()];
+    let color_of = |family: usize| FAMILY_COLORS[family % FAMILY_COLORS.len()];
     chart.draw_series(
         points
             .iter()
-            .map(|p| Circle::new((p.ns_per_eval, y_of(p)), 5, colour_of(p.family).filled())),
+            .map(|p| Circle::new((p.ns_per_eval, y_of(p)), 5, color_of(p.family).filled())),
     )?;
     // Labels: the first of a few positions around the point whose box
     // overlaps no point and no label already placed, and stays inside the
@@ -165,19 +165,19 @@ fn draw(
         root.draw(&Text::new(
             p.label.clone(),
             (px + dx, py + dy),
-            font(label_px).color(&colour_of(p.family)),
+            font(label_px).color(&color_of(p.family)),
         ))?;
     }
     // The legend, right of the plot: one entry per family, in its colour.
     for (i, name) in families.iter().enumerate() {
-        let colour = colour_of(i);
+        let color = color_of(i);
         let x = size.0 as i32 - legend_width + 30;
         let y = 80 + 24 * i as i32;
-        root.draw(&Circle::new((x, y), 5, colour.filled()))?;
+        root.draw(&Circle::new((x, y), 5, color.filled()))?;
         root.draw(&Text::new(
             name.to_string(),
             (x + 12, y - 8),
-            font(15).color(&colour),
+            font(15).color(&color),
         ))?;
     }
     root.present()?;

@@ -1,6 +1,5 @@
 //! `irid bake STACK.toml -o OUT.exr`: a lookup table of the stack's response.
 
-use std::io::IsTerminal;
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Instant;
@@ -96,14 +95,7 @@ pub fn run(args: Args) -> Result<ExitCode> {
     // Flag errors first; what fails after them comes from the stack (a
     // material undefined at some wavelength), so name its file.
     spec.validate()?;
-    let bar = std::io::stderr().is_terminal().then(|| {
-        let bar = indicatif::ProgressBar::new(1000);
-        bar.set_style(
-            indicatif::ProgressStyle::with_template("baking {bar:40} {percent:>3}% {elapsed}")
-                .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
-        );
-        bar
-    });
+    let bar = super::render::progress_bar("baking {bar:40} {percent:>3}% {elapsed}");
     let started = Instant::now();
     let mut lut = bake_with_progress(&spec, &|f| {
         if let Some(bar) = &bar {

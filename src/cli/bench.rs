@@ -17,9 +17,11 @@ pub struct Args {
     /// Fewer points and LUT resolutions: a smoke test, not a measurement.
     #[arg(long)]
     pub quick: bool,
-    /// Directory for report.md, results.csv and speed-vs-error.png.
-    #[arg(short = 'o', long = "out", default_value = "benches/results")]
-    pub out: PathBuf,
+    /// Directory for report.md, results.csv, renders.csv, speed-vs-error.png
+    /// and SETUP.md [default: benches/results/DATE-MACHINE, one per run, as
+    /// in benches/results/].
+    #[arg(short = 'o', long = "out")]
+    pub out: Option<PathBuf>,
     /// Random points per stack (default 10000, or 200 with --quick).
     #[arg(long)]
     pub points: Option<usize>,
@@ -81,6 +83,10 @@ fn run_report(args: &Args) -> Result<()> {
         .collect::<Vec<_>>()
         .join(" ");
     let machine = Machine::current();
+    let out = args
+        .out
+        .clone()
+        .unwrap_or_else(|| Path::new(RESULTS_DIR).join(run_dir_name(&machine)));
     eprintln!(
         "irid bench: {} points per stack on {}",
         options.points,
@@ -94,7 +100,11 @@ fn run_report(args: &Args) -> Result<()> {
     let _ = std::fs::remove_dir_all(&cache);
     let renders = renders?;
     report::write_all(
-        &args.out, &rows, &skipped, &renders, &options, &machine, &command,
+        &out, &rows, &skipped, &renders, &options, &machine, &command,
+    )?;
+    irid::atomic::write(
+        &out.join("SETUP.md"),
+        setup_note(&machine, &command, &out).as_bytes(),
     )?;
     for s in report::summarize(&rows) {
         eprintln!(
@@ -118,8 +128,61 @@ fn run_report(args: &Args) -> Result<()> {
             r.scene, r.mode, r.render_s, r.mean_de2000
         );
     }
-    eprintln!("wrote {}", args.out.join("report.md").display());
+    eprintln!("wrote {}", out.join("report.md").display());
     Ok(())
+}
+
+/// Where dated runs live: one directory per run, named by [`run_dir_name`].
+const RESULTS_DIR: &str = "benches/results";
+
+/// `YYYY-MM-DD-cpu-model-Ncore`: the run's UTC date and a name for the
+/// machine from what the report header records about it, so runs on one
+/// machine sort by date and runs on different machines do not collide.
+fn run_dir_name(machine: &Machine) -> String {
+    let date = machine.date_utc.get(..10).unwrap_or("undated");
+    let mut cpu = String::new();
+    for c in machine.cpu_model.chars() {
+        if c.is_ascii_alphanumeric() {
+            cpu.push(c.to_ascii_lowercase());
+        } else if !cpu.is_empty() && !cpu.ends_with('-') {
+            cpu.push('-');
+        }
+    }
+    let cpu = cpu.trim_end_matches('-');
+    let cpu = if cpu.is_empty() { "cpu" } else { cpu };
+    format!("{date}-{cpu}-{}core", machine.cores)
+}
+
+/// The run's SETUP.md: the machine, the source it was built from and the
+/// commands, so a reader can tell what the figures beside it measured.
+fn setup_note(machine: &Machine, command: &str, out: &Path) -> String {
+    let commit = std::process::Command::new("git")
+        .args(["describe", "--always", "--dirty", "--abbrev=12"])
+        .output()
+        .ok()
+        .filter(|o| o.status.success())
+        .and_then(|o| String::from_utf8(o.stdout).ok())
+        .map(|s| s.trim().to_string())
+        .filter(|s| !s.is_empty())
+        .unwrap_or_else(|| "unknown (not run from a git checkout)".to_string());
+    format!(
+        "# Bench run {name}\n\n\
+         - Machine: {cores} logical cores, CPU {cpu}; {threads} worker thread(s)\n\
+         - Date: {date} UTC\n\
+         - Source: git {commit}, irid {version}\n\
+         - Command: `{command}`\n\n\
+         The peers' timings (peers.md) come from a second command, run after this one:\n\n\
+         ```sh\n\
+         OMP_NUM_THREADS=2 IRID_BIN=target/release/irid .venv/bin/python tools/bench_peers.py -o {out}\n\
+         ```\n",
+        date = machine.date_utc,
+        name = run_dir_name(machine),
+        cores = machine.cores,
+        cpu = machine.cpu_model,
+        threads = machine.threads,
+        version = env!("CARGO_PKG_VERSION"),
+        out = out.display(),
+    )
 }
 
 /// More repetitions than this only make the run look hung.
@@ -238,4 +301,35 @@ fn write_raw(path: &Path, r: &[f64], t: &[f64]) -> Result<()> {
         bytes.extend_from_slice(&v.to_le_bytes());
     }
     Ok(irid::atomic::write(path, &bytes)?)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn machine(cpu_model: &str) -> Machine {
+        Machine {
+            cpu_model: cpu_model.to_string(),
+            cores: 2,
+            threads: 2,
+            date_utc: "2026-11-29 06:01".to_string(),
+        }
+    }
+
+    #[test]
+    fn run_directories_are_named_by_date_and_machine() {
+        assert_eq!(
+            run_dir_name(&machine("AMD EPYC")),
+            "2026-11-29-amd-epyc-2core"
+        );
+        assert_eq!(
+            run_dir_name(&machine("Intel(R) Core(TM) i7-8550U CPU @ 1.80GHz")),
+            "2026-11-29-intel-r-core-tm-i7-8550u-cpu-1-80ghz-2core"
+        );
+        assert_eq!(run_dir_name(&machine("")), "2026-11-29-cpu-2core");
+        assert!(
+            setup_note(&machine("AMD EPYC"), "irid bench", Path::new("d"))
+                .contains("- Command: `irid bench`")
+        );
+    }
 }

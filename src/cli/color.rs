@@ -6,7 +6,7 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use anyhow::{anyhow, Result};
-use irid::color::{linear_to_srgb8, stack_colours, Sampling, SpectralIntegrator, White};
+use irid::color::{linear_to_srgb8, stack_colors, Sampling, SpectralIntegrator, White};
 use irid::optics::Stack;
 
 use super::args::{check_angles, check_grid, parse_list};
@@ -42,13 +42,13 @@ pub fn run(args: Args) -> Result<ExitCode> {
         "--angles × --sampling wavelengths",
         &[angles_deg.len(), integrator.wavelengths_nm().len()],
     )?;
-    let colours = stack_colours(&stack, &integrator, &angles_deg)
+    let colors = stack_colors(&stack, &integrator, &angles_deg)
         .map_err(|e| anyhow!("{}: {e}", args.stack.display()))?;
 
     let stdout = std::io::stdout();
     let mut out = stdout.lock();
     if args.json {
-        serde_json::to_writer_pretty(&mut out, &colours)?;
+        serde_json::to_writer_pretty(&mut out, &colors)?;
         writeln!(out)?;
         return Ok(ExitCode::SUCCESS);
     }
@@ -80,7 +80,7 @@ pub fn run(args: Args) -> Result<ExitCode> {
         "{:>7}  {:<width$}  transmittance",
         "angle", "reflectance"
     )?;
-    for c in &colours {
+    for c in &colors {
         writeln!(
             out,
             "{:>6.2}°  {} {:<27}  {} {}",

@@ -1,5 +1,6 @@
 //! `irid render`: render a scene file or a built-in scene to PNG (and EXR).
 
+use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::time::Instant;
@@ -143,11 +144,20 @@ pub fn run(args: Args) -> Result<ExitCode> {
     opts.spp = args.spp;
     opts.max_depth = args.max_depth;
     opts.seed = args.seed;
-    opts.progress = true;
 
     let (films, image, render_s) = with_threads(args.threads, || -> Result<_> {
         let films = render::prepare_films(&scene, &opts.film)?;
-        let (image, render_s) = timed(|| render::render_with(&scene, &films, &opts));
+        let bar = progress_bar("rendering {bar:40} {percent:>3}% {elapsed} (eta {eta})");
+        let (image, render_s) = timed(|| {
+            render::render_with_progress(&scene, &films, &opts, &|f| {
+                if let Some(bar) = &bar {
+                    bar.set_position((f * 1000.0) as u64);
+                }
+            })
+        });
+        if let Some(bar) = &bar {
+            bar.finish_and_clear();
+        }
         Ok((films, image, render_s))
     })??;
     image.write_png(&output)?;
@@ -209,4 +219,16 @@ pub fn file_stem(name: &str) -> String {
             }
         })
         .collect()
+}
+
+/// A progress bar over 1000 steps on stderr, when stderr is a terminal.
+pub fn progress_bar(template: &str) -> Option<indicatif::ProgressBar> {
+    std::io::stderr().is_terminal().then(|| {
+        let bar = indicatif::ProgressBar::new(1000);
+        bar.set_style(
+            indicatif::ProgressStyle::with_template(template)
+                .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+        );
+        bar
+    })
 }

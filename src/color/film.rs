@@ -9,7 +9,7 @@ use crate::optics::{Response, Stack, StackGrid};
 
 /// A stack's reflected and transmitted colour under D65 at one angle.
 #[derive(Clone, Debug, PartialEq, Serialize)]
-pub struct FilmColour {
+pub struct FilmColor {
     pub angle_deg: f64,
     /// Linear sRGB.
     pub reflectance_rgb: [f64; 3],
@@ -21,11 +21,11 @@ pub struct FilmColour {
 
 /// Colours of `stack` at each incidence angle (degrees, in [0, 90)), with
 /// unpolarized light from the ambient side.
-pub fn stack_colours(
+pub fn stack_colors(
     stack: &Stack,
     integrator: &SpectralIntegrator,
     angles_deg: &[f64],
-) -> Result<Vec<FilmColour>> {
+) -> Result<Vec<FilmColor>> {
     if let Some(a) = angles_deg.iter().find(|a| !(**a >= 0.0 && **a < 90.0)) {
         return Err(Error::invalid(
             "angle",
@@ -51,7 +51,7 @@ pub fn stack_colours(
             {
                 (r[i], t[i]) = (resp.r(), resp.t());
             }
-            FilmColour {
+            FilmColor {
                 angle_deg,
                 reflectance_rgb: integrator.rgb(&r),
                 transmittance_rgb: integrator.rgb(&t),

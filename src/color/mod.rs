@@ -11,7 +11,7 @@ mod film;
 mod sampling;
 mod space;
 
-pub use film::{stack_colours, FilmColour};
+pub use film::{stack_colors, FilmColor};
 pub use sampling::{Sampling, SpectralIntegrator, White};
 pub use space::{
     delta_e2000, delta_e2000_rgb, linear_srgb_to_xyz, linear_to_srgb8, white_xyz, xyz_to_lab,

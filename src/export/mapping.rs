@@ -340,7 +340,11 @@ mod tests {
         // survives resizing.
         let g = Mapping::new((0.0, 1.0), (0.1, 1.0), 2.0, AngleWarp::Grazing, 5, 5);
         let want = [0.1, 0.15625, 0.325, 0.60625, 1.0];
-        assert!(g.cos_nodes().iter().zip(want).all(|(a, b)| (a - b).abs() < 1e-15));
+        assert!(g
+            .cos_nodes()
+            .iter()
+            .zip(want)
+            .all(|(a, b)| (a - b).abs() < 1e-15));
         assert_eq!(g.resized(9, 9).angle_warp(), AngleWarp::Grazing);
         assert_eq!(g.thickness_nodes(), [0.0, 0.0625, 0.25, 0.5625, 1.0]);
     }

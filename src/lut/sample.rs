@@ -56,21 +56,21 @@ impl RgbNodes {
         if kind != Kind::Rgb {
             return RgbNodes::None;
         }
-        let colour = |v: &[f32]| Vec4::new(v[0], v[1], v[2], 0.0);
+        let color = |v: &[f32]| Vec4::new(v[0], v[1], v[2], 0.0);
         let nodes = data.chunks_exact(6);
-        let white = data.get(..6).map(|v| colour(v) + colour(&v[3..]));
+        let white = data.get(..6).map(|v| color(v) + color(&v[3..]));
         let lossless = white.filter(|&white| {
             nodes.clone().all(|v| {
-                let sum = colour(v) + colour(&v[3..]);
+                let sum = color(v) + color(&v[3..]);
                 sum.is_finite() && (sum - white).abs().max_element() <= LOSSLESS_TOLERANCE
             })
         });
         match lossless {
             Some(white) => RgbNodes::Lossless {
-                reflectance: nodes.map(colour).collect(),
+                reflectance: nodes.map(color).collect(),
                 white,
             },
-            None => RgbNodes::Full(nodes.map(|v| [colour(v), colour(&v[3..])]).collect()),
+            None => RgbNodes::Full(nodes.map(|v| [color(v), color(&v[3..])]).collect()),
         }
     }
 }

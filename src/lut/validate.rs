@@ -90,13 +90,13 @@ pub fn validate(lut: &Lut, points: usize, seed: u64) -> Result<ErrorStats> {
     let sampling: Sampling = h.color.sampling.parse()?;
     let integrator = SpectralIntegrator::new(sampling);
     let wavelengths = integrator.wavelengths_nm();
-    let colour_covered = match kind {
+    let color_covered = match kind {
         Kind::Rgb => true,
         Kind::Spectral => wavelengths
             .iter()
             .all(|&w| w >= w_range.0 && w <= w_range.1),
     };
-    let colour_grid = StackGrid::new(stack, if colour_covered { wavelengths } else { &[] })?;
+    let color_grid = StackGrid::new(stack, if color_covered { wavelengths } else { &[] })?;
 
     let mut rng = rand_pcg::Pcg64::seed_from_u64(seed);
     let mut draw = |(lo, hi): (f64, f64)| (lo + rng.random::<f64>() * (hi - lo)) as f32;
@@ -123,8 +123,8 @@ pub fn validate(lut: &Lut, points: usize, seed: u64) -> Result<ErrorStats> {
                     thick[layer - 1] = f64::from(t);
                 }
                 let cos = f64::from(c);
-                let mut colour = |table_r: &[f64; 3], table_t: &[f64; 3]| {
-                    for (k, (wl, n)) in colour_grid.iter().enumerate() {
+                let mut color = |table_r: &[f64; 3], table_t: &[f64; 3]| {
+                    for (k, (wl, n)) in color_grid.iter().enumerate() {
                         let resp = solve(n, thick, wl, cos);
                         spec_r[k] = resp.r();
                         spec_t[k] = resp.t();
@@ -142,7 +142,7 @@ pub fn validate(lut: &Lut, points: usize, seed: u64) -> Result<ErrorStats> {
                         let s = lut.sample_rgb(t, c);
                         let table_r = s.reflectance.map(f64::from);
                         let table_t = s.transmittance.map(f64::from);
-                        let (r, tr, de) = colour(&table_r, &table_t);
+                        let (r, tr, de) = color(&table_r, &table_t);
                         for k in 0..3 {
                             abs[k] = (table_r[k] - r[k]).abs();
                             abs[3 + k] = (table_t[k] - tr[k]).abs();
@@ -155,7 +155,7 @@ pub fn validate(lut: &Lut, points: usize, seed: u64) -> Result<ErrorStats> {
                         let (r, tr) = lut.sample_spectral(t, c, w);
                         abs[0] = (f64::from(r) - resp.r()).abs();
                         abs[1] = (f64::from(tr) - resp.t()).abs();
-                        if colour_covered {
+                        if color_covered {
                             let mut table_r = vec![0.0; wavelengths.len()];
                             let mut table_t = vec![0.0; wavelengths.len()];
                             for (k, &wl) in wavelengths.iter().enumerate() {
@@ -165,7 +165,7 @@ pub fn validate(lut: &Lut, points: usize, seed: u64) -> Result<ErrorStats> {
                             }
                             let rgb_r = integrator.rgb(&table_r);
                             let rgb_t = integrator.rgb(&table_t);
-                            Some(colour(&rgb_r, &rgb_t).2)
+                            Some(color(&rgb_r, &rgb_t).2)
                         } else {
                             None
                         }

@@ -1,9 +1,9 @@
 //! The transfer-matrix solution of a planar multilayer, written as the
 //! reflection-coefficient recursion from the substrate up (Rouard/Parratt).
 //!
-//! Conventions (see `shared/design.md`): fields vary as e^{-iωt}, a forward
-//! wave as e^{+i k0 q z}, the index is n + ik with k > 0 absorbing. Inside
-//! every medium we work with q = n cos θ = sqrt(n² − β²), β = n0 sin θ0 the
+//! Conventions (explained in docs/architecture.md): fields vary as
+//! e^{-iωt}, a forward wave as e^{+i k0 q z}, the index is n + ik with k > 0
+//! absorbing. Inside every medium we work with q = n cos θ = sqrt(n² − β²), β = n0 sin θ0 the
 //! conserved tangential index, on the branch Im q ≥ 0. On that branch the
 //! round-trip factor e^{2i k0 q d} of every layer has modulus ≤ 1, so thick
 //! absorbers and evanescent gaps underflow to zero instead of overflowing,

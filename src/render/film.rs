@@ -3,15 +3,13 @@
 //! [`DirectFilm`] evaluates the transfer matrix at every hit (the reference),
 //! so the two modes share every other line of the renderer.
 
-/// Linear-sRGB reflectance and transmittance of a film at one point.
-pub use crate::lut::FilmRgb;
-
 use std::cell::RefCell;
 
 use super::material::AngleTable;
 use super::scene::Film;
 use crate::color::{Sampling, SpectralIntegrator};
 use crate::error::Result;
+use crate::lut::FilmRgb;
 use crate::optics::{self, Stack, StackGrid};
 
 /// Which side of the film the light arrives from.

@@ -1,8 +1,6 @@
 //! Rendered images: linear RGB in memory, tiled parallel rendering, and
 //! the comparison of two renders.
 
-use std::io::IsTerminal;
-
 use glam::Vec3;
 use rayon::prelude::*;
 
@@ -30,7 +28,6 @@ pub struct Sampler {
     pub spp: u32,
     pub seed: u64,
     pub exposure: f32,
-    pub progress: bool,
 }
 
 /// Renders every pixel. Each pixel's sample positions come from a hash of
@@ -41,9 +38,17 @@ pub struct Sampler {
 /// thread: handing every tile to the worker while the caller sleeps made
 /// renders bimodal on this project's 2-CPU VM, up to 15 % slower when the
 /// two threads sat on different CPUs (benches/film_cost.rs).
-pub fn render_tiles<F: FilmShading>(tracer: &Tracer<F>, camera: &Camera, s: &Sampler) -> Image {
+///
+/// `progress` is called with the fraction of tiles done after each tile,
+/// from whichever thread rendered it.
+pub fn render_tiles<F: FilmShading>(
+    tracer: &Tracer<F>,
+    camera: &Camera,
+    s: &Sampler,
+    progress: &(dyn Fn(f64) + Sync),
+) -> Image {
     let on_caller = rayon::current_thread_index().is_none() && rayon::current_num_threads() == 1;
-    render_tiles_on(tracer, camera, s, on_caller)
+    render_tiles_on(tracer, camera, s, on_caller, progress)
 }
 
 /// [`render_tiles`], on the calling thread alone or on the current pool.
@@ -52,21 +57,12 @@ fn render_tiles_on<F: FilmShading>(
     camera: &Camera,
     s: &Sampler,
     on_caller: bool,
+    progress: &(dyn Fn(f64) + Sync),
 ) -> Image {
     let tiles_x = s.width.div_ceil(TILE);
     let tiles_y = s.height.div_ceil(TILE);
-    let bar = if s.progress && std::io::stderr().is_terminal() {
-        let bar = indicatif::ProgressBar::new(u64::from(tiles_x * tiles_y));
-        bar.set_style(
-            indicatif::ProgressStyle::with_template(
-                "rendering {bar:40} {percent:>3}% {elapsed} (eta {eta})",
-            )
-            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
-        );
-        Some(bar)
-    } else {
-        None
-    };
+    let tile_count = tiles_x * tiles_y;
+    let done = std::sync::atomic::AtomicU32::new(0);
     let render_tile = |k: u32| {
         let (x0, y0) = ((k % tiles_x) * TILE, (k / tiles_x) * TILE);
         let (x1, y1) = ((x0 + TILE).min(s.width), (y0 + TILE).min(s.height));
@@ -76,20 +72,15 @@ fn render_tiles_on<F: FilmShading>(
                 px.push(render_pixel(tracer, camera, s, x, y).to_array());
             }
         }
-        if let Some(b) = &bar {
-            b.inc(1);
-        }
+        let d = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+        progress(f64::from(d) / f64::from(tile_count));
         (x0, y0, px)
     };
-    let tile_count = tiles_x * tiles_y;
     let tiles: Vec<(u32, u32, Vec<[f32; 3]>)> = if on_caller {
         (0..tile_count).map(render_tile).collect()
     } else {
         (0..tile_count).into_par_iter().map(render_tile).collect()
     };
-    if let Some(b) = bar {
-        b.finish_and_clear();
-    }
     let mut pixels = vec![[0.0f32; 3]; (s.width * s.height) as usize];
     for (x0, y0, px) in tiles {
         let w = (x0 + TILE).min(s.width) - x0;
@@ -233,10 +224,10 @@ mod tests {
                 spp,
                 seed: 5,
                 exposure: 1.0,
-                progress: false,
             };
-            let alone = render_tiles_on(&tracer, &camera, &sampler, true);
-            let pooled = pool.install(|| render_tiles_on(&tracer, &camera, &sampler, false));
+            let alone = render_tiles_on(&tracer, &camera, &sampler, true, &|_| {});
+            let pooled =
+                pool.install(|| render_tiles_on(&tracer, &camera, &sampler, false, &|_| {}));
             assert_eq!(alone, pooled, "{spp} spp");
             assert!(alone.pixels.iter().any(|p| p[0] > 0.0));
         }

@@ -4,9 +4,10 @@
 
 use std::path::{Path, PathBuf};
 
-use super::film::{FilmRgb, FilmShading, Side};
+use super::film::{FilmShading, Side};
 use super::scene::Film;
 use crate::error::{Error, Result};
+use crate::lut::FilmRgb;
 use crate::lut::{BakeSpec, Lut, Resolution};
 
 const THICKNESS_STEP_NM: f64 = 4.0;

@@ -29,9 +29,9 @@ use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
 pub use self::image::Image;
-pub use film::{DirectFilm, FilmRgb, FilmShading, Side};
+pub use film::{DirectFilm, FilmShading, Side};
 pub use lut_film::LutFilm;
-pub use output::ColourDifference;
+pub use output::ColorDifference;
 pub use scene::Scene;
 pub use scene_file::builtin_names;
 
@@ -82,8 +82,6 @@ pub struct RenderOptions {
     pub spp: Option<u32>,
     pub max_depth: Option<u32>,
     pub seed: u64,
-    /// Show a progress bar (only ever drawn on a terminal).
-    pub progress: bool,
 }
 
 impl RenderOptions {
@@ -95,7 +93,6 @@ impl RenderOptions {
             spp: None,
             max_depth: None,
             seed: 0,
-            progress: false,
         }
     }
 }
@@ -184,8 +181,21 @@ fn bake_thickness_grids(scene: &Scene) -> Vec<Option<ThicknessGrid>> {
         .collect()
 }
 
-/// Renders with prepared film shaders.
+/// Renders with prepared film shaders (no progress output; see
+/// [`render_with_progress`]).
 pub fn render_with(scene: &Scene, films: &PreparedFilms, opts: &RenderOptions) -> Image {
+    render_with_progress(scene, films, opts, &|_| {})
+}
+
+/// Renders with prepared film shaders, calling `progress` with the fraction
+/// of the image done (0 to 1, from the rendering threads) as it goes: the
+/// library draws nothing itself, the caller shows what it likes.
+pub fn render_with_progress(
+    scene: &Scene,
+    films: &PreparedFilms,
+    opts: &RenderOptions,
+    progress: &(dyn Fn(f64) + Sync),
+) -> Image {
     let s = &scene.settings;
     let width = opts.width.unwrap_or(s.width).max(1);
     let height = opts.height.unwrap_or(s.height).max(1);
@@ -204,17 +214,16 @@ pub fn render_with(scene: &Scene, films: &PreparedFilms, opts: &RenderOptions) -
         spp: opts.spp.unwrap_or(s.spp).max(1),
         seed: opts.seed,
         exposure: s.exposure,
-        progress: opts.progress,
     };
     // One tracer type per kind of shader, each compiled with its shader's
     // lookup inlined.
     match &films.shaders {
-        FilmShaders::Lut(shaders) => {
-            render_tiles_with(scene, shaders, films, max_depth, &camera, &sampler)
-        }
-        FilmShaders::Direct(shaders) => {
-            render_tiles_with(scene, shaders, films, max_depth, &camera, &sampler)
-        }
+        FilmShaders::Lut(shaders) => render_tiles_with(
+            scene, shaders, films, max_depth, &camera, &sampler, progress,
+        ),
+        FilmShaders::Direct(shaders) => render_tiles_with(
+            scene, shaders, films, max_depth, &camera, &sampler, progress,
+        ),
     }
 }
 
@@ -225,6 +234,7 @@ fn render_tiles_with<F: FilmShading>(
     max_depth: u32,
     camera: &camera::Camera,
     sampler: &image::Sampler,
+    progress: &(dyn Fn(f64) + Sync),
 ) -> Image {
     let tracer = tracer::Tracer {
         scene,
@@ -232,7 +242,7 @@ fn render_tiles_with<F: FilmShading>(
         thickness_grids: &films.thickness_grids,
         max_depth,
     };
-    image::render_tiles(&tracer, camera, sampler)
+    image::render_tiles(&tracer, camera, sampler, progress)
 }
 
 /// Prepares the films and renders.

@@ -42,7 +42,7 @@ impl Image {
 
     /// The per-pixel CIEDE2000 difference to another image of the same size,
     /// on the displayed colours (clamped to [0, 1] as in the PNG).
-    pub fn delta_e2000(&self, other: &Image) -> Result<ColourDifference> {
+    pub fn delta_e2000(&self, other: &Image) -> Result<ColorDifference> {
         if (self.width, self.height) != (other.width, other.height) {
             return Err(Error::invalid(
                 "image comparison",
@@ -62,7 +62,7 @@ impl Image {
         de.sort_by(f64::total_cmp);
         let mean = de.iter().sum::<f64>() / de.len().max(1) as f64;
         let rank = ((de.len() as f64 * 0.99).ceil() as usize).clamp(1, de.len()) - 1;
-        Ok(ColourDifference {
+        Ok(ColorDifference {
             mean,
             p99: de[rank],
             max: de[de.len() - 1],
@@ -72,7 +72,7 @@ impl Image {
 
 /// CIEDE2000 statistics over the pixels of two images.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct ColourDifference {
+pub struct ColorDifference {
     pub mean: f64,
     pub p99: f64,
     pub max: f64,

@@ -1,0 +1,475 @@
+//! Evaluating a grid: the stack split around the varying layer once per
+//! cos θ and wavelength, then the phase factor swept along the thickness
+//! axis, with rows the previous round's grid shares copied instead.
+
+use num_complex::Complex64 as C64;
+use rayon::prelude::*;
+
+use super::critical_cos;
+use super::grid::{AxisGrid, Grid};
+use crate::color::SpectralIntegrator;
+use crate::error::Result;
+use crate::lut::sample::channel_names;
+use crate::lut::{BakeSpec, Kind};
+use crate::optics::twoport::{Scratch, VaryingLayer};
+use crate::optics::{solve, Layer, Stack, StackGrid};
+use crate::simd::avx2_dispatch;
+
+/// The phase factor along a uniform thickness axis is advanced by complex
+/// multiplications and recomputed exactly this often (see [`phases`]): the
+/// rounding then stays near 1e-14 (tested), while the complex exponential
+/// (a sincos) is paid on one node in 64.
+pub(super) const PHASE_RESYNC: usize = 64;
+
+/// The stack and everything about it that is fixed for the whole bake.
+pub(super) struct Prepared {
+    /// The stack actually evaluated: a layerless stack gets a zero-thickness
+    /// layer of the ambient medium, which changes nothing optically.
+    pub(super) stack: Stack,
+    pub(super) layer: usize,
+    pub(super) channels: usize,
+    /// rgb kind: the stack at the integration wavelengths and the
+    /// linear-sRGB weight of each wavelength (the spectral kind has none).
+    pub(super) stack_grid: StackGrid,
+    pub(super) weights: Vec<[f64; 3]>,
+    /// The substrate's critical cos θ (where its q has a branch point),
+    /// when it is lossless and optically thinner than the ambient.
+    pub(super) critical_cos: Option<f64>,
+}
+
+impl Prepared {
+    pub(super) fn new(spec: &BakeSpec) -> Result<Prepared> {
+        let mut stack = spec.stack.clone();
+        let layer = if stack.layers.is_empty() {
+            stack.layers.push(Layer {
+                material: stack.ambient.clone(),
+                thickness_nm: 0.0,
+            });
+            1
+        } else {
+            spec.layer
+        };
+        let (stack_grid, weights) = match spec.kind {
+            Kind::Rgb => {
+                let integrator = SpectralIntegrator::new(spec.sampling);
+                (
+                    StackGrid::new(&stack, integrator.wavelengths_nm())?,
+                    rgb_weights(&integrator),
+                )
+            }
+            Kind::Spectral => (StackGrid::new(&stack, &[])?, Vec::new()),
+        };
+        let critical_cos = critical_cos(&stack, spec.kind, spec.wavelength_nm);
+        Ok(Prepared {
+            stack,
+            layer,
+            channels: channel_names(spec.kind).len(),
+            stack_grid,
+            weights,
+            critical_cos,
+        })
+    }
+
+    /// Exact values on a grid, layout `[w][c][t][channel]`. Rows (one cos θ
+    /// and wavelength) that `previous` also has keep the values of its
+    /// thickness chunks that are computed the same way (see [`reuse_plan`]),
+    /// so the result is the same bit for bit as evaluating everything.
+    pub(super) fn eval(
+        &self,
+        grid: &Grid,
+        previous: Option<&(Grid, Vec<f64>)>,
+        progress: &(dyn Fn(f64) + Sync),
+    ) -> Result<Vec<f64>> {
+        let [t_axis, c_axis, w_axis] = &grid.axes;
+        let ch = self.channels;
+        let row_len = t_axis.nodes.len() * ch;
+        let rows = c_axis.nodes.len() * w_axis.nodes.len();
+        let nc = c_axis.nodes.len();
+        let mut out = vec![0.0; rows * row_len];
+        let done = std::sync::atomic::AtomicUsize::new(0);
+        let tick = || {
+            let d = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+            if d.is_multiple_of(16) || d == rows {
+                progress(d as f64 / rows as f64);
+            }
+        };
+        let chunks = chunks(t_axis);
+        let all = [Piece::Compute(0..chunks.len())];
+        let (plan, old_rows) = match previous {
+            Some((old, values)) => (
+                reuse_plan(&chunks, t_axis, &old.axes[0]),
+                previous_rows(grid, old, values, ch),
+            ),
+            None => (Vec::new(), vec![None; rows]),
+        };
+        // The stack at the wavelengths a row integrates over (rgb) or the
+        // one it holds (spectral: the row's wavelength node).
+        let spectral_grid;
+        let stack_grid = if grid.spectral {
+            spectral_grid = StackGrid::new(&self.stack, &w_axis.nodes)?;
+            &spectral_grid
+        } else {
+            &self.stack_grid
+        };
+        let n = t_axis.nodes.len();
+        out.par_chunks_mut(row_len).enumerate().for_each_init(
+            || Worker::new(n, stack_grid.thicknesses_nm()),
+            |wk, (row_index, row)| {
+                let (w, c) = (row_index / nc, row_index % nc);
+                let cos = c_axis.nodes[c];
+                let wavelengths = if grid.spectral {
+                    w..w + 1
+                } else {
+                    0..stack_grid.wavelengths_nm().len()
+                };
+                let (pieces, old_row) = match old_rows[row_index] {
+                    Some(old_row) => (&plan[..], old_row),
+                    None => (&all[..], &[][..]),
+                };
+                // The row's split stacks, one per wavelength, made at its
+                // first computed piece and shared by the others.
+                wk.splits.clear();
+                for piece in pieces {
+                    let range = match piece {
+                        Piece::Copy {
+                            old_start,
+                            start,
+                            len,
+                        } => {
+                            row[start * ch..(start + len) * ch]
+                                .copy_from_slice(&old_row[old_start * ch..(old_start + len) * ch]);
+                            continue;
+                        }
+                        Piece::Compute(range) => &chunks[range.clone()],
+                    };
+                    if wk.splits.is_empty() {
+                        for i in wavelengths.clone() {
+                            let v = self.split(stack_grid, i, cos, &mut wk.scratch);
+                            wk.splits.push((i, v));
+                        }
+                    }
+                    self.compute(grid, stack_grid, cos, range, row, wk);
+                }
+                tick();
+            },
+        );
+        Ok(out)
+    }
+
+    /// The values of consecutive thickness `chunks` of one row (cos θ `cos`,
+    /// split stacks in `wk.splits`) into the row's slice of the output.
+    fn compute(
+        &self,
+        grid: &Grid,
+        stack_grid: &StackGrid,
+        cos: f64,
+        chunks: &[Chunk],
+        row: &mut [f64],
+        wk: &mut Worker,
+    ) {
+        let ch = self.channels;
+        let start = chunks[0].start;
+        let m = chunks
+            .iter()
+            .map(|k| k.start + k.len)
+            .max()
+            .unwrap_or(start)
+            - start;
+        let nodes = &grid.axes[0].nodes[start..start + m];
+        let dst = &mut row[start * ch..(start + m) * ch];
+        if grid.spectral {
+            let split = wk.splits[0];
+            self.responses(&split, stack_grid, cos, nodes, chunks, wk);
+            for (o, (&r, &t)) in dst.chunks_exact_mut(2).zip(wk.r.iter().zip(&wk.t)) {
+                o[0] = r;
+                o[1] = t;
+            }
+            return;
+        }
+        // Channel-major accumulators ([channel][node]), so the
+        // weighting loop below runs over contiguous arrays.
+        wk.acc.clear();
+        wk.acc.resize(6 * m, 0.0);
+        for k in 0..wk.splits.len() {
+            let split = wk.splits[k];
+            self.responses(&split, stack_grid, cos, nodes, chunks, wk);
+            accumulate(&mut wk.acc, &wk.r[..m], &wk.t[..m], self.weights[split.0]);
+        }
+        for (j, o) in dst.chunks_exact_mut(6).enumerate() {
+            for (k, o) in o.iter_mut().enumerate() {
+                *o = wk.acc[k * m + j];
+            }
+        }
+    }
+
+    /// Unpolarized R and T at the thickness `nodes` (the nodes `chunks`
+    /// cover, from the first chunk's start) into `wk.r`, `wk.t`: the
+    /// split-stack form (`split`: the stack split at `stack_grid`'s wavelength
+    /// of that index), or the solver node by node where the split is
+    /// degenerate (the varying layer at its own critical angle).
+    pub(super) fn responses(
+        &self,
+        &(i, ref v): &(usize, VaryingLayer),
+        stack_grid: &StackGrid,
+        cos: f64,
+        nodes: &[f64],
+        chunks: &[Chunk],
+        wk: &mut Worker,
+    ) {
+        let m = nodes.len();
+        if !v.is_degenerate() {
+            let (re, im) = (&mut wk.phase_re[..m], &mut wk.phase_im[..m]);
+            phases(v, nodes, chunks, re, im);
+            v.responses(re, im, &mut wk.r[..m], &mut wk.t[..m]);
+            return;
+        }
+        let (idx, wavelength_nm) = (stack_grid.indices_at(i), stack_grid.wavelengths_nm()[i]);
+        for (j, &t) in nodes.iter().enumerate() {
+            wk.thicknesses_nm[self.layer - 1] = t;
+            let resp = solve(idx, &wk.thicknesses_nm, wavelength_nm, cos);
+            wk.r[j] = resp.r();
+            wk.t[j] = resp.t();
+        }
+    }
+
+    /// The stack split around the varying layer at `stack_grid`'s `i`-th
+    /// wavelength and `cos`.
+    #[inline]
+    pub(super) fn split(
+        &self,
+        stack_grid: &StackGrid,
+        i: usize,
+        cos: f64,
+        scratch: &mut Scratch,
+    ) -> VaryingLayer {
+        VaryingLayer::new(
+            stack_grid.indices_at(i),
+            stack_grid.thicknesses_nm(),
+            self.layer,
+            stack_grid.wavelengths_nm()[i],
+            cos,
+            scratch,
+        )
+    }
+}
+
+/// For each row of `grid` (one cos θ and wavelength), the same row of the
+/// previous grid `old` (values `values`, `channels` per node), if it has one.
+fn previous_rows<'a>(
+    grid: &Grid,
+    old: &Grid,
+    values: &'a [f64],
+    channels: usize,
+) -> Vec<Option<&'a [f64]>> {
+    let [_, c_axis, w_axis] = &grid.axes;
+    let nc = c_axis.nodes.len();
+    let old_row_len = old.axes[0].nodes.len() * channels;
+    let key = |w: f64, c: f64| (w.to_bits(), c.to_bits());
+    let old_nc = old.axes[1].nodes.len();
+    let index: std::collections::HashMap<_, _> = (0..old.axes[2].nodes.len())
+        .flat_map(|w| (0..old_nc).map(move |c| (w, c)))
+        .map(|(w, c)| {
+            let row = w * old_nc + c;
+            (
+                key(old.axes[2].nodes[w], old.axes[1].nodes[c]),
+                &values[row * old_row_len..(row + 1) * old_row_len],
+            )
+        })
+        .collect();
+    (0..nc * w_axis.nodes.len())
+        .map(|row| {
+            let (w, c) = (row / nc, row % nc);
+            index.get(&key(w_axis.nodes[w], c_axis.nodes[c])).copied()
+        })
+        .collect()
+}
+
+/// The linear-sRGB weight of each integration wavelength, as triples: the
+/// integrator is linear in the spectrum, so the bake accumulates weight × R
+/// per node instead of storing whole spectra.
+pub(super) fn rgb_weights(integrator: &SpectralIntegrator) -> Vec<[f64; 3]> {
+    let [r, g, b] = integrator.rgb_weights();
+    r.iter()
+        .zip(g)
+        .zip(b)
+        .map(|((&r, &g), &b)| [r, g, b])
+        .collect()
+}
+
+avx2_dispatch! {
+    /// Adds `weights` × R and × T to channel-major accumulators
+    /// (`[channel][node]`, R channels first).
+    fn accumulate(acc: &mut [f64], r: &[f64], t: &[f64], weights: [f64; 3]) {
+        let n = r.len();
+        let (acc_r, acc_t) = acc.split_at_mut(3 * n);
+        for (acc, values) in [(acc_r, r), (acc_t, t)] {
+            for (a, wt) in acc.chunks_exact_mut(n).zip(weights) {
+                for (a, &v) in a.iter_mut().zip(values) {
+                    *a += wt * v;
+                }
+            }
+        }
+    }
+}
+
+/// One worker's buffers, allocated once per rayon task.
+pub(super) struct Worker {
+    pub(super) scratch: Scratch,
+    /// The current row's split stacks, each with its wavelength's index.
+    pub(super) splits: Vec<(usize, VaryingLayer)>,
+    pub(super) thicknesses_nm: Vec<f64>,
+    pub(super) phase_re: Vec<f64>,
+    pub(super) phase_im: Vec<f64>,
+    pub(super) r: Vec<f64>,
+    pub(super) t: Vec<f64>,
+    pub(super) acc: Vec<f64>,
+}
+
+impl Worker {
+    pub(super) fn new(nodes: usize, thicknesses_nm: &[f64]) -> Worker {
+        Worker {
+            scratch: Scratch::default(),
+            splits: Vec::new(),
+            thicknesses_nm: thicknesses_nm.to_vec(),
+            phase_re: vec![0.0; nodes],
+            phase_im: vec![0.0; nodes],
+            r: vec![0.0; nodes],
+            t: vec![0.0; nodes],
+            acc: Vec::with_capacity(6 * nodes),
+        }
+    }
+}
+
+/// A stretch of at most [`PHASE_RESYNC`] thickness nodes whose phase
+/// factors start from an exact exponential at the first and advance by the
+/// spacing `step` (see [`phases`]). Their values depend only on that first
+/// node, `step` and the stack, cos θ and wavelength: a chunk that appears
+/// in two grids gives the same values in both.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) struct Chunk {
+    pub(super) start: usize,
+    pub(super) len: usize,
+    pub(super) step: f64,
+}
+
+/// The chunks of a thickness axis, in order. Adjacent uniform segments with
+/// the same spacing (the halves of a refined one) form one run, cut into
+/// chunks of [`PHASE_RESYNC`] nodes from its start; consecutive runs share
+/// their boundary node, which the later run's chunk sets.
+pub(super) fn chunks(t_axis: &AxisGrid) -> Vec<Chunk> {
+    let mut runs = Vec::new();
+    let (mut run_start, mut run_step, mut j) = (0, 0.0, 0);
+    for seg in &t_axis.segments {
+        if seg.intervals == 0 {
+            continue;
+        }
+        let step = (seg.end - seg.start) / seg.intervals as f64;
+        if (step - run_step).abs() > 1e-12 * step {
+            if j > run_start {
+                runs.push((run_start, j, run_step));
+            }
+            run_start = j;
+            run_step = step;
+        }
+        j += seg.intervals;
+    }
+    runs.push((run_start, j, run_step));
+    let mut out = Vec::new();
+    for (start, last, step) in runs {
+        for chunk in (start..=last).step_by(PHASE_RESYNC) {
+            out.push(Chunk {
+                start: chunk,
+                len: (chunk + PHASE_RESYNC).min(last + 1) - chunk,
+                step,
+            });
+        }
+    }
+    out
+}
+
+/// One step of evaluating a row: copy a chunk's values from the previous
+/// grid's row, or compute consecutive chunks.
+#[derive(Clone, Debug)]
+pub(super) enum Piece {
+    Copy {
+        old_start: usize,
+        start: usize,
+        len: usize,
+    },
+    Compute(std::ops::Range<usize>),
+}
+
+/// How to evaluate a row that the previous grid also has (same cos θ and
+/// wavelength): each chunk whose first node and step match a chunk of the
+/// old axis at least as long, with the same node positions, is copied;
+/// the rest are computed. Pieces follow chunk order, so the node two runs
+/// share gets the later run's value, as in a full evaluation.
+pub(super) fn reuse_plan(chunks: &[Chunk], t_axis: &AxisGrid, old_axis: &AxisGrid) -> Vec<Piece> {
+    let key = |c: &Chunk, nodes: &[f64]| (nodes[c.start].to_bits(), c.step.to_bits());
+    let old: std::collections::HashMap<_, _> = self::chunks(old_axis)
+        .into_iter()
+        .map(|c| (key(&c, &old_axis.nodes), c))
+        .collect();
+    let same_nodes =
+        |a: &[f64], b: &[f64]| a.iter().zip(b).all(|(x, y)| x.to_bits() == y.to_bits());
+    let mut plan: Vec<Piece> = Vec::new();
+    for (i, c) in chunks.iter().enumerate() {
+        let found = old.get(&key(c, &t_axis.nodes)).filter(|o| {
+            o.len >= c.len
+                && same_nodes(
+                    &old_axis.nodes[o.start..o.start + c.len],
+                    &t_axis.nodes[c.start..c.start + c.len],
+                )
+        });
+        match (found, plan.last_mut()) {
+            (Some(o), _) => plan.push(Piece::Copy {
+                old_start: o.start,
+                start: c.start,
+                len: c.len,
+            }),
+            (None, Some(Piece::Compute(range))) => range.end = i + 1,
+            (None, _) => plan.push(Piece::Compute(i..i + 1)),
+        }
+    }
+    plan
+}
+
+avx2_dispatch! {
+    /// The phase factor at the nodes `chunks` cover, from the first chunk's
+    /// start (`nodes`, `re` and `im` begin there). Each chunk starts from an
+    /// exact exponential, its first [`PHASE_LANES`] nodes follow by one
+    /// complex multiplication each, and every later node is the one
+    /// [`PHASE_LANES`] back times δ^[`PHASE_LANES`]: the lanes are
+    /// independent chains, so the loop is not one long chain of dependent
+    /// multiplications.
+    pub(super) fn phases(v: &VaryingLayer, nodes: &[f64], chunks: &[Chunk], re: &mut [f64], im: &mut [f64]) {
+        let origin = chunks.first().map_or(0, |c| c.start);
+        let mut step_bits = None;
+        let (mut delta, mut lanes_step) = (C64::new(1.0, 0.0), C64::new(1.0, 0.0));
+        for c in chunks {
+            if step_bits != Some(c.step.to_bits()) {
+                step_bits = Some(c.step.to_bits());
+                delta = v.phase(c.step);
+                lanes_step = delta;
+                for _ in 0..PHASE_LANES.trailing_zeros() {
+                    lanes_step = lanes_step * lanes_step;
+                }
+            }
+            let (start, end) = (c.start - origin, c.start - origin + c.len);
+            let mut phase = v.phase(nodes[start]);
+            for j in start..end.min(start + PHASE_LANES) {
+                re[j] = phase.re;
+                im[j] = phase.im;
+                phase *= delta;
+            }
+            for j in start + PHASE_LANES..end {
+                let (a, b) = (re[j - PHASE_LANES], im[j - PHASE_LANES]);
+                re[j] = a * lanes_step.re - b * lanes_step.im;
+                im[j] = a * lanes_step.im + b * lanes_step.re;
+            }
+        }
+    }
+}
+
+/// Independent multiplication chains in [`phases`].
+pub(super) const PHASE_LANES: usize = 8;

@@ -1,0 +1,44 @@
+#!/usr/bin/env bash
+# The whole test suite, exactly as CI runs it (.ci/run calls this script).
+#
+# On a fresh Debian machine with only the Rust toolchain, Python 3.11 with
+# pip, and gcc, it installs what the checks need before running them: Python
+# virtualenvs under .venv*/ (from PyPI), and, through apt-get as root, the
+# Debian packages a check needs (the software Vulkan driver, Chromium, the X
+# libraries Blender's Python module links). Each step exits non-zero on a
+# failure and the script stops at the first one.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+step() { printf '\n== %s\n' "$*"; }
+
+step "cargo fmt --check"
+cargo fmt --check
+
+step "cargo test --release"
+cargo test --release
+
+# Cross-checks against independent Python implementations (tmm,
+# colour-science, OpenEXR, tmm-faster), in a virtualenv made here.
+step "Python cross-checks"
+python3 -m venv .venv
+.venv/bin/pip install --quiet --disable-pip-version-check -r tools/requirements.txt
+export IRID_BIN="$PWD/target/release/irid"
+for check in tools/crosscheck_*.py tools/read_lut.py; do
+    step "$check"
+    .venv/bin/python "$check"
+done
+
+# irid against tmm, colour-science and tmm-faster on the same grids: fails if
+# irid and Byrnes' tmm disagree beyond 1e-9. The committed figures in
+# benches/results/ come from a developer's run; this one writes elsewhere.
+step "tools/bench_peers.py"
+OMP_NUM_THREADS=2 .venv/bin/python tools/bench_peers.py -o "$(mktemp -d)"
+
+# One script per integration (GPU shaders on lavapipe, the Python package,
+# the browser preview, Blender), each installing what it needs.
+for script in tools/ci/*.sh; do
+    [ -e "$script" ] || continue
+    step "$script"
+    bash "$script"
+done
