@@ -7,7 +7,8 @@ texture coordinates (docs/gpu.md). This module turns such a directory into a
 shader node group that evaluates the same mapping with math nodes, samples
 both tables bilinearly, and shades with a GGX Glossy BSDF coloured by the
 film's reflectance (no Fresnel of its own: the table already holds it) plus,
-when the film transmits, a Refraction BSDF coloured by its transmittance.
+when the film transmits into a lossless substrate, a Refraction BSDF coloured
+by its transmittance (into a metal the transmitted power is absorbed).
 
 Use it as a module from Blender's Python:
 
