@@ -21,6 +21,7 @@ fn film_json(dir: &Path) -> serde_json::Value {
 
 /// The channel names, sample type and size of an EXR texture.
 fn exr_layout(path: &Path) -> (Vec<String>, bool, (usize, usize)) {
+    use exr::prelude::{ReadChannels, ReadLayers};
     let image = exr::prelude::read()
         .no_deep_data()
         .largest_resolution_level()
@@ -69,15 +70,28 @@ fn every_example_stack_exports() {
     for stack in &stacks {
         let name = stack.file_stem().unwrap().to_string_lossy().into_owned();
         let out = scratch.path().join(&name);
-        let run = irid_in(
-            scratch.path(),
-            [
-                "export",
-                stack.to_str().unwrap(),
-                "-o",
-                out.to_str().unwrap(),
-            ],
-        );
+        let mut args = vec![
+            "export",
+            stack.to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+        ];
+        // The gain film reflects up to 2 in the range its table covers, where
+        // f16 steps by 2e-3: a 1e-3 target is out of f16's reach there.
+        let target = if name == "gain-on-gold" {
+            args.extend([
+                "--angles",
+                "0.2:1",
+                "--thickness",
+                "200:300",
+                "--max-error",
+                "3e-3",
+            ]);
+            3e-3
+        } else {
+            1e-3
+        };
+        let run = irid_in(scratch.path(), &args);
         assert!(run.success(), "{name}: {}", run.stderr);
         assert!(run.stdout.contains("texels"), "{name}: {}", run.stdout);
         let film = film_json(&out);
@@ -112,7 +126,7 @@ fn every_example_stack_exports() {
             .map(|v| v.as_f64().unwrap())
             .collect();
         assert_eq!(max.len(), 6);
-        assert!(max.iter().all(|&e| e <= 1e-3), "{name}: {max:?}");
+        assert!(max.iter().all(|&e| e <= target), "{name}: {max:?}");
         assert_eq!(film["error"]["points"], 20_000);
         assert!(film["texture"]["png"].is_null());
     }
@@ -296,4 +310,57 @@ fn bad_input_is_one_line_and_leaves_no_directory() {
     }
     assert_eq!(std::fs::read_to_string(d.join("file")).unwrap(), "x");
     only(d, &["file"]);
+}
+
+/// `--white e`: a flat spectrum is (1, 1, 1) channel by channel; a table
+/// baked with it says so in its header (version 3), reads back, and
+/// validates against the same convention.
+#[test]
+fn white_e_is_flat_and_recorded_in_tables() {
+    use irid::color::{Sampling, SpectralIntegrator, White};
+    for sampling in [Sampling::Exact, Sampling::Uniform(41)] {
+        let e = SpectralIntegrator::with_white(sampling, White::E);
+        let flat = vec![0.37; e.wavelengths_nm().len()];
+        for c in e.rgb(&flat) {
+            assert!((c - 0.37).abs() < 1e-12, "{sampling}: {c}");
+        }
+        // A single-wavelength spike: E weighs wavelengths by the CMFs
+        // alone, D65 by D65 × CMFs, so they differ in colour.
+        let d = SpectralIntegrator::new(sampling);
+        let mut spike = vec![0.0; flat.len()];
+        spike[flat.len() / 4] = 1.0;
+        assert_ne!(e.rgb(&spike), d.rgb(&spike));
+    }
+    let stack = Stack::from_toml_str(
+        "ambient = { n = 1.0 }\nsubstrate = { n = 1.5 }\n[[layers]]\nn = 1.33\nthickness_nm = 300.0\n",
+        Path::new("."),
+        "film",
+    )
+    .unwrap();
+    let mut spec = irid::lut::BakeSpec::new(stack);
+    spec.thickness_nm = (100.0, 400.0);
+    spec.sampling = Sampling::Uniform(31);
+    spec.white = White::E;
+    spec.validation_points = 2000;
+    let lut = irid::lut::bake(&spec).unwrap();
+    assert_eq!(lut.header().version, irid::lut::WHITE_E_VERSION);
+    assert_eq!(lut.header().color.white, White::E);
+    let scratch = Scratch::new("export");
+    let path = scratch.path().join("e.exr");
+    lut.write(&path).unwrap();
+    let back = irid::lut::Lut::load(&path).unwrap();
+    assert_eq!(back.header().color.white, White::E);
+    assert_eq!(back.header().version, irid::lut::WHITE_E_VERSION);
+    let stats = irid::lut::validate(&back, 2000, 3).unwrap();
+    assert!(
+        stats.max_abs.iter().all(|&e| e <= 1e-3),
+        "{:?}",
+        stats.max_abs
+    );
+    // The D65 table of the same spec keeps version 2 and no white field.
+    spec.white = White::D65;
+    let d65 = irid::lut::bake(&spec).unwrap();
+    assert_eq!(d65.header().version, irid::lut::FORMAT_VERSION);
+    let json = serde_json::to_string(d65.header()).unwrap();
+    assert!(!json.contains("\"white\""));
 }

@@ -99,7 +99,7 @@ def check_table(path, rng):
     h = json.loads(text)
     fail = lambda why: sys.exit(f"FAIL: {path}: {why}")  # noqa: E731
     # Version 2 differs from 1 only in allowing a null bake check.
-    if h.get("format") != "irid-lut" or h.get("version") not in (1, 2):
+    if h.get("format") != "irid-lut" or h.get("version") not in (1, 2, 3):
         fail(f"format {h.get('format')} version {h.get('version')}")
     axes = {a["name"]: np.array(a["nodes"]) for a in h["axes"]}
     t_nodes, c_nodes = axes["thickness_nm"], axes["cos_theta"]

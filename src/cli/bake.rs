@@ -36,6 +36,11 @@ pub struct Args {
     /// Spectral integration of the rgb kind: exact (1 nm), uniform:N, rgb3.
     #[arg(long, default_value = "exact")]
     pub sampling: String,
+    /// What (1, 1, 1) is in the rgb kind: d65 (a perfect reflector under
+    /// D65) or e (a flat spectrum, as Blender Cycles and glTF viewers); see
+    /// docs/color.md.
+    #[arg(long, default_value = "d65")]
+    pub white: String,
     /// Wavelength range MIN:MAX in nm of the spectral kind.
     #[arg(long, default_value = "380:780")]
     pub wavelengths: String,
@@ -81,6 +86,10 @@ pub fn run(args: Args) -> Result<ExitCode> {
         .parse::<Sampling>()
         .map_err(|e| anyhow!("--{e}"))?;
     spec.wavelength_nm = parse_range("--wavelengths", &args.wavelengths)?;
+    spec.white = args
+        .white
+        .parse::<irid::color::White>()
+        .map_err(|e| anyhow!("--{e}"))?;
     spec.half = args.half;
     spec.validation_points = args.validate_points;
     spec.resolution = match (&args.resolution, args.max_error) {

@@ -428,12 +428,19 @@ fn textures(mapping: &Mapping, values: &[[f64; 6]]) -> (Texture, Texture) {
     (make(0), make(3))
 }
 
-/// Fails, naming where, when a value is not finite or beyond f16: a gain
-/// film whose range reaches (or crosses) a lasing pole.
+/// |R| or |T| beyond which a gain film is taken to be at a lasing pole: a
+/// hundredfold amplification is no film a renderer shows, and near a pole
+/// the response is unbounded anyway.
+pub const LASING_BOUND: f64 = 100.0;
+
+/// Fails, naming where, when a value is not finite or beyond f16, or, for
+/// a gain film, beyond [`LASING_BOUND`]: its range reaches (or crosses) a
+/// lasing pole.
 fn check_representable(mapping: &Mapping, values: &[[f64; 6]], gain: bool) -> Result<()> {
+    let bound = if gain { LASING_BOUND } else { F16_MAX };
     let Some(k) = values
         .iter()
-        .position(|v| v.iter().any(|x| !(x.abs() <= F16_MAX)))
+        .position(|v| v.iter().any(|x| !(x.abs() <= bound)))
     else {
         return Ok(());
     };
@@ -446,7 +453,7 @@ fn check_representable(mapping: &Mapping, values: &[[f64; 6]], gain: bool) -> Re
     Err(if gain {
         Error::invalid(
             "gain film",
-            format!("R or T exceeds f16's largest value (65504) or is not finite at {at}: the range reaches a lasing pole; narrow --thickness or --angles"),
+            format!("R or T exceeds {LASING_BOUND} or is not finite at {at}: the range reaches a lasing pole; narrow --thickness or --angles"),
         )
     } else {
         Error::invalid("export", format!("R or T is not finite at {at}"))
@@ -598,7 +605,7 @@ pub fn export(spec: &ExportSpec, progress: &dyn Fn(&str)) -> Result<Export> {
         spec.thickness_nm.0 == spec.thickness_nm.1,
         spec.cos_theta.0 == spec.cos_theta.1,
     );
-    let mut mapping = choose_warps(&film, spec, t_flat, c_flat, progress);
+    let mut mapping = choose_warps(&film, spec, t_flat, c_flat, gain, progress)?;
     let reference = Reference::new(&film, spec);
     let waves = film.grid.wavelengths_nm().len();
     let target = spec.max_error;
@@ -719,8 +726,9 @@ fn choose_warps(
     spec: &ExportSpec,
     t_flat: bool,
     c_flat: bool,
+    gain: bool,
     progress: &dyn Fn(&str),
-) -> Mapping {
+) -> Result<Mapping> {
     const PROBE: usize = 129;
     let size = |flat: bool| if flat { 1 } else { PROBE };
     let critical =
@@ -747,11 +755,13 @@ fn choose_warps(
         })
         .collect();
     if candidates.len() == 1 {
-        return candidates[0].resized(start_size(t_flat), start_size(c_flat));
+        return Ok(candidates[0].resized(start_size(t_flat), start_size(c_flat)));
     }
     let share = 0.5 * spec.max_error;
-    let predicted = |m: &Mapping| {
-        let fine = film.eval(&m.resized(2 * m.size_u - 1, 2 * m.size_v - 1));
+    let predicted = |m: &Mapping| -> Result<f64> {
+        let fine_map = m.resized(2 * m.size_u - 1, 2 * m.size_v - 1);
+        let fine = film.eval(&fine_map);
+        check_representable(&fine_map, &fine, gain)?;
         let [e_u, e_v, e_c] = midpoint_errors(m, &fine);
         let e_u = e_u.max(0.5 * e_c);
         let e_v = e_v.max(0.5 * e_c);
@@ -768,15 +778,16 @@ fn choose_warps(
             m.thickness_power,
             m.angle_warp()
         ));
-        texels
+        Ok(texels)
     };
-    let best = candidates
-        .iter()
-        .map(|m| (predicted(m), m))
-        .min_by(|a, b| a.0.total_cmp(&b.0))
-        .map(|(_, m)| *m)
-        .unwrap_or(candidates[0]);
-    best.resized(start_size(t_flat), start_size(c_flat))
+    let mut best = (f64::INFINITY, candidates[0]);
+    for m in &candidates {
+        let texels = predicted(m)?;
+        if texels < best.0 {
+            best = (texels, *m);
+        }
+    }
+    Ok(best.1.resized(start_size(t_flat), start_size(c_flat)))
 }
 
 /// The first size the search tries along an axis.

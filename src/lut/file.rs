@@ -10,7 +10,7 @@ use exr::prelude::{
 };
 
 use super::header::{
-    readable_version, Header, FORMAT_NAME, FORMAT_VERSION, OLDEST_READABLE_VERSION,
+    readable_version, version_for, Header, FORMAT_NAME, OLDEST_READABLE_VERSION, WHITE_E_VERSION,
 };
 use super::sample::{channel_names, Lut};
 use crate::error::{Error, Result};
@@ -31,7 +31,7 @@ impl Lut {
         // A table read from an older version is written in the current one:
         // its header is valid in this version too (see OLDEST_READABLE_VERSION).
         let current = Header {
-            version: FORMAT_VERSION,
+            version: version_for(header.color.white),
             ..header.clone()
         };
         let json = serde_json::to_string(&current)
@@ -106,7 +106,7 @@ impl Lut {
         let version = value.get("version").and_then(|v| v.as_u64());
         if !version.is_some_and(readable_version) {
             return Err(bad(format!(
-                "format version {} (this irid reads versions {OLDEST_READABLE_VERSION} to {FORMAT_VERSION})",
+                "format version {} (this irid reads versions {OLDEST_READABLE_VERSION} to {WHITE_E_VERSION})",
                 version.map_or("missing".into(), |v| v.to_string()),
             )));
         }

@@ -5,6 +5,7 @@ use serde::{Deserialize, Serialize};
 use super::axis::Axis;
 use super::validate::ErrorStats;
 use super::Kind;
+use crate::color::White;
 use crate::optics::Stack;
 
 pub const FORMAT_NAME: &str = "irid-lut";
@@ -12,13 +13,25 @@ pub const FORMAT_NAME: &str = "irid-lut";
 /// Version 2: `error.bake_check` may be null (a table baked without the
 /// check, `irid bake --no-check`).
 pub const FORMAT_VERSION: u32 = 2;
+/// Version 3: `color.white` is `"e"` (see docs/color.md). Only such tables
+/// are written as version 3, so an older irid refuses them instead of
+/// taking them for D65 tables; D65 tables stay version 2, unchanged.
+pub const WHITE_E_VERSION: u32 = 3;
 /// The oldest version this irid reads: every version-1 header is a valid
 /// version-2 header (its bake check is always present).
 pub const OLDEST_READABLE_VERSION: u32 = 1;
 
 /// Whether this irid reads tables of format `version`.
 pub fn readable_version(version: u64) -> bool {
-    (u64::from(OLDEST_READABLE_VERSION)..=u64::from(FORMAT_VERSION)).contains(&version)
+    (u64::from(OLDEST_READABLE_VERSION)..=u64::from(WHITE_E_VERSION)).contains(&version)
+}
+
+/// The version a table of this white is written in.
+pub fn version_for(white: White) -> u32 {
+    match white {
+        White::D65 => FORMAT_VERSION,
+        White::E => WHITE_E_VERSION,
+    }
 }
 
 pub const THICKNESS_AXIS: &str = "thickness_nm";
@@ -71,6 +84,10 @@ pub struct ColorInfo {
     /// The spectral sampling of the rgb integration (`exact`, `uniform:N`,
     /// `rgb3`).
     pub sampling: String,
+    /// What (1, 1, 1) is (docs/color.md). Absent in D65 tables, which are
+    /// written as before.
+    #[serde(default, skip_serializing_if = "White::is_d65")]
+    pub white: White,
 }
 
 /// Measured error of the table against the exact response.

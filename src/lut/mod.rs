@@ -15,13 +15,14 @@ pub use axis::Axis;
 pub use bake::{bake, bake_with_progress, VALIDATION_SEED};
 pub use header::{
     BakeCheck, ColorInfo, ErrorInfo, Header, FORMAT_NAME, FORMAT_VERSION, OLDEST_READABLE_VERSION,
+    WHITE_E_VERSION,
 };
 pub use sample::{FilmRgb, Lut};
 pub use validate::{validate, ErrorStats, RegionStats, MAX_POINTS as MAX_VALIDATION_POINTS};
 
 use serde::{Deserialize, Serialize};
 
-use crate::color::Sampling;
+use crate::color::{Sampling, White};
 use crate::error::{Error, Result};
 use crate::optics::{Stack, MAX_THICKNESS_NM};
 
@@ -90,6 +91,10 @@ pub struct BakeSpec {
     /// The rgb kind's spectral integration (also the colour used for the
     /// CIEDE2000 figures of a spectral table).
     pub sampling: Sampling,
+    /// What (1, 1, 1) is in the rgb kind (docs/color.md). Not serialized
+    /// when D65, so D65 specs keep the cache keys they always had.
+    #[serde(default, skip_serializing_if = "White::is_d65")]
+    pub white: White,
     /// The spectral kind's wavelength axis range.
     pub wavelength_nm: (f64, f64),
     pub resolution: Resolution,
@@ -124,6 +129,7 @@ impl BakeSpec {
             cos_theta: (DEFAULT_COS_MIN, 1.0),
             kind: Kind::Rgb,
             sampling: Sampling::Exact,
+            white: White::D65,
             wavelength_nm: (380.0, 780.0),
             resolution: Resolution::MaxError(1e-3),
             half: false,

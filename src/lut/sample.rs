@@ -4,8 +4,8 @@ use glam::Vec4;
 
 use super::axis::Locator;
 use super::header::{
-    readable_version, Header, COS_AXIS, FORMAT_VERSION, OLDEST_READABLE_VERSION, THICKNESS_AXIS,
-    WAVELENGTH_AXIS,
+    readable_version, Header, COS_AXIS, OLDEST_READABLE_VERSION, THICKNESS_AXIS, WAVELENGTH_AXIS,
+    WHITE_E_VERSION,
 };
 use super::Kind;
 
@@ -111,7 +111,7 @@ impl Lut {
     pub(crate) fn from_parts(header: Header, data: Vec<f32>) -> Result<Lut, String> {
         if !readable_version(header.version.into()) {
             return Err(format!(
-                "format version {} (this irid reads versions {OLDEST_READABLE_VERSION} to {FORMAT_VERSION})",
+                "format version {} (this irid reads versions {OLDEST_READABLE_VERSION} to {WHITE_E_VERSION})",
                 header.version
             ));
         }

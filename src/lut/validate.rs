@@ -88,7 +88,7 @@ pub fn validate(lut: &Lut, points: usize, seed: u64) -> Result<ErrorStats> {
         (0.0, 0.0)
     };
     let sampling: Sampling = h.color.sampling.parse()?;
-    let integrator = SpectralIntegrator::new(sampling);
+    let integrator = SpectralIntegrator::with_white(sampling, h.color.white);
     let wavelengths = integrator.wavelengths_nm();
     let color_covered = match kind {
         Kind::Rgb => true,

@@ -24,8 +24,7 @@ pub fn gpu() -> Option<Gpu> {
     let instance = wgpu::Instance::new(desc);
     let adapter = pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
         power_preference: wgpu::PowerPreference::HighPerformance,
-        force_fallback_adapter: false,
-        compatible_surface: None,
+        ..Default::default()
     }));
     let adapter = match adapter {
         Ok(a) => a,
@@ -156,15 +155,14 @@ pub fn glsl_program(generated: &str) -> Source {
         if line.starts_with("#version") || line.starts_with("precision ") {
             continue;
         }
-        let line = line.replace(
-            "layout(std140, binding = 3) uniform",
-            "layout(std140, set = 0, binding = 3) uniform",
-        );
-        let line = if line.starts_with("uniform IridParams") {
-            format!("layout(std140, set = 0, binding = 3) {line}")
-        } else {
-            line
-        };
+        // The parameter block at set 0, binding 3 (GLSL 4.50 gives the
+        // binding, ES 3.00 none).
+        let line = line
+            .replace("layout(std140, binding = 3) uniform", "layout(std140) uniform")
+            .replace(
+                "layout(std140) uniform",
+                "layout(std140, set = 0, binding = 3) uniform",
+            );
         body.push_str(&line);
         body.push('\n');
     }
@@ -494,7 +492,7 @@ pub fn run(
             timeout: None,
         })
         .expect("poll");
-    let data = slice.get_mapped_range();
+    let data = slice.get_mapped_range().expect("mapped results");
     let floats: &[f32] = bytemuck::cast_slice(&data);
     let out = floats
         .chunks_exact(6)

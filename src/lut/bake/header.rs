@@ -6,8 +6,8 @@ use super::grid::Grid;
 use super::sweep::Prepared;
 use crate::lut::axis::Axis;
 use crate::lut::header::{
-    BakeCheck, Channel, ColorInfo, ErrorInfo, Header, BAKE_CHECK_METRIC, COS_AXIS, FORMAT_NAME,
-    FORMAT_VERSION, THICKNESS_AXIS, WAVELENGTH_AXIS,
+    version_for, BakeCheck, Channel, ColorInfo, ErrorInfo, Header, BAKE_CHECK_METRIC, COS_AXIS,
+    FORMAT_NAME, THICKNESS_AXIS, WAVELENGTH_AXIS,
 };
 use crate::lut::sample::channel_names;
 use crate::lut::{BakeSpec, Kind};
@@ -53,7 +53,7 @@ pub(super) fn header(
     let names = channel_names(spec.kind);
     Header {
         format: FORMAT_NAME.into(),
-        version: FORMAT_VERSION,
+        version: version_for(spec.white),
         kind: spec.kind,
         x_axis: THICKNESS_AXIS.into(),
         y_axis: COS_AXIS.into(),
@@ -74,7 +74,8 @@ pub(super) fn header(
             prep.layer
         },
         color: ColorInfo {
-            illuminant: "CIE D65".into(),
+            white: spec.white,
+            illuminant: spec.white.illuminant().into(),
             observer: "CIE 1931 2°".into(),
             space: "linear sRGB (ITU-R BT.709 primaries, D65 white)".into(),
             sampling: spec.sampling.to_string(),

@@ -51,7 +51,7 @@ impl Prepared {
         };
         let (stack_grid, weights) = match spec.kind {
             Kind::Rgb => {
-                let integrator = SpectralIntegrator::new(spec.sampling);
+                let integrator = SpectralIntegrator::with_white(spec.sampling, spec.white);
                 (
                     StackGrid::new(&stack, integrator.wavelengths_nm())?,
                     rgb_weights(&integrator),
