@@ -1,0 +1,562 @@
+"""irid thin films in Blender: a Cycles/EEVEE material built from an `irid export`.
+
+`irid export` writes a directory with reflectance.exr, transmittance.exr and
+film.json: the film's exact reflected and transmitted colour over a grid of
+(thickness, cos θ), and the closed-form mapping from (thickness, cos θ) to
+texture coordinates (docs/gpu.md). This module turns such a directory into a
+shader node group that evaluates the same mapping with math nodes, samples
+both tables bilinearly, and shades with a GGX Glossy BSDF coloured by the
+film's reflectance (no Fresnel of its own: the table already holds it) plus,
+when the film transmits into a lossless substrate, a Refraction BSDF coloured
+by its transmittance (into a metal the transmitted power is absorbed).
+
+Use it as a module from Blender's Python:
+
+    import irid_blender
+    mat = irid_blender.make_material("/path/to/export", thickness_nm=350.0)
+    obj.data.materials.append(mat)
+
+or install this file as an add-on (Preferences > Add-ons > Install from Disk):
+File > Import > irid film (film.json) builds the material and assigns it to
+the selected objects.
+
+What is exact: at roughness 0 the colour of every reflected and transmitted
+ray is the table's bilinear interpolation of the exact film response at the
+ray's angle to the shading normal. What is approximated: with roughness > 0
+the film is still evaluated at the shading normal's angle, not per
+microfacet, and GGX spreads that one colour over the lobe.
+"""
+
+import json
+import math
+import os
+
+import bpy
+
+bl_info = {
+    "name": "irid thin film",
+    "author": "irid",
+    "version": (0, 1, 0),
+    "blender": (4, 2, 0),
+    "location": "File > Import > irid film (film.json)",
+    "description": "Exact thin-film iridescence from an irid export (lookup tables + node group)",
+    "category": "Material",
+}
+
+FILM_FORMAT = "irid-film"
+FILM_VERSION = 1
+# Wavelength at which a transmitting film's refraction index is taken: the
+# one irid grades the substrate's critical angle at (docs/lut-format.md).
+IOR_WAVELENGTH_NM = 550.0
+TABLES = ("reflectance", "transmittance")
+
+
+class ExportError(ValueError):
+    """An export directory that cannot be turned into a material."""
+
+
+class Export:
+    """A checked export directory: the texture files and the mapping parameters."""
+
+    def __init__(self, directory):
+        self.directory = os.path.abspath(os.fspath(directory))
+        film_path = os.path.join(self.directory, "film.json")
+        if not os.path.isdir(self.directory):
+            raise ExportError(f"irid export {self.directory}: not a directory")
+        if not os.path.isfile(film_path):
+            raise ExportError(f"irid export {self.directory}: film.json is missing")
+        try:
+            with open(film_path, encoding="utf-8") as f:
+                film = json.load(f)
+        except (OSError, UnicodeDecodeError, json.JSONDecodeError) as e:
+            raise ExportError(f"irid export {film_path}: not readable JSON ({e})") from None
+        self.film = film
+        where = film_path
+        if not isinstance(film, dict):
+            raise ExportError(f"irid export {where}: expected a JSON object")
+        if film.get("format") != FILM_FORMAT or film.get("version") != FILM_VERSION:
+            raise ExportError(
+                f"irid export {where}: format {film.get('format')!r} version "
+                f"{film.get('version')!r}, expected {FILM_FORMAT!r} version {FILM_VERSION}"
+            )
+        params = _object(film, "params", where)
+        number = lambda key: _number(params, key, f"{where}: params")  # noqa: E731
+        self.thickness_min_nm = number("thickness_min_nm")
+        self.thickness_max_nm = number("thickness_max_nm")
+        self.cos_min = number("cos_min")
+        self.cos_max = number("cos_max")
+        self.cos_crit = number("cos_crit")
+        self.y_crit = number("y_crit")
+        self.size_u = number("size_u")
+        self.size_v = number("size_v")
+        self.thickness_power = number("thickness_power")
+        if self.thickness_power not in (1.0, 2.0):
+            raise ExportError(
+                f"irid export {where}: params.thickness_power = {self.thickness_power}, "
+                "expected 1 or 2"
+            )
+        for key in ("size_u", "size_v"):
+            value = getattr(self, key)
+            if value < 1 or value != int(value):
+                raise ExportError(f"irid export {where}: params.{key} = {value} is not a size")
+        self.size_u = int(self.size_u)
+        self.size_v = int(self.size_v)
+        if not 0.0 <= self.thickness_min_nm <= self.thickness_max_nm:
+            raise ExportError(
+                f"irid export {where}: thickness range [{self.thickness_min_nm}, "
+                f"{self.thickness_max_nm}] nm is empty or negative"
+            )
+        if not 0.0 <= self.cos_min <= self.cos_max <= 1.0:
+            raise ExportError(
+                f"irid export {where}: cos θ range [{self.cos_min}, {self.cos_max}] is not "
+                "a range inside [0, 1]"
+            )
+        # cos_crit < 0: angle nodes uniform in cos θ; otherwise they crowd towards
+        # cos_crit, a critical angle inside the range or cos_min (grazing).
+        if self.cos_crit >= 0.0:
+            if not self.cos_min <= self.cos_crit < self.cos_max or not 0.0 <= self.y_crit < 1.0:
+                raise ExportError(
+                    f"irid export {where}: angle warp centre cos {self.cos_crit} (y {self.y_crit}) "
+                    f"is not inside the cos θ range [{self.cos_min}, {self.cos_max})"
+                )
+        opaque = film.get("opaque")
+        if not isinstance(opaque, bool):
+            raise ExportError(f"irid export {where}: 'opaque' must be true or false")
+        self.opaque = opaque
+        texture = _object(film, "texture", where)
+        files = _object(texture, "files", f"{where}: texture")
+        if (texture.get("width"), texture.get("height")) != (self.size_u, self.size_v):
+            raise ExportError(
+                f"irid export {where}: texture is {texture.get('width')}×{texture.get('height')}, "
+                f"params say {self.size_u}×{self.size_v}"
+            )
+        self.paths = {}
+        for table in TABLES:
+            name = files.get(table)
+            if not isinstance(name, str) or not name or os.path.basename(name) != name:
+                raise ExportError(f"irid export {where}: texture.files.{table} is not a file name")
+            path = os.path.join(self.directory, name)
+            if not os.path.isfile(path):
+                raise ExportError(f"irid export {self.directory}: {name} is missing")
+            self.paths[table] = path
+        self.white = film.get("white")
+        self.stack = film.get("stack")
+        self.label = os.path.basename(self.directory.rstrip(os.sep)) or "film"
+
+    def thickness_fraction(self, thickness_nm):
+        """The 0-1 thickness socket value of a thickness in nm (the export's range)."""
+        t = float(thickness_nm)
+        span = self.thickness_max_nm - self.thickness_min_nm
+        tolerance = 1e-9 * max(1.0, self.thickness_max_nm)
+        if not (self.thickness_min_nm - tolerance <= t <= self.thickness_max_nm + tolerance):
+            raise ValueError(
+                f"thickness {t} nm is outside the export's range "
+                f"[{self.thickness_min_nm}, {self.thickness_max_nm}] nm"
+            )
+        if span == 0.0:
+            return 0.0
+        return min(1.0, max(0.0, (t - self.thickness_min_nm) / span))
+
+    def transmits(self):
+        """Whether light leaves through the substrate: the film transmits (film.json
+        "opaque" is false) into a lossless substrate. Into a metal the transmitted
+        power is absorbed, so no refraction lobe is drawn."""
+        if self.opaque:
+            return False
+        try:
+            return not _absorbs(self.stack["substrate"])
+        except (KeyError, TypeError, ValueError) as e:
+            raise ExportError(
+                f"irid export {self.directory}: the stack in film.json does not describe "
+                f"the substrate ({e})"
+            ) from None
+
+    def relative_ior(self):
+        """Substrate over ambient refractive index at IOR_WAVELENGTH_NM, from the stack."""
+        try:
+            n_ambient = _index_at(self.stack["ambient"], IOR_WAVELENGTH_NM)
+            n_substrate = _index_at(self.stack["substrate"], IOR_WAVELENGTH_NM)
+        except (KeyError, TypeError, ValueError) as e:
+            raise ExportError(
+                f"irid export {self.directory}: the stack in film.json does not give the "
+                f"substrate's index ({e}); pass ior= explicitly"
+            ) from None
+        return n_substrate / n_ambient
+
+
+def _object(parent, key, where):
+    value = parent.get(key)
+    if not isinstance(value, dict):
+        raise ExportError(f"irid export {where}: '{key}' is missing or not an object")
+    return value
+
+
+def _number(parent, key, where):
+    value = parent.get(key)
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+        raise ExportError(f"irid export {where}.{key}: expected a finite number, got {value!r}")
+    return float(value)
+
+
+def _index_at(material, wavelength_nm):
+    """Real part of a serialized irid material's index (docs/lut-format.md, `stack`)."""
+    dispersion = material["dispersion"]
+    um = wavelength_nm * 1e-3
+    if "constant" in dispersion:
+        n = dispersion["constant"]["n"]
+    elif "cauchy" in dispersion:
+        c = dispersion["cauchy"]
+        n = c["a"] + c["b"] / um**2 + c.get("c", 0.0) / um**4
+    elif "sellmeier" in dispersion:
+        s = dispersion["sellmeier"]
+        n2 = s.get("a", 1.0) + sum(b * um**2 / (um**2 - c) for b, c in zip(s["b"], s["c"]))
+        n = math.sqrt(n2)
+    elif "table" in dispersion:
+        t = dispersion["table"]
+        n = _interp(wavelength_nm, t["wavelength_nm"], t["n"])
+    else:
+        raise ValueError(f"unknown dispersion {sorted(dispersion)}")
+    if not (isinstance(n, (int, float)) and math.isfinite(n) and n > 0):
+        raise ValueError(f"index {n!r} is not a positive number")
+    return float(n)
+
+
+def _absorbs(material):
+    """Whether a serialized irid material has k != 0 anywhere."""
+    dispersion = material["dispersion"]
+    if "constant" in dispersion:
+        return dispersion["constant"]["k"] != 0
+    if "table" in dispersion:
+        return any(k != 0 for k in dispersion["table"]["k"])
+    if "cauchy" in dispersion or "sellmeier" in dispersion:
+        return False
+    raise ValueError(f"unknown dispersion {sorted(dispersion)}")
+
+
+def _interp(x, xs, ys):
+    if not xs or len(xs) != len(ys) or not xs[0] <= x <= xs[-1]:
+        raise ValueError(f"{x} nm is outside the material's table")
+    for i in range(1, len(xs)):
+        if x <= xs[i]:
+            f = (x - xs[i - 1]) / (xs[i] - xs[i - 1])
+            return ys[i - 1] + f * (ys[i] - ys[i - 1])
+    return ys[-1]
+
+
+class _Builder:
+    """Adds nodes and links to a node tree, laid out in columns."""
+
+    def __init__(self, tree):
+        self.tree = tree
+
+    def node(self, kind, column, row, label=None, **props):
+        node = self.tree.nodes.new(kind)
+        node.location = (200.0 * column, -160.0 * row)
+        if label:
+            node.label = label
+        for key, value in props.items():
+            setattr(node, key, value)
+        return node
+
+    def math(self, operation, column, row, a, b=None, c=None, label=None):
+        """A Math node; each operand is an output socket or a constant."""
+        node = self.node("ShaderNodeMath", column, row, label, operation=operation)
+        for i, operand in enumerate((a, b, c)):
+            if operand is None:
+                continue
+            if isinstance(operand, (int, float)):
+                node.inputs[i].default_value = float(operand)
+            else:
+                self.link(operand, node.inputs[i])
+        return node.outputs[0]
+
+    def link(self, output, input_):
+        self.tree.links.new(output, input_)
+
+
+def make_node_group(export_dir, name=None, ior=None):
+    """A shader node group for an export: inputs Thickness (0-1 over the export's
+    thickness range) and Roughness; outputs BSDF, Reflectance and Transmittance.
+
+    Raises ExportError for a bad export directory; nothing stays in the .blend
+    when building fails."""
+    export = export_dir if isinstance(export_dir, Export) else Export(export_dir)
+    if not export.transmits():
+        ior = None  # Glossy only: nothing leaves through the substrate
+    elif ior is None:
+        ior = export.relative_ior()
+    group_name = name or f"irid film {export.label}"
+    created = []
+    try:
+        images = {}
+        for table in TABLES:
+            images[table] = _load_image(export, table, f"{group_name} {table}")
+            created.append(images[table])
+        group = bpy.data.node_groups.new(group_name, "ShaderNodeTree")
+        created.append(group)
+        _build_group(group, export, images, ior)
+    except BaseException:
+        for block in reversed(created):
+            _remove(block)
+        raise
+    return group
+
+
+def make_material(export_dir, thickness_nm=None, name=None, roughness=0.0, ior=None):
+    """A material shading with the film of an `irid export` directory.
+
+    thickness_nm: the film's thickness, a constant inside the export's range;
+    None leaves the group's Thickness socket (0-1 over the range, like glTF's
+    iridescenceThicknessTexture) for an attribute or texture to drive
+    (default 0.5). roughness: GGX roughness of both lobes. ior: relative
+    index of refraction when the film transmits into a lossless substrate
+    (default: substrate over ambient at 550 nm, from the stack in film.json);
+    over an absorbing substrate (a metal) the material has no refraction lobe.
+
+    Raises ExportError (a ValueError) with one message for a missing file or
+    a damaged film.json, ValueError for a thickness outside the export's
+    range; nothing half-built stays in the .blend."""
+    export = Export(export_dir)
+    fraction = None if thickness_nm is None else export.thickness_fraction(thickness_nm)
+    roughness = float(roughness)
+    if not 0.0 <= roughness <= 1.0:
+        raise ValueError(f"roughness {roughness} is outside [0, 1]")
+    material_name = name or f"irid {export.label}"
+    group = make_node_group(export, name=f"{material_name} film", ior=ior)
+    material = None
+    try:
+        material = bpy.data.materials.new(material_name)
+        if material.node_tree is None:  # Blender before 5.0 creates it on request
+            material.use_nodes = True
+        tree = material.node_tree
+        tree.nodes.clear()
+        build = _Builder(tree)
+        film = build.node("ShaderNodeGroup", 0, 0, label="irid film")
+        film.node_tree = group
+        film.width = 220
+        out = build.node("ShaderNodeOutputMaterial", 2, 0)
+        build.link(film.outputs["BSDF"], out.inputs["Surface"])
+        if fraction is not None:
+            film.inputs["Thickness"].default_value = fraction
+        film.inputs["Roughness"].default_value = roughness
+        material["irid_export"] = export.directory
+        if thickness_nm is not None:
+            material["irid_thickness_nm"] = float(thickness_nm)
+    except BaseException:
+        if material is not None:
+            _remove(material)
+        images = [n.image for n in group.nodes if n.bl_idname == "ShaderNodeTexImage"]
+        _remove(group)
+        for image in images:
+            _remove(image)
+        raise
+    return material
+
+
+def _load_image(export, table, name):
+    path = export.paths[table]
+    try:
+        image = bpy.data.images.load(path, check_existing=False)
+    except RuntimeError as e:
+        raise ExportError(f"irid export {path}: Blender cannot read it ({e})") from None
+    try:
+        image.name = name
+        image.colorspace_settings.name = _texture_colorspace(image)
+        image.alpha_mode = "CHANNEL_PACKED"
+        # Reading the size loads the pixels: a damaged file shows here, not at render time.
+        size = tuple(image.size)
+        if size == (0, 0):
+            raise ExportError(f"irid export {path}: Blender cannot read it (damaged or not an image)")
+        if size != (export.size_u, export.size_v):
+            raise ExportError(
+                f"irid export {path}: image is {size[0]}×{size[1]}, film.json says "
+                f"{export.size_u}×{export.size_v}"
+            )
+    except BaseException:
+        _remove(image)
+        raise
+    return image
+
+
+def _texture_colorspace(image):
+    """The export's colours are linear sRGB, i.e. linear Rec.709 primaries, with
+    no transfer curve. Tagged so, Blender converts them into the scene's
+    working space (Blender 5.0 offers ACEScg and Rec.2020, where film colours
+    outside Rec.709 keep their negative Rec.709 channels instead of being
+    clipped by the BSDF); in the default Rec.709 working space it is the same
+    as Non-Color. Blender builds without that colour space read them as
+    Non-Color (raw numbers)."""
+    names = image.colorspace_settings.bl_rna.properties["name"].enum_items.keys()
+    return "Linear Rec.709" if "Linear Rec.709" in names else "Non-Color"
+
+
+def _remove(block):
+    collections = {
+        bpy.types.Image: bpy.data.images,
+        bpy.types.Material: bpy.data.materials,
+        bpy.types.NodeTree: bpy.data.node_groups,
+    }
+    for kind, collection in collections.items():
+        if isinstance(block, kind):
+            collection.remove(block)
+            return
+
+
+def _build_group(group, export, images, ior):
+    iface = group.interface
+    sock = iface.new_socket("Thickness", in_out="INPUT", socket_type="NodeSocketFloat")
+    sock.subtype = "FACTOR"
+    sock.min_value, sock.max_value, sock.default_value = 0.0, 1.0, 0.5
+    sock.description = (
+        f"Film thickness: 0 = {export.thickness_min_nm:g} nm, 1 = {export.thickness_max_nm:g} nm"
+    )
+    sock = iface.new_socket("Roughness", in_out="INPUT", socket_type="NodeSocketFloat")
+    sock.subtype = "FACTOR"
+    sock.min_value, sock.max_value, sock.default_value = 0.0, 1.0, 0.0
+    iface.new_socket("BSDF", in_out="OUTPUT", socket_type="NodeSocketShader")
+    for table in ("Reflectance", "Transmittance"):
+        iface.new_socket(table, in_out="OUTPUT", socket_type="NodeSocketColor")
+
+    build = _Builder(group)
+    inputs = build.node("NodeGroupInput", 0, 0)
+    outputs = build.node("NodeGroupOutput", 9, 0)
+
+    # u: thickness fraction x in [0, 1], square-rooted when the thickness nodes
+    # crowd towards the minimum (thickness_power 2), to texel centres:
+    # u = (x (N_u - 1) + 0.5) / N_u.
+    nu = export.size_u
+    x = build.math("MULTIPLY", 1, 0, inputs.outputs["Thickness"], 1.0, label="x = clamp(thickness)")
+    x.node.use_clamp = True
+    if export.thickness_power == 2.0:
+        x = build.math("SQRT", 1.5, 0, x, label="x = sqrt(x)")
+    u = build.math("MULTIPLY_ADD", 2, 0, x, (nu - 1) / nu, 0.5 / nu, label="u")
+
+    # cos θ: the incoming direction against the shading normal, either side.
+    geometry = build.node("ShaderNodeNewGeometry", 0, 2)
+    dot = build.node("ShaderNodeVectorMath", 1, 2, label="cos θ", operation="DOT_PRODUCT")
+    build.link(geometry.outputs["Incoming"], dot.inputs[0])
+    build.link(geometry.outputs["Normal"], dot.inputs[1])
+    cos = build.math("ABSOLUTE", 2, 2, dot.outputs["Value"])
+    clamp = build.node("ShaderNodeClamp", 3, 2, label="clamp to the table")
+    build.link(cos, clamp.inputs["Value"])
+    clamp.inputs["Min"].default_value = export.cos_min
+    clamp.inputs["Max"].default_value = export.cos_max
+    c = clamp.outputs["Result"]
+
+    # y: the export's angle warp, linear in cos θ or square-root on each side
+    # of cos_crit (a branch-free form: one of the two roots is zero; with
+    # cos_crit = cos_min there is no side below).
+    if export.cos_max == export.cos_min:
+        y = build.math("MULTIPLY", 4, 2, c, 0.0, label="y = 0 (one angle)")
+    elif export.cos_crit < 0.0:
+        span = export.cos_max - export.cos_min
+        y = build.math("MULTIPLY_ADD", 4, 2, c, 1.0 / span, -export.cos_min / span, label="y")
+    else:
+        cc, yc = export.cos_crit, export.y_crit
+        above = build.math(
+            "MULTIPLY_ADD", 4, 2, c, 1.0 / (export.cos_max - cc), -cc / (export.cos_max - cc)
+        )
+        above = build.math("SQRT", 5, 2, build.math("MAXIMUM", 4.5, 2, above, 0.0))
+        y = build.math("MULTIPLY_ADD", 5.5, 2, above, 1.0 - yc, yc, label="y")
+        if cc > export.cos_min:
+            below = build.math(
+                "MULTIPLY_ADD", 4, 3, c, -1.0 / (cc - export.cos_min), cc / (cc - export.cos_min)
+            )
+            below = build.math("SQRT", 5, 3, build.math("MAXIMUM", 4.5, 3, below, 0.0))
+            y = build.math("MULTIPLY_ADD", 6, 2, below, -yc, y, label="y")
+    # v in the file's row order is (y (N_v - 1) + 0.5) / N_v; Blender puts the
+    # file's first row at v = 1, so the texture is read at 1 - v.
+    nv = export.size_v
+    v = build.math("MULTIPLY_ADD", 6.5, 1, y, -(nv - 1) / nv, 1.0 - 0.5 / nv, label="v (Blender)")
+    uv = build.node("ShaderNodeCombineXYZ", 7, 0, label="uv")
+    build.link(u, uv.inputs["X"])
+    build.link(v, uv.inputs["Y"])
+
+    colours = {}
+    for row, table in enumerate(TABLES):
+        tex = build.node(
+            "ShaderNodeTexImage",
+            7.5,
+            1 + 2 * row,
+            label=table,
+            interpolation="Linear",
+            extension="EXTEND",
+            projection="FLAT",
+        )
+        tex.image = images[table]
+        build.link(uv.outputs["Vector"], tex.inputs["Vector"])
+        colours[table] = tex.outputs["Color"]
+        build.link(tex.outputs["Color"], outputs.inputs[table.capitalize()])
+
+    glossy = build.node("ShaderNodeBsdfGlossy", 8.5, -1, label="film reflection", distribution="GGX")
+    build.link(colours["reflectance"], glossy.inputs["Color"])
+    build.link(inputs.outputs["Roughness"], glossy.inputs["Roughness"])
+    if ior is None:
+        build.link(glossy.outputs["BSDF"], outputs.inputs["BSDF"])
+        return
+    refraction = build.node(
+        "ShaderNodeBsdfRefraction", 8.5, 1, label="film transmission", distribution="GGX"
+    )
+    refraction.inputs["IOR"].default_value = float(ior)
+    build.link(colours["transmittance"], refraction.inputs["Color"])
+    build.link(inputs.outputs["Roughness"], refraction.inputs["Roughness"])
+    add = build.node("ShaderNodeAddShader", 9, -1)
+    build.link(glossy.outputs["BSDF"], add.inputs[0])
+    build.link(refraction.outputs["BSDF"], add.inputs[1])
+    build.link(add.outputs["Shader"], outputs.inputs["BSDF"])
+
+
+# Add-on: File > Import > irid film (film.json).
+
+
+class IRID_OT_import_film(bpy.types.Operator):
+    """Build a material from an irid export (film.json) and assign it to the selected objects"""
+
+    bl_idname = "import_scene.irid_film"
+    bl_label = "Import irid film"
+    bl_options = {"REGISTER", "UNDO"}
+
+    filepath: bpy.props.StringProperty(subtype="FILE_PATH")
+    filter_glob: bpy.props.StringProperty(default="film.json", options={"HIDDEN"})
+    use_thickness: bpy.props.BoolProperty(
+        name="Constant thickness",
+        description="Use one thickness in nm; off leaves the 0-1 Thickness socket to a texture",
+        default=True,
+    )
+    thickness_nm: bpy.props.FloatProperty(name="Thickness (nm)", default=300.0, min=0.0)
+    roughness: bpy.props.FloatProperty(name="Roughness", default=0.0, min=0.0, max=1.0)
+
+    def execute(self, context):
+        try:
+            material = make_material(
+                os.path.dirname(self.filepath),
+                thickness_nm=self.thickness_nm if self.use_thickness else None,
+                roughness=self.roughness,
+            )
+        except ValueError as e:
+            self.report({"ERROR"}, str(e))
+            return {"CANCELLED"}
+        for obj in context.selected_objects:
+            if obj.type == "MESH":
+                obj.data.materials.clear()
+                obj.data.materials.append(material)
+        self.report({"INFO"}, f"Built material {material.name}")
+        return {"FINISHED"}
+
+    def invoke(self, context, event):
+        context.window_manager.fileselect_add(self)
+        return {"RUNNING_MODAL"}
+
+
+def _menu_import(self, context):
+    self.layout.operator(IRID_OT_import_film.bl_idname, text="irid film (film.json)")
+
+
+def register():
+    bpy.utils.register_class(IRID_OT_import_film)
+    bpy.types.TOPBAR_MT_file_import.append(_menu_import)
+
+
+def unregister():
+    bpy.types.TOPBAR_MT_file_import.remove(_menu_import)
+    bpy.utils.unregister_class(IRID_OT_import_film)

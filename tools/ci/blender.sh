@@ -1,0 +1,43 @@
+#!/usr/bin/env bash
+# CI: irid in Blender (docs/blender.md). Installs what is missing (the X
+# libraries Blender's Python module links against, a Python 3.11 virtualenv
+# with bpy 5.0, numpy < 2 and OpenEXR, the irid binary), then runs
+# tools/blender/test_blender.py: Cycles renders of irid exports against
+# `irid color`. Idempotent; exits non-zero on any failure.
+set -euo pipefail
+cd "$(dirname "$0")/../.."
+
+# bpy's wheel carries its own libraries but links these from the system.
+missing=()
+for lib in libX11.so.6:libx11-6 libXrender.so.1:libxrender1 libXfixes.so.3:libxfixes3 \
+           libXi.so.6:libxi6 libxkbcommon.so.0:libxkbcommon0; do
+    ldconfig -p | grep "${lib%%:*}" >/dev/null || missing+=("${lib##*:}")
+done
+if [ "${#missing[@]}" -gt 0 ]; then
+    apt-get update -qq
+    DEBIAN_FRONTEND=noninteractive apt-get install -y -qq "${missing[@]}"
+fi
+
+# bpy 5.0 ships wheels for CPython 3.11 only.
+python=""
+for candidate in python3.11 python3; do
+    if command -v "$candidate" >/dev/null &&
+        "$candidate" -c 'import sys; sys.exit(sys.version_info[:2] != (3, 11))'; then
+        python="$candidate"
+        break
+    fi
+done
+if [ -z "$python" ]; then
+    echo "tools/ci/blender.sh: bpy 5.0 needs Python 3.11, none found" >&2
+    exit 2
+fi
+venv=.venv-blender
+if ! "$venv/bin/python" -c 'import bpy, numpy, OpenEXR' 2>/dev/null; then
+    "$python" -m venv "$venv"
+    "$venv/bin/pip" install --quiet --disable-pip-version-check \
+        "bpy==5.0.*" "numpy<2" "OpenEXR==3.5.3"
+fi
+
+cargo build --release --quiet --bin irid
+"$venv/bin/python" tools/blender/test_blender.py --irid target/release/irid \
+    --table "$(mktemp -d)/blender-table.md"
