@@ -38,7 +38,9 @@ struct Export {
 /// What [`write_preview`] wrote.
 #[derive(Debug)]
 pub struct Preview {
+    /// The page to open: `index.html` inside the preview folder.
     pub index: PathBuf,
+    /// The names the exports are listed under in the page, in order.
     pub exports: Vec<String>,
 }
 

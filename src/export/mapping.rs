@@ -338,7 +338,7 @@ mod tests {
         );
         let nodes = m.cos_nodes();
         assert!(nodes.windows(2).all(|w| w[0] < w[1]));
-        assert!(nodes.iter().any(|&c| c == 0.7303));
+        assert!(nodes.contains(&0.7303));
         // Doubling the intervals keeps every node, the critical one included.
         let fine = m.resized(3, 129);
         for (j, &c) in nodes.iter().enumerate() {

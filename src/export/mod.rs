@@ -312,9 +312,9 @@ impl Film {
                         if uniform {
                             let delta = split.phase(step);
                             let mut phase = split.phase(t_nodes[0]);
-                            for j in 0..n {
+                            for (j, &t) in t_nodes.iter().enumerate() {
                                 if j % PHASE_RESYNC == 0 {
-                                    phase = split.phase(t_nodes[j]);
+                                    phase = split.phase(t);
                                 }
                                 buf.re[j] = phase.re;
                                 buf.im[j] = phase.im;
@@ -455,7 +455,7 @@ fn check_representable(mapping: &Mapping, values: &[[f64; 6]], gain: bool) -> Re
     let bound = if gain { LASING_BOUND } else { F16_MAX };
     let Some(k) = values
         .iter()
-        .position(|v| v.iter().any(|x| !(x.abs() <= bound)))
+        .position(|v| v.iter().any(|x| x.is_nan() || x.abs() > bound))
     else {
         return Ok(());
     };
