@@ -1,6 +1,6 @@
 //! Solver speed: unpolarized R and T of stacks of 1, 2, 10 and 100 layers at
 //! one wavelength and angle (both polarizations), and the batched entry point
-//! over a wavelength × angle grid. The stacks are the ones
+//! over a wavelength × angle grid, scalar and four lanes at a time. The stacks are the ones
 //! `tools/time_tmm.py` times in Python `tmm`.
 
 // Not an API: criterion's macros generate undocumented public functions.
@@ -11,6 +11,7 @@ use std::time::{Duration, Instant};
 use criterion::{black_box, criterion_group, criterion_main, Criterion, Throughput};
 use num_complex::Complex64 as C64;
 
+use irid::optics::lanes::{avx2_available, solve_batch_on, Path};
 use irid::optics::{solve, solve_batch, Response, Stack, StackGrid};
 
 /// Ambient air, `layers` films alternating lossless (n = 1.5) and absorbing
@@ -83,21 +84,55 @@ fn single_least_disturbed(c: &mut Criterion) {
 }
 
 fn batched(c: &mut Criterion) {
-    // 2 layers over 81 wavelengths × 32 angles, indices constant per
-    // wavelength as in the single-sample bench; time per sample via throughput.
-    let (n, d) = bench_stack(2);
+    // 1 to 100 layers over 81 wavelengths × 32 angles, indices constant per
+    // wavelength as in the single-sample bench; time per sample via
+    // throughput. The same points three ways: one `solve` call per point,
+    // the four-lane kernel's portable copy, and `solve_batch` (the AVX2 copy
+    // when the CPU has it).
     let wavelengths: Vec<f64> = (0..81).map(|i| 380.0 + 5.0 * i as f64).collect();
     let cos: Vec<f64> = (0..32).map(|i| (i as f64 + 0.5) / 32.0).collect();
-    let indices: Vec<C64> = wavelengths.iter().flat_map(|_| n.iter().copied()).collect();
     let mut out = vec![Response::default(); wavelengths.len() * cos.len()];
     let mut g = c.benchmark_group("solve_batch");
     g.throughput(Throughput::Elements(out.len() as u64));
-    g.bench_function("2 layers, 81 wavelengths x 32 angles", |b| {
-        b.iter(|| {
-            solve_batch(black_box(&indices), &d, &wavelengths, &cos, &mut out);
-            out[out.len() - 1].r()
-        })
-    });
+    for layers in [1usize, 2, 10, 100] {
+        let (n, d) = bench_stack(layers);
+        let indices: Vec<C64> = wavelengths.iter().flat_map(|_| n.iter().copied()).collect();
+        g.bench_function(format!("{layers} layers, scalar solve per point"), |b| {
+            b.iter(|| {
+                for (i, &wl) in wavelengths.iter().enumerate() {
+                    for (j, &cj) in cos.iter().enumerate() {
+                        out[i * cos.len() + j] = solve(black_box(&n), &d, wl, cj);
+                    }
+                }
+                out[out.len() - 1].r()
+            })
+        });
+        g.bench_function(format!("{layers} layers, portable lanes"), |b| {
+            b.iter(|| {
+                solve_batch_on(
+                    Path::Portable,
+                    black_box(&indices),
+                    &d,
+                    &wavelengths,
+                    &cos,
+                    &mut out,
+                );
+                out[out.len() - 1].r()
+            })
+        });
+        g.bench_function(
+            format!(
+                "{layers} layers, solve_batch ({})",
+                if avx2_available() { "AVX2" } else { "portable" }
+            ),
+            |b| {
+                b.iter(|| {
+                    solve_batch(black_box(&indices), &d, &wavelengths, &cos, &mut out);
+                    out[out.len() - 1].r()
+                })
+            },
+        );
+    }
     g.finish();
 }
 

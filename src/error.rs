@@ -74,6 +74,35 @@ impl Error {
 /// The library's result type, with [`Error`] as the error.
 pub type Result<T, E = Error> = std::result::Result<T, E>;
 
+/// `text` with every control character (NUL, ESC, newline, DEL, C1 codes)
+/// written as a Rust-style escape (`\u{1b}`), so that a name echoed from a
+/// file can neither move the cursor, recolour the terminal nor split a
+/// one-line message.
+pub fn escape(text: &str) -> std::borrow::Cow<'_, str> {
+    if !text.chars().any(char::is_control) {
+        return std::borrow::Cow::Borrowed(text);
+    }
+    let mut out = String::with_capacity(text.len() + 8);
+    for c in text.chars() {
+        if c.is_control() {
+            out.push_str(&format!("\\u{{{:x}}}", u32::from(c)));
+        } else {
+            out.push(c);
+        }
+    }
+    std::borrow::Cow::Owned(out)
+}
+
+/// A number for a message: as written (`1.5`, `650`) in the usual range,
+/// in exponent form (`1e-320`) outside it rather than hundreds of digits.
+pub fn short_number(x: f64) -> String {
+    if x == 0.0 || !x.is_finite() || (1e-4..1e16).contains(&x.abs()) {
+        format!("{x}")
+    } else {
+        format!("{x:e}")
+    }
+}
+
 /// A TOML parse error as a malformed-file error: where it is (line and
 /// column, 1-based) and what is wrong.
 pub(crate) fn toml_error(origin: &str, e: &toml::de::Error, text: &str) -> Error {
@@ -100,5 +129,26 @@ pub(crate) fn toml_message(e: &toml::de::Error, text: &str) -> String {
         "unexpected end of file (a value or bracket is missing)".to_string()
     } else {
         "invalid TOML syntax".to_string()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn numbers_print_short() {
+        assert_eq!(super::short_number(1.5), "1.5");
+        assert_eq!(super::short_number(-650.0), "-650");
+        assert_eq!(super::short_number(1e-320), "1e-320");
+        assert_eq!(super::short_number(-2.5e300), "-2.5e300");
+        assert_eq!(super::short_number(0.0), "0");
+    }
+
+    #[test]
+    fn control_characters_are_escaped() {
+        assert_eq!(super::escape("glass"), "glass");
+        assert_eq!(
+            super::escape("a\u{1b}[31mred\0\n\u{7f}\u{9b}é"),
+            "a\\u{1b}[31mred\\u{0}\\u{a}\\u{7f}\\u{9b}é"
+        );
     }
 }

@@ -11,6 +11,7 @@ pub mod atomic;
 pub mod bench;
 pub mod color;
 pub mod error;
+pub mod limits;
 pub mod lut;
 pub mod optics;
 pub mod render;

@@ -51,7 +51,7 @@ fn main() -> ExitCode {
             return ExitCode::SUCCESS;
         }
         Err(e) => {
-            eprintln!("irid: {}", clap_line(&e));
+            eprintln!("irid: {}", irid::error::escape(&clap_line(&e)));
             return ExitCode::from(2);
         }
     };
@@ -144,5 +144,7 @@ fn one_line(e: &anyhow::Error) -> String {
         }
         line.push_str(&text);
     }
-    line.replace('\n', " ")
+    // Messages of other libraries may span lines; names echoed from files
+    // may hold any control character (escaped, never sent to the terminal).
+    irid::error::escape(&line.replace('\n', " ")).into_owned()
 }

@@ -400,7 +400,7 @@ fn bad_files_give_clear_errors() {
         let nodes = j["axes"][1]["nodes"].as_array_mut().unwrap();
         nodes.pop();
     });
-    expect(&mismatch, "values");
+    expect(&mismatch, "header's axes give");
 
     let channels = dir.join("channels.exr");
     rewrite_header(&good, &channels, |j| j["kind"] = "spectral".into());

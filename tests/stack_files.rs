@@ -159,7 +159,10 @@ fn errors_name_the_file_and_the_field() {
             layer("n = [1.4, 0.1, 3]\nthickness_nm = 5"),
             &["test.toml", "line 4"],
         ),
-        (layer("n = 0\nthickness_nm = 5"), &["layers[1]", "not be 0"]),
+        (
+            layer("n = 0\nthickness_nm = 5"),
+            &["layers[1]", "|n + ik| ≥ 1e-6"],
+        ),
         (layer("n = -1.5\nthickness_nm = 5"), &["layers[1]", "0 ≤ n"]),
         (
             layer("n = [1.5, 1e7]\nthickness_nm = 5"),

@@ -21,7 +21,7 @@ use crate::color::{Sampling, SpectralIntegrator};
 use crate::error::{Error, Result};
 use crate::lut;
 use crate::optics::twoport::{Scratch, VaryingLayer};
-use crate::optics::{solve, Stack, StackGrid};
+use crate::optics::{Response, Stack, StackGrid};
 
 #[derive(Clone, Debug)]
 pub struct Grid {
@@ -110,15 +110,22 @@ pub fn evaluate(
                             Vec::with_capacity(n_w),
                             Vec::with_capacity(n_w),
                             Vec::with_capacity(n_w),
+                            vec![Response::default(); n_w],
                         )
                     },
-                    |(thick, scratch, splits, rotations, phases), ((r_block, t_block), &cos)| {
+                    |(thick, scratch, splits, rotations, phases, spectrum),
+                     ((r_block, t_block), &cos)| {
                         match &grid.thicknesses_nm {
                             None => {
-                                for (w, (wavelength_nm, n)) in sg.iter().enumerate() {
-                                    let resp = solve(n, thick, wavelength_nm, cos);
-                                    r_block[w] = resp.r();
-                                    t_block[w] = resp.t();
+                                // One angle's wavelengths in one batch, four per vector.
+                                sg.solve_spectrum(thick, cos, spectrum);
+                                for ((resp, r), t) in spectrum
+                                    .iter()
+                                    .zip(r_block.iter_mut())
+                                    .zip(t_block.iter_mut())
+                                {
+                                    *r = resp.r();
+                                    *t = resp.t();
                                 }
                             }
                             Some(ts) => {

@@ -15,13 +15,20 @@ pub struct Args {
 pub fn run(args: Args) -> Result<ExitCode> {
     let lut = Lut::load(&args.lut)?;
     let h = lut.header();
-    println!("{}", args.lut.display());
-    println!(
+    let mut out = String::new();
+    super::say!(out, "{}", args.lut.display());
+    super::say!(
+        out,
         "  {} v{}, {} table, {} samples, written by {}",
-        h.format, h.version, h.kind, h.precision, h.tool
+        h.format,
+        h.version,
+        h.kind,
+        h.precision,
+        h.tool
     );
-    println!("  cache key {}", h.cache_key);
-    println!(
+    super::say!(out, "  cache key {}", h.cache_key);
+    super::say!(
+        out,
         "axes (x = {}, y = {}{}):",
         h.x_axis,
         h.y_axis,
@@ -48,7 +55,8 @@ pub fn run(args: Args) -> Result<ExitCode> {
         } else {
             format!(" {}", a.unit)
         };
-        println!(
+        super::say!(
+            out,
             "  {:<14} {:>6} nodes  {} .. {}{unit}  ({spacing})",
             a.name,
             n.len(),
@@ -56,49 +64,68 @@ pub fn run(args: Args) -> Result<ExitCode> {
             n[n.len() - 1],
         );
     }
-    println!("channels:");
+    super::say!(out, "channels:");
     for c in &h.channels {
-        println!("  {:<16} {}", c.name, c.meaning);
+        super::say!(out, "  {:<16} {}", c.name, c.meaning);
     }
-    println!("stack:");
-    println!("  ambient    {}", h.stack.ambient.name);
+    super::say!(out, "stack:");
+    super::say!(out, "  ambient    {}", h.stack.ambient.name);
     for (i, l) in h.stack.layers.iter().enumerate() {
         let varying = if i + 1 == h.layer {
             "   <- thickness axis"
         } else {
             ""
         };
-        println!(
+        super::say!(
+            out,
             "  layer {:<4} {} {} nm{varying}",
             i + 1,
             l.material.name,
             l.thickness_nm
         );
     }
-    println!("  substrate  {}", h.stack.substrate.name);
-    println!(
+    super::say!(out, "  substrate  {}", h.stack.substrate.name);
+    super::say!(
+        out,
         "colour: {}, {}, {}, sampling {}",
-        h.color.space, h.color.illuminant, h.color.observer, h.color.sampling
+        h.color.space,
+        h.color.illuminant,
+        h.color.observer,
+        h.color.sampling
     );
-    println!("error:");
+    super::say!(out, "error:");
     if let Some(e) = h.error.target_max_abs {
-        println!("  target (--max-error)  {e:e}");
+        super::say!(out, "  target (--max-error)  {e:e}");
     }
     match &h.error.bake_check {
-        Some(check) => println!(
+        Some(check) => super::say!(
+            out,
             "  bake check            max abs {:.3e} over {} points ({})",
-            check.max_abs_all, check.points, check.metric
+            check.max_abs_all,
+            check.points,
+            check.metric
         ),
-        None => println!("  bake check            not made (baked with --no-check)"),
+        None => super::say!(
+            out,
+            "  bake check            not made (baked with --no-check)"
+        ),
     }
     if let Some(v) = &h.error.validation {
-        println!(
+        super::say!(
+            out,
             "  validation            {} random points (seed {}) against the solver:",
-            v.points, v.seed
+            v.points,
+            v.seed
         );
+        super::print_escaped(&out);
+        out.clear();
         crate::cli::validate::print_stats(v);
     } else {
-        println!("  validation            not recorded (run `irid validate`)");
+        super::say!(
+            out,
+            "  validation            not recorded (run `irid validate`)"
+        );
+        super::print_escaped(&out);
     }
     Ok(ExitCode::SUCCESS)
 }

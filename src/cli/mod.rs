@@ -1,5 +1,21 @@
 //! One module per subcommand. Shared argument parsing lives in `args`.
 
+/// Appends one formatted line to a String, its control characters escaped:
+/// names and descriptions come from files and must not reach the terminal
+/// raw (nor split a line).
+macro_rules! say {
+    ($out:expr, $($t:tt)*) => {{
+        $out.push_str(&irid::error::escape(&format!($($t)*)));
+        $out.push('\n');
+    }};
+}
+pub(crate) use say;
+
+/// Prints lines gathered by [`say`].
+pub fn print_escaped(text: &str) {
+    print!("{text}");
+}
+
 pub mod args;
 pub mod bake;
 pub mod bench;

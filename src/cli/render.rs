@@ -134,6 +134,15 @@ pub fn run(args: Args) -> Result<ExitCode> {
         }
     };
     // Fail before a long render, not after it.
+    if let Some(exr) = &args.exr {
+        if same_file(&output, exr) {
+            bail!(
+                "-o {} and --exr {}: the PNG and the EXR must be different files",
+                output.display(),
+                exr.display()
+            );
+        }
+    }
     for path in std::iter::once(&output).chain(args.exr.as_ref()) {
         let dir = path.parent().filter(|d| !d.as_os_str().is_empty());
         if dir.is_some_and(|d| !d.is_dir()) {
@@ -146,6 +155,7 @@ pub fn run(args: Args) -> Result<ExitCode> {
     opts.spp = args.spp;
     opts.max_depth = args.max_depth;
     opts.seed = args.seed;
+    render::check_image_size(&scene, &opts)?;
 
     let (films, image, render_s) = with_threads(args.threads, || -> Result<_> {
         let films = render::prepare_films(&scene, &opts.film)?;
@@ -162,10 +172,7 @@ pub fn run(args: Args) -> Result<ExitCode> {
         }
         Ok((films, image, render_s))
     })??;
-    image.write_png(&output)?;
-    if let Some(exr) = &args.exr {
-        image.write_exr(exr)?;
-    }
+    image.write_outputs(&output, args.exr.as_deref())?;
     let film = match &opts.film {
         FilmMode::Lut { .. } => format!(
             "lut: {} table(s) baked, {} from cache, {:.3} s",
@@ -204,6 +211,20 @@ pub fn run(args: Args) -> Result<ExitCode> {
         println!("wrote   {}", exr.display());
     }
     Ok(ExitCode::SUCCESS)
+}
+
+/// Whether two output paths name the same file (the same name in the same
+/// directory, however spelled).
+fn same_file(a: &Path, b: &Path) -> bool {
+    let key = |p: &Path| {
+        let dir = p.parent().filter(|d| !d.as_os_str().is_empty());
+        let dir = dir.unwrap_or(Path::new("."));
+        (
+            dir.canonicalize().unwrap_or(dir.to_path_buf()),
+            p.file_name().map(|n| n.to_os_string()),
+        )
+    };
+    key(a) == key(b)
 }
 
 /// A scene name made safe as a file name.

@@ -53,24 +53,34 @@ pub fn run(args: Args) -> Result<ExitCode> {
 
 /// The validation figures as an indented table.
 pub fn print_stats(s: &ErrorStats) {
-    println!(
+    let mut out = String::new();
+    super::say!(
+        out,
         "  {:<16} {:>10} {:>10} {:>10}",
-        "channel", "max abs", "mean abs", "p99 abs"
+        "channel",
+        "max abs",
+        "mean abs",
+        "p99 abs"
     );
     for (k, name) in s.channels.iter().enumerate() {
-        println!(
+        super::say!(
+            out,
             "  {:<16} {:>10.3e} {:>10.3e} {:>10.3e}",
-            name, s.max_abs[k], s.mean_abs[k], s.p99_abs[k]
+            name,
+            s.max_abs[k],
+            s.mean_abs[k],
+            s.p99_abs[k]
         );
     }
     if let (Some(max), Some(mean)) = (s.max_de2000, s.mean_de2000) {
-        println!(
+        super::say!(out,
             "  CIEDE2000        reflectance max {:.4} mean {:.4}; transmittance max {:.4} mean {:.4}",
             max[0], mean[0], max[1], mean[1]
         );
     }
     let [t, c, w] = s.worst_point;
-    println!(
+    super::say!(
+        out,
         "  worst point      thickness {t:.3} nm, cos θ {c:.5} ({:.2}°){}",
         c.clamp(-1.0, 1.0).acos().to_degrees(),
         if w > 0.0 {
@@ -80,9 +90,15 @@ pub fn print_stats(s: &ErrorStats) {
         }
     );
     for r in &s.regions {
-        println!(
+        super::say!(
+            out,
             "  region {:<9} {:>6} points  max abs {:.3e}  mean {:.3e}  ({})",
-            r.name, r.points, r.max_abs, r.mean_abs, r.description
+            r.name,
+            r.points,
+            r.max_abs,
+            r.mean_abs,
+            r.description
         );
     }
+    super::print_escaped(&out);
 }

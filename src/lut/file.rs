@@ -4,15 +4,17 @@
 
 use std::path::Path;
 
+use exr::meta::MetaData;
 use exr::prelude::{
     read, AnyChannel, AnyChannels, AttributeValue, Encoding, FlatSamples, Image, Layer,
-    LayerAttributes, ReadChannels, ReadLayers, SmallVec, Text, WritableImage,
+    LayerAttributes, ReadChannels, ReadLayers, SampleType, SmallVec, Text, Vec2, WritableImage,
 };
 
 use super::header::{
     readable_version, Header, FORMAT_NAME, FORMAT_VERSION, OLDEST_READABLE_VERSION,
 };
-use super::sample::{channel_names, Lut};
+use super::sample::{channel_names, check_header, Lut};
+use super::Kind;
 use crate::error::{Error, Result};
 
 /// The header attribute's name.
@@ -68,27 +70,35 @@ impl Lut {
     }
 
     /// Reads and checks a table: the `irid` header's format name and
-    /// version, axes, channel names and node counts against the pixels.
-    /// Any mismatch is an error naming the file, never a panic.
+    /// version, axes, channel names and node counts against the image, all
+    /// from the file's headers before a pixel is read, so a small file that
+    /// declares a vast data window is refused without allocating it. Then
+    /// the pixels, which must be finite. Any mismatch is an error naming the
+    /// file, never a panic.
     pub fn load(path: &Path) -> Result<Lut> {
         let bad = |why: String| Error::malformed(path, why);
         if let Err(e) = std::fs::metadata(path) {
             return Err(Error::io(path, e));
         }
-        let image = read()
-            .no_deep_data()
-            .largest_resolution_level()
-            .all_channels()
-            .first_valid_layer()
-            .all_attributes()
-            .from_file(path)
+        let meta = MetaData::read_from_file(path, false)
             .map_err(|e| bad(format!("not a readable OpenEXR file: {e}")))?;
-        let layer = &image.layer_data;
-        let text = layer
-            .attributes
+        let exr_header = meta
+            .headers
+            .first()
+            .ok_or_else(|| bad("an OpenEXR file without an image".into()))?;
+        if exr_header.deep {
+            return Err(bad("a deep OpenEXR image is not an irid table".into()));
+        }
+        let text = exr_header
+            .own_attributes
             .other
             .get(&Text::from(ATTRIBUTE))
-            .or_else(|| image.attributes.other.get(&Text::from(ATTRIBUTE)))
+            .or_else(|| {
+                exr_header
+                    .shared_attributes
+                    .other
+                    .get(&Text::from(ATTRIBUTE))
+            })
             .ok_or_else(|| {
                 bad(format!(
                     "no '{ATTRIBUTE}' header attribute: not an irid table"
@@ -112,47 +122,82 @@ impl Lut {
         }
         let header: Header =
             serde_json::from_value(value).map_err(|e| bad(format!("'{ATTRIBUTE}' header: {e}")))?;
+        let (width, height) = check_header(&header).map_err(bad)?;
         let names = channel_names(header.kind);
-        let size = layer.size;
-        let mut planes = Vec::with_capacity(names.len());
+        let size = exr_header.layer_size;
+        if (size.0, size.1) != (width, height) {
+            return Err(bad(format!(
+                "the image is {}x{} pixels but the header's axes give {width}x{height} ({} thickness nodes across, cos θ{} nodes down)",
+                size.0,
+                size.1,
+                header.axes[0].nodes.len(),
+                if header.kind == Kind::Spectral { " × wavelength" } else { "" },
+            )));
+        }
+        let stored = &exr_header.channels.list;
+        if stored.len() != names.len() {
+            return Err(bad(format!(
+                "{} channels, a {} table has exactly {names:?}",
+                stored.len(),
+                header.kind
+            )));
+        }
+        let want_type = if header.precision == "f16" {
+            SampleType::F16
+        } else {
+            SampleType::F32
+        };
         for name in names {
+            let channel = stored
+                .iter()
+                .find(|c| c.name == **name)
+                .ok_or_else(|| bad(format!("missing channel '{name}'")))?;
+            if channel.sample_type != want_type || channel.sampling != Vec2(1, 1) {
+                return Err(bad(format!(
+                    "channel '{name}' sample type differs from header precision {}",
+                    header.precision
+                )));
+            }
+        }
+        // The reader's planes (stored sample size), their f32 copies, the
+        // interleaved table and, for rgb, its SIMD layout (32 bytes a node).
+        let values = (width as u64).checked_mul(height as u64);
+        let per_value = want_type.bytes_per_sample() as u64 + 8;
+        let estimate = values.and_then(|v| {
+            let nodes_extra = if header.kind == Kind::Rgb { 32 } else { 0 };
+            crate::limits::product(&[v, names.len() as u64], per_value)?
+                .checked_add(v.checked_mul(nodes_extra)?)
+        });
+        crate::limits::check_allocation(
+            &format!("{}: loading the table", path.display()),
+            estimate,
+        )?;
+
+        let image = read()
+            .no_deep_data()
+            .largest_resolution_level()
+            .all_channels()
+            .first_valid_layer()
+            .all_attributes()
+            .from_file(path)
+            .map_err(|e| bad(format!("not a readable OpenEXR file: {e}")))?;
+        let layer = &image.layer_data;
+        if (layer.size.0, layer.size.1) != (width, height) {
+            return Err(bad("the image's size changed while it was read".into()));
+        }
+        let pixels = width * height;
+        let mut data = vec![0.0f32; pixels * names.len()];
+        for (k, name) in names.iter().enumerate() {
             let channel = layer
                 .channel_data
                 .list
                 .iter()
                 .find(|c| c.name == **name)
                 .ok_or_else(|| bad(format!("missing channel '{name}'")))?;
-            let want = if header.precision == "f16" {
-                matches!(channel.sample_data, FlatSamples::F16(_))
-            } else {
-                matches!(channel.sample_data, FlatSamples::F32(_))
-            };
-            if !want {
-                return Err(bad(format!(
-                    "channel '{name}' sample type differs from header precision {}",
-                    header.precision
-                )));
+            if channel.sample_data.len() != pixels {
+                return Err(bad(format!("channel '{name}' holds too few samples")));
             }
-            planes.push(channel.sample_data.values_as_f32().collect::<Vec<f32>>());
-        }
-        if layer.channel_data.list.len() != names.len() {
-            return Err(bad(format!(
-                "{} channels, a {} table has exactly {names:?}",
-                layer.channel_data.list.len(),
-                header.kind
-            )));
-        }
-        let pixels = size.0 * size.1;
-        let width = header.axes.first().map_or(0, |a| a.nodes.len());
-        if size.0 != width {
-            return Err(bad(format!(
-                "image is {} pixels wide but the thickness axis has {width} nodes",
-                size.0
-            )));
-        }
-        let mut data = vec![0.0f32; pixels * names.len()];
-        for (k, plane) in planes.iter().enumerate() {
-            for (p, &v) in plane.iter().enumerate() {
+            for (p, v) in channel.sample_data.values_as_f32().enumerate() {
                 data[p * names.len() + k] = v;
             }
         }

@@ -189,22 +189,46 @@ impl BakeSpec {
                 wavelength,
             } => {
                 let spectral = self.kind == Kind::Spectral;
-                if thickness == 0 || angle == 0 || (spectral && wavelength == 0) {
+                let wavelength = if spectral { wavelength } else { 1 };
+                if thickness == 0 || angle == 0 || wavelength == 0 {
                     return Err(Error::invalid("resolution", "node counts must be ≥ 1"));
                 }
-                let total = thickness * angle * if spectral { wavelength } else { 1 };
-                if thickness > MAX_AXIS_NODES || angle > MAX_AXIS_NODES || total > MAX_NODES {
+                let total = thickness
+                    .checked_mul(angle)
+                    .and_then(|n| n.checked_mul(wavelength));
+                if thickness > MAX_AXIS_NODES
+                    || angle > MAX_AXIS_NODES
+                    || wavelength > MAX_AXIS_NODES
+                    || total.is_none_or(|t| t > MAX_NODES)
+                {
                     return Err(Error::invalid(
                         "resolution",
-                        format!("at most {MAX_AXIS_NODES} nodes per axis and {MAX_NODES} in all"),
+                        format!(
+                            "{thickness},{angle}{}: at most {MAX_AXIS_NODES} nodes per axis and {MAX_NODES} in all",
+                            if spectral { format!(",{wavelength}") } else { String::new() }
+                        ),
                     ));
                 }
+                crate::limits::check_allocation(
+                    "resolution",
+                    self.fixed_bake_bytes([thickness, angle, wavelength]),
+                )?;
             }
             Resolution::MaxError(e) => {
                 if !(e > 0.0 && e.is_finite()) {
                     return Err(Error::invalid(
                         "max-error",
-                        format!("must be a positive number, got {e}"),
+                        format!("must be a positive number, got {e:e}"),
+                    ));
+                }
+                let floor = storage_error_floor(self.half);
+                if e < floor {
+                    return Err(Error::invalid(
+                        "max-error",
+                        format!(
+                            "{e:e} is below what {} storage resolves: its values near 1 are {floor:e} apart",
+                            if self.half { "f16" } else { "f32" }
+                        ),
                     ));
                 }
                 if !self.check {
@@ -216,6 +240,32 @@ impl BakeSpec {
             }
         }
         Ok(())
+    }
+
+    /// The peak memory of a fixed-resolution bake, estimated from its node
+    /// counts: the exact values (f64) at every node of the check grid (every
+    /// interval halved) or of the table itself without the check, the
+    /// stored f32 table, and the sampler's layout of an rgb table. None
+    /// when the figure overflows.
+    fn fixed_bake_bytes(&self, counts: [usize; 3]) -> Option<u64> {
+        let channels = match self.kind {
+            Kind::Rgb => 6,
+            Kind::Spectral => 2,
+        };
+        let table = crate::limits::product(&counts.map(|c| c as u64), 1)?;
+        let evaluated = if self.check {
+            crate::limits::product(&counts.map(|c| 2 * c as u64), 1)?
+        } else {
+            table
+        };
+        let values = crate::limits::product(&[evaluated, channels], 8)?;
+        let stored = crate::limits::product(&[table, channels], 4)?;
+        let simd = if self.kind == Kind::Rgb {
+            table.checked_mul(32)?
+        } else {
+            0
+        };
+        values.checked_add(stored)?.checked_add(simd)
     }
 
     /// A stable hex digest of everything that determines the table (stack,
@@ -261,6 +311,19 @@ pub fn cached_at(spec: &BakeSpec, path: &std::path::Path) -> Result<(Lut, bool)>
 /// (0 nm, 90°), which no grid can interpolate. Up to 89° it is steep but
 /// smooth; beyond, the sampler clamps to the 89° row.
 pub const DEFAULT_COS_MIN: f64 = 0.017_452_406_437_283_51;
+
+/// The smallest `--max-error` a table's storage can meet: the spacing of
+/// f32 (2⁻²⁴) or f16 (2⁻¹¹) values just below 1. Rounding a reflectance or
+/// transmittance near 1 to the stored type errs by up to half of it, and a
+/// target below the spacing leaves the interpolation no room at all: the
+/// refinement would only grow the grid until it hit the size limits.
+pub fn storage_error_floor(half: bool) -> f64 {
+    if half {
+        2f64.powi(-11)
+    } else {
+        2f64.powi(-24)
+    }
+}
 
 /// Caps that keep a typo (`--resolution 1000000,…`) from exhausting memory.
 pub const MAX_AXIS_NODES: usize = 1 << 16;

@@ -12,6 +12,7 @@ use super::header::{
     WAVELENGTH_AXIS,
 };
 use super::Kind;
+use crate::optics::{MAX_THICKNESS_NM, WAVELENGTH_RANGE_NM};
 
 /// A film's unpolarized reflectance and transmittance as linear sRGB.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -101,6 +102,159 @@ pub(crate) const RGB_CHANNELS: [&str; 6] = [
 ];
 pub(crate) const SPECTRAL_CHANNELS: [&str; 2] = ["reflectance", "transmittance"];
 
+/// The smallest gap between neighbouring axis nodes as stored in f32: the
+/// sampler divides by the gap and scales by the reciprocal of the axis span
+/// times up to 65536 buckets, which must stay finite.
+pub const MIN_NODE_SPACING_F32: f32 = 1e-30;
+
+/// Checks everything in a header that the sampler and the validator index
+/// by or rely on, before any pixel is read: the version; names, order and
+/// count of axes and channels; axis nodes finite, strictly increasing as
+/// stored (f64) and as sampled (f32) with gaps of at least
+/// [`MIN_NODE_SPACING_F32`], within the ranges the format allows; the
+/// stack valid and `layer` one of its layers (0 for a stack without
+/// layers); the precision; error statistics with one entry per channel.
+/// Returns the image size the axes give: (thickness nodes, cos θ nodes ×
+/// wavelength nodes).
+pub(crate) fn check_header(header: &Header) -> Result<(usize, usize), String> {
+    if !readable_version(header.version.into()) {
+        return Err(format!(
+            "format version {} (this irid reads versions {OLDEST_READABLE_VERSION} to {FORMAT_VERSION})",
+            header.version
+        ));
+    }
+    let want_axes: &[&str] = match header.kind {
+        Kind::Rgb => &[THICKNESS_AXIS, COS_AXIS],
+        Kind::Spectral => &[THICKNESS_AXIS, COS_AXIS, WAVELENGTH_AXIS],
+    };
+    let names: Vec<String> = header
+        .axes
+        .iter()
+        .map(|a| crate::error::escape(&a.name).into_owned())
+        .collect();
+    if names != want_axes {
+        return Err(format!(
+            "header axes {names:?}, a {} table has {want_axes:?}",
+            header.kind
+        ));
+    }
+    if header.x_axis != THICKNESS_AXIS || header.y_axis != COS_AXIS {
+        return Err(format!(
+            "header x_axis/y_axis are {}/{}, expected {THICKNESS_AXIS}/{COS_AXIS}",
+            crate::error::escape(&header.x_axis),
+            crate::error::escape(&header.y_axis)
+        ));
+    }
+    let ranges = [(0.0, MAX_THICKNESS_NM), (0.0, 1.0), WAVELENGTH_RANGE_NM];
+    for (axis, (lo, hi)) in header.axes.iter().zip(ranges) {
+        check_axis(axis, lo, hi)?;
+    }
+    let want_channels = channel_names(header.kind);
+    let channels: Vec<String> = header
+        .channels
+        .iter()
+        .map(|c| crate::error::escape(&c.name).into_owned())
+        .collect();
+    if channels != want_channels {
+        return Err(format!(
+            "header channels {channels:?}, a {} table has {want_channels:?}",
+            header.kind
+        ));
+    }
+    if header.precision != "f32" && header.precision != "f16" {
+        return Err(format!(
+            "header precision '{}', expected f32 or f16",
+            crate::error::escape(&header.precision)
+        ));
+    }
+    header
+        .stack
+        .validate()
+        .map_err(|e| format!("header stack: {e}"))?;
+    let layers = header.stack.layers.len();
+    let layer_ok = if layers == 0 {
+        header.layer == 0
+    } else {
+        (1..=layers).contains(&header.layer)
+    };
+    if !layer_ok {
+        return Err(format!(
+            "header layer {} is not a layer of the stack ({})",
+            header.layer,
+            if layers == 0 {
+                "no layers: layer must be 0".to_string()
+            } else {
+                format!("1 to {layers}")
+            }
+        ));
+    }
+    let n = want_channels.len();
+    let per_channel = |what: &str, len: usize| {
+        if len == n {
+            Ok(())
+        } else {
+            Err(format!(
+                "header {what} has {len} entries, one per channel ({n}) expected"
+            ))
+        }
+    };
+    if let Some(check) = &header.error.bake_check {
+        per_channel("error.bake_check.max_abs", check.max_abs.len())?;
+    }
+    if let Some(v) = &header.error.validation {
+        per_channel("error.validation.channels", v.channels.len())?;
+        per_channel("error.validation.max_abs", v.max_abs.len())?;
+        per_channel("error.validation.mean_abs", v.mean_abs.len())?;
+        per_channel("error.validation.p99_abs", v.p99_abs.len())?;
+    }
+    let width = header.axes[0].nodes.len();
+    let height = header.axes[1]
+        .nodes
+        .len()
+        .checked_mul(header.axes.get(2).map_or(1, |w| w.nodes.len()))
+        .filter(|_| width <= i32::MAX as usize)
+        .filter(|&h| h <= i32::MAX as usize)
+        .ok_or("header axes have more nodes than an OpenEXR image holds")?;
+    Ok((width, height))
+}
+
+/// One axis: nodes present, finite, within [lo, hi], strictly increasing
+/// as f64 and as the f32 the sampler uses, with gaps it can divide by.
+fn check_axis(axis: &super::Axis, lo: f64, hi: f64) -> Result<(), String> {
+    let name = &axis.name;
+    let nodes = &axis.nodes;
+    if nodes.is_empty() {
+        return Err(format!("axis {name} has no nodes"));
+    }
+    if let Some(&x) = nodes.iter().find(|&&x| !(lo..=hi).contains(&x)) {
+        return Err(format!(
+            "axis {name} node {x:e} is outside the format's range {lo:e} to {hi:e}"
+        ));
+    }
+    if let Some(k) = nodes.windows(2).position(|w| w[1] <= w[0]) {
+        return Err(format!(
+            "axis {name} nodes must be strictly increasing: node {} ({:e}) follows {:e}",
+            k + 2,
+            nodes[k + 1],
+            nodes[k]
+        ));
+    }
+    if let Some(k) = nodes.windows(2).position(|w| {
+        (w[1] as f32 - w[0] as f32)
+            .partial_cmp(&MIN_NODE_SPACING_F32)
+            .is_none_or(|o| o.is_lt())
+    }) {
+        return Err(format!(
+            "axis {name} nodes {} and {} ({:e} and {:e}) are closer than the f32 sampler resolves (equal as f32, or less than {MIN_NODE_SPACING_F32:e} apart)",
+            k + 1,
+            k + 2,
+            nodes[k],
+            nodes[k + 1]
+        ));
+    }
+    Ok(())
+}
+
 pub(crate) fn channel_names(kind: Kind) -> &'static [&'static str] {
     match kind {
         Kind::Rgb => &RGB_CHANNELS,
@@ -109,65 +263,36 @@ pub(crate) fn channel_names(kind: Kind) -> &'static [&'static str] {
 }
 
 impl Lut {
-    /// Checks that the header describes `data` (names, order and count of
-    /// axes and channels, increasing finite nodes, node counts against the
-    /// value count) and builds the lookup. The error says what disagrees.
+    /// Checks that the header describes `data` (see [`check_header`]) and
+    /// that every value is finite, and builds the lookup. The error says
+    /// what disagrees.
     pub(crate) fn from_parts(header: Header, data: Vec<f32>) -> Result<Lut, String> {
-        if !readable_version(header.version.into()) {
-            return Err(format!(
-                "format version {} (this irid reads versions {OLDEST_READABLE_VERSION} to {FORMAT_VERSION})",
-                header.version
-            ));
-        }
-        let want_axes: &[&str] = match header.kind {
-            Kind::Rgb => &[THICKNESS_AXIS, COS_AXIS],
-            Kind::Spectral => &[THICKNESS_AXIS, COS_AXIS, WAVELENGTH_AXIS],
-        };
-        let names: Vec<&str> = header.axes.iter().map(|a| a.name.as_str()).collect();
-        if names != want_axes {
-            return Err(format!(
-                "header axes {names:?}, a {} table has {want_axes:?}",
-                header.kind
-            ));
-        }
-        if header.x_axis != THICKNESS_AXIS || header.y_axis != COS_AXIS {
-            return Err(format!(
-                "header x_axis/y_axis are {}/{}, expected {THICKNESS_AXIS}/{COS_AXIS}",
-                header.x_axis, header.y_axis
-            ));
-        }
-        for axis in &header.axes {
-            if axis.nodes.is_empty() {
-                return Err(format!("axis {} has no nodes", axis.name));
-            }
-            if axis.nodes.iter().any(|x| !x.is_finite())
-                || axis.nodes.windows(2).any(|w| w[1] <= w[0])
-            {
-                return Err(format!(
-                    "axis {} nodes must be finite and strictly increasing",
-                    axis.name
-                ));
-            }
-        }
-        let cos = &header.axes[1].nodes;
-        if cos[0] < 0.0 || cos[cos.len() - 1] > 1.0 {
-            return Err("axis cos_theta nodes must lie in [0, 1]".into());
-        }
+        let (width, height) = check_header(&header)?;
         let want_channels = channel_names(header.kind);
-        let channels: Vec<&str> = header.channels.iter().map(|c| c.name.as_str()).collect();
-        if channels != want_channels {
+        let values = width
+            .checked_mul(height)
+            .and_then(|n| n.checked_mul(want_channels.len()));
+        if values != Some(data.len()) {
             return Err(format!(
-                "header channels {channels:?}, a {} table has {want_channels:?}",
-                header.kind
-            ));
-        }
-        let nodes: usize = header.axes.iter().map(|a| a.nodes.len()).product();
-        if nodes.checked_mul(want_channels.len()) != Some(data.len()) {
-            return Err(format!(
-                "header axes give {} nodes × {} channels but the image holds {} values",
-                nodes,
+                "header axes give {width}x{height} nodes × {} channels but the image holds {} values",
                 want_channels.len(),
                 data.len()
+            ));
+        }
+        if let Some(at) = data.iter().position(|v| !v.is_finite()) {
+            let node = at / want_channels.len();
+            let (i, row) = (node % width, node / width);
+            let n_cos = header.axes[1].nodes.len();
+            return Err(format!(
+                "channel {} is {} at thickness {} nm, cos θ {}{}: table values must be finite",
+                want_channels[at % want_channels.len()],
+                data[at],
+                header.axes[0].nodes[i],
+                header.axes[1].nodes[row % n_cos],
+                header
+                    .axes
+                    .get(2)
+                    .map_or(String::new(), |w| format!(", {} nm", w.nodes[row / n_cos])),
             ));
         }
         let rgb_nodes = RgbNodes::new(header.kind, &data);

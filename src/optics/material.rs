@@ -10,7 +10,7 @@ use std::path::Path;
 use num_complex::Complex64 as C64;
 use serde::{Deserialize, Serialize};
 
-use crate::error::{Error, Result};
+use crate::error::{short_number, Error, Result};
 
 /// A tabulated index, linearly interpolated in wavelength.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -66,15 +66,28 @@ fn one() -> f64 {
 /// |n|² stay far inside the range of f64.
 pub const MAX_INDEX: f64 = 1e6;
 
+/// Smallest |n + ik| accepted. The solver squares indices and divides by
+/// them (n², n⁴ in the p-polarized admittances): below about 1e-9 those
+/// underflow or lose the digits that separate s from p, and n = 1e-320
+/// gave NaN. 1e-6, the mirror of [`MAX_INDEX`], keeps every product far
+/// inside f64 and is far below any material (silver's n is about 0.05).
+pub const MIN_INDEX: f64 = 1e-6;
+
+/// Whether a complex index lies in the range the solver computes exactly.
+fn index_in_range(n: f64, k: f64) -> bool {
+    (0.0..=MAX_INDEX).contains(&n) && k.abs() <= MAX_INDEX && n.hypot(k) >= MIN_INDEX
+}
+
 impl Material {
     /// A wavelength-independent index; see [`Material::check`] for the
     /// values it accepts.
     pub fn constant(n: f64, k: f64) -> Self {
         Material {
             name: if k == 0.0 {
-                format!("n={n}")
+                format!("n={}", short_number(n))
             } else {
-                format!("n={n}{k:+}i")
+                let sign = if k.is_sign_negative() { "" } else { "+" };
+                format!("n={}{sign}{}i", short_number(n), short_number(k))
             },
             dispersion: Dispersion::Constant { n, k },
         }
@@ -89,10 +102,12 @@ impl Material {
             Dispersion::Cauchy { a, b, c } => {
                 let l2 = um * um;
                 let n = a + b / l2 + c / (l2 * l2);
-                if !(n > 0.0 && n <= MAX_INDEX) {
+                if !(MIN_INDEX..=MAX_INDEX).contains(&n) {
                     return Err(Error::invalid(
                         format!("material {}", self.name),
-                        format!("Cauchy n = {n} at {wavelength_nm} nm is not a positive index"),
+                        format!(
+                            "Cauchy n = {n:e} at {wavelength_nm} nm is outside {MIN_INDEX:e}–{MAX_INDEX:e}"
+                        ),
                     ));
                 }
                 Ok(C64::new(n, 0.0))
@@ -100,40 +115,55 @@ impl Material {
             Dispersion::Sellmeier { a, b, c } => {
                 let l2 = um * um;
                 let n2 = a + b.iter().zip(c).map(|(b, c)| b * l2 / (l2 - c)).sum::<f64>();
-                if !(n2 > 0.0 && n2 <= MAX_INDEX * MAX_INDEX) {
+                if !(MIN_INDEX * MIN_INDEX..=MAX_INDEX * MAX_INDEX).contains(&n2) {
                     return Err(Error::invalid(
                         format!("material {}", self.name),
-                        format!("Sellmeier n² = {n2} ≤ 0 at {wavelength_nm} nm (near a pole)"),
+                        format!(
+                            "Sellmeier n² = {n2:e} at {wavelength_nm} nm (near a pole) puts n outside {MIN_INDEX:e}–{MAX_INDEX:e}"
+                        ),
                     ));
                 }
                 Ok(C64::new(n2.sqrt(), 0.0))
             }
-            Dispersion::Table(t) => t.index_at(wavelength_nm).ok_or_else(|| {
-                Error::invalid(
-                    format!("material {}", self.name),
-                    format!(
-                        "wavelength {wavelength_nm} nm is outside its table ({}–{} nm)",
-                        self.range_nm().0,
-                        self.range_nm().1
-                    ),
-                )
-            }),
+            Dispersion::Table(t) => {
+                let index = t.index_at(wavelength_nm).ok_or_else(|| {
+                    Error::invalid(
+                        format!("material {}", self.name),
+                        format!(
+                            "wavelength {wavelength_nm} nm is outside its table ({}–{} nm)",
+                            self.range_nm().0,
+                            self.range_nm().1
+                        ),
+                    )
+                })?;
+                // Rows are checked, but between two rows whose k differ in
+                // sign the interpolated index can pass near zero.
+                if !index_in_range(index.re, index.im) {
+                    return Err(Error::invalid(
+                        format!("material {}", self.name),
+                        format!(
+                            "interpolated index {:e}{:+e}i at {wavelength_nm} nm is below {MIN_INDEX:e} in magnitude",
+                            index.re, index.im
+                        ),
+                    ));
+                }
+                Ok(index)
+            }
         }
     }
 
     /// Checks the model's parameters: finite numbers, 0 ≤ n ≤ [`MAX_INDEX`],
-    /// |k| ≤ [`MAX_INDEX`], n + ik ≠ 0 (the solver divides by n²), Sellmeier
+    /// |k| ≤ [`MAX_INDEX`], |n + ik| ≥ [`MIN_INDEX`] (the solver divides by
+    /// n²), Sellmeier
     /// lists of equal length.
     pub fn check(&self) -> Result<()> {
         let bad = |why: String| Err(Error::invalid(format!("material {}", self.name), why));
-        let index_ok = |n: f64, k: f64| {
-            (0.0..=MAX_INDEX).contains(&n) && k.abs() <= MAX_INDEX && (n, k) != (0.0, 0.0)
-        };
+        let index_ok = index_in_range;
         match &self.dispersion {
             Dispersion::Constant { n, k } => {
                 if !index_ok(*n, *k) {
                     return bad(format!(
-                        "index {n}{k:+}i must have 0 ≤ n ≤ {MAX_INDEX:e}, |k| ≤ {MAX_INDEX:e}, and not be 0"
+                        "index {n:e}{k:+e}i must have 0 ≤ n ≤ {MAX_INDEX:e}, |k| ≤ {MAX_INDEX:e} and |n + ik| ≥ {MIN_INDEX:e}"
                     ));
                 }
             }
@@ -158,7 +188,7 @@ impl Material {
                 t.check()?;
                 if let Some(i) = (0..t.n.len()).find(|&i| !index_ok(t.n[i], t.k[i])) {
                     return bad(format!(
-                        "table row {} ({} nm): index {}{:+}i must have 0 ≤ n ≤ {MAX_INDEX:e}, |k| ≤ {MAX_INDEX:e}, and not be 0",
+                        "table row {} ({} nm): index {:e}{:+e}i must have 0 ≤ n ≤ {MAX_INDEX:e}, |k| ≤ {MAX_INDEX:e} and |n + ik| ≥ {MIN_INDEX:e}",
                         i + 1,
                         t.wavelength_nm[i],
                         t.n[i],

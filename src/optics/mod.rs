@@ -1,5 +1,6 @@
 //! Optics: materials, stacks and the transfer-matrix solver.
 
+pub mod lanes;
 pub mod library;
 #[rustfmt::skip]
 mod library_data;

@@ -8,6 +8,7 @@
 use num_complex::Complex64 as C64;
 use serde::{Deserialize, Serialize};
 
+use super::lanes;
 use super::material::Material;
 use super::solver::{self, Response};
 use crate::error::{Error, Result};
@@ -152,6 +153,8 @@ pub struct StackGrid {
     /// Wavelength-major: the N + 2 indices of wavelength i at [i(N+2), (i+1)(N+2)).
     indices: Vec<C64>,
     thicknesses_nm: Vec<f64>,
+    /// The same indices laid out for the four-lane solver.
+    spectrum: lanes::Spectrum,
 }
 
 impl StackGrid {
@@ -167,6 +170,7 @@ impl StackGrid {
             indices.extend_from_slice(&row);
         }
         Ok(StackGrid {
+            spectrum: lanes::Spectrum::new(&indices, media, wavelengths_nm),
             wavelengths_nm: wavelengths_nm.to_vec(),
             indices,
             thicknesses_nm: stack.thicknesses_nm(),
@@ -206,6 +210,36 @@ impl StackGrid {
     pub fn set_thickness_nm(&mut self, layer: usize, thickness_nm: f64) {
         debug_assert!((0.0..=MAX_THICKNESS_NM).contains(&thickness_nm));
         self.thicknesses_nm[layer] = thickness_nm;
+    }
+
+    /// R and T at every wavelength at one angle, with the N layer
+    /// thicknesses given (e.g. the stack's own with one varied), into `out`
+    /// (one per wavelength): the spectrum of one point, the batched solver's
+    /// fastest entry (indices and 2π/λ are laid out once, in [`StackGrid::new`]).
+    /// Allocates nothing.
+    ///
+    /// # Panics
+    /// If `thicknesses_nm` or `out` has the wrong length.
+    pub fn solve_spectrum(&self, thicknesses_nm: &[f64], cos_theta0: f64, out: &mut [Response]) {
+        self.solve_spectrum_on(lanes::Path::Best, thicknesses_nm, cos_theta0, out);
+    }
+
+    /// [`StackGrid::solve_spectrum`] on a chosen copy of the kernel.
+    pub fn solve_spectrum_on(
+        &self,
+        path: lanes::Path,
+        thicknesses_nm: &[f64],
+        cos_theta0: f64,
+        out: &mut [Response],
+    ) {
+        lanes::solve_spectrum_on(
+            path,
+            &self.spectrum,
+            &self.indices,
+            thicknesses_nm,
+            cos_theta0,
+            out,
+        );
     }
 
     /// R and T at every (wavelength, cos θ0) pair, wavelength-major, into

@@ -135,6 +135,22 @@ impl EquirectMap {
                 std::io::Error::new(std::io::ErrorKind::NotFound, "environment map not found"),
             ));
         }
+        // The data window is read from the header and checked against the
+        // memory budget before the reader allocates it: a few hundred bytes
+        // of file can declare a window of terabytes.
+        let meta = exr::meta::MetaData::read_from_file(path, false)
+            .map_err(|e| Error::malformed(path, format!("not a readable OpenEXR image: {e}")))?;
+        let largest = meta
+            .headers
+            .iter()
+            .map(|h| crate::limits::product(&[h.layer_size.0 as u64, h.layer_size.1 as u64], 1))
+            .try_fold(0u64, |acc, px| px.map(|px| acc.max(px)));
+        // The reader's RGBA f32 samples (16 bytes a pixel), the map (12)
+        // and the tuple it is built from (12).
+        crate::limits::check_allocation(
+            &format!("{}: environment map", path.display()),
+            largest.and_then(|px| px.checked_mul(40)),
+        )?;
         let image = exr::prelude::read_first_rgba_layer_from_file(
             path,
             |res, _| {

@@ -14,7 +14,7 @@ use super::scene::Film;
 use crate::color::{Sampling, SpectralIntegrator};
 use crate::error::Result;
 use crate::lut::FilmRgb;
-use crate::optics::{self, Stack, StackGrid};
+use crate::optics::{Response, Stack, StackGrid};
 
 /// Which side of the film the light arrives from.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -58,8 +58,10 @@ impl DirectSide {
 }
 
 thread_local! {
-    /// Per-thread scratch: thicknesses, R spectrum, T spectrum.
-    static SCRATCH: RefCell<(Vec<f64>, Vec<f64>, Vec<f64>)> = const { RefCell::new((Vec::new(), Vec::new(), Vec::new())) };
+    /// Per-thread scratch: thicknesses, the spectrum, its R and its T.
+    #[allow(clippy::type_complexity)]
+    static SCRATCH: RefCell<(Vec<f64>, Vec<Response>, Vec<f64>, Vec<f64>)> =
+        const { RefCell::new((Vec::new(), Vec::new(), Vec::new(), Vec::new())) };
 }
 
 impl DirectFilm {
@@ -88,19 +90,19 @@ impl FilmShading for DirectFilm {
             Side::Back => self.back.as_ref().unwrap_or(&self.front),
             Side::Front => &self.front,
         };
-        SCRATCH.with_borrow_mut(|(d, r, t)| {
+        SCRATCH.with_borrow_mut(|(d, spectrum, r, t)| {
             d.clear();
             d.extend_from_slice(s.grid.thicknesses_nm());
             if let Some(x) = d.get_mut(s.layer) {
                 *x = f64::from(thickness_nm);
             }
+            spectrum.resize(s.grid.wavelengths_nm().len(), Response::default());
+            // Every wavelength of the sampling in one batch, four per vector.
+            s.grid.solve_spectrum(d, f64::from(cos_theta), spectrum);
             r.clear();
             t.clear();
-            for (w, n) in s.grid.iter() {
-                let resp = optics::solve(n, d, w, f64::from(cos_theta));
-                r.push(resp.r());
-                t.push(resp.t());
-            }
+            r.extend(spectrum.iter().map(Response::r));
+            t.extend(spectrum.iter().map(Response::t));
             FilmRgb {
                 reflectance: self.integrator.rgb(r).map(|v| v as f32),
                 transmittance: self.integrator.rgb(t).map(|v| v as f32),

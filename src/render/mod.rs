@@ -185,6 +185,25 @@ fn bake_thickness_grids(scene: &Scene) -> Vec<Option<ThicknessGrid>> {
         .collect()
 }
 
+/// Bytes a render holds per pixel at its peak: the tiles' pixels and the
+/// image (12 bytes each), the PNG's bytes (3) and the EXR writer's copy (12).
+pub const RENDER_BYTES_PER_PIXEL: u64 = 40;
+
+/// Refuses a render whose image would not fit the memory budget (see
+/// [`crate::limits`]), before any work is done.
+pub fn check_image_size(scene: &Scene, opts: &RenderOptions) -> crate::Result<()> {
+    let s = &scene.settings;
+    let width = opts.width.unwrap_or(s.width).max(1);
+    let height = opts.height.unwrap_or(s.height).max(1);
+    crate::limits::check_allocation(
+        &format!("a {width}x{height} image"),
+        crate::limits::product(
+            &[u64::from(width), u64::from(height)],
+            RENDER_BYTES_PER_PIXEL,
+        ),
+    )
+}
+
 /// Renders with prepared film shaders (no progress output; see
 /// [`render_with_progress`]).
 pub fn render_with(scene: &Scene, films: &PreparedFilms, opts: &RenderOptions) -> Image {

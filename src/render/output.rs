@@ -15,11 +15,32 @@ use crate::error::{Error, Result};
 impl Image {
     /// 8-bit sRGB (clamped) PNG.
     pub fn write_png(&self, path: &Path) -> Result<()> {
-        let mut bytes = Vec::with_capacity(self.pixels.len() * 3);
-        for p in &self.pixels {
-            bytes.extend_from_slice(&linear_to_srgb8(p.map(f64::from)));
+        crate::atomic::write_with(path, self.png_writer(path))
+    }
+
+    /// Linear-sRGB 32-bit float OpenEXR.
+    pub fn write_exr(&self, path: &Path) -> Result<()> {
+        crate::atomic::write_with(path, self.exr_writer(path))
+    }
+
+    /// The PNG and, if asked, the EXR as one set: both appear or neither
+    /// does (a failed EXR leaves no PNG), and the two must be different
+    /// files.
+    pub fn write_outputs(&self, png: &Path, exr: Option<&Path>) -> Result<()> {
+        let mut outputs: Vec<(std::path::PathBuf, crate::atomic::Writer)> =
+            vec![(png.to_path_buf(), Box::new(self.png_writer(png)))];
+        if let Some(exr) = exr {
+            outputs.push((exr.to_path_buf(), Box::new(self.exr_writer(exr))));
         }
-        crate::atomic::write_with(path, |tmp| {
+        crate::atomic::write_set(outputs)
+    }
+
+    fn png_writer<'a>(&'a self, path: &'a Path) -> impl FnOnce(&Path) -> Result<()> + 'a {
+        move |tmp| {
+            let mut bytes = Vec::with_capacity(self.pixels.len() * 3);
+            for p in &self.pixels {
+                bytes.extend_from_slice(&linear_to_srgb8(p.map(f64::from)));
+            }
             ::image::save_buffer_with_format(
                 tmp,
                 &bytes,
@@ -29,19 +50,18 @@ impl Image {
                 ::image::ImageFormat::Png,
             )
             .map_err(|e| Error::malformed(path, format!("cannot write PNG: {e}")))
-        })
+        }
     }
 
-    /// Linear-sRGB 32-bit float OpenEXR.
-    pub fn write_exr(&self, path: &Path) -> Result<()> {
-        crate::atomic::write_with(path, |tmp| {
+    fn exr_writer<'a>(&'a self, path: &'a Path) -> impl FnOnce(&Path) -> Result<()> + 'a {
+        move |tmp| {
             let w = self.width as usize;
             exr::prelude::write_rgb_file(tmp, w, self.height as usize, |x, y| {
                 let p = self.pixels[y * w + x];
                 (p[0], p[1], p[2])
             })
             .map_err(|e| Error::malformed(path, format!("cannot write EXR: {e}")))
-        })
+        }
     }
 
     /// The per-pixel CIEDE2000 difference to another image of the same size,

@@ -86,6 +86,7 @@ pub fn bake_with_progress(spec: &BakeSpec, progress: &(dyn Fn(f64) + Sync)) -> R
         let coarse = Grid::new(&axes, spec.kind);
         let fine = Grid::new(&axes.clone().map(|a| doubled(&a)), spec.kind);
         within_limits(&coarse, &fine, wavelength_work, round, target)?;
+        within_budget(&coarse, &fine, prep.channels, target)?;
         let clock = std::time::Instant::now();
         let values = prep.eval(&fine, previous.as_ref(), progress)?;
         let eval_s = clock.elapsed().as_secs_f64();
@@ -157,6 +158,27 @@ fn within_limits(
             ),
         ),
     })
+}
+
+/// Refuses a round whose memory would exceed the budget (see
+/// [`crate::limits`]): the exact values at the fine grid's nodes (f64) and
+/// the last round's, about a quarter as many, kept for reuse; the coarse
+/// table as stored (f32) and the sampler's layout of it (32 bytes a node).
+fn within_budget(coarse: &Grid, fine: &Grid, channels: usize, target: Option<f64>) -> Result<()> {
+    let (fine_n, coarse_n) = (fine.total() as u64, coarse.total() as u64);
+    let estimate = crate::limits::product(&[fine_n, channels as u64], 10).and_then(|v| {
+        v.checked_add(crate::limits::product(
+            &[coarse_n],
+            4 * channels as u64 + 32,
+        )?)
+    });
+    let what = match target {
+        Some(target) => {
+            format!("max-error {target:e}: a grid of {coarse_n} nodes checked at {fine_n}")
+        }
+        None => format!("resolution: a grid of {coarse_n} nodes checked at {fine_n}"),
+    };
+    crate::limits::check_allocation(&what, estimate)
 }
 
 /// Validates a table that meets `target` at the check's points against the

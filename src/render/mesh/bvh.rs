@@ -79,6 +79,12 @@ impl Mesh {
                 idx: *tri,
             });
         }
+        if triangles.is_empty() {
+            return Err(Error::invalid(
+                "mesh",
+                "has no usable triangle: every face has zero area (coincident or collinear vertices)",
+            ));
+        }
         let mut mesh = Mesh {
             triangles,
             vertex_normals: normals,

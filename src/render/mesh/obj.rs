@@ -8,8 +8,12 @@ use super::MeshData;
 use crate::error::{Error, Result};
 
 /// Loads every model of an OBJ file as one mesh (triangulated, with the
-/// file's normals when every vertex has one).
+/// file's normals when every vertex has one). A face with fewer than three
+/// vertices is refused, naming its line: the OBJ reader would otherwise
+/// pass on index lists that do not divide into triangles.
 pub fn load_obj(path: &Path) -> Result<MeshData> {
+    let text = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    check_faces(&text).map_err(|why| Error::malformed(path, why))?;
     let options = tobj::LoadOptions {
         triangulate: true,
         single_index: true,
@@ -57,9 +61,38 @@ pub fn load_obj(path: &Path) -> Result<MeshData> {
     }
     Ok((positions, indices, normals))
 }
+/// Every face line (`f ...`) lists at least three vertices.
+fn check_faces(text: &[u8]) -> std::result::Result<(), String> {
+    for (k, line) in text.split(|&b| b == b'\n').enumerate() {
+        let mut words = line
+            .split(|b| b.is_ascii_whitespace())
+            .filter(|w| !w.is_empty());
+        if words.next() == Some(b"f".as_slice()) {
+            let vertices = words.take_while(|w| !w.starts_with(b"#")).count();
+            if vertices < 3 {
+                return Err(format!(
+                    "line {}: a face needs at least 3 vertices, this one has {vertices}",
+                    k + 1
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn faces_with_fewer_than_three_vertices_are_refused() {
+        assert!(check_faces(b"v 0 0 0\nf 1 2 3\nf 1 2 3 4 # quad\n").is_ok());
+        assert!(check_faces(b"v 0 0 0\nf 1 2\n")
+            .unwrap_err()
+            .contains("line 2"));
+        assert!(check_faces(b"f\t1\n").unwrap_err().contains("has 1"));
+        assert!(check_faces(b"f 1 2 # 3\n").is_err());
+    }
     #[test]
     fn obj_import_reads_faces_and_reports_missing_files() {
         let dir = std::env::temp_dir().join(format!("irid-obj-{}", std::process::id()));

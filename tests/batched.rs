@@ -1,0 +1,374 @@
+//! The batched solver (four points per vector, `optics::lanes`) against the
+//! scalar one, over random stacks and the hard cases: thick absorbers,
+//! evanescent gaps, grazing and critical angles, hundreds of layers, gain,
+//! layers at their own critical angle, metal substrates, phases beyond the
+//! polynomial's range. Both copies of the kernel run: the AVX2 one (when
+//! the CPU has it) must equal the portable one bit for bit, and both must
+//! equal the scalar solver to 1e-12.
+
+use num_complex::Complex64 as C64;
+use rand::{Rng, SeedableRng};
+use rand_pcg::Pcg64;
+
+use irid::optics::lanes::{avx2_available, solve_batch_on, Path};
+use irid::optics::{solve, solve_batch, Response, Stack, StackGrid};
+
+fn c(n: f64, k: f64) -> C64 {
+    C64::new(n, k)
+}
+
+/// One stack over a few wavelengths and angles, with indices that change
+/// from one wavelength to the next (as dispersion makes them).
+struct Case {
+    what: String,
+    /// Wavelength-major, N + 2 per wavelength.
+    indices: Vec<C64>,
+    thicknesses_nm: Vec<f64>,
+    wavelengths_nm: Vec<f64>,
+    cos_theta0: Vec<f64>,
+}
+
+const TOLERANCE: f64 = 1e-12;
+
+fn differs(a: f64, b: f64) -> bool {
+    let scale = a.abs().max(b.abs()).max(1.0);
+    // NaN on either side counts as a difference unless both are NaN.
+    !((a - b).abs() <= TOLERANCE * scale || (a.is_nan() && b.is_nan()))
+}
+
+fn same_bits(a: &Response, b: &Response) -> bool {
+    [a.rs, a.rp, a.ts, a.tp]
+        .iter()
+        .zip([b.rs, b.rp, b.ts, b.tp])
+        .all(|(x, y)| x.to_bits() == y.to_bits())
+}
+
+/// Runs both copies of the kernel and the scalar solver; returns the
+/// largest difference seen (for the report in a failure message).
+fn check(case: &Case) {
+    let media = case.thicknesses_nm.len() + 2;
+    let points = case.wavelengths_nm.len() * case.cos_theta0.len();
+    let mut best = vec![Response::default(); points];
+    let mut portable = vec![Response::default(); points];
+    solve_batch_on(
+        Path::Best,
+        &case.indices,
+        &case.thicknesses_nm,
+        &case.wavelengths_nm,
+        &case.cos_theta0,
+        &mut best,
+    );
+    solve_batch_on(
+        Path::Portable,
+        &case.indices,
+        &case.thicknesses_nm,
+        &case.wavelengths_nm,
+        &case.cos_theta0,
+        &mut portable,
+    );
+    for (i, (b, p)) in best.iter().zip(&portable).enumerate() {
+        let (w, a) = (i / case.cos_theta0.len(), i % case.cos_theta0.len());
+        let n = &case.indices[w * media..(w + 1) * media];
+        let wl = case.wavelengths_nm[w];
+        let cos = case.cos_theta0[a];
+        let want = solve(n, &case.thicknesses_nm, wl, cos);
+        assert!(
+            same_bits(b, p),
+            "{}: AVX2 and portable differ at {wl} nm, cos {cos}: {b:?} vs {p:?}",
+            case.what
+        );
+        for (got, want, name) in [
+            (b.rs, want.rs, "Rs"),
+            (b.rp, want.rp, "Rp"),
+            (b.ts, want.ts, "Ts"),
+            (b.tp, want.tp, "Tp"),
+        ] {
+            assert!(
+                !differs(got, want),
+                "{}: {name} at {wl} nm, cos {cos}: batched {got:e}, scalar {want:e} (Δ {:e})",
+                case.what,
+                got - want
+            );
+        }
+    }
+}
+
+#[derive(Clone, Copy, Debug)]
+enum Kind {
+    Lossless,
+    Passive,
+    WithGain,
+    Metal,
+}
+
+/// A random stack of `layers` layers of up to `max_thickness_nm`, its
+/// indices drifting by up to 2 % over `n_w` wavelengths.
+fn random_case(
+    rng: &mut Pcg64,
+    kind: Kind,
+    layers: usize,
+    max_thickness_nm: f64,
+    n_w: usize,
+    n_a: usize,
+) -> Case {
+    let n0 = rng.random_range(1.0..2.0);
+    let mut base = vec![c(n0, 0.0)];
+    for _ in 0..layers {
+        let k = match kind {
+            Kind::Lossless => 0.0,
+            Kind::Passive | Kind::Metal => {
+                if rng.random_bool(0.5) {
+                    0.0
+                } else {
+                    rng.random_range(0.0..1.0)
+                }
+            }
+            Kind::WithGain => rng.random_range(-0.05..0.5),
+        };
+        base.push(c(rng.random_range(1.0..3.0), k));
+    }
+    base.push(match kind {
+        Kind::Lossless => c(rng.random_range(1.0..2.5), 0.0),
+        Kind::Metal => c(rng.random_range(0.05..2.0), rng.random_range(1.0..8.0)),
+        _ => c(rng.random_range(1.0..2.5), rng.random_range(0.0..0.5)),
+    });
+    let thicknesses_nm = (0..layers)
+        .map(|_| rng.random_range(0.0..max_thickness_nm))
+        .collect();
+    let wavelengths_nm: Vec<f64> = (0..n_w).map(|_| rng.random_range(300.0..900.0)).collect();
+    let mut indices = Vec::with_capacity(n_w * base.len());
+    for _ in 0..n_w {
+        for (m, n) in base.iter().enumerate() {
+            let drift = 1.0 + rng.random_range(-0.02..0.02);
+            // The ambient stays lossless; gain stays gain, loss stays loss.
+            let k = if m == 0 { 0.0 } else { n.im * drift };
+            indices.push(c(n.re * drift, k));
+        }
+    }
+    let mut cos_theta0: Vec<f64> = (0..n_a).map(|_| rng.random_range(0.0..1.0)).collect();
+    // Normal, grazing and near-grazing incidence, and every layer's own
+    // critical angle (exactly, and just off it) where the ambient is denser.
+    cos_theta0.extend([1.0, 0.0, 1e-9, 1e-4]);
+    for n in &base[1..base.len() - 1] {
+        if n.re < n0 {
+            let cc = (1.0 - (n.re / n0).powi(2)).sqrt();
+            cos_theta0.extend([cc, cc * (1.0 + 1e-7), cc * (1.0 - 1e-5)]);
+        }
+    }
+    Case {
+        what: format!("{kind:?}, {layers} layers"),
+        indices,
+        thicknesses_nm,
+        wavelengths_nm,
+        cos_theta0,
+    }
+}
+
+#[test]
+fn kernel_copies_are_reported() {
+    // Which copy Path::Best runs on this machine, for the test log.
+    println!("AVX2 available: {}", avx2_available());
+}
+
+#[test]
+fn random_stacks_batched_equal_scalar() {
+    let mut rng = Pcg64::seed_from_u64(13);
+    for round in 0..400 {
+        let kind = [Kind::Lossless, Kind::Passive, Kind::WithGain, Kind::Metal][round % 4];
+        let layers = rng.random_range(0..8);
+        let n_w = rng.random_range(1..10);
+        let n_a = rng.random_range(1..6);
+        check(&random_case(&mut rng, kind, layers, 2000.0, n_w, n_a));
+    }
+}
+
+#[test]
+fn hundreds_of_layers() {
+    let mut rng = Pcg64::seed_from_u64(14);
+    for kind in [Kind::Lossless, Kind::Passive, Kind::WithGain, Kind::Metal] {
+        check(&random_case(&mut rng, kind, 300, 300.0, 5, 3));
+    }
+}
+
+#[test]
+fn thick_absorbers_and_huge_phases() {
+    let mut rng = Pcg64::seed_from_u64(15);
+    // Millimetre layers: decays that underflow (and must come out as exactly
+    // zero, as in the scalar solver) and phases far beyond the polynomial
+    // reduction's range, which fall back to the C library lane by lane.
+    for kind in [Kind::Lossless, Kind::Passive, Kind::Metal, Kind::WithGain] {
+        for _ in 0..20 {
+            let layers = rng.random_range(1..5);
+            check(&random_case(&mut rng, kind, layers, 2e6, 7, 3));
+        }
+    }
+    // Mixed within one group of four: one lane with a tiny decay, one past
+    // underflow, one with a phase of 10⁸, one ordinary.
+    let case = Case {
+        what: "mixed decays".into(),
+        indices: [
+            [c(1.0, 0.0), c(1.5, 1e-3), c(1.5, 0.0)],
+            [c(1.0, 0.0), c(1.5, 0.9), c(1.5, 0.0)],
+            [c(1.0, 0.0), c(1.5, 0.0), c(1.5, 0.0)],
+            [c(1.0, 0.0), c(1.5, 1e-6), c(1.5, 0.0)],
+        ]
+        .concat(),
+        thicknesses_nm: vec![4e7],
+        wavelengths_nm: vec![500.0, 501.0, 502.0, 503.0],
+        cos_theta0: vec![1.0],
+    };
+    check(&case);
+}
+
+#[test]
+fn evanescent_gaps() {
+    // Frustrated total internal reflection: glass / air gap / glass beyond
+    // the critical angle, gaps from nothing to far past the decay length.
+    let glass = c(1.5, 0.0);
+    let air = c(1.0, 0.0);
+    for gap in [0.0, 1.0, 50.0, 200.0, 1000.0, 1e5, 1e7] {
+        let case = Case {
+            what: format!("gap {gap} nm"),
+            indices: [glass, air, glass, glass, air, c(0.2, 3.0)].to_vec(),
+            thicknesses_nm: vec![gap],
+            wavelengths_nm: vec![450.0, 650.0],
+            cos_theta0: vec![0.9, 0.6, 0.5, 0.3, 0.1, 0.0],
+        };
+        check(&case);
+    }
+}
+
+#[test]
+fn gain_on_gold_and_near_critical_runs() {
+    // A gain film on gold, and runs of layers at their critical angle
+    // (taken by the scalar field form, lane by lane).
+    let mut case = Case {
+        what: "gain on gold".into(),
+        indices: vec![c(1.0, 0.0), c(1.6, -0.08), c(0.27, 2.9)],
+        thicknesses_nm: vec![350.0],
+        wavelengths_nm: vec![620.0],
+        cos_theta0: (0..=40).map(|i| f64::from(i) / 40.0).collect(),
+    };
+    check(&case);
+    let n0 = 1.7;
+    let cc = (1.0 - (1.2f64 / n0).powi(2)).sqrt();
+    case = Case {
+        what: "near-critical run".into(),
+        indices: vec![
+            c(n0, 0.0),
+            c(1.2, 0.0),
+            c(1.2, 0.0),
+            c(1.2, 1e-9),
+            c(1.45, 0.0),
+            c(1.2, 0.0),
+            c(1.5, 0.0),
+        ],
+        thicknesses_nm: vec![80.0, 0.0, 300.0, 120.0, 5.0],
+        wavelengths_nm: vec![550.0],
+        cos_theta0: vec![
+            cc,
+            cc + 1e-12,
+            cc - 1e-9,
+            0.9,
+            cc * (1.0 + 1e-3),
+            0.2,
+            cc,
+            0.7,
+        ],
+    };
+    check(&case);
+}
+
+#[test]
+fn batch_lengths_that_are_not_multiples_of_four() {
+    let mut rng = Pcg64::seed_from_u64(16);
+    for n_w in 1..9 {
+        for n_a in 1..4 {
+            let mut case = random_case(&mut rng, Kind::Passive, 2, 500.0, n_w, n_a);
+            case.cos_theta0.truncate(n_a);
+            check(&case);
+        }
+    }
+}
+
+#[test]
+fn stack_grid_solves_through_the_batch() {
+    // The public path (StackGrid::solve → solve_batch) on a dispersive stack.
+    let stack: Stack = irid::bench::stacks::find("soap").unwrap().unwrap().stack;
+    let wl: Vec<f64> = (380..=780).step_by(7).map(f64::from).collect();
+    let grid = StackGrid::new(&stack, &wl).unwrap();
+    let cos: Vec<f64> = (0..=9).map(|i| f64::from(i) / 9.0).collect();
+    let mut out = vec![Response::default(); wl.len() * cos.len()];
+    grid.solve(&cos, &mut out);
+    let mut direct = vec![Response::default(); out.len()];
+    solve_batch(
+        grid.indices(),
+        grid.thicknesses_nm(),
+        grid.wavelengths_nm(),
+        &cos,
+        &mut direct,
+    );
+    assert_eq!(out, direct);
+    for (i, (w, n)) in grid.iter().enumerate() {
+        for (a, &c) in cos.iter().enumerate() {
+            let want = solve(n, grid.thicknesses_nm(), w, c);
+            let got = out[i * cos.len() + a];
+            assert!(!differs(got.r(), want.r()) && !differs(got.t(), want.t()));
+        }
+    }
+}
+
+#[test]
+fn spectrum_path_equals_scalar_on_both_copies() {
+    // StackGrid::solve_spectrum (indices laid out per lane group once) on
+    // dispersive and hard stacks, thicknesses varied per call as the
+    // validation and the direct film vary them.
+    let mut rng = Pcg64::seed_from_u64(17);
+    for name in [
+        "soap",
+        "absorbing",
+        "gain-on-gold",
+        "two-layer",
+        "mirror-front",
+        "mirror-back",
+    ] {
+        let b = irid::bench::stacks::find(name).unwrap().unwrap();
+        for n_w in [1usize, 3, 4, 41, 471] {
+            let wl: Vec<f64> = (0..n_w)
+                .map(|i| 360.0 + 470.0 * i as f64 / n_w.max(2) as f64)
+                .collect();
+            let grid = StackGrid::new(&b.stack, &wl).unwrap();
+            let mut thick = grid.thicknesses_nm().to_vec();
+            for _ in 0..6 {
+                let layer = rng.random_range(0..thick.len());
+                thick[layer] = rng.random_range(0.0..3000.0);
+                let cos = match rng.random_range(0..4) {
+                    0 => 0.0,
+                    1 => 1.0,
+                    _ => rng.random_range(0.0..1.0),
+                };
+                let mut best = vec![Response::default(); n_w];
+                let mut portable = vec![Response::default(); n_w];
+                grid.solve_spectrum(&thick, cos, &mut best);
+                grid.solve_spectrum_on(Path::Portable, &thick, cos, &mut portable);
+                for (k, ((b_, p), (w, n))) in
+                    best.iter().zip(&portable).zip(grid.iter()).enumerate()
+                {
+                    assert!(same_bits(b_, p), "{name} {k}: AVX2 vs portable");
+                    let want = solve(n, &thick, w, cos);
+                    for (got, want) in [
+                        (b_.rs, want.rs),
+                        (b_.rp, want.rp),
+                        (b_.ts, want.ts),
+                        (b_.tp, want.tp),
+                    ] {
+                        assert!(
+                            !differs(got, want),
+                            "{name} at {w} nm, cos {cos}: {got:e} vs {want:e}"
+                        );
+                    }
+                }
+            }
+        }
+    }
+}
