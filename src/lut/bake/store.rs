@@ -2,7 +2,7 @@
 //! and refused when they do not fit.
 
 use crate::error::{Error, Result};
-use crate::lut::sample::{channel_names, Lut};
+use crate::lut::sample::channel_names;
 use crate::lut::Kind;
 
 /// A table must hold the values it was baked from: a gain film near a
@@ -43,14 +43,14 @@ pub(super) fn representable(
 
 // Used by the bench (and its tests); a library built without it has no use.
 #[cfg(any(feature = "bench", test))]
-impl Lut {
+impl crate::lut::Lut {
     /// This table with every value rounded to f16, for a caller that has the
     /// f32 table and wants the f16 one too without baking again: the values a
     /// `--half` bake of the same spec stores (it rounds through f32 too), but
     /// the header keeps no error figures (they measured the f32 table's
     /// rounding) and no cache key (a bake's header differs). Refused, as by
     /// the baker, when a value overflows f16.
-    pub(crate) fn rounded_to_half(&self) -> Result<Lut> {
+    pub(crate) fn rounded_to_half(&self) -> Result<crate::lut::Lut> {
         let data: Vec<f32> = self
             .data()
             .iter()
@@ -64,7 +64,7 @@ impl Lut {
         header.error.bake_check = None;
         header.error.validation = None;
         header.cache_key.clear();
-        Lut::from_parts(header, data).map_err(|why| Error::invalid("rounded table", why))
+        Self::from_parts(header, data).map_err(|why| Error::invalid("rounded table", why))
     }
 }
 
@@ -73,7 +73,7 @@ impl Lut {
 /// other paths (no F16C, aarch64) work from the f64, which differs where the
 /// f32 value lies exactly halfway between two f16 values. Through f32
 /// everywhere, a table is the same on every machine and an f32 table rounded
-/// to f16 is the f16 table (see [`Lut::rounded_to_half`]).
+/// to f16 is the f16 table (see `Lut::rounded_to_half`).
 #[inline]
 pub(super) fn stored(v: f64, half: bool) -> f32 {
     let single = v as f32;
