@@ -232,10 +232,17 @@ fn png_option_writes_16_bit_pngs_with_their_own_error() {
     );
     let png_err = film["error"]["png"]["max_abs"].as_array().unwrap();
     let exr_err = film["error"]["max_abs"].as_array().unwrap();
-    // 16-bit quantization (1.5e-5) is far below f16's rounding near 1.
+    // The PNGs clamp out-of-gamut (negative) values to 0, which the EXRs
+    // keep, and quantize to 16 bits: their measured error is stated on its
+    // own, finite, and never below the EXRs' beyond quantization (1.5e-5).
     for (p, x) in png_err.iter().zip(exr_err) {
-        assert!((p.as_f64().unwrap() - x.as_f64().unwrap()).abs() < 3e-4);
+        let (p, x) = (p.as_f64().unwrap(), x.as_f64().unwrap());
+        assert!(p.is_finite() && p + 2e-5 >= x, "png {p} exr {x}");
     }
+    assert!(film["error"]["png"]["max_delta_e00"][0]
+        .as_f64()
+        .unwrap()
+        .is_finite());
 }
 
 #[test]

@@ -23,7 +23,7 @@ use serde::{Deserialize, Serialize};
 use crate::color::{delta_e2000_rgb, Sampling, SpectralIntegrator, White};
 use crate::error::{Error, Result};
 use crate::optics::twoport::{Scratch, VaryingLayer};
-use crate::optics::{solve, Layer, Stack, StackGrid, MAX_THICKNESS_NM};
+use crate::optics::{solve, Layer, Stack, StackGrid};
 
 /// The shaders, as committed in `shaders/` (the GLSL and HLSL forms are
 /// generated from the WGSL by `cargo run -p irid-gpu --bin gen-shaders`).
@@ -101,31 +101,7 @@ impl ExportSpec {
 
     /// Checks ranges and the stack; errors name the offending option.
     pub fn validate(&self) -> Result<()> {
-        self.stack.validate()?;
-        let n = self.stack.layers.len();
-        if n > 0 && !(1..=n).contains(&self.layer) {
-            return Err(Error::invalid(
-                "layer",
-                format!(
-                    "must be between 1 and {n} (the stack's layers), got {}",
-                    self.layer
-                ),
-            ));
-        }
-        let (t0, t1) = self.thickness_nm;
-        if !(t0 >= 0.0 && t0 <= t1 && t1 <= MAX_THICKNESS_NM) {
-            return Err(Error::invalid(
-                "thickness",
-                format!("need 0 ≤ min ≤ max ≤ {MAX_THICKNESS_NM:e} nm, got {t0}:{t1}"),
-            ));
-        }
-        let (c0, c1) = self.cos_theta;
-        if !(c0 >= 0.0 && c1 <= 1.0 && c0 <= c1) {
-            return Err(Error::invalid(
-                "angles",
-                format!("cos θ range must satisfy 0 ≤ min ≤ max ≤ 1, got {c0}:{c1}"),
-            ));
-        }
+        crate::lut::check_film_domain(&self.stack, self.layer, self.thickness_nm, self.cos_theta)?;
         if !(self.max_error > 0.0 && self.max_error.is_finite()) {
             return Err(Error::invalid(
                 "max-error",

@@ -30,6 +30,41 @@ use crate::color::{Sampling, White};
 use crate::error::{Error, Result};
 use crate::optics::{Stack, MAX_THICKNESS_NM};
 
+/// Checks what a table or an export covers: the stack itself, `layer`
+/// within it, 0 ≤ min ≤ max ≤ [`MAX_THICKNESS_NM`] (the stack's own bound,
+/// which also keeps an f32 thickness axis finite), and 0 ≤ cos θ min ≤ max
+/// ≤ 1. Errors name the option: `layer`, `thickness` or `angles`.
+pub fn check_film_domain(
+    stack: &Stack,
+    layer: usize,
+    thickness_nm: (f64, f64),
+    cos_theta: (f64, f64),
+) -> Result<()> {
+    stack.validate()?;
+    let n = stack.layers.len();
+    if n > 0 && !(1..=n).contains(&layer) {
+        return Err(Error::invalid(
+            "layer",
+            format!("must be between 1 and {n} (the stack's layers), got {layer}"),
+        ));
+    }
+    let (t0, t1) = thickness_nm;
+    if !(t0 >= 0.0 && t0 <= t1 && t1 <= MAX_THICKNESS_NM) {
+        return Err(Error::invalid(
+            "thickness",
+            format!("need 0 ≤ min ≤ max ≤ {MAX_THICKNESS_NM:e} nm, got {t0}:{t1}"),
+        ));
+    }
+    let (c0, c1) = cos_theta;
+    if !(c0 >= 0.0 && c1 <= 1.0 && c0 <= c1) {
+        return Err(Error::invalid(
+            "angles",
+            format!("cos θ range must satisfy 0 ≤ min ≤ max ≤ 1, got {c0}:{c1}"),
+        ));
+    }
+    Ok(())
+}
+
 /// What a table holds.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -144,32 +179,7 @@ impl BakeSpec {
 
     /// Checks ranges and the stack; errors name the offending field.
     pub fn validate(&self) -> Result<()> {
-        self.stack.validate()?;
-        let n = self.stack.layers.len();
-        if n > 0 && !(1..=n).contains(&self.layer) {
-            return Err(Error::invalid(
-                "layer",
-                format!(
-                    "must be between 1 and {n} (the stack's layers), got {}",
-                    self.layer
-                ),
-            ));
-        }
-        let (t0, t1) = self.thickness_nm;
-        // The stack's own bound also keeps the f32 axis in the file finite.
-        if !(t0 >= 0.0 && t0 <= t1 && t1 <= MAX_THICKNESS_NM) {
-            return Err(Error::invalid(
-                "thickness",
-                format!("need 0 ≤ min ≤ max ≤ {MAX_THICKNESS_NM:e} nm, got {t0}:{t1}"),
-            ));
-        }
-        let (c0, c1) = self.cos_theta;
-        if !(c0 >= 0.0 && c1 <= 1.0 && c0 <= c1) {
-            return Err(Error::invalid(
-                "angles",
-                format!("cos θ range must satisfy 0 ≤ min ≤ max ≤ 1, got {c0}:{c1}"),
-            ));
-        }
+        check_film_domain(&self.stack, self.layer, self.thickness_nm, self.cos_theta)?;
         if self.kind == Kind::Spectral {
             let (w0, w1) = self.wavelength_nm;
             if !(w0.is_finite() && w1.is_finite() && w0 > 0.0 && w0 <= w1) {
