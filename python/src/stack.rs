@@ -7,7 +7,7 @@ use pyo3::prelude::*;
 use pyo3::types::{PyComplex, PyDict, PyList, PyString, PyTuple};
 use rayon::prelude::*;
 
-use irid::color::{stack_colors, Sampling, SpectralIntegrator};
+use irid::color::{stack_colors, Sampling, SpectralIntegrator, White};
 use irid::optics::spec::{IndexSpec, MediumSpec};
 use irid::optics::{
     library, solve, solve_amplitudes, Layer, Material, Stack, StackGrid, MAX_THICKNESS_NM,
@@ -398,7 +398,10 @@ impl PyStack {
     /// [0, 90)) for unpolarized light from the ambient, as `irid color`.
     ///
     /// sampling: "exact" (1 nm over 360–830 nm), "uniform:N" (380–780 nm)
-    /// or "rgb3". white: the illuminant, "d65".
+    /// or "rgb3". white: "d65" (irid's default: the spectrum under D65, a
+    /// perfect reflector is (1, 1, 1)) or "e" (the equal-energy white that
+    /// Blender Cycles and the glTF viewer assume: a flat spectrum is
+    /// (1, 1, 1)), as `irid color --white`.
     /// Returns a dict: angle_deg (A,), reflectance_rgb, transmittance_rgb
     /// (linear sRGB, (A, 3)), reflectance_xyz, transmittance_xyz (CIE XYZ,
     /// Y = 1 for a perfect reflector, (A, 3)).
@@ -412,12 +415,10 @@ impl PyStack {
     ) -> PyResult<Bound<'py, PyDict>> {
         let angles = real_list(angles_deg, "angles_deg")?;
         let sampling: Sampling = sampling.parse().map_err(py_error)?;
-        if !white.trim().eq_ignore_ascii_case("d65") {
-            return Err(invalid(format!("white '{white}'"), "expected d65"));
-        }
+        let white: White = white.parse().map_err(py_error)?;
         let colours = py
             .allow_threads(|| {
-                let integrator = SpectralIntegrator::new(sampling);
+                let integrator = SpectralIntegrator::with_white(sampling, white);
                 stack_colors(&self.stack, &integrator, &angles)
             })
             .map_err(py_error)?;

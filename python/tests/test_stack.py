@@ -127,9 +127,11 @@ def test_solve_over_thicknesses_agrees_with_coherent(luts):
 def test_color_matches_the_cli(luts, irid_cli):
     path = luts / "soap-film.toml"
     angles = [0.0, 25.0, 50.0, 75.0]
-    for sampling in ["exact", "uniform:16", "rgb3"]:
-        mine = irid.Stack.load(path).color(angles, sampling=sampling)
-        run = irid_cli("color", path, "--angles", ",".join(map(str, angles)), "--sampling", sampling, "--json")
+    for sampling, white in [("exact", "d65"), ("uniform:16", "d65"), ("rgb3", "d65"), ("exact", "e"), ("uniform:16", "e")]:
+        mine = irid.Stack.load(path).color(angles, sampling=sampling, white=white)
+        run = irid_cli(
+            "color", path, "--angles", ",".join(map(str, angles)), "--sampling", sampling, "--white", white, "--json"
+        )
         assert run.returncode == 0, run.stderr
         cli = json.loads(run.stdout)
         for j, c in enumerate(cli):
