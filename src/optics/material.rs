@@ -65,7 +65,9 @@ pub enum Dispersion {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Material {
     /// The label that names the material in error messages and table
-    /// headers (a built-in's name, or the one given in a stack file).
+    /// headers: a built-in's name, the `name` given in a stack file, or one
+    /// derived from the index form (e.g. the Cauchy coefficients or the
+    /// table's path).
     pub name: String,
     /// How the complex index n + ik varies with vacuum wavelength.
     pub dispersion: Dispersion,

@@ -104,8 +104,8 @@ pub struct Fresnel {
 
 /// The [`Fresnel`] coefficients from medium i (index `n_i`, normal index
 /// `q_i` = n_i cos θ_i) into medium f; the q are those of
-/// [`normal_index`], on the branch Im q ≥ 0. A pair whose denominators
-/// vanish (q_i = −q_f) gives non-finite coefficients.
+/// [`normal_index`], on the branch Im q ≥ 0. Where a denominator vanishes
+/// the coefficients are not finite.
 #[inline]
 pub fn fresnel(n_i: C64, q_i: C64, n_f: C64, q_f: C64) -> Fresnel {
     let s_den = (q_i + q_f).inv();
