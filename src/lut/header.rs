@@ -136,8 +136,8 @@ pub struct ErrorInfo {
 /// The baker's own dense error measurement.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct BakeCheck {
-    /// Prose definition of the measured figure: always
-    /// [`BAKE_CHECK_METRIC`].
+    /// Prose definition of the measured figure: always the text of the
+    /// `BAKE_CHECK_METRIC` constant.
     pub metric: String,
     /// How many off-grid points were compared.
     pub points: usize,

@@ -59,7 +59,8 @@ pub struct MediumSpec {
     /// A constant index, wavelength independent.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub n: Option<IndexSpec>,
-    /// The name of a built-in material (see [`library`](super::library)).
+    /// The name of a built-in material (the `optics::library` list; an
+    /// unknown name is an error that lists them).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub material: Option<String>,
     /// Cauchy coefficients [A, B] or [A, B, C]: n = A + B/λ² + C/λ⁴ with λ
