@@ -25,10 +25,6 @@
 //!   Fresnel, no polarization, phases of 0 or π from comparing indices, a real
 //!   substrate index derived from its normal-incidence reflectance, two terms.
 
-// Not every public item here is documented yet: the crate-wide
-// missing_docs lint (Cargo.toml) is waived for this file until it is.
-#![allow(missing_docs)]
-
 use num_complex::Complex64 as C64;
 
 use crate::optics::solver::{fresnel, normal_index};
@@ -41,13 +37,19 @@ pub const CHANNEL_WAVELENGTHS_NM: [f64; 3] = [650.0, 510.0, 475.0];
 /// Where the film's (single, real) index is taken for a dispersive film.
 pub const FILM_WAVELENGTH_NM: f64 = 550.0;
 
+/// Which published form of the analytic model to evaluate.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Variant {
+    /// The original paper (and Blender Cycles): exact complex Fresnel per
+    /// polarization with the real reflection phases, three Fourier terms.
     BelcourBarla,
+    /// The `KHR_materials_iridescence` reference: Schlick Fresnel, no
+    /// polarization, phases of 0 or π, a real substrate index, two terms.
     Gltf,
 }
 
 impl Variant {
+    /// The variant's name as it appears in reports and plot legends.
     pub fn label(self) -> &'static str {
         match self {
             Variant::BelcourBarla => "analytic Belcour-Barla",
@@ -59,7 +61,11 @@ impl Variant {
 /// One film between an outside medium and a substrate, as the model sees it.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct AnalyticFilm {
+    /// Real index of the medium the light arrives from (constant over the
+    /// spectrum).
     pub outside_ior: f64,
+    /// Real index of the film, constant over the spectrum (the model has no
+    /// film absorption or gain).
     pub film_ior: f64,
     /// The substrate index for the R, G and B channels; k > 0 is a conductor.
     pub base_ior: [C64; 3],

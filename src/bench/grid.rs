@@ -7,10 +7,6 @@
 //! stack is split once around the varying layer, and each thickness node
 //! then costs one complex exponential and one division per polarization.
 
-// Not every public item here is documented yet: the crate-wide
-// missing_docs lint (Cargo.toml) is waived for this file until it is.
-#![allow(missing_docs)]
-
 use std::time::Instant;
 
 use num_complex::Complex64 as C64;
@@ -23,31 +19,45 @@ use crate::lut;
 use crate::optics::twoport::{Scratch, VaryingLayer};
 use crate::optics::{Response, Stack, StackGrid};
 
+/// The points of a grid evaluation: every combination of angle, thickness
+/// and wavelength.
 #[derive(Clone, Debug)]
 pub struct Grid {
+    /// Vacuum wavelengths in nm.
     pub wavelengths_nm: Vec<f64>,
+    /// Incidence angles in the ambient, degrees from the normal, in
+    /// [0, 90].
     pub angles_deg: Vec<f64>,
     /// Values for the varying layer; `None` keeps the stack's own thickness.
     pub thicknesses_nm: Option<Vec<f64>>,
 }
 
 impl Grid {
+    /// Nodes on the thickness axis: 1 without one (the stack's own
+    /// thickness).
     pub fn thickness_count(&self) -> usize {
         self.thicknesses_nm.as_ref().map_or(1, Vec::len)
     }
 
+    /// Total points: thickness × angle × wavelength counts.
     pub fn points(&self) -> usize {
         self.thickness_count() * self.angles_deg.len() * self.wavelengths_nm.len()
     }
 }
 
+/// The result of [`evaluate`]: R and T at every grid point, and what a peer
+/// needs to check them.
 #[derive(Clone, Debug)]
 pub struct GridOutput {
+    /// Unpolarized reflectance at each point, `[angle][thickness][wavelength]`
+    /// row-major.
     pub r: Vec<f64>,
+    /// Unpolarized transmittance (power into the substrate), same layout.
     pub t: Vec<f64>,
     /// Complex indices of ambient, layers and substrate at each wavelength,
     /// `[wavelength][medium]`: what a peer must be given to solve the same problem.
     pub indices: Vec<C64>,
+    /// Media per wavelength in `indices`: the layers plus 2.
     pub media: usize,
     /// Wall time of the fastest repetition.
     pub seconds: f64,
@@ -199,10 +209,12 @@ pub struct BakeTimes {
     /// The default bake: the grid with every interval halved, so that the
     /// table's interpolation error is measured (the header's bake check).
     pub checked_s: f64,
+    /// Points the checked bake evaluated.
     pub checked_points: usize,
     /// `--no-check`: the table's own nodes only, the same points a peer
     /// computes to build the table.
     pub table_s: f64,
+    /// Points the unchecked bake evaluated.
     pub table_points: usize,
 }
 

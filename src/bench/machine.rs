@@ -1,14 +1,13 @@
 //! The facts every report header carries: when, on what, with how many cores
 //! and worker threads.
 
-// Not every public item here is documented yet: the crate-wide
-// missing_docs lint (Cargo.toml) is waived for this file until it is.
-#![allow(missing_docs)]
-
 use std::time::{SystemTime, UNIX_EPOCH};
 
+/// The machine a benchmark ran on, as a report header states it.
 #[derive(Clone, Debug)]
 pub struct Machine {
+    /// The first `model name` of /proc/cpuinfo, or "unknown" where there
+    /// is none (not Linux, or no such line).
     pub cpu_model: String,
     /// Logical CPUs the process may use.
     pub cores: usize,
@@ -20,6 +19,8 @@ pub struct Machine {
 }
 
 impl Machine {
+    /// The facts now: call it from inside the run's rayon pool so `threads`
+    /// counts that pool's workers.
     pub fn current() -> Machine {
         Machine {
             cpu_model: cpu_model().unwrap_or_else(|| "unknown".to_string()),

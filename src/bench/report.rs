@@ -1,9 +1,5 @@
 //! Report files: Markdown table, CSV, written atomically.
 
-// Not every public item here is documented yet: the crate-wide
-// missing_docs lint (Cargo.toml) is waived for this file until it is.
-#![allow(missing_docs)]
-
 use std::path::Path;
 
 use crate::error::{Error, Result};
@@ -22,13 +18,21 @@ pub const PLOT_FLOOR_DE: f64 = 1e-4;
 /// One method's figures over the stacks it applies to (medians).
 #[derive(Clone, Debug)]
 pub struct Summary {
+    /// The method summarized.
     pub method: Method,
+    /// How many stacks it was measured on.
     pub stacks: usize,
+    /// Median of [`Row::ns_per_eval`] over those stacks.
     pub ns_per_eval: f64,
+    /// Median of [`Row::max_abs`] (largest linear-sRGB reflectance error).
     pub max_abs: f64,
+    /// Median of [`Row::p99_abs`].
     pub p99_abs: f64,
+    /// Median of [`Row::mean_de2000`].
     pub mean_de2000: f64,
+    /// Median of [`Row::max_de2000`].
     pub max_de2000: f64,
+    /// Non-finite results summed (not a median) over the stacks.
     pub nonfinite: usize,
 }
 
@@ -71,6 +75,9 @@ pub fn summarize(rows: &[Row]) -> Vec<Summary> {
         .collect()
 }
 
+/// The per-stack rows as CSV text with a header line: one line per
+/// (stack, method), errors in scientific notation, an empty `setup_s` for
+/// methods without one.
 pub fn csv(rows: &[Row]) -> String {
     let mut s = String::from(
         "stack,method,family,ns_per_eval,max_abs_r,p99_abs_r,mean_de2000,max_de2000,points,nonfinite,setup_s\n",
@@ -94,6 +101,8 @@ pub fn csv(rows: &[Row]) -> String {
     s
 }
 
+/// The full-render rows as CSV text with a header line: one line per
+/// (scene, mode), times in seconds.
 pub fn renders_csv(rows: &[RenderRow]) -> String {
     let mut s = String::from(
         "scene,mode,width,height,prepare_s,render_s,mean_de2000,p99_de2000,max_de2000\n",

@@ -7,10 +7,6 @@
 //! one loop and the wall time is divided by the count, so compare methods by
 //! their ratios within one run; absolute figures move with the machine's load.
 
-// Not every public item here is documented yet: the crate-wide
-// missing_docs lint (Cargo.toml) is waived for this file until it is.
-#![allow(missing_docs)]
-
 use std::hint::black_box;
 use std::time::Instant;
 
@@ -23,10 +19,12 @@ use crate::error::{Error, Result};
 use crate::lut;
 use crate::optics::{solve, StackGrid};
 
+/// What a benchmark run measures and how thoroughly.
 #[derive(Clone, Debug)]
 pub struct Options {
     /// Random (thickness, cos θ) points per stack.
     pub points: usize,
+    /// Seed of the PCG64 stream that draws the points, so runs compare.
     pub seed: u64,
     /// LUT resolutions as (thickness nodes, angle nodes), coarse to fine.
     pub lut_resolutions: Vec<(usize, usize)>,
@@ -34,10 +32,14 @@ pub struct Options {
     pub lut_half: bool,
     /// Built-in scenes rendered in full, and at what size (width, height).
     pub render_scenes: Vec<&'static str>,
+    /// (width, height) in pixels of each full render.
     pub render_size: (u32, u32),
 }
 
 impl Options {
+    /// The published benchmark: 10 000 points per stack, four LUT
+    /// resolutions from 16×8 to 1024×64 with f16 copies, and two scenes
+    /// rendered at 160×120.
     pub fn full() -> Options {
         Options {
             points: 10_000,
@@ -62,16 +64,23 @@ impl Options {
     }
 }
 
+/// A group of methods that share a technique (and a colour on the plot).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Family {
+    /// The transfer matrix solved per evaluation, under some sampling.
     Direct,
+    /// Baked rgb tables, bilinearly interpolated.
     Lut,
+    /// The single-film analytic model.
     Analytic,
 }
 
 impl Family {
+    /// Every family, in report and legend order (the order of
+    /// [`Family::index`]).
     pub const ALL: [Family; 3] = [Family::Direct, Family::Lut, Family::Analytic];
 
+    /// The family's name in reports and the plot legend.
     pub fn label(self) -> &'static str {
         match self {
             Family::Direct => "direct TMM",
@@ -80,23 +89,36 @@ impl Family {
         }
     }
 
+    /// Position in [`Family::ALL`]; selects the plot colour.
     pub fn index(self) -> usize {
         self as usize
     }
 }
 
+/// One way of computing a film's reflectance colour that the benchmark
+/// times and scores.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Method {
+    /// The solver at every wavelength of this sampling, integrated to
+    /// linear sRGB (`exact` is the reference).
     Direct(Sampling),
+    /// A baked rgb table over the stack's thickness range and cos θ ∈
+    /// [0, 1], sampled bilinearly.
     Lut {
+        /// Nodes on the thickness axis.
         thickness_nodes: usize,
+        /// Nodes on the cos θ axis.
         angle_nodes: usize,
+        /// Stored as f16 (the f32 table rounded) rather than f32.
         half: bool,
     },
+    /// The analytic one-film model (only for stacks with exactly one
+    /// layer).
     Analytic(Variant),
 }
 
 impl Method {
+    /// The method's name in reports, e.g. `direct exact`, `LUT 64x16 f32`.
     pub fn name(&self) -> String {
         match self {
             Method::Direct(s) => format!("direct {s}"),
@@ -112,6 +134,7 @@ impl Method {
         }
     }
 
+    /// The family the method belongs to.
     pub fn family(&self) -> Family {
         match self {
             Method::Direct(_) => Family::Direct,
@@ -124,15 +147,23 @@ impl Method {
 /// One method on one stack.
 #[derive(Clone, Debug)]
 pub struct Row {
+    /// The fixed stack's short name.
     pub stack: String,
+    /// The method measured.
     pub method: Method,
+    /// Single-threaded nanoseconds per evaluation (one thickness, one
+    /// angle, to linear sRGB), from the fastest repetition of the loop.
     pub ns_per_eval: f64,
     /// Largest |ΔR| over points and channels (linear sRGB reflectance).
     pub max_abs: f64,
     /// 99th percentile over points of the largest channel |ΔR|.
     pub p99_abs: f64,
+    /// Mean CIEDE2000 between the method's and the exact reflectance
+    /// colour over the finite points.
     pub mean_de2000: f64,
+    /// Largest CIEDE2000 over the finite points.
     pub max_de2000: f64,
+    /// Points evaluated, non-finite ones included.
     pub points: usize,
     /// Points where the method returned a non-finite colour.
     pub nonfinite: usize,
@@ -146,8 +177,11 @@ pub struct Row {
 /// A method that could not be measured on a stack, and why.
 #[derive(Clone, Debug)]
 pub struct Skipped {
+    /// The fixed stack's short name.
     pub stack: String,
+    /// The method that was not measured.
     pub method: Method,
+    /// The reason, e.g. values beyond f16's range.
     pub why: String,
 }
 
@@ -162,6 +196,10 @@ pub fn run(options: &Options) -> Result<(Vec<Row>, Vec<Skipped>)> {
     Ok((rows, skipped))
 }
 
+/// Every method measured on one stack: the exact direct method first (the
+/// reference for every other row's errors), then the other samplings, the
+/// LUT resolutions (and their f16 copies), and the analytic variants where
+/// the stack has one layer.
 pub fn run_stack(bench: &BenchStack, options: &Options) -> Result<(Vec<Row>, Vec<Skipped>)> {
     let points = sample_points(bench, options.points, options.seed);
     let mut rows = Vec::new();

@@ -5,10 +5,6 @@
 //! absorbing film and a gain film on gold (which it cannot represent), a
 //! two-layer stack, and a 10-layer mirror seen from both sides.
 
-// Not every public item here is documented yet: the crate-wide
-// missing_docs lint (Cargo.toml) is waived for this file until it is.
-#![allow(missing_docs)]
-
 use std::path::Path;
 
 use crate::color::Sampling;
@@ -16,14 +12,19 @@ use crate::error::Result;
 use crate::lut::{BakeSpec, Kind, Resolution};
 use crate::optics::Stack;
 
+/// One of the fixed benchmark stacks, resolved, with the layer and range
+/// over which its thickness is swept.
 #[derive(Clone, Debug)]
 pub struct BenchStack {
     /// Short name used on the command line and in reports.
     pub name: &'static str,
+    /// One line saying what the stack is and what it tests.
     pub description: &'static str,
+    /// The resolved stack, built from the embedded stack file and validated.
     pub stack: Stack,
     /// Index (from the top, 0-based) of the layer whose thickness varies.
     pub varying_layer: usize,
+    /// (min, max) thickness in nm the varying layer is swept over.
     pub thickness_range_nm: (f64, f64),
 }
 
@@ -139,6 +140,8 @@ impl Def {
     }
 }
 
+/// Every fixed stack, resolved, in run order; fails only if an embedded
+/// stack file does not resolve.
 pub fn fixed_stacks() -> Result<Vec<BenchStack>> {
     DEFS.iter().map(Def::build).collect()
 }
@@ -148,10 +151,13 @@ pub fn descriptions() -> Vec<(&'static str, &'static str)> {
     DEFS.iter().map(|d| (d.name, d.description)).collect()
 }
 
+/// The short name of every fixed stack, in run order.
 pub fn names() -> Vec<&'static str> {
     DEFS.iter().map(|d| d.name).collect()
 }
 
+/// The fixed stack called `name` (ASCII case-insensitive), resolved;
+/// `Ok(None)` when no stack has that name.
 pub fn find(name: &str) -> Result<Option<BenchStack>> {
     DEFS.iter()
         .find(|d| d.name.eq_ignore_ascii_case(name))

@@ -1,10 +1,6 @@
 //! The colour of a whole stack: its reflectance and transmittance spectra at
 //! each angle, reduced by one sampling strategy.
 
-// Not every public item here is documented yet: the crate-wide
-// missing_docs lint (Cargo.toml) is waived for this file until it is.
-#![allow(missing_docs)]
-
 use serde::Serialize;
 
 use super::SpectralIntegrator;
@@ -14,12 +10,19 @@ use crate::optics::{Response, Stack, StackGrid};
 /// A stack's reflected and transmitted colour under D65 at one angle.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct FilmColor {
+    /// Incidence angle in the ambient, degrees from the normal, in [0, 90).
     pub angle_deg: f64,
-    /// Linear sRGB.
+    /// Linear sRGB of the unpolarized reflectance spectrum, a perfect
+    /// reflector being (1, 1, 1) (the integrator's white convention).
     pub reflectance_rgb: [f64; 3],
+    /// Linear sRGB of the unpolarized transmittance spectrum (power into
+    /// the substrate), on the same scale as `reflectance_rgb`.
     pub transmittance_rgb: [f64; 3],
     /// CIE XYZ, Y = 1 for a perfect reflector.
     pub reflectance_xyz: [f64; 3],
+    /// CIE XYZ of the transmittance spectrum, on the scale of
+    /// `reflectance_xyz` (Y = 1 for a transmittance of 1 at every
+    /// wavelength).
     pub transmittance_xyz: [f64; 3],
 }
 

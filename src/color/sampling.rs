@@ -1,10 +1,6 @@
 //! Wavelength-sampling strategies and the precomputed weight tables that turn
 //! a sampled spectrum into XYZ or linear sRGB with one dot product per channel.
 
-// Not every public item here is documented yet: the crate-wide
-// missing_docs lint (Cargo.toml) is waived for this file until it is.
-#![allow(missing_docs)]
-
 use std::fmt;
 use std::str::FromStr;
 
@@ -143,6 +139,8 @@ impl White {
         }
     }
 
+    /// Whether this is the default D65 white (serde uses it to leave the
+    /// white out of headers and specs, keeping D65 files unchanged).
     pub fn is_d65(&self) -> bool {
         *self == White::D65
     }
@@ -258,10 +256,14 @@ impl SpectralIntegrator {
         }
     }
 
+    /// The wavelength sampling strategy this integrator was built for.
     pub fn sampling(&self) -> Sampling {
         self.sampling
     }
 
+    /// The white convention: which spectrum integrates to (1, 1, 1). D65
+    /// for `rgb3`, which takes R, G and B at three wavelengths whatever
+    /// white was asked for.
     pub fn white(&self) -> White {
         self.white
     }

@@ -1,10 +1,6 @@
 //! Colour spaces: linear sRGB ↔ XYZ, CIE Lab and CIEDE2000 (through the
 //! `palette` crate), and 8-bit sRGB encoding.
 
-// Not every public item here is documented yet: the crate-wide
-// missing_docs lint (Cargo.toml) is waived for this file until it is.
-#![allow(missing_docs)]
-
 use std::sync::LazyLock;
 
 use palette::color_difference::Ciede2000;
@@ -77,11 +73,16 @@ pub fn white_xyz() -> [f64; 3] {
     SRGB.white_xyz
 }
 
+/// CIE XYZ to linear sRGB (BT.709 primaries), with the matrix built from
+/// the tables' own D65 white so [`white_xyz`] maps to exactly (1, 1, 1) up
+/// to rounding. No clamping: out-of-gamut colours get negative components.
 #[inline]
 pub fn xyz_to_linear_srgb(xyz: [f64; 3]) -> [f64; 3] {
     mat_vec(&SRGB.xyz_to_rgb, xyz)
 }
 
+/// Linear sRGB (BT.709 primaries) to CIE XYZ, the exact inverse of
+/// [`xyz_to_linear_srgb`]: (1, 1, 1) maps to [`white_xyz`], Y = 1.
 #[inline]
 pub fn linear_srgb_to_xyz(rgb: [f64; 3]) -> [f64; 3] {
     mat_vec(&SRGB.rgb_to_xyz, rgb)

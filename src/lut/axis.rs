@@ -1,18 +1,20 @@
 //! Table axes: how the baker places nodes, and the O(1) lookup the sampler
 //! uses for any increasing node list read from a file.
 
-// Not every public item here is documented yet: the crate-wide
-// missing_docs lint (Cargo.toml) is waived for this file until it is.
-#![allow(missing_docs)]
-
 use serde::{Deserialize, Serialize};
 
 /// One axis as written in the header: the node positions are the truth, a
 /// reader interpolates linearly in the axis value between them.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Axis {
+    /// The quantity along the axis: `thickness_nm`, `cos_theta` or
+    /// `wavelength_nm` (the header's axis-name constants).
     pub name: String,
+    /// The unit of the node values: `nm` for thickness and wavelength, `1`
+    /// for cos θ (dimensionless).
     pub unit: String,
+    /// Node positions in `unit`, strictly increasing; node i is column,
+    /// row or block i of the image.
     pub nodes: Vec<f64>,
 }
 

@@ -1,9 +1,5 @@
 //! The JSON header stored in a table's `irid` attribute.
 
-// Not every public item here is documented yet: the crate-wide
-// missing_docs lint (Cargo.toml) is waived for this file until it is.
-#![allow(missing_docs)]
-
 use serde::{Deserialize, Serialize};
 
 use super::axis::Axis;
@@ -12,6 +8,7 @@ use super::Kind;
 use crate::color::White;
 use crate::optics::Stack;
 
+/// The header's `format` value that identifies an irid table.
 pub const FORMAT_NAME: &str = "irid-lut";
 /// Bumped on any change a reader of an older version would misread.
 /// Version 2: `error.bake_check` may be null (a table baked without the
@@ -38,8 +35,13 @@ pub fn version_for(white: White) -> u32 {
     }
 }
 
+/// Name of the thickness axis (nodes in nm), always the image's x axis.
 pub const THICKNESS_AXIS: &str = "thickness_nm";
+/// Name of the cos θ axis (cosine of the ambient incidence angle,
+/// dimensionless), always the image's y axis.
 pub const COS_AXIS: &str = "cos_theta";
+/// Name of a spectral table's wavelength axis (nodes in nm), folded into y
+/// as stacked blocks of cos θ rows.
 pub const WAVELENGTH_AXIS: &str = "wavelength_nm";
 
 /// Everything a reader needs besides the pixels.
@@ -47,7 +49,12 @@ pub const WAVELENGTH_AXIS: &str = "wavelength_nm";
 pub struct Header {
     /// Always [`FORMAT_NAME`].
     pub format: String,
+    /// The format version the file was written in: [`FORMAT_VERSION`], or
+    /// [`WHITE_E_VERSION`] for an equal-energy-white table; readers accept
+    /// [`OLDEST_READABLE_VERSION`] up to [`WHITE_E_VERSION`].
     pub version: u32,
+    /// Whether the pixels hold rgb colours (six channels) or a spectral
+    /// response (two channels and a wavelength axis).
     pub kind: Kind,
     /// The axis along image columns (x).
     pub x_axis: String,
@@ -57,7 +64,11 @@ pub struct Header {
     /// Spectral kind only: the axis whose blocks are stacked along y.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub y_blocks: Option<String>,
+    /// The axes in order thickness, cos θ, then (spectral kind only)
+    /// wavelength; their node lists fix the image size.
     pub axes: Vec<Axis>,
+    /// The image channels, in the order every per-channel error array
+    /// (`max_abs` and the like) follows.
     pub channels: Vec<Channel>,
     /// "f32" or "f16": the sample type on disk.
     pub precision: String,
@@ -66,7 +77,10 @@ pub struct Header {
     /// Which layer's thickness the thickness axis sets (1-based; 0 when the
     /// stack has no layers).
     pub layer: usize,
+    /// How rgb values were integrated from the spectrum (illuminant,
+    /// observer, colour space, sampling, white).
     pub color: ColorInfo,
+    /// The table's measured interpolation error figures.
     pub error: ErrorInfo,
     /// "irid <version>" that wrote the file.
     pub tool: String,
@@ -74,16 +88,30 @@ pub struct Header {
     pub cache_key: String,
 }
 
+/// One image channel of the table.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Channel {
+    /// The EXR channel name: `reflectance.R` … `transmittance.B` for the
+    /// rgb kind, `reflectance` and `transmittance` for the spectral kind.
+    /// EXR sorts channels by name, so readers look them up by name.
     pub name: String,
+    /// Human-readable description of the value: unpolarized (mean of s and
+    /// p) reflectance or transmittance (power into the substrate), and for
+    /// rgb the colour space and white.
     pub meaning: String,
 }
 
+/// The colorimetry of an rgb table's values (also written for spectral
+/// tables, whose CIEDE2000 figures use it).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct ColorInfo {
+    /// The illuminant the spectrum is integrated under, as named by
+    /// [`White::illuminant`] (CIE D65, or equal-energy E).
     pub illuminant: String,
+    /// The colour-matching functions: always "CIE 1931 2°".
     pub observer: String,
+    /// The output colour space: linear sRGB (BT.709 primaries, D65 white),
+    /// normalized so a perfect reflector is (1, 1, 1).
     pub space: String,
     /// The spectral sampling of the rgb integration (`exact`, `uniform:N`,
     /// `rgb3`).
@@ -108,6 +136,8 @@ pub struct ErrorInfo {
 /// The baker's own dense error measurement.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct BakeCheck {
+    /// Prose definition of the measured figure: always the text of the
+    /// `BAKE_CHECK_METRIC` constant.
     pub metric: String,
     /// How many off-grid points were compared.
     pub points: usize,
@@ -117,6 +147,8 @@ pub struct BakeCheck {
     pub max_abs_all: f64,
 }
 
+/// The text of [`BakeCheck::metric`]: where the bake check compares the
+/// table with the exact response and what it reports.
 pub const BAKE_CHECK_METRIC: &str =
     "largest absolute difference, per channel, between the table's \
     multilinear interpolation and the exact response (fast baker, agrees with the solver to 1e-12) \

@@ -4,10 +4,6 @@
 //!
 //! The file layout is specified in `docs/lut-format.md`.
 
-// Not every public item here is documented yet: the crate-wide
-// missing_docs lint (Cargo.toml) is waived for this file until it is.
-#![allow(missing_docs)]
-
 mod axis;
 mod bake;
 mod file;
@@ -104,8 +100,12 @@ impl std::fmt::Display for Kind {
 pub enum Resolution {
     /// Node counts per axis (wavelength is ignored for the rgb kind).
     Nodes {
+        /// Nodes on the thickness axis (≥ 1; 1 is a single thickness).
         thickness: usize,
+        /// Nodes on the cos θ axis (≥ 1).
         angle: usize,
+        /// Nodes on the wavelength axis of a spectral table (≥ 1); the rgb
+        /// kind has no wavelength axis and treats it as 1.
         wavelength: usize,
     },
     /// The coarsest grid (found by refining) whose bake check error — the
@@ -118,14 +118,19 @@ pub enum Resolution {
 /// [`BakeSpec::cache_key`] bake bit-identical tables.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct BakeSpec {
+    /// The film stack whose reflectance and transmittance the table holds.
     pub stack: Stack,
     /// The layer whose thickness is the table's thickness axis, counted from
     /// 1 at the ambient side. Ignored (the axis is a single node at 0) for a
     /// stack without layers.
     pub layer: usize,
+    /// The (min, max) thickness of `layer` in nm spanned by the thickness
+    /// axis; 0 ≤ min ≤ max ≤ [`MAX_THICKNESS_NM`]. Equal ends give a single
+    /// thickness node.
     pub thickness_nm: (f64, f64),
-    /// cos θ in the ambient, within [0, 1].
+    /// The (min, max) range of cos θ in the ambient, within [0, 1].
     pub cos_theta: (f64, f64),
+    /// Whether the table holds rgb colours or a spectral response.
     pub kind: Kind,
     /// The rgb kind's spectral integration (also the colour used for the
     /// CIEDE2000 figures of a spectral table).
@@ -136,6 +141,8 @@ pub struct BakeSpec {
     pub white: White,
     /// The spectral kind's wavelength axis range.
     pub wavelength_nm: (f64, f64),
+    /// The grid: fixed node counts, or an error target the bake refines
+    /// the grid to meet.
     pub resolution: Resolution,
     /// Store f16 instead of f32 (the error figures include the rounding).
     pub half: bool,
@@ -341,8 +348,12 @@ pub fn storage_error_floor(half: bool) -> f64 {
     }
 }
 
-/// Caps that keep a typo (`--resolution 1000000,…`) from exhausting memory.
+/// Caps that keep a typo (`--resolution 1000000,…`) from exhausting memory:
+/// at most this many nodes on any one axis.
 pub const MAX_AXIS_NODES: usize = 1 << 16;
+/// At most this many nodes in a whole table (the product of its axes' node
+/// counts), enforced on fixed resolutions and on the grids an error target
+/// refines to.
 pub const MAX_NODES: usize = 1 << 26;
 
 /// FNV-1a: tiny, dependency-free and fixed forever (unlike std's hasher).

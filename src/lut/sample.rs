@@ -1,9 +1,5 @@
 //! The in-memory table and its allocation-free sampler.
 
-// Not every public item here is documented yet: the crate-wide
-// missing_docs lint (Cargo.toml) is waived for this file until it is.
-#![allow(missing_docs)]
-
 use glam::Vec4;
 
 use super::axis::Locator;
@@ -17,7 +13,11 @@ use crate::optics::{MAX_THICKNESS_NM, WAVELENGTH_RANGE_NM};
 /// A film's unpolarized reflectance and transmittance as linear sRGB.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct FilmRgb {
+    /// Reflected colour (R, G, B), a perfect reflector being (1, 1, 1);
+    /// components can leave [0, 1] for out-of-gamut spectra or gain layers.
     pub reflectance: [f32; 3],
+    /// Colour of the power transmitted into the substrate, on the same
+    /// scale as `reflectance`.
     pub transmittance: [f32; 3],
 }
 
@@ -306,6 +306,8 @@ impl Lut {
         })
     }
 
+    /// The table's header: axes, channels, stack, colorimetry and error
+    /// figures, as read from or written to the file's `irid` attribute.
     pub fn header(&self) -> &Header {
         &self.header
     }
@@ -314,6 +316,8 @@ impl Lut {
         &mut self.header
     }
 
+    /// Whether the table holds rgb colours or a spectral response (the
+    /// header's `kind`), which decides the layout of [`Lut::data`].
     pub fn kind(&self) -> Kind {
         self.header.kind
     }

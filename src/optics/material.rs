@@ -1,10 +1,6 @@
 //! Refractive-index models: a material's complex index as a function of
 //! vacuum wavelength. k > 0 absorbs, k < 0 is gain.
 
-// Not every public item here is documented yet: the crate-wide
-// missing_docs lint (Cargo.toml) is waived for this file until it is.
-#![allow(missing_docs)]
-
 use std::path::Path;
 
 use num_complex::Complex64 as C64;
@@ -19,7 +15,11 @@ pub struct IndexTable {
     pub source: String,
     /// Strictly increasing.
     pub wavelength_nm: Vec<f64>,
+    /// Real part of the index at each wavelength (0 ≤ n ≤ [`MAX_INDEX`]),
+    /// same length as `wavelength_nm`.
     pub n: Vec<f64>,
+    /// Extinction coefficient at each wavelength, same length as
+    /// `wavelength_nm`: k > 0 absorbs, k < 0 is gain, |k| ≤ [`MAX_INDEX`].
     pub k: Vec<f64>,
 }
 
@@ -29,13 +29,18 @@ pub struct IndexTable {
 pub enum Dispersion {
     /// The same n + ik at every wavelength.
     Constant {
+        /// Real part of the index (0 ≤ n ≤ [`MAX_INDEX`]).
         n: f64,
+        /// Extinction coefficient: k > 0 absorbs, k < 0 is gain.
         k: f64,
     },
     /// n(λ) = A + B/λ² + C/λ⁴ with λ in micrometres; k = 0.
     Cauchy {
+        /// The constant term A (dimensionless).
         a: f64,
+        /// B, in µm².
         b: f64,
+        /// C, in µm⁴.
         c: f64,
     },
     /// n²(λ) = A + Σ Bᵢ λ² / (λ² − Cᵢ) with λ in micrometres and Cᵢ in µm²;
@@ -43,17 +48,28 @@ pub enum Dispersion {
     /// rewriting of Ciddor's formula) carry a constant of their own.
     Sellmeier {
         #[serde(default = "one")]
+        /// The constant term A (defaults to 1 when absent from a file).
         a: f64,
+        /// The oscillator strengths Bᵢ (dimensionless), one per term.
         b: Vec<f64>,
+        /// The resonance terms Cᵢ in µm² (squared resonance wavelengths),
+        /// as many as `b`.
         c: Vec<f64>,
     },
+    /// Tabulated n and k, linearly interpolated in wavelength; an error
+    /// outside the table's range.
     Table(IndexTable),
 }
 
 /// A named material: its dispersion and a label used in messages and headers.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Material {
+    /// The label that names the material in error messages and table
+    /// headers: a built-in's name, the `name` given in a stack file, or one
+    /// derived from the index form (e.g. the Cauchy coefficients or the
+    /// table's path).
     pub name: String,
+    /// How the complex index n + ik varies with vacuum wavelength.
     pub dispersion: Dispersion,
 }
 

@@ -11,18 +11,20 @@
 //! finite layer the branch does not change the answer (the layer's transfer
 //! matrix is even in q), so gain layers take the same branch and stay bounded.
 
-// Not every public item here is documented yet: the crate-wide
-// missing_docs lint (Cargo.toml) is waived for this file until it is.
-#![allow(missing_docs)]
-
 use num_complex::Complex64 as C64;
 
 /// Power reflectance and transmittance for s and p polarization.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Response {
+    /// s-polarized reflectance |r_s|², a power fraction.
     pub rs: f64,
+    /// p-polarized reflectance |r_p|², a power fraction.
     pub rp: f64,
+    /// s-polarized transmittance: the Poynting flux into the substrate,
+    /// |t_s|² Re(q_sub) / q0. R + T + absorption = 1 for a passive stack.
     pub ts: f64,
+    /// p-polarized transmittance: the Poynting flux into the substrate,
+    /// |t_p|² Re(n_sub conj(cos θ_sub)) / (n0 cos θ0).
     pub tp: f64,
 }
 
@@ -44,9 +46,15 @@ impl Response {
 /// interface (r) and to the bottom interface (t).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Amplitudes {
+    /// s-polarized reflection coefficient at the top interface.
     pub rs: C64,
+    /// p-polarized reflection coefficient at the top interface (Byrnes'
+    /// sign convention).
     pub rp: C64,
+    /// s-polarized transmission coefficient: the substrate's forward
+    /// amplitude at the bottom interface over the incident one.
     pub ts: C64,
+    /// p-polarized transmission coefficient, referenced like `ts`.
     pub tp: C64,
 }
 
@@ -84,12 +92,20 @@ pub fn normal_index(n: C64, beta_sq: f64) -> C64 {
 /// (Byrnes' convention), given each side's index n and q.
 #[derive(Clone, Copy, Debug)]
 pub struct Fresnel {
+    /// s reflection: (q_i − q_f) / (q_i + q_f).
     pub rs: C64,
+    /// p reflection: (n_f² q_i − n_i² q_f) / (n_f² q_i + n_i² q_f).
     pub rp: C64,
+    /// s transmission: 2 q_i / (q_i + q_f).
     pub ts: C64,
+    /// p transmission: 2 n_i n_f q_i / (n_f² q_i + n_i² q_f).
     pub tp: C64,
 }
 
+/// The [`Fresnel`] coefficients from medium i (index `n_i`, normal index
+/// `q_i` = n_i cos θ_i) into medium f; the q are those of
+/// [`normal_index`], on the branch Im q ≥ 0. Where a denominator vanishes
+/// the coefficients are not finite.
 #[inline]
 pub fn fresnel(n_i: C64, q_i: C64, n_f: C64, q_f: C64) -> Fresnel {
     let s_den = (q_i + q_f).inv();

@@ -21,10 +21,6 @@
 //! Layers, listed from the top (ambient side) down, also need
 //! `thickness_nm`. Errors name the field: layers are numbered from 1.
 
-// Not every public item here is documented yet: the crate-wide
-// missing_docs lint (Cargo.toml) is waived for this file until it is.
-#![allow(missing_docs)]
-
 use std::fmt;
 use std::path::{Path, PathBuf};
 
@@ -41,9 +37,14 @@ use crate::error::{Error, Result};
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct StackSpec {
+    /// The semi-infinite medium light arrives from (no `thickness_nm`);
+    /// the stack requires it to be lossless.
     pub ambient: MediumSpec,
+    /// The finite layers from the top (ambient side) down, each with a
+    /// `thickness_nm`; may be empty (a bare interface).
     #[serde(default)]
     pub layers: Vec<MediumSpec>,
+    /// The semi-infinite medium below the last layer (no `thickness_nm`).
     pub substrate: MediumSpec,
 }
 
@@ -51,18 +52,30 @@ pub struct StackSpec {
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct MediumSpec {
+    /// A label for the material in messages and headers, replacing the one
+    /// its index form would give.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub name: Option<String>,
+    /// A constant index, wavelength independent.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub n: Option<IndexSpec>,
+    /// The name of a built-in material (the `optics::library` list; an
+    /// unknown name is an error that lists them).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub material: Option<String>,
+    /// Cauchy coefficients [A, B] or [A, B, C]: n = A + B/λ² + C/λ⁴ with λ
+    /// in µm (C defaults to 0), k = 0.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub cauchy: Option<Vec<f64>>,
+    /// Sellmeier coefficients, λ in µm.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub sellmeier: Option<SellmeierSpec>,
+    /// A refractiveindex.info-style CSV of n (and k) against wavelength,
+    /// relative to the stack file's directory.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub table: Option<PathBuf>,
+    /// The layer's physical thickness in nm: required for layers, refused
+    /// for the ambient and substrate (they are semi-infinite).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub thickness_nm: Option<f64>,
 }
@@ -70,16 +83,24 @@ pub struct MediumSpec {
 /// `n = 1.5` or `n = [1.5, 0.1]`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct IndexSpec {
+    /// Real part of the index.
     pub n: f64,
+    /// Extinction coefficient (0 when written as a single number): k > 0
+    /// absorbs, k < 0 is gain.
     pub k: f64,
 }
 
+/// `sellmeier = { a = 1.0, b = [...], c = [...] }`: n² = a + Σ bᵢλ²/(λ² −
+/// cᵢ) with λ in µm; k = 0.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct SellmeierSpec {
+    /// The constant term (1 when omitted, the classic form).
     #[serde(default = "one")]
     pub a: f64,
+    /// The dimensionless strengths bᵢ, one per term.
     pub b: Vec<f64>,
+    /// The resonance terms cᵢ in µm², as many as `b`.
     pub c: Vec<f64>,
 }
 

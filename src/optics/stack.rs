@@ -1,10 +1,6 @@
 //! A planar multilayer: a lossless ambient, finite layers from the top down,
 //! and a semi-infinite substrate that may absorb.
 
-// Not every public item here is documented yet: the crate-wide
-// missing_docs lint (Cargo.toml) is waived for this file until it is.
-#![allow(missing_docs)]
-
 use num_complex::Complex64 as C64;
 use serde::{Deserialize, Serialize};
 
@@ -115,6 +111,8 @@ impl Stack {
         Ok(())
     }
 
+    /// The N layer thicknesses in nm, top (ambient side) down: the
+    /// `thicknesses_nm` argument of [`solver::solve`].
     pub fn thicknesses_nm(&self) -> Vec<f64> {
         self.layers.iter().map(|l| l.thickness_nm).collect()
     }
@@ -177,10 +175,14 @@ impl StackGrid {
         })
     }
 
+    /// The vacuum wavelengths in nm the indices were evaluated at, in the
+    /// order given to [`StackGrid::new`].
     pub fn wavelengths_nm(&self) -> &[f64] {
         &self.wavelengths_nm
     }
 
+    /// The stack's N layer thicknesses in nm, top down, as they were
+    /// when the grid was built.
     pub fn thicknesses_nm(&self) -> &[f64] {
         &self.thicknesses_nm
     }

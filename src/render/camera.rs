@@ -1,13 +1,13 @@
 //! A pinhole perspective camera.
 
-// Not every public item here is documented yet: the crate-wide
-// missing_docs lint (Cargo.toml) is waived for this file until it is.
-#![allow(missing_docs)]
-
 use glam::Vec3;
 
 use super::geometry::Ray;
 
+/// A pinhole camera: every ray starts at the eye and passes through a
+/// point of an image plane at unit distance along the view direction,
+/// sized by the vertical field of view and the aspect ratio. Ray
+/// directions are unit vectors in world space.
 #[derive(Clone, Copy, Debug)]
 pub struct Camera {
     origin: Vec3,

@@ -1,10 +1,6 @@
 //! What a ray sees when it leaves the scene: a procedural sky over a
 //! checkered ground, or an equirectangular image the user supplies.
 
-// Not every public item here is documented yet: the crate-wide
-// missing_docs lint (Cargo.toml) is waived for this file until it is.
-#![allow(missing_docs)]
-
 use std::path::Path;
 
 use glam::Vec3;
@@ -12,13 +8,18 @@ use glam::Vec3;
 use super::thickness::fast_floor;
 use crate::error::{Error, Result};
 
+/// The radiance arriving from infinitely far away along each direction.
 #[derive(Clone, Debug)]
 pub enum Environment {
+    /// The procedural sky over a checkered ground.
     Sky(Sky),
+    /// A user-supplied equirectangular OpenEXR map.
     Map(EquirectMap),
 }
 
 impl Environment {
+    /// Linear-sRGB radiance seen along unit direction `dir` (world space,
+    /// +y up), for a ray that leaves the scene.
     #[inline]
     pub fn radiance(&self, dir: Vec3) -> Vec3 {
         match self {
@@ -41,17 +42,26 @@ impl Environment {
 /// A procedural sky as the scene describes it. Linear RGB radiances; `up` is +y.
 #[derive(Clone, Debug)]
 pub struct SkyParams {
+    /// Radiance straight up; the sky blends from `horizon` to it with the
+    /// square root of the direction's height.
     pub zenith: Vec3,
+    /// Radiance at the horizon, just above it.
     pub horizon: Vec3,
+    /// First colour of the ground checkerboard, seen below the horizon.
     pub ground: Vec3,
     /// Second colour of the ground checkerboard (equal to `ground` for none).
     pub ground_checker: Vec3,
     /// Checker square size on a ground plane `ground_depth` below the eye.
     pub checker_size: f32,
+    /// Distance in scene units from the eye down to the virtual ground plane
+    /// the checkerboard is projected on (directions, not positions, pick
+    /// the square, so it moves with the viewer).
     pub ground_depth: f32,
-    /// Unit direction toward the sun, its radiance and angular radius.
+    /// Unit direction toward the sun.
     pub sun_direction: Vec3,
+    /// Radiance added to the sky within the sun's disc.
     pub sun_radiance: Vec3,
+    /// Angular radius of the sun's disc in degrees; 0 or less for no sun.
     pub sun_radius_deg: f32,
 }
 
@@ -70,6 +80,8 @@ pub struct Sky {
 }
 
 impl Sky {
+    /// The sky for `params`, with the sun's cone, the far-ground colour and
+    /// the ambient mean computed once.
     pub fn new(params: SkyParams) -> Sky {
         let p = &params;
         Sky {
@@ -84,10 +96,14 @@ impl Sky {
         }
     }
 
+    /// The parameters the sky was built from.
     pub fn params(&self) -> &SkyParams {
         &self.params
     }
 
+    /// Linear-sRGB radiance along unit direction `dir`: above the horizon
+    /// (y ≥ 0) the horizon-to-zenith gradient plus the sun inside its disc;
+    /// below it the checkerboard, fading toward its mean near the horizon.
     #[inline]
     pub fn radiance(&self, dir: Vec3) -> Vec3 {
         let p = &self.params;

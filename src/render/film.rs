@@ -3,10 +3,6 @@
 //! [`DirectFilm`] evaluates the transfer matrix at every hit (the reference),
 //! so the two modes share every other line of the renderer.
 
-// Not every public item here is documented yet: the crate-wide
-// missing_docs lint (Cargo.toml) is waived for this file until it is.
-#![allow(missing_docs)]
-
 use std::cell::RefCell;
 
 use super::material::AngleTable;
@@ -65,6 +61,10 @@ thread_local! {
 }
 
 impl DirectFilm {
+    /// The direct shader for `film`: its stack's indices evaluated at every
+    /// wavelength of `sampling` (and of the reversed stack too when the film
+    /// has a back side), integrated under D65. Fails if a material cannot be
+    /// evaluated at one of those wavelengths.
     pub fn new(film: &Film, sampling: Sampling) -> Result<DirectFilm> {
         let integrator = SpectralIntegrator::new(sampling);
         let wl = integrator.wavelengths_nm();

@@ -1,24 +1,26 @@
 //! Rays, hits and the analytic shapes (spheres, planes) of the tracer.
 
-// Not every public item here is documented yet: the crate-wide
-// missing_docs lint (Cargo.toml) is waived for this file until it is.
-#![allow(missing_docs)]
-
 use glam::Vec3;
 
+/// A half-line in world space: the points origin + t · dir for t > 0.
 #[derive(Clone, Copy, Debug)]
 pub struct Ray {
+    /// Where the ray starts, in scene units.
     pub origin: Vec3,
     /// Unit length.
     pub dir: Vec3,
 }
 
 impl Ray {
+    /// A ray from `origin` along `dir`, which the caller must have
+    /// normalized (it is stored as given).
     #[inline]
     pub fn new(origin: Vec3, dir: Vec3) -> Self {
         Ray { origin, dir }
     }
 
+    /// The point at parameter `t`, which is also its distance from the
+    /// origin in scene units since `dir` has unit length.
     #[inline]
     pub fn at(&self, t: f32) -> Vec3 {
         self.origin + t * self.dir
@@ -28,6 +30,7 @@ impl Ray {
 /// The nearest intersection of a ray with one shape.
 #[derive(Clone, Copy, Debug)]
 pub struct SurfaceHit {
+    /// Ray parameter of the hit: its distance along the ray in scene units.
     pub t: f32,
     /// Unit geometric normal pointing out of the shape (for planes: the
     /// side the plane's normal names).
@@ -40,7 +43,9 @@ pub struct SurfaceHit {
 /// A sphere; its outside is the side its normals point to.
 #[derive(Clone, Copy, Debug)]
 pub struct Sphere {
+    /// Centre in world space.
     pub center: Vec3,
+    /// Radius in scene units (positive).
     pub radius: f32,
 }
 
@@ -71,6 +76,7 @@ impl Sphere {
         })
     }
 
+    /// The axis-aligned cube that just contains the sphere.
     pub fn bounds(&self) -> Aabb {
         Aabb {
             min: self.center - Vec3::splat(self.radius),
@@ -82,11 +88,16 @@ impl Sphere {
 /// An infinite plane through `point` with unit `normal`.
 #[derive(Clone, Copy, Debug)]
 pub struct Plane {
+    /// Any point on the plane, in world space.
     pub point: Vec3,
+    /// Unit normal; it names the plane's outside (front) side.
     pub normal: Vec3,
 }
 
 impl Plane {
+    /// The hit with t in (t_min, t_max), if any; a ray (nearly) parallel to
+    /// the plane misses. The hit's normals are the plane's whichever side
+    /// the ray comes from.
     #[inline]
     pub fn intersect(&self, ray: &Ray, t_min: f32, t_max: f32) -> Option<SurfaceHit> {
         let denom = self.normal.dot(ray.dir);
@@ -108,22 +119,28 @@ impl Plane {
 /// Axis-aligned bounding box.
 #[derive(Clone, Copy, Debug)]
 pub struct Aabb {
+    /// The corner with the smallest x, y and z.
     pub min: Vec3,
+    /// The corner with the largest x, y and z.
     pub max: Vec3,
 }
 
 impl Aabb {
+    /// The empty box (min = +∞, max = −∞): the identity of
+    /// [`Aabb::grow`] and [`Aabb::union`].
     pub const EMPTY: Aabb = Aabb {
         min: Vec3::splat(f32::INFINITY),
         max: Vec3::splat(f32::NEG_INFINITY),
     };
 
+    /// Enlarges the box to contain `p`.
     #[inline]
     pub fn grow(&mut self, p: Vec3) {
         self.min = self.min.min(p);
         self.max = self.max.max(p);
     }
 
+    /// The smallest box containing both boxes.
     #[inline]
     pub fn union(&self, o: &Aabb) -> Aabb {
         Aabb {
@@ -132,6 +149,7 @@ impl Aabb {
         }
     }
 
+    /// The box's midpoint (not finite for [`Aabb::EMPTY`]).
     #[inline]
     pub fn center(&self) -> Vec3 {
         0.5 * (self.min + self.max)

@@ -1,10 +1,6 @@
 //! Rendered images: linear RGB in memory, tiled parallel rendering, and
 //! the comparison of two renders.
 
-// Not every public item here is documented yet: the crate-wide
-// missing_docs lint (Cargo.toml) is waived for this file until it is.
-#![allow(missing_docs)]
-
 use glam::Vec3;
 use rayon::prelude::*;
 
@@ -15,8 +11,13 @@ use super::tracer::Tracer;
 /// A linear-RGB image (exposure applied), rows top to bottom.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Image {
+    /// Width in pixels.
     pub width: u32,
+    /// Height in pixels.
     pub height: u32,
+    /// Linear sRGB radiance (R, G, B) per pixel, row-major from the top-left
+    /// corner: pixel (x, y) is at index y · width + x. Unclamped: values
+    /// can exceed 1 or, out of gamut, fall below 0.
     pub pixels: Vec<[f32; 3]>,
 }
 
@@ -27,10 +28,17 @@ const TILE: u32 = 16;
 /// How one render samples its pixels.
 #[derive(Clone, Copy, Debug)]
 pub struct Sampler {
+    /// Image width in pixels.
     pub width: u32,
+    /// Image height in pixels.
     pub height: u32,
+    /// Samples per pixel: a jittered k×k grid when it is a square k², else
+    /// a jittered Latin hypercube; 1 (or 0) takes the pixel centre.
     pub spp: u32,
+    /// Hashed with the pixel and sample index into each sample's jitter, so
+    /// the image depends on it and not on scheduling.
     pub seed: u64,
+    /// Factor applied to each pixel's mean radiance.
     pub exposure: f32,
 }
 

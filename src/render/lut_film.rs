@@ -2,10 +2,6 @@
 //! covering only the film's thickness range, cached on disk under the
 //! table's cache key so a changed stack, range or resolution rebakes.
 
-// Not every public item here is documented yet: the crate-wide
-// missing_docs lint (Cargo.toml) is waived for this file until it is.
-#![allow(missing_docs)]
-
 use std::path::{Path, PathBuf};
 
 use super::film::{FilmShading, Side};
@@ -18,6 +14,10 @@ const THICKNESS_STEP_NM: f64 = 4.0;
 const MAX_THICKNESS_NODES: usize = 8193;
 const ANGLE_NODES: usize = 65;
 
+/// A film shaded from baked rgb tables: one for the front side and, when
+/// the film has a back side, one for the reversed stack (without it, back
+/// hits use the front table). Each covers the film's thickness range and
+/// every incidence angle; see [`LutFilm::spec`].
 pub struct LutFilm {
     front: Lut,
     back: Option<Lut>,

@@ -1,42 +1,59 @@
 //! Surface materials as the tracer sees them, with everything spectral
 //! already reduced to linear-sRGB weights.
 
-// Not every public item here is documented yet: the crate-wide
-// missing_docs lint (Cargo.toml) is waived for this file until it is.
-#![allow(missing_docs)]
-
 use glam::Vec3;
 
 use super::thickness::ThicknessField;
 
+/// How a surface scatters light, in the tracer's terms.
 #[derive(Clone, Debug)]
 pub enum Material {
     /// Lambertian, lit by the lights (with shadows) plus the environment's
     /// mean radiance as the ambient term; optionally a checkerboard.
     Diffuse {
+        /// Linear-sRGB reflectance (fraction of light scattered per
+        /// channel); the even squares' colour when there is a checker.
         albedo: Vec3,
+        /// A checkerboard in the x–z plane alternating `albedo` with its
+        /// own colour.
         checker: Option<Checker>,
     },
     /// An opaque mirror whose reflectance depends on the incidence angle
     /// (exact Fresnel of a library metal, integrated over the spectrum).
-    Metal { reflectance: AngleTable },
+    Metal {
+        /// Linear-sRGB reflectance over cos θ of the incident ray.
+        reflectance: AngleTable,
+    },
     /// A smooth uncoated dielectric of real index `ior` in a medium of index
     /// 1; light inside is absorbed per unit length (Beer–Lambert).
-    Dielectric { ior: f32, absorption: Vec3 },
+    Dielectric {
+        /// Real refractive index of the object (the outside being 1).
+        ior: f32,
+        /// Beer–Lambert absorption coefficient per scene unit, per linear
+        /// sRGB channel; zero for a clear object.
+        absorption: Vec3,
+    },
     /// A thin-film stack over a substrate, shaded through a [`super::film::FilmShading`].
     Film(FilmMaterial),
 }
 
+/// The second colour and square size of a diffuse checkerboard, laid out
+/// on the hit point's x and z world coordinates.
 #[derive(Clone, Debug)]
 pub struct Checker {
+    /// Linear-sRGB albedo of the odd squares.
     pub albedo: Vec3,
+    /// Side of a square in scene units.
     pub size: f32,
 }
 
+/// A thin-film coated surface: which film stack, how thick its varying
+/// layer is where, and what lies on either side.
 #[derive(Clone, Debug)]
 pub struct FilmMaterial {
     /// Index into the scene's films (and the renderer's film shaders).
     pub film: usize,
+    /// The varying layer's thickness in nm over the surface.
     pub thickness: ThicknessField,
     /// Real index of the stack's ambient, at 550 nm.
     pub outside_ior: f32,
@@ -45,6 +62,7 @@ pub struct FilmMaterial {
     pub inside: Option<Interior>,
 }
 
+/// The medium inside a film-coated object that light can enter.
 #[derive(Clone, Copy, Debug)]
 pub struct Interior {
     /// Real index at 550 nm, used to bend the transmitted ray.
@@ -84,6 +102,8 @@ pub struct AngleTable {
 }
 
 impl AngleTable {
+    /// Tabulates `f` at `nodes` evenly spaced cos θ from 0 to 1 inclusive
+    /// (at least 2 nodes).
     pub fn from_fn(nodes: usize, mut f: impl FnMut(f64) -> [f32; 3]) -> AngleTable {
         let nodes = nodes.max(2);
         let values = (0..nodes)
@@ -92,6 +112,8 @@ impl AngleTable {
         AngleTable { values }
     }
 
+    /// The weights at `cos_theta`, clamped to [0, 1], linearly
+    /// interpolated between the two nearest nodes.
     #[inline]
     pub fn at(&self, cos_theta: f32) -> Vec3 {
         let x = cos_theta.clamp(0.0, 1.0) * (self.values.len() - 1) as f32;

@@ -11,10 +11,6 @@
 //! # Ok::<(), irid::Error>(())
 //! ```
 
-// Not every public item here is documented yet: the crate-wide
-// missing_docs lint (Cargo.toml) is waived for this file until it is.
-#![allow(missing_docs)]
-
 pub mod camera;
 pub mod environment;
 pub mod film;
@@ -52,11 +48,20 @@ pub enum FilmMode {
     /// field to a grid too (see [`ThicknessGrid`]) rather than evaluate the
     /// noise at every hit.
     Lut {
+        /// Directory of baked tables, one file per film side named after
+        /// the film, the side and the table's cache key (see
+        /// [`LutFilm::cache_path`]); created when missing.
         cache_dir: PathBuf,
+        /// Bake each bounded noise film's thickness field to a grid (the
+        /// default) instead of evaluating the noise at every hit.
         thickness_grids: bool,
     },
     /// Evaluate the transfer matrix at every hit with this wavelength sampling.
-    Direct { sampling: Sampling },
+    Direct {
+        /// The spectral integration that turns each hit's R and T spectra
+        /// into linear sRGB.
+        sampling: Sampling,
+    },
 }
 
 impl FilmMode {
@@ -80,15 +85,25 @@ impl FilmMode {
 /// Per-run settings; `None` keeps the scene file's value.
 #[derive(Clone, Debug)]
 pub struct RenderOptions {
+    /// How films are shaded: baked tables or the direct solver.
     pub film: FilmMode,
+    /// Image width in pixels (values below 1 become 1).
     pub width: Option<u32>,
+    /// Image height in pixels (values below 1 become 1).
     pub height: Option<u32>,
+    /// Stratified samples per pixel (values below 1 become 1; 1 samples
+    /// the pixel centre).
     pub spp: Option<u32>,
+    /// Reflection and refraction bounces after the camera ray.
     pub max_depth: Option<u32>,
+    /// Seeds the per-sample jitter; the image depends only on it (and the
+    /// scene and options), not on thread count or scheduling.
     pub seed: u64,
 }
 
 impl RenderOptions {
+    /// Options that shade films with `film` and keep every scene-file
+    /// setting, with seed 0.
     pub fn new(film: FilmMode) -> RenderOptions {
         RenderOptions {
             film,
@@ -103,12 +118,15 @@ impl RenderOptions {
 
 /// One shader per film of a scene, all of one mode.
 pub enum FilmShaders {
+    /// Table-backed shaders, indexed like the scene's `films`.
     Lut(Vec<LutFilm>),
+    /// Direct transfer-matrix shaders, indexed like the scene's `films`.
     Direct(Vec<DirectFilm>),
 }
 
 /// The film shaders a scene needs, and what preparing them cost.
 pub struct PreparedFilms {
+    /// One shader per entry of the scene's `films`, in the same order.
     pub shaders: FilmShaders,
     /// Per object: in LUT mode with thickness grids, its film's noise
     /// thickness field baked to a grid (where the object is bounded and the
@@ -120,6 +138,8 @@ pub struct PreparedFilms {
     pub bake_time: Duration,
     /// Tables baked by this call, and tables found in the cache.
     pub tables_baked: usize,
+    /// Tables loaded from the cache directory instead of baked (zero in
+    /// direct mode).
     pub tables_cached: usize,
 }
 

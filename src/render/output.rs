@@ -2,10 +2,6 @@
 //! temporary file in the target directory and a rename, and comparing two
 //! renders in CIEDE2000.
 
-// Not every public item here is documented yet: the crate-wide
-// missing_docs lint (Cargo.toml) is waived for this file until it is.
-#![allow(missing_docs)]
-
 use std::path::Path;
 
 use super::image::Image;
@@ -97,7 +93,11 @@ impl Image {
 /// CIEDE2000 statistics over the pixels of two images.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ColorDifference {
+    /// Mean CIEDE2000 over all pixels.
     pub mean: f64,
+    /// 99th percentile over pixels: the value of rank ⌈0.99·n⌉ in
+    /// ascending order.
     pub p99: f64,
+    /// Largest CIEDE2000 of any pixel.
     pub max: f64,
 }

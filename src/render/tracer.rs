@@ -2,10 +2,6 @@
 //! refraction to a fixed depth, direct light with shadows on diffuse
 //! surfaces, the environment everywhere else.
 
-// Not every public item here is documented yet: the crate-wide
-// missing_docs lint (Cargo.toml) is waived for this file until it is.
-#![allow(missing_docs)]
-
 use glam::Vec3;
 
 use super::environment::checker_even;
@@ -19,6 +15,7 @@ use super::thickness::ThicknessGrid;
 /// hit is frequent enough that an indirect call, which cannot be inlined,
 /// is a measurable part of what film shading costs in LUT mode.
 pub struct Tracer<'a, F: FilmShading> {
+    /// The scene traced: objects, materials, lights and environment.
     pub scene: &'a Scene,
     /// One shader per entry of `scene.films`.
     pub films: &'a [F],
@@ -26,6 +23,9 @@ pub struct Tracer<'a, F: FilmShading> {
     /// was (LUT mode); other objects evaluate their field exactly. May be
     /// empty.
     pub thickness_grids: &'a [Option<ThicknessGrid>],
+    /// Reflection and refraction bounces followed after the camera ray;
+    /// a ray past this depth takes the environment's radiance in its
+    /// direction instead of being traced.
     pub max_depth: u32,
 }
 

@@ -1,9 +1,5 @@
 //! The mesh and its bounding-volume hierarchy.
 
-// Not every public item here is documented yet: the crate-wide
-// missing_docs lint (Cargo.toml) is waived for this file until it is.
-#![allow(missing_docs)]
-
 use glam::{Mat3, Vec3};
 
 use crate::error::{Error, Result};
@@ -94,10 +90,14 @@ impl Mesh {
         Ok(mesh)
     }
 
+    /// Triangles kept: the faces given, less the degenerate (zero-area)
+    /// ones dropped when the mesh was built.
     pub fn triangle_count(&self) -> usize {
         self.triangles.len()
     }
 
+    /// The box around every kept triangle (the BVH root's bounds), in the
+    /// coordinates of the vertex positions.
     pub fn bounds(&self) -> Aabb {
         self.nodes[0].bounds
     }

@@ -2,10 +2,6 @@
 //! paper. The format is documented in `docs/scene-format.md` and by the
 //! built-in scenes under `luts/scenes/`.
 
-// Not every public item here is documented yet: the crate-wide
-// missing_docs lint (Cargo.toml) is waived for this file until it is.
-#![allow(missing_docs)]
-
 //!
 //! [`sections`] is the file as parsed; [`build`] turns each section into
 //! the scene's part, one function per section (and per material and shape
@@ -54,6 +50,9 @@ const BUILTIN: [(&str, &str); 6] = [
 /// well below an 8-bit step.
 const METAL_TABLE_NODES: usize = 257;
 
+/// The names of the scenes compiled into the binary, for
+/// [`Scene::builtin`] and [`Scene::load_named`] (which prefer them over a
+/// file path of the same name).
 pub fn builtin_names() -> Vec<&'static str> {
     BUILTIN.iter().map(|(n, _)| *n).collect()
 }

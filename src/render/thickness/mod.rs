@@ -5,10 +5,6 @@
 //! precomputed grid of a field over one object's surface that LUT renders
 //! read instead.
 
-// Not every public item here is documented yet: the crate-wide
-// missing_docs lint (Cargo.toml) is waived for this file until it is.
-#![allow(missing_docs)]
-
 mod grid;
 mod noise;
 
@@ -17,21 +13,32 @@ use glam::Vec3;
 pub use grid::{ThicknessGrid, GRID_MAX_ERROR_NM};
 pub use noise::Perlin;
 
+/// A film's thickness as a function of the surface point, in nm: the value
+/// the film shader gets for the varying layer at each hit.
 #[derive(Clone, Debug)]
 pub enum ThicknessField {
+    /// The same thickness everywhere.
     Uniform {
+        /// The layer's thickness in nm.
         thickness_nm: f32,
     },
+    /// d(p) = min + (max − min) · noise(s · p), the noise mapped to [0, 1]
+    /// (see [`Perlin::unit`]), so d stays within [min, max].
     Noise {
+        /// Thickness in nm where the noise is 0.
         min_nm: f32,
+        /// Thickness in nm where the noise is 1.
         max_nm: f32,
         /// Frequency s, per scene unit.
         scale: f32,
+        /// The seeded noise field.
         perlin: Box<Perlin>,
     },
 }
 
 impl ThicknessField {
+    /// A noise field between `min_nm` and `max_nm` (nm) with frequency
+    /// `scale` per scene unit, its Perlin noise seeded with `seed`.
     pub fn noise(min_nm: f32, max_nm: f32, scale: f32, seed: u32) -> ThicknessField {
         ThicknessField::Noise {
             min_nm,
@@ -41,6 +48,8 @@ impl ThicknessField {
         }
     }
 
+    /// The thickness in nm at point `p` (scene units, the same space the
+    /// noise frequency is given in).
     #[inline]
     pub fn at(&self, p: Vec3) -> f32 {
         match self {

@@ -1,10 +1,6 @@
 //! Perlin's improved noise with hashed gradients, portable and in AVX2
 //! lanes.
 
-// Not every public item here is documented yet: the crate-wide
-// missing_docs lint (Cargo.toml) is waived for this file until it is.
-#![allow(missing_docs)]
-
 use glam::{Vec3, Vec4};
 
 use super::{avx2_available, fast_floor};
@@ -87,6 +83,10 @@ fn fade(d: Vec4) -> Vec4 {
 }
 
 impl Perlin {
+    /// The noise field for `seed`: the seed is hashed (SplitMix64's
+    /// finaliser) into the permutation key, so nearby seeds give unrelated
+    /// fields. Uses the AVX2 code when the CPU has it (same values bit for
+    /// bit).
     pub fn new(seed: u32) -> Perlin {
         // SplitMix64's finaliser: seeds 1 and 2 get unrelated keys.
         let mut z = u64::from(seed).wrapping_add(0x9E37_79B9_7F4A_7C15);
