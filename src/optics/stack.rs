@@ -207,13 +207,6 @@ impl StackGrid {
             .zip(self.indices.chunks_exact(media))
     }
 
-    /// Changes one layer's thickness (the baker's varying layer); the value
-    /// must lie in [0, [`MAX_THICKNESS_NM`]], as [`Stack::validate`] requires.
-    pub fn set_thickness_nm(&mut self, layer: usize, thickness_nm: f64) {
-        debug_assert!((0.0..=MAX_THICKNESS_NM).contains(&thickness_nm));
-        self.thicknesses_nm[layer] = thickness_nm;
-    }
-
     /// R and T at every wavelength at one angle, with the N layer
     /// thicknesses given (e.g. the stack's own with one varied), into `out`
     /// (one per wavelength): the spectrum of one point, the batched solver's
