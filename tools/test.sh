@@ -15,6 +15,9 @@ step() { printf '\n== %s\n' "$*"; }
 step "cargo fmt --check"
 cargo fmt --check
 
+step "tools/check_links.py (every relative link and anchor in the Markdown)"
+python3 tools/check_links.py
+
 step "cargo test --release"
 cargo test --release
 
