@@ -24,7 +24,7 @@ def cli_path():
     return None
 
 
-@pytest.fixture(scope="session")
+@pytest.fixture(scope="package")
 def irid_cli():
     """Runs the irid CLI: irid_cli(*args) -> CompletedProcess (text)."""
     path = cli_path()
@@ -40,7 +40,7 @@ def irid_cli():
     return run
 
 
-@pytest.fixture(scope="session")
+@pytest.fixture(scope="package")
 def luts():
     if not LUTS.is_dir():
         pytest.skip("needs the repository's luts/ folder (run from a clone)")
