@@ -372,3 +372,140 @@ fn spectrum_path_equals_scalar_on_both_copies() {
         }
     }
 }
+
+/// A stack whose every medium has one index at all wavelengths, which
+/// `StackGrid::solve_spectrum` solves with its interfaces computed once per
+/// angle (`lanes::constant`).
+fn non_dispersive(n0: f64, layers: &[(C64, f64)], substrate: C64) -> Stack {
+    use irid::optics::{Layer, Material};
+    Stack {
+        ambient: Material::constant(n0, 0.0),
+        layers: layers
+            .iter()
+            .map(|&(n, d)| Layer {
+                material: Material::constant(n.re, n.im),
+                thickness_nm: d,
+            })
+            .collect(),
+        substrate: Material::constant(substrate.re, substrate.im),
+    }
+}
+
+/// `solve_spectrum` on both copies of the kernel against the scalar solver,
+/// over `wavelengths` and every angle of `cosines`.
+fn check_spectrum(what: &str, stack: &Stack, wavelengths: &[f64], cosines: &[f64]) {
+    let grid = StackGrid::new(stack, wavelengths).unwrap();
+    let thick = grid.thicknesses_nm().to_vec();
+    for &cos in cosines {
+        let mut best = vec![Response::default(); wavelengths.len()];
+        let mut portable = vec![Response::default(); wavelengths.len()];
+        grid.solve_spectrum(&thick, cos, &mut best);
+        grid.solve_spectrum_on(Path::Portable, &thick, cos, &mut portable);
+        for ((b, p), (w, n)) in best.iter().zip(&portable).zip(grid.iter()) {
+            assert!(
+                same_bits(b, p),
+                "{what} at {w} nm, cos {cos}: AVX2 vs portable"
+            );
+            let want = solve(n, &thick, w, cos);
+            for (got, want, name) in [
+                (b.rs, want.rs, "Rs"),
+                (b.rp, want.rp, "Rp"),
+                (b.ts, want.ts, "Ts"),
+                (b.tp, want.tp, "Tp"),
+            ] {
+                assert!(
+                    !differs(got, want),
+                    "{what}: {name} at {w} nm, cos {cos}: spectrum {got:e}, scalar {want:e} (Δ {:e})",
+                    got - want
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn non_dispersive_stacks_equal_scalar() {
+    // Random constant-index stacks of every kind, at random, normal, grazing
+    // and every layer's own critical angle; 1 to 471 wavelengths, so that
+    // partial groups of four occur.
+    let mut rng = Pcg64::seed_from_u64(18);
+    for round in 0..300 {
+        let kind = [Kind::Lossless, Kind::Passive, Kind::WithGain, Kind::Metal][round % 4];
+        let layers = rng.random_range(0..8);
+        let case = random_case(&mut rng, kind, layers, 2000.0, 1, 4);
+        let media = case.thicknesses_nm.len() + 2;
+        let n = &case.indices[..media];
+        let body: Vec<(C64, f64)> = n[1..media - 1]
+            .iter()
+            .copied()
+            .zip(case.thicknesses_nm.iter().copied())
+            .collect();
+        let stack = non_dispersive(n[0].re, &body, n[media - 1]);
+        let n_w = [1, 3, 4, 5, 41, 471][round % 6];
+        let wl: Vec<f64> = (0..n_w)
+            .map(|i| 360.0 + 470.0 * i as f64 / n_w.max(2) as f64)
+            .collect();
+        check_spectrum(&case.what, &stack, &wl, &case.cos_theta0);
+    }
+}
+
+#[test]
+fn non_dispersive_hard_cases() {
+    let wl: Vec<f64> = (0..37).map(|i| 380.0 + 11.0 * f64::from(i)).collect();
+    let cosines: Vec<f64> = (0..=50).map(|i| f64::from(i) / 50.0).collect();
+    let glass = c(1.5, 0.0);
+    let air = c(1.0, 0.0);
+    // Evanescent gaps: glass / air / glass beyond the critical angle.
+    for gap in [0.0, 1.0, 200.0, 1e5, 1e7] {
+        let s = non_dispersive(1.5, &[(air, gap)], glass);
+        check_spectrum(&format!("gap {gap} nm"), &s, &wl, &cosines);
+    }
+    // Thick absorbers (decays that underflow) and phases beyond the
+    // polynomial's range.
+    for (k, d) in [(1e-3, 4e7), (0.9, 4e7), (0.0, 4e7), (1e-6, 1e6)] {
+        let s = non_dispersive(1.0, &[(c(1.5, k), d)], glass);
+        check_spectrum(&format!("k {k}, {d} nm"), &s, &wl, &cosines);
+    }
+    // Gain on gold, a metal substrate, and a dense ambient over a run of
+    // layers at their critical angle (taken by the general kernel).
+    let gold = c(0.27, 2.9);
+    check_spectrum(
+        "gain on gold",
+        &non_dispersive(1.0, &[(c(1.6, -0.08), 350.0)], gold),
+        &wl,
+        &cosines,
+    );
+    let n0 = 1.7;
+    let cc = (1.0 - (1.2f64 / n0).powi(2)).sqrt();
+    check_spectrum(
+        "near-critical run",
+        &non_dispersive(
+            n0,
+            &[
+                (c(1.2, 0.0), 80.0),
+                (c(1.2, 0.0), 30.0),
+                (c(2.0, 0.1), 60.0),
+            ],
+            c(1.45, 0.0),
+        ),
+        &wl,
+        &[cc, cc * (1.0 + 1e-7), cc * (1.0 - 1e-5), 0.5],
+    );
+    // Sixty layers (the most media the non-dispersive kernel lays out is
+    // 66), a lossless quarter-wave mirror.
+    let mirror: Vec<(C64, f64)> = (0..60)
+        .map(|i| {
+            if i % 2 == 0 {
+                (c(2.4, 0.0), 57.3)
+            } else {
+                (c(1.46, 0.0), 94.2)
+            }
+        })
+        .collect();
+    check_spectrum(
+        "60-layer mirror",
+        &non_dispersive(1.0, &mirror, glass),
+        &wl,
+        &cosines,
+    );
+}

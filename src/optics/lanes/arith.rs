@@ -1,37 +1,9 @@
-//! The solver of [`super::solver`] on four (wavelength, angle) pairs of one
-//! stack at once: every complex quantity of the recursion is held as four
-//! real parts and four imaginary parts, so that with AVX2 one instruction
-//! advances all four lanes.
-//!
-//! The arithmetic is the scalar recursion's (the same products and sums in
-//! the same order, the same branch of every square root). It departs from
-//! [`solve`] only where speed asks: e^x, sin and cos come from a range
-//! reduction and a polynomial instead of the C library, and a complex
-//! reciprocal takes one division and two products instead of two divisions.
-//! Each is within an ulp or a few; `tests/batched.rs` holds the lanes to the
-//! scalar solver within 10⁻¹² over random and hard stacks.
-//! What the lanes do not cover is handed, lane by lane, to the scalar solver,
-//! which then gives that lane's answer exactly:
-//! - grazing incidence (cos θ0 ≤ 0), which has its own closed form;
-//! - a layer at or near its own critical angle (the scalar solver's field
-//!   form, [`near_critical`](super::solver) there);
-//!
-//! For one layer of one lane only, the one-way phase factor of a layer whose
-//! decay underflows (e^x below 2^−1022) or whose phase exceeds the
-//! reduction's exact range ([`PHASE_LIMIT`]) is computed with the C library.
-//!
-//! Gain layers and evanescent gaps need nothing of their own: the branch
-//! Im q ≥ 0 keeps every factor bounded, exactly as in the scalar solver.
-//!
-//! The kernel is generic over its lane type: [`avx2::Avx2`] (one AVX2
-//! register per quantity, chosen at run time when the CPU has it) or
-//! [`Portable`] (an array). Both perform the same IEEE operations in the same
-//! order (Rust never fuses a multiply and an add on its own), so they agree
-//! bit for bit.
+//! Four-lane arithmetic for the batched solver: the lane type (AVX2 or a
+//! portable array performing the same IEEE operations), complex numbers
+//! held as four real and four imaginary parts, and e^x, sin and cos by range
+//! reduction and polynomial.
 
 use num_complex::Complex64 as C64;
-
-use super::solver::{solve, Response};
 
 /// Lanes per group: one AVX2 register of f64.
 pub const LANES: usize = 4;
@@ -39,14 +11,14 @@ pub const LANES: usize = 4;
 /// |phase| up to which sin and cos reduce the argument exactly: the
 /// reduction multiplies the quadrant count by the first two 33-bit pieces
 /// of π/2, exact while the count stays below 2^20 (phase ≈ 1.6 × 10⁶).
-const PHASE_LIMIT: f64 = 1e5;
+pub(super) const PHASE_LIMIT: f64 = 1e5;
 
 /// exp(x) for x at or above this stays a normal number, built from 2^n.
-const EXP_NORMAL_MIN: f64 = -708.0;
+pub(super) const EXP_NORMAL_MIN: f64 = -708.0;
 
 /// 1.5 × 2^52: adding it rounds a float below 2^51 in magnitude to an
 /// integer, which then sits in the low bits of the sum.
-const ROUND_MAGIC: f64 = 6_755_399_441_055_744.0;
+pub(super) const ROUND_MAGIC: f64 = 6_755_399_441_055_744.0;
 
 const LOG2_E: f64 = std::f64::consts::LOG2_E;
 /// ln 2 in two pieces, the first with 32 significant bits so that n × LN2_HI
@@ -73,7 +45,7 @@ const INV_FACTORIAL: [f64; 18] = {
 /// Four f64 lanes and the operations the recursion needs. Two
 /// implementations perform the same IEEE operations: [`Portable`] (an
 /// array, one lane after the other) and, on x86-64, [`Avx2`] (one register).
-trait Lanes: Copy {
+pub(super) trait Lanes: Copy {
     type Mask: Copy;
     fn splat(x: f64) -> Self;
     fn from_array(a: [f64; LANES]) -> Self;
@@ -222,7 +194,7 @@ impl Lanes for Portable {
 }
 
 #[cfg(target_arch = "x86_64")]
-mod avx2 {
+pub(super) mod avx2 {
     //! The AVX2 copy: one `__m256d` per quantity. Every function here is
     //! inlined into `batch_avx2`, which is compiled with AVX2 enabled and
     //! only called once the CPU is known to have it.
@@ -365,14 +337,14 @@ mod avx2 {
 /// repeat num_complex's formulas exactly (including 0 − x where it writes
 /// that, which differs from −x in the sign of a zero).
 #[derive(Clone, Copy, Debug)]
-struct Cv<V> {
-    re: V,
-    im: V,
+pub(super) struct Cv<V> {
+    pub(super) re: V,
+    pub(super) im: V,
 }
 
 impl<V: Lanes> Cv<V> {
     #[inline(always)]
-    fn real(re: V) -> Self {
+    pub(super) fn real(re: V) -> Self {
         Cv {
             re,
             im: V::splat(0.0),
@@ -380,7 +352,7 @@ impl<V: Lanes> Cv<V> {
     }
 
     #[inline(always)]
-    fn add(self, o: Self) -> Self {
+    pub(super) fn add(self, o: Self) -> Self {
         Cv {
             re: self.re.add(o.re),
             im: self.im.add(o.im),
@@ -388,7 +360,7 @@ impl<V: Lanes> Cv<V> {
     }
 
     #[inline(always)]
-    fn sub(self, o: Self) -> Self {
+    pub(super) fn sub(self, o: Self) -> Self {
         Cv {
             re: self.re.sub(o.re),
             im: self.im.sub(o.im),
@@ -396,7 +368,7 @@ impl<V: Lanes> Cv<V> {
     }
 
     #[inline(always)]
-    fn mul(self, o: Self) -> Self {
+    pub(super) fn mul(self, o: Self) -> Self {
         Cv {
             re: self.re.mul(o.re).sub(self.im.mul(o.im)),
             im: self.re.mul(o.im).add(self.im.mul(o.re)),
@@ -405,7 +377,7 @@ impl<V: Lanes> Cv<V> {
 
     /// A real factor times a complex number (`f64 * C64`).
     #[inline(always)]
-    fn scale(self, k: V) -> Self {
+    pub(super) fn scale(self, k: V) -> Self {
         Cv {
             re: k.mul(self.re),
             im: k.mul(self.im),
@@ -414,7 +386,7 @@ impl<V: Lanes> Cv<V> {
 
     /// `C64 - f64`.
     #[inline(always)]
-    fn sub_real(self, x: V) -> Self {
+    pub(super) fn sub_real(self, x: V) -> Self {
         Cv {
             re: self.re.sub(x),
             im: self.im,
@@ -422,14 +394,14 @@ impl<V: Lanes> Cv<V> {
     }
 
     #[inline(always)]
-    fn norm_sqr(self) -> V {
+    pub(super) fn norm_sqr(self) -> V {
         self.re.mul(self.re).add(self.im.mul(self.im))
     }
 
     /// 1/z with one division (num_complex divides twice; the results
     /// differ by at most an ulp).
     #[inline(always)]
-    fn inv(self) -> Self {
+    pub(super) fn inv(self) -> Self {
         let r = V::splat(1.0).div(self.norm_sqr());
         Cv {
             re: self.re.mul(r),
@@ -439,7 +411,7 @@ impl<V: Lanes> Cv<V> {
 
     /// `one + self` with `one` = 1 + 0i.
     #[inline(always)]
-    fn one_plus(self) -> Self {
+    pub(super) fn one_plus(self) -> Self {
         Cv {
             re: V::splat(1.0).add(self.re),
             im: V::splat(0.0).add(self.im),
@@ -448,7 +420,7 @@ impl<V: Lanes> Cv<V> {
 
     /// `one - self`.
     #[inline(always)]
-    fn one_minus(self) -> Self {
+    pub(super) fn one_minus(self) -> Self {
         Cv {
             re: V::splat(1.0).sub(self.re),
             im: V::splat(0.0).sub(self.im),
@@ -460,7 +432,7 @@ impl<V: Lanes> Cv<V> {
 /// reflected into Im ≥ 0 when the argument lies below the real axis (a −0.0
 /// imaginary part counts as above).
 #[inline(always)]
-fn sqrt_upper<V: Lanes>(z: Cv<V>) -> Cv<V> {
+pub(super) fn sqrt_upper<V: Lanes>(z: Cv<V>) -> Cv<V> {
     let (x, y) = (z.re, z.im);
     let half = V::splat(0.5);
     let zero = V::splat(0.0);
@@ -526,7 +498,7 @@ fn sin_cos_lanes<V: Lanes>(a: V) -> (V, V) {
 /// zero where the decay underflows to zero; lanes outside the polynomials'
 /// range take the scalar solver's own expression.
 #[inline(always)]
-fn one_way<V: Lanes>(phase: Cv<V>) -> Cv<V> {
+pub(super) fn one_way<V: Lanes>(phase: Cv<V>) -> Cv<V> {
     let x = phase.im.neg();
     let zero = V::splat(0.0);
     // A lossless layer (the common case) decays by exactly 1 in every lane.
@@ -561,7 +533,7 @@ fn one_way<V: Lanes>(phase: Cv<V>) -> Cv<V> {
 }
 
 /// Every lane's bit of a mask.
-const ALL_LANES: u32 = (1 << LANES) - 1;
+pub(super) const ALL_LANES: u32 = (1 << LANES) - 1;
 
 /// The scalar solver's one-way factor, written as it writes it.
 #[inline(never)]
@@ -573,375 +545,4 @@ fn scalar_one_way(phase: C64) -> C64 {
         let (sin, cos) = phase.re.sin_cos();
         C64::new(cos * decay, sin * decay)
     }
-}
-
-/// Solves four (wavelength, angle) pairs of one stack. `indices[l]` holds
-/// lane l's N + 2 indices (ambient, layers, substrate) at `wavelength_nm[l]`;
-/// the preconditions are [`solve`]'s.
-/// `medium(j)` gives medium j's n and n² in every lane (n² as `n * n`
-/// computes it), `k0` is 2π over each lane's wavelength.
-#[inline(always)]
-fn solve_lanes<V: Lanes>(
-    medium: impl Fn(usize) -> (Cv<V>, Cv<V>),
-    k0: V,
-    indices: [&[C64]; LANES],
-    thicknesses_nm: &[f64],
-    wavelength_nm: [f64; LANES],
-    cos_theta0: [f64; LANES],
-) -> [Response; LANES] {
-    let last = thicknesses_nm.len() + 1;
-    for lane in &indices {
-        assert_eq!(lane.len(), last + 1, "indices: N + 2 per lane");
-    }
-    let zero = V::splat(0.0);
-    let one = V::splat(1.0);
-    // Lanes whose answer the scalar solver gives instead: grazing here,
-    // near-critical layers below.
-    let mut scalar = cos_theta0.map(|c| c.is_nan() || c <= 0.0);
-    let cos = V::from_array(cos_theta0.map(|c| c.min(1.0)));
-    let n0 = medium(0).0.re;
-    let beta_sq = n0.mul(n0).mul(one.sub(cos).mul(one.add(cos)));
-
-    let (n_sub, nsq_sub) = medium(last);
-    let mut n_below = n_sub;
-    let mut nsq_below = nsq_sub;
-    let q_sub = sqrt_upper(nsq_below.sub_real(beta_sq));
-    let mut q_below = q_sub;
-    let (mut gamma_s, mut gamma_p) = (Cv::real(zero), Cv::real(zero));
-    let (mut ts, mut tp) = (Cv::real(one), Cv::real(one));
-    let mut near_critical = 0u32;
-
-    for j in (0..last).rev() {
-        let (n_above, nsq_above, q_above) = if j == 0 {
-            (Cv::real(n0), Cv::real(n0.mul(n0)), Cv::real(n0.mul(cos)))
-        } else {
-            let (n, nsq) = medium(j);
-            (n, nsq, sqrt_upper(nsq.sub_real(beta_sq)))
-        };
-        if j + 1 < last {
-            let k0_d = k0.mul(V::splat(thicknesses_nm[j]));
-            let one_way = one_way(q_below.scale(k0_d));
-            let round_trip = one_way.mul(one_way);
-            gamma_s = gamma_s.mul(round_trip);
-            gamma_p = gamma_p.mul(round_trip);
-            ts = ts.mul(one_way);
-            tp = tp.mul(one_way);
-        }
-        if j > 0 {
-            // The scalar solver's near-critical test: |q|⁴ < 10⁻⁸ |n²|².
-            let q2 = q_above.norm_sqr();
-            near_critical |= V::bits(q2.mul(q2).lt(V::splat(1e-8).mul(nsq_above.norm_sqr())));
-        }
-
-        let x = q_above.mul(gamma_s.one_plus());
-        let y = q_below.mul(gamma_s.one_minus());
-        let inv_s = x.add(y).inv();
-        gamma_s = x.sub(y).mul(inv_s);
-        ts = ts.mul(q_above.scale(V::splat(2.0)).mul(inv_s));
-
-        let x = nsq_below.mul(q_above).mul(gamma_p.one_plus());
-        let y = nsq_above.mul(q_below).mul(gamma_p.one_minus());
-        let inv_p = x.add(y).inv();
-        gamma_p = x.sub(y).mul(inv_p);
-        tp = tp.mul(
-            n_above
-                .scale(V::splat(2.0))
-                .mul(n_below)
-                .mul(q_above)
-                .mul(inv_p),
-        );
-
-        n_below = n_above;
-        nsq_below = nsq_above;
-        q_below = q_above;
-    }
-
-    // Power, as the scalar solver's `to_power`.
-    let q0 = n0.mul(cos);
-    let conj_q = Cv {
-        re: q_sub.re,
-        im: q_sub.im.neg(),
-    };
-    let p_flux = conj_q.mul(n_sub).mul(n_sub).re.div(n_sub.norm_sqr());
-    let rs = gamma_s.norm_sqr().to_array();
-    let rp = gamma_p.norm_sqr().to_array();
-    let inv_q0 = one.div(q0);
-    let t_s = ts.norm_sqr().mul(q_sub.re).mul(inv_q0).to_array();
-    let t_p = tp.norm_sqr().mul(p_flux).mul(inv_q0).to_array();
-    for (l, s) in scalar.iter_mut().enumerate() {
-        *s |= near_critical & (1 << l) != 0;
-    }
-    let mut out = [Response::default(); LANES];
-    for l in 0..LANES {
-        out[l] = if scalar[l] {
-            solve(indices[l], thicknesses_nm, wavelength_nm[l], cos_theta0[l])
-        } else {
-            Response {
-                rs: rs[l],
-                rp: rp[l],
-                ts: t_s[l],
-                tp: t_p[l],
-            }
-        };
-    }
-    out
-}
-
-/// The kernel's loop over groups of four output points. Point `i` of `out`
-/// is wavelength `i / cos_theta0.len()` at angle `i % cos_theta0.len()`;
-/// a last partial group repeats its final point in the unused lanes.
-#[inline(always)]
-fn batch_body<V: Lanes>(
-    indices: &[C64],
-    thicknesses_nm: &[f64],
-    wavelengths_nm: &[f64],
-    cos_theta0: &[f64],
-    out: &mut [Response],
-) {
-    let media = thicknesses_nm.len() + 2;
-    let n_angles = cos_theta0.len();
-    let total = out.len();
-    let mut start = 0;
-    while start < total {
-        let mut idx: [&[C64]; LANES] = [&[]; LANES];
-        let mut wl = [0.0; LANES];
-        let mut cos = [0.0; LANES];
-        for l in 0..LANES {
-            let i = (start + l).min(total - 1);
-            let (w, a) = (i / n_angles, i % n_angles);
-            idx[l] = &indices[w * media..(w + 1) * media];
-            wl[l] = wavelengths_nm[w];
-            cos[l] = cos_theta0[a];
-        }
-        let gather = |j: usize| {
-            let n = Cv {
-                re: V::from_array(idx.map(|n| n[j].re)),
-                im: V::from_array(idx.map(|n| n[j].im)),
-            };
-            (n, n.mul(n))
-        };
-        let k0 = V::splat(std::f64::consts::TAU).div(V::from_array(wl));
-        let res = solve_lanes::<V>(gather, k0, idx, thicknesses_nm, wl, cos);
-        let end = (start + LANES).min(total);
-        out[start..end].copy_from_slice(&res[..end - start]);
-        start = end;
-    }
-}
-
-/// A stack's indices at a list of wavelengths, laid out for the lanes:
-/// per group of four consecutive wavelengths and per medium, n and n² of the
-/// four lanes side by side, and 2π/λ of each lane. Built once per
-/// [`StackGrid`](super::StackGrid), it turns each lane's loads into one
-/// vector load and takes n², 2π/λ off the per-point work.
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct Spectrum {
-    media: usize,
-    wavelengths: usize,
-    /// [group][medium][n.re, n.im, n².re, n².im][lane].
-    lanes: Vec<[[f64; LANES]; 4]>,
-    /// [group][lane].
-    k0: Vec<[f64; LANES]>,
-    wavelengths_nm: Vec<[f64; LANES]>,
-}
-
-impl Spectrum {
-    /// `indices` wavelength-major, `media` per wavelength (as
-    /// [`StackGrid`](super::StackGrid) stores them). A last partial group
-    /// repeats its final wavelength.
-    pub fn new(indices: &[C64], media: usize, wavelengths_nm: &[f64]) -> Spectrum {
-        assert_eq!(indices.len(), media * wavelengths_nm.len());
-        let groups = wavelengths_nm.len().div_ceil(LANES);
-        let mut lanes = Vec::with_capacity(groups * media);
-        let mut k0 = Vec::with_capacity(groups);
-        let mut wl = Vec::with_capacity(groups);
-        for g in 0..groups {
-            let w = |l: usize| (g * LANES + l).min(wavelengths_nm.len() - 1);
-            for j in 0..media {
-                let mut m = [[0.0; LANES]; 4];
-                for l in 0..LANES {
-                    let n = indices[w(l) * media + j];
-                    let nsq = n * n;
-                    m[0][l] = n.re;
-                    m[1][l] = n.im;
-                    m[2][l] = nsq.re;
-                    m[3][l] = nsq.im;
-                }
-                lanes.push(m);
-            }
-            let group_wl: [f64; LANES] = std::array::from_fn(|l| wavelengths_nm[w(l)]);
-            k0.push(group_wl.map(|x| std::f64::consts::TAU / x));
-            wl.push(group_wl);
-        }
-        Spectrum {
-            media,
-            wavelengths: wavelengths_nm.len(),
-            lanes,
-            k0,
-            wavelengths_nm: wl,
-        }
-    }
-}
-
-/// Every wavelength of a [`Spectrum`] at one angle, four per vector.
-#[inline(always)]
-fn spectrum_body<V: Lanes>(
-    spectrum: &Spectrum,
-    indices: &[C64],
-    thicknesses_nm: &[f64],
-    cos_theta0: f64,
-    out: &mut [Response],
-) {
-    let media = spectrum.media;
-    let total = spectrum.wavelengths;
-    for (g, (k0, wl)) in spectrum.k0.iter().zip(&spectrum.wavelengths_nm).enumerate() {
-        let group = &spectrum.lanes[g * media..(g + 1) * media];
-        let medium = |j: usize| {
-            let m = &group[j];
-            (
-                Cv {
-                    re: V::from_array(m[0]),
-                    im: V::from_array(m[1]),
-                },
-                Cv {
-                    re: V::from_array(m[2]),
-                    im: V::from_array(m[3]),
-                },
-            )
-        };
-        let start = g * LANES;
-        let idx: [&[C64]; LANES] = std::array::from_fn(|l| {
-            let w = (start + l).min(total - 1);
-            &indices[w * media..(w + 1) * media]
-        });
-        let res = solve_lanes::<V>(
-            medium,
-            V::from_array(*k0),
-            idx,
-            thicknesses_nm,
-            *wl,
-            [cos_theta0; LANES],
-        );
-        let end = (start + LANES).min(total);
-        out[start..end].copy_from_slice(&res[..end - start]);
-    }
-}
-
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-fn spectrum_avx2(
-    spectrum: &Spectrum,
-    indices: &[C64],
-    thicknesses_nm: &[f64],
-    cos_theta0: f64,
-    out: &mut [Response],
-) {
-    spectrum_body::<avx2::Avx2>(spectrum, indices, thicknesses_nm, cos_theta0, out)
-}
-
-fn spectrum_portable(
-    spectrum: &Spectrum,
-    indices: &[C64],
-    thicknesses_nm: &[f64],
-    cos_theta0: f64,
-    out: &mut [Response],
-) {
-    spectrum_body::<Portable>(spectrum, indices, thicknesses_nm, cos_theta0, out)
-}
-
-/// R and T at every wavelength of `spectrum` at one angle, into `out` (one
-/// per wavelength). `indices` are the same indices, wavelength-major (for
-/// the lanes the scalar solver takes over); `thicknesses_nm` the N layers'.
-///
-/// # Panics
-/// If the lengths disagree.
-pub fn solve_spectrum_on(
-    path: Path,
-    spectrum: &Spectrum,
-    indices: &[C64],
-    thicknesses_nm: &[f64],
-    cos_theta0: f64,
-    out: &mut [Response],
-) {
-    assert_eq!(spectrum.media, thicknesses_nm.len() + 2, "media");
-    assert_eq!(
-        indices.len(),
-        spectrum.media * spectrum.wavelengths,
-        "indices"
-    );
-    assert_eq!(out.len(), spectrum.wavelengths, "out: one per wavelength");
-    if out.is_empty() {
-        return;
-    }
-    #[cfg(target_arch = "x86_64")]
-    if path == Path::Best && avx2_available() {
-        // SAFETY: the CPU has AVX2 (checked just above).
-        return unsafe { spectrum_avx2(spectrum, indices, thicknesses_nm, cos_theta0, out) };
-    }
-    let _ = path;
-    spectrum_portable(spectrum, indices, thicknesses_nm, cos_theta0, out)
-}
-
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-fn batch_avx2(
-    indices: &[C64],
-    thicknesses_nm: &[f64],
-    wavelengths_nm: &[f64],
-    cos_theta0: &[f64],
-    out: &mut [Response],
-) {
-    batch_body::<avx2::Avx2>(indices, thicknesses_nm, wavelengths_nm, cos_theta0, out)
-}
-
-fn batch_portable(
-    indices: &[C64],
-    thicknesses_nm: &[f64],
-    wavelengths_nm: &[f64],
-    cos_theta0: &[f64],
-    out: &mut [Response],
-) {
-    batch_body::<Portable>(indices, thicknesses_nm, wavelengths_nm, cos_theta0, out)
-}
-
-/// Which copy of the kernel runs.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Path {
-    /// AVX2 when the CPU has it (checked at run time), portable otherwise.
-    Best,
-    /// The portable copy, whatever the CPU (for tests and comparisons).
-    Portable,
-}
-
-/// True when [`Path::Best`] runs the AVX2 copy on this CPU.
-pub fn avx2_available() -> bool {
-    #[cfg(target_arch = "x86_64")]
-    {
-        std::arch::is_x86_feature_detected!("avx2")
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    {
-        false
-    }
-}
-
-/// [`solve_batch`](super::solver::solve_batch) on a chosen copy of the
-/// kernel; the lengths must already agree (the caller checks them).
-pub fn solve_batch_on(
-    path: Path,
-    indices: &[C64],
-    thicknesses_nm: &[f64],
-    wavelengths_nm: &[f64],
-    cos_theta0: &[f64],
-    out: &mut [Response],
-) {
-    if cos_theta0.is_empty() || out.is_empty() {
-        return;
-    }
-    #[cfg(target_arch = "x86_64")]
-    if path == Path::Best && avx2_available() {
-        // SAFETY: the CPU has AVX2 (checked just above).
-        return unsafe { batch_avx2(indices, thicknesses_nm, wavelengths_nm, cos_theta0, out) };
-    }
-    let _ = path;
-    batch_portable(indices, thicknesses_nm, wavelengths_nm, cos_theta0, out)
 }

@@ -1,0 +1,170 @@
+//! The spectrum of one point when no medium's index changes with
+//! wavelength (a non-dispersive stack: constant n + ik in every layer, the
+//! ambient and the substrate). At one angle every normal index q and every
+//! interface's Fresnel coefficients are then the same at all wavelengths;
+//! only the layers' phases k0 q d change. They are computed once per call,
+//! and each wavelength costs one e^{iφ} per layer and, per interface and
+//! polarization, the recursion
+//!
+//!   Γ ← (r + Γρ) / (1 + rΓρ),  t ← t · t_int · e^{iφ} / (1 + rΓρ),
+//!
+//! ρ = e^{2iφ} the layer's round trip. This is the general solver's
+//! recursion divided through by the interface's own denominator
+//! (x + y = (q_a + q_b)(1 + rΓρ) for s): the same quantities, with the
+//! products that do not depend on wavelength taken out of the loop.
+//!
+//! Where that division would not be safe the caller's general kernel runs
+//! instead: grazing incidence, a layer at or near its critical angle (the
+//! scalar solver's field form), or a Fresnel coefficient that is not finite.
+
+use num_complex::Complex64 as C64;
+
+use super::arith::{one_way, Cv, Lanes, LANES};
+use crate::optics::solver::Response;
+
+/// Most media the interfaces are laid out for on the stack; deeper stacks
+/// take the general kernel (they are dominated by their layers anyway).
+const MAX_MEDIA: usize = 66;
+
+/// One interface's coefficients, from the medium above into the one below.
+#[derive(Clone, Copy, Debug, Default)]
+struct Interface {
+    rs: C64,
+    rp: C64,
+    /// The normal index q of the layer below the interface and its
+    /// thickness: its phase is (k0 d) q, multiplied in the scalar solver's
+    /// order. Unused for the bottom interface.
+    q: C64,
+    d: f64,
+}
+
+/// A non-dispersive stack at one angle: what stays the same at every
+/// wavelength.
+pub(super) struct Interfaces {
+    /// Top-down; interface i lies between medium i and medium i + 1.
+    at: [Interface; MAX_MEDIA - 1],
+    count: usize,
+    /// |Π t_s|² Re(q_sub) / q0: the s transmittance's constant factor.
+    ts_scale: f64,
+    /// |Π t_p|² Re(q̄_sub n_sub²) / (|n_sub|² q0), likewise for p.
+    tp_scale: f64,
+}
+
+impl Interfaces {
+    /// The interfaces of the stack with `indices` (N + 2: ambient, layers,
+    /// substrate) and `thicknesses_nm` at incidence cos θ0, with the scalar
+    /// solver's normal indices and branch; `None` where the general kernel
+    /// must run instead.
+    pub(super) fn new(indices: &[C64], thicknesses_nm: &[f64], cos_theta0: f64) -> Option<Self> {
+        let media = indices.len();
+        // Grazing (and NaN) incidence has its own closed form in the scalar solver.
+        let grazing = cos_theta0.is_nan() || cos_theta0 <= 0.0;
+        if grazing || media > MAX_MEDIA || media != thicknesses_nm.len() + 2 {
+            return None;
+        }
+        let cos = cos_theta0.min(1.0);
+        let n0 = indices[0].re;
+        let beta_sq = n0 * n0 * ((1.0 - cos) * (1.0 + cos));
+        let q0 = n0 * cos;
+        let medium = |j: usize| -> (C64, C64, C64) {
+            if j == 0 {
+                let n = C64::new(n0, 0.0);
+                (n, n * n, C64::new(q0, 0.0))
+            } else {
+                let n = indices[j];
+                let nsq = n * n;
+                (n, nsq, crate::optics::solver::normal_index(n, beta_sq))
+            }
+        };
+        let mut at = [Interface::default(); MAX_MEDIA - 1];
+        let (mut ts_amp, mut tp_amp) = (C64::new(1.0, 0.0), C64::new(1.0, 0.0));
+        let mut above = medium(0);
+        for (i, slot) in at.iter_mut().enumerate().take(media - 1) {
+            let below = medium(i + 1);
+            let ((n_a, nsq_a, q_a), (n_b, nsq_b, q_b)) = (above, below);
+            if i + 1 < media - 1 {
+                // The scalar solver's near-critical test on the layer below.
+                let q2 = q_b.norm_sqr();
+                if q2 * q2 < 1e-8 * nsq_b.norm_sqr() {
+                    return None;
+                }
+                slot.q = q_b;
+                slot.d = thicknesses_nm[i];
+            }
+            let s_den = (q_a + q_b).inv();
+            slot.rs = (q_a - q_b) * s_den;
+            ts_amp *= 2.0 * q_a * s_den;
+            let (a, b) = (nsq_b * q_a, nsq_a * q_b);
+            let p_den = (a + b).inv();
+            slot.rp = (a - b) * p_den;
+            tp_amp *= 2.0 * n_a * n_b * q_a * p_den;
+            above = below;
+        }
+        let (n_sub, _, q_sub) = above;
+        let p_flux = (q_sub.conj() * n_sub * n_sub).re / n_sub.norm_sqr();
+        let out = Interfaces {
+            at,
+            count: media - 1,
+            ts_scale: ts_amp.norm_sqr() * q_sub.re / q0,
+            tp_scale: tp_amp.norm_sqr() * p_flux / q0,
+        };
+        let finite = |z: C64| z.re.is_finite() && z.im.is_finite();
+        let all_finite = out.at[..out.count]
+            .iter()
+            .all(|f| finite(f.rs) && finite(f.rp) && finite(f.q) && f.d.is_finite())
+            && out.ts_scale.is_finite()
+            && out.tp_scale.is_finite();
+        all_finite.then_some(out)
+    }
+}
+
+/// One step of the recursion up through an interface, for one polarization:
+/// Γ ← (r + g)/(1 + r g) with g = Γρ; returns 1/|1 + r g|², the factor
+/// |t|² picks up.
+#[inline(always)]
+fn step<V: Lanes>(gamma: &mut Cv<V>, r: Cv<V>, rho: Cv<V>) -> V {
+    let g = gamma.mul(rho);
+    let den = r.mul(g).one_plus();
+    let inv_norm = V::splat(1.0).div(den.norm_sqr());
+    let inv = Cv {
+        re: den.re.mul(inv_norm),
+        im: den.im.neg().mul(inv_norm),
+    };
+    *gamma = r.add(g).mul(inv);
+    inv_norm
+}
+
+/// R and T of four wavelengths (2π/λ in `k0`) of the stack `f` describes.
+#[inline(always)]
+pub(super) fn solve_lanes<V: Lanes>(f: &Interfaces, k0: V) -> [Response; LANES] {
+    let splat = |z: C64| Cv {
+        re: V::splat(z.re),
+        im: V::splat(z.im),
+    };
+    let bottom = &f.at[f.count - 1];
+    let (mut gamma_s, mut gamma_p) = (splat(bottom.rs), splat(bottom.rp));
+    // |t|² without its constant factor: Π |e^{iφ}|² / |1 + rΓρ|².
+    let (mut ts_norm, mut tp_norm) = (V::splat(1.0), V::splat(1.0));
+    for i in (0..f.count - 1).rev() {
+        let face = &f.at[i];
+        let w = one_way(splat(face.q).scale(k0.mul(V::splat(face.d))));
+        let rho = w.mul(w);
+        let decay = w.norm_sqr();
+        ts_norm = ts_norm
+            .mul(decay)
+            .mul(step(&mut gamma_s, splat(face.rs), rho));
+        tp_norm = tp_norm
+            .mul(decay)
+            .mul(step(&mut gamma_p, splat(face.rp), rho));
+    }
+    let rs = gamma_s.norm_sqr().to_array();
+    let rp = gamma_p.norm_sqr().to_array();
+    let ts = ts_norm.mul(V::splat(f.ts_scale)).to_array();
+    let tp = tp_norm.mul(V::splat(f.tp_scale)).to_array();
+    std::array::from_fn(|l| Response {
+        rs: rs[l],
+        rp: rp[l],
+        ts: ts[l],
+        tp: tp[l],
+    })
+}
