@@ -11,7 +11,9 @@ use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg64;
 
 use irid::optics::lanes::{avx2_available, solve_batch_on, Path};
-use irid::optics::{solve, solve_batch, Response, Stack, StackGrid};
+use irid::optics::{solve, Response};
+#[cfg(feature = "bench")]
+use irid::optics::{solve_batch, Stack, StackGrid};
 
 fn c(n: f64, k: f64) -> C64 {
     C64::new(n, k)
@@ -291,6 +293,7 @@ fn batch_lengths_that_are_not_multiples_of_four() {
     }
 }
 
+#[cfg(feature = "bench")]
 #[test]
 fn stack_grid_solves_through_the_batch() {
     // The public path (StackGrid::solve → solve_batch) on a dispersive stack.
@@ -318,6 +321,7 @@ fn stack_grid_solves_through_the_batch() {
     }
 }
 
+#[cfg(feature = "bench")]
 #[test]
 fn spectrum_path_equals_scalar_on_both_copies() {
     // StackGrid::solve_spectrum (indices laid out per lane group once) on

@@ -5,6 +5,7 @@
 
 mod common;
 
+#[cfg(feature = "cli")]
 use common::{irid, Scratch};
 use irid::color::{
     delta_e2000, delta_e2000_rgb, linear_srgb_to_xyz, stack_colors, white_xyz, xyz_to_lab,
@@ -301,16 +302,19 @@ fn sampling_error_on_a_soap_film() {
     assert!(r3.mean > results[1].1.mean, "rgb3 {r3:?}");
 }
 
+#[cfg(feature = "cli")]
 const SOAP_500NM: &str = "ambient = { n = 1.0 }\nsubstrate = { n = 1.0 }\n\
                           [[layers]]\nn = 1.33\nthickness_nm = 500.0\n";
 
 /// A stack file in a scratch folder (removed with it).
+#[cfg(feature = "cli")]
 fn stack_file(text: &str) -> (Scratch, String) {
     let dir = Scratch::new("color");
     let path = dir.write("stack.toml", text).to_str().unwrap().to_owned();
     (dir, path)
 }
 
+#[cfg(feature = "cli")]
 #[test]
 fn cli_json_matches_the_library() {
     let (_dir, path) = stack_file(SOAP_500NM);
@@ -376,6 +380,7 @@ fn cli_json_matches_the_library() {
     }
 }
 
+#[cfg(feature = "cli")]
 #[test]
 fn cli_human_output_has_a_hex_swatch_per_angle() {
     let (_dir, path) = stack_file("ambient = { n = 1.0 }\nsubstrate = { n = 1.5 }\n");
@@ -392,6 +397,7 @@ fn cli_human_output_has_a_hex_swatch_per_angle() {
     assert!(lines[3].trim_start().starts_with("30.00°"), "{text}");
 }
 
+#[cfg(feature = "cli")]
 #[test]
 fn cli_bad_input_is_one_line_and_exit_2() {
     let (_dir, path) = stack_file(SOAP_500NM);

@@ -29,7 +29,9 @@ use irid::render::{FilmMode, RenderOptions, Scene};
 use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg64;
 
-use common::{irid_in, Scratch};
+#[cfg(feature = "cli")]
+use common::irid_in;
+use common::Scratch;
 
 fn env_count(name: &str, default: u64) -> u64 {
     std::env::var(name)
@@ -594,6 +596,7 @@ fn fuzz_parsers_in_process() {
 /// The command line with numeric flags at their extremes: exit 0, 1 or 2;
 /// an error is one line; a success prints no NaN or infinity; nothing but
 /// the named outputs is left behind.
+#[cfg(feature = "cli")]
 #[test]
 fn fuzz_numeric_flags_through_the_binary() {
     let cases = env_count("IRID_FUZZ_CLI_CASES", 40);

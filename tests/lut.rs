@@ -9,7 +9,9 @@ mod common;
 
 use std::path::{Path, PathBuf};
 
-use common::{irid, Run, Scratch};
+use common::Scratch;
+#[cfg(feature = "cli")]
+use common::{irid, Run};
 use irid::color::Sampling;
 use irid::lut::{bake, validate, BakeSpec, Kind, Lut, Resolution};
 use irid::optics::{Layer, Material, Stack};
@@ -412,6 +414,7 @@ fn bad_files_give_clear_errors() {
 
 /// `irid bake luts/soap-film.toml -o OUT` over 100–400 nm with 16-sample
 /// integration, then `extra`.
+#[cfg(feature = "cli")]
 fn bake_soap(out: &Path, extra: &[&str]) -> Run {
     let stack = luts_dir().join("soap-film.toml");
     let mut args = vec![
@@ -428,6 +431,7 @@ fn bake_soap(out: &Path, extra: &[&str]) -> Run {
     irid(&args)
 }
 
+#[cfg(feature = "cli")]
 #[test]
 fn bake_info_validate_commands() {
     let dir = Scratch::new("lut-cli");
@@ -500,6 +504,7 @@ fn bake_info_validate_commands() {
 /// checked bake and, stored as f32, the same values to the last rounding
 /// step (the f64 responses agree to 1e-12, see the baker's unit test); no
 /// bake check in the header, and the table writes, loads and validates.
+#[cfg(feature = "cli")]
 #[test]
 fn unchecked_bake_matches_the_checked_one() {
     let dir = Scratch::new("lut-nocheck");

@@ -9,6 +9,7 @@ mod common;
 
 use std::path::{Path, PathBuf};
 
+#[cfg(feature = "cli")]
 use common::{irid_in, Scratch};
 use irid::color::Sampling;
 use irid::render::{
@@ -226,6 +227,7 @@ fn reversed_stack_reflects_totally_beyond_the_critical_angle() {
     );
 }
 
+#[cfg(feature = "cli")]
 const GOOD: &str = r#"
 [render]
 width = 8
@@ -247,6 +249,7 @@ center = [0.0, 0.0, 0.0]
 radius = 1.0
 "#;
 
+#[cfg(feature = "cli")]
 #[test]
 fn cli_renders_a_scene_file_to_png_and_exr() {
     let dir = Scratch::new("render-cli-ok");
@@ -288,6 +291,7 @@ fn cli_renders_a_scene_file_to_png_and_exr() {
 /// In LUT mode a noise film's thickness is baked to a grid, and the run
 /// says so; `--exact-noise` evaluates the noise at every hit instead. The
 /// two images agree to within a few 8-bit levels (the grid's 2 nm).
+#[cfg(feature = "cli")]
 #[test]
 fn cli_bakes_noise_thickness_unless_told_not_to() {
     let dir = Scratch::new("render-cli-noise");
@@ -330,6 +334,7 @@ fn cli_bakes_noise_thickness_unless_told_not_to() {
 
 /// Each bad input gives exit code 2, one line naming the problem, and no
 /// output file.
+#[cfg(feature = "cli")]
 #[test]
 fn cli_rejects_bad_scenes_with_one_line() {
     let cases: [(&str, String, &str); 6] = [

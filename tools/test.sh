@@ -21,6 +21,12 @@ python3 tools/check_links.py
 step "cargo test --release"
 cargo test --release
 
+# The library alone (no `cli` feature, so no bench either), as a dependent
+# with default-features = false builds it; the tests that run the binary
+# or use the bench are gated on those features.
+step "cargo test --release --no-default-features"
+cargo test --release --no-default-features
+
 # Cross-checks against independent Python implementations (tmm,
 # colour-science, OpenEXR, tmm-faster), in a virtualenv made here.
 step "Python cross-checks"

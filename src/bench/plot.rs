@@ -6,9 +6,11 @@
 //! and encoded with the `image` crate.
 
 use std::io::Cursor;
+use std::ops::Range;
 use std::path::Path;
 use std::sync::Once;
 
+use plotters::coord::Shift;
 use plotters::prelude::*;
 use plotters::style::{register_font, FontStyle};
 
@@ -114,19 +116,15 @@ fn draw(
         .x_label_formatter(&|v| format_tick(*v))
         .y_label_formatter(&|v| format_tick(*v))
         .draw()?;
-    let color_of = |family: usize| FAMILY_COLORS[family % FAMILY_COLORS.len()];
     chart.draw_series(
         points
             .iter()
-            .map(|p| Circle::new((p.ns_per_eval, y_of(p)), 5, color_of(p.family).filled())),
+            .map(|p| Circle::new((p.ns_per_eval, y_of(p)), 5, family_color(p.family).filled())),
     )?;
-    // Labels: the first of a few positions around the point whose box
-    // overlaps no point and no label already placed, and stays inside the
-    // axes.
     let (label_px, char_px) = (13u32, 8);
     // Inside the axes, clear of the tick labels.
     let (area_x, area_y) = chart.plotting_area().get_pixel_range();
-    let mut placed: Vec<(i32, i32, i32, i32)> = points
+    let mut placed: Vec<Rect> = points
         .iter()
         .map(|p| {
             let (px, py) = chart.backend_coord(&(p.ns_per_eval, y_of(p)));
@@ -134,59 +132,88 @@ fn draw(
         })
         .collect();
     for p in points {
-        let (px, py) = chart.backend_coord(&(p.ns_per_eval, y_of(p)));
+        let point = chart.backend_coord(&(p.ns_per_eval, y_of(p)));
         let w = char_px * p.label.chars().count() as i32;
         let h = label_px as i32 + 2;
-        let candidates = [
-            (8, -h / 2),
-            (8, -h - 2),
-            (8, 4),
-            (-w - 8, -h / 2),
-            (-w - 8, -h - 2),
-            (-w - 8, 4),
-            (8, -2 * h - 4),
-            (8, h + 6),
-            (-w - 8, -2 * h - 4),
-            (-w - 8, h + 6),
-            (-w / 2, -h - 8),
-            (-w / 2, 8),
-            (-w / 2, -2 * h - 8),
-            (-w / 2, h + 10),
-        ];
-        let inside = |x: i32, y: i32| {
-            x >= area_x.start && y >= area_y.start && x + w <= area_x.end && y + h <= area_y.end
-        };
-        let free = |x: i32, y: i32| {
-            placed
-                .iter()
-                .all(|&(ax, ay, aw, ah)| x + w <= ax || ax + aw <= x || y + h <= ay || ay + ah <= y)
-        };
-        let (dx, dy) = candidates
-            .iter()
-            .copied()
-            .find(|&(dx, dy)| inside(px + dx, py + dy) && free(px + dx, py + dy))
-            .unwrap_or(candidates[0]);
-        placed.push((px + dx, py + dy, w, h));
+        let (x, y) = place_label(point, (w, h), (&area_x, &area_y), &placed);
+        placed.push((x, y, w, h));
         root.draw(&Text::new(
             p.label.clone(),
-            (px + dx, py + dy),
-            font(label_px).color(&color_of(p.family)),
+            (x, y),
+            font(label_px).color(&family_color(p.family)),
         ))?;
     }
-    // The legend, right of the plot: one entry per family, in its colour.
+    draw_legend(&root, families, size.0 as i32 - legend_width + 30)?;
+    root.present()?;
+    Ok(())
+}
+
+/// A box in pixels: left, top, width, height.
+type Rect = (i32, i32, i32, i32);
+
+/// Where a label of size (w, h) for the point at `(px, py)` goes (its
+/// top-left corner): the first of a few positions around the point whose
+/// box overlaps nothing in `placed` (points and labels) and stays inside
+/// `area`, else the first position.
+fn place_label(
+    (px, py): (i32, i32),
+    (w, h): (i32, i32),
+    (area_x, area_y): (&Range<i32>, &Range<i32>),
+    placed: &[Rect],
+) -> (i32, i32) {
+    let candidates = [
+        (8, -h / 2),
+        (8, -h - 2),
+        (8, 4),
+        (-w - 8, -h / 2),
+        (-w - 8, -h - 2),
+        (-w - 8, 4),
+        (8, -2 * h - 4),
+        (8, h + 6),
+        (-w - 8, -2 * h - 4),
+        (-w - 8, h + 6),
+        (-w / 2, -h - 8),
+        (-w / 2, 8),
+        (-w / 2, -2 * h - 8),
+        (-w / 2, h + 10),
+    ];
+    let inside = |x: i32, y: i32| {
+        x >= area_x.start && y >= area_y.start && x + w <= area_x.end && y + h <= area_y.end
+    };
+    let free = |x: i32, y: i32| {
+        placed
+            .iter()
+            .all(|&(ax, ay, aw, ah)| x + w <= ax || ax + aw <= x || y + h <= ay || ay + ah <= y)
+    };
+    let (dx, dy) = candidates
+        .iter()
+        .copied()
+        .find(|&(dx, dy)| inside(px + dx, py + dy) && free(px + dx, py + dy))
+        .unwrap_or(candidates[0]);
+    (px + dx, py + dy)
+}
+
+/// One entry per family, in its colour, in a column at pixel `x`.
+fn draw_legend(
+    root: &DrawingArea<BitMapBackend<'_>, Shift>,
+    families: &[&str],
+    x: i32,
+) -> std::result::Result<(), Box<dyn std::error::Error>> {
     for (i, name) in families.iter().enumerate() {
-        let color = color_of(i);
-        let x = size.0 as i32 - legend_width + 30;
+        let color = family_color(i);
         let y = 80 + 24 * i as i32;
         root.draw(&Circle::new((x, y), 5, color.filled()))?;
         root.draw(&Text::new(
             name.to_string(),
             (x + 12, y - 8),
-            font(15).color(&color),
+            (FONT_NAME, 15).into_font().color(&color),
         ))?;
     }
-    root.present()?;
     Ok(())
+}
+
+fn family_color(family: usize) -> RGBColor {
+    FAMILY_COLORS[family % FAMILY_COLORS.len()]
 }
 
 /// Tick labels in plain decimal, short: 0.001, 0.5, 20, 3000, 1e+06.

@@ -195,13 +195,33 @@ pub fn markdown(
     machine: &Machine,
     command: &str,
 ) -> String {
-    let summary = summarize(rows);
-    let is_exact = |m: &Method| matches!(m, Method::Direct(Sampling::Exact));
-    let exact_ns = |stack: &str| {
-        rows.iter()
-            .find(|r| r.stack == stack && is_exact(&r.method))
-            .map_or(f64::NAN, |r| r.ns_per_eval)
-    };
+    let mut s = preamble_markdown(options, machine, command);
+    s.push_str(&summary_markdown(rows));
+    for (name, description) in descriptions() {
+        s.push_str(&stack_markdown(name, description, rows, skipped));
+    }
+    if !renders.is_empty() {
+        s.push_str(&renders_markdown(renders, machine.threads));
+    }
+    s
+}
+
+fn is_exact(method: &Method) -> bool {
+    matches!(method, Method::Direct(Sampling::Exact))
+}
+
+/// " (n stacks)" for a method measured on fewer than all stacks: its median
+/// is then not comparable with the others' at a glance.
+fn fewer_stacks_note(m: &Summary) -> String {
+    if m.stacks < names().len() {
+        format!(" ({} stacks)", m.stacks)
+    } else {
+        String::new()
+    }
+}
+
+/// The title and the bullet list saying how the figures were measured.
+fn preamble_markdown(options: &Options, machine: &Machine, command: &str) -> String {
     let mut s = String::new();
     s.push_str("# irid bench: speed against error\n\n");
     s.push_str(&format!("- Date: {} UTC\n", machine.date_utc));
@@ -235,7 +255,13 @@ pub fn markdown(
         "- Analytic: the single-film model of Belcour & Barla (2017) (exact Fresnel, 3 terms) and the \
          glTF `KHR_materials_iridescence` reference (Schlick, 2 terms), on the one-film stacks only\n\n",
     );
-    s.push_str(
+    s
+}
+
+/// The "All stacks" section: the table of medians and the plot under it.
+fn summary_markdown(rows: &[Row]) -> String {
+    let summary = summarize(rows);
+    let mut s = String::from(
         "## All stacks\n\nMedians over the stacks each method applies to (one stack, the gain film, \
          would decide every mean), of each column.\n\n",
     );
@@ -248,11 +274,7 @@ pub fn markdown(
         s.push_str(&format!(
             "| {}{}{} | {:.1} | {} | {} | {} | {} | {} |\n",
             m.method.name(),
-            if m.stacks < names().len() {
-                format!(" ({} stacks)", m.stacks)
-            } else {
-                String::new()
-            },
+            fewer_stacks_note(m),
             if m.nonfinite > 0 {
                 format!(" ({} non-finite, left out)", m.nonfinite)
             } else {
@@ -270,57 +292,62 @@ pub fn markdown(
         "\n![speed vs error](speed-vs-error.png)\n\nIn the plot, errors below {PLOT_FLOOR_DE:e} \
          (the exact method's 0) are drawn at {PLOT_FLOOR_DE:e}.\n"
     ));
-    for (name, description) in descriptions() {
-        s.push_str(&format!("\n## {name}: {description}\n\n"));
-        if let Some(r) = rows.iter().find(|r| r.stack == name) {
-            let gain = find(name)
-                .ok()
-                .flatten()
-                .is_some_and(|b| b.stack.layers.iter().any(|l| l.material.has_gain()));
-            s.push_str(&format!(
-                "Largest reference reflectance channel over the points: {:.3}{}.\n\n",
-                r.reference_max,
-                if gain {
-                    " (a gain layer: near its resonances reflectance exceeds 1 by far, so absolute \
-                     errors there are large)"
-                } else {
-                    ""
-                }
-            ));
-        }
-        s.push_str(&table_header(true));
-        let exact = exact_ns(name);
-        for r in rows.iter().filter(|r| r.stack == name) {
-            s.push_str(&format!(
-                "| {}{} | {:.1} | {} | {} | {} | {} | {} | {} |\n",
-                r.method.name(),
-                if r.nonfinite > 0 {
-                    format!(
-                        " ({} of {} points non-finite, left out)",
-                        r.nonfinite, r.points
-                    )
-                } else {
-                    String::new()
-                },
-                r.ns_per_eval,
-                fmt_ratio(exact / r.ns_per_eval),
-                fmt_err(r.max_abs),
-                fmt_err(r.p99_abs),
-                fmt_err(r.mean_de2000),
-                fmt_err(r.max_de2000),
-                r.setup_s.map_or(String::new(), |v| format!("{v:.3}")),
-            ));
-        }
-        for k in skipped.iter().filter(|k| k.stack == name) {
-            s.push_str(&format!(
-                "\n{} not measured: the baker refuses it ({}).\n",
-                k.method.name(),
-                k.why
-            ));
-        }
+    s
+}
+
+/// One stack's section: its largest reference reflectance, its table (speed
+/// relative to that stack's exact evaluation), and the methods the baker
+/// refused for it.
+fn stack_markdown(name: &str, description: &str, rows: &[Row], skipped: &[Skipped]) -> String {
+    let mut s = format!("\n## {name}: {description}\n\n");
+    if let Some(r) = rows.iter().find(|r| r.stack == name) {
+        let gain = find(name)
+            .ok()
+            .flatten()
+            .is_some_and(|b| b.stack.layers.iter().any(|l| l.material.has_gain()));
+        s.push_str(&format!(
+            "Largest reference reflectance channel over the points: {:.3}{}.\n\n",
+            r.reference_max,
+            if gain {
+                " (a gain layer: near its resonances reflectance exceeds 1 by far, so absolute \
+                 errors there are large)"
+            } else {
+                ""
+            }
+        ));
     }
-    if !renders.is_empty() {
-        s.push_str(&renders_markdown(renders, machine.threads));
+    s.push_str(&table_header(true));
+    let exact = rows
+        .iter()
+        .find(|r| r.stack == name && is_exact(&r.method))
+        .map_or(f64::NAN, |r| r.ns_per_eval);
+    for r in rows.iter().filter(|r| r.stack == name) {
+        s.push_str(&format!(
+            "| {}{} | {:.1} | {} | {} | {} | {} | {} | {} |\n",
+            r.method.name(),
+            if r.nonfinite > 0 {
+                format!(
+                    " ({} of {} points non-finite, left out)",
+                    r.nonfinite, r.points
+                )
+            } else {
+                String::new()
+            },
+            r.ns_per_eval,
+            fmt_ratio(exact / r.ns_per_eval),
+            fmt_err(r.max_abs),
+            fmt_err(r.p99_abs),
+            fmt_err(r.mean_de2000),
+            fmt_err(r.max_de2000),
+            r.setup_s.map_or(String::new(), |v| format!("{v:.3}")),
+        ));
+    }
+    for k in skipped.iter().filter(|k| k.stack == name) {
+        s.push_str(&format!(
+            "\n{} not measured: the baker refuses it ({}).\n",
+            k.method.name(),
+            k.why
+        ));
     }
     s
 }
@@ -349,11 +376,7 @@ pub fn write_all(
             label: format!(
                 "{}{}{}",
                 m.method.name(),
-                if m.stacks < names().len() {
-                    format!(" ({} stacks)", m.stacks)
-                } else {
-                    String::new()
-                },
+                fewer_stacks_note(m),
                 if m.mean_de2000 < PLOT_FLOOR_DE {
                     " (error 0, at floor)"
                 } else {

@@ -202,20 +202,24 @@ pub fn run(options: &Options) -> Result<(Vec<Row>, Vec<Skipped>)> {
 /// the stack has one layer.
 pub fn run_stack(bench: &BenchStack, options: &Options) -> Result<(Vec<Row>, Vec<Skipped>)> {
     let points = sample_points(bench, options.points, options.seed);
-    let mut rows = Vec::new();
-    let mut skipped = Vec::new();
 
     // The exact method is the reference: its error is zero by construction.
     let mut exact = Direct::new(bench, Sampling::Exact)?;
     let (ns, reference) = time_all(&points, |t, c| exact.eval(t, c));
-    rows.push(row(
+    let mut rows = vec![row(
         bench,
         Method::Direct(Sampling::Exact),
         ns,
         &reference,
         &reference,
         None,
-    ));
+    )];
+    let mut skipped = Vec::new();
+    let stack = StackReference {
+        bench,
+        points,
+        reference,
+    };
 
     for sampling in [
         Sampling::Rgb3,
@@ -224,37 +228,72 @@ pub fn run_stack(bench: &BenchStack, options: &Options) -> Result<(Vec<Row>, Vec
         Sampling::Uniform(81),
     ] {
         let mut direct = Direct::new(bench, sampling)?;
-        let (ns, out) = time_all(&points, |t, c| direct.eval(t, c));
-        rows.push(row(
-            bench,
-            Method::Direct(sampling),
-            ns,
-            &out,
-            &reference,
-            None,
-        ));
+        rows.push(stack.row(Method::Direct(sampling), |t, c| direct.eval(t, c), None));
     }
 
     for &(thickness_nodes, angle_nodes) in &options.lut_resolutions {
+        let (lut_rows, refused) = stack.lut_rows(thickness_nodes, angle_nodes, options.lut_half)?;
+        rows.extend(lut_rows);
+        skipped.extend(refused);
+    }
+
+    if let Some(film) = AnalyticFilm::from_stack(&bench.stack) {
+        for variant in [Variant::BelcourBarla, Variant::Gltf] {
+            rows.push(stack.row(
+                Method::Analytic(variant),
+                |t, c| film.reflectance_rgb(variant, t, c),
+                None,
+            ));
+        }
+    }
+    Ok((rows, skipped))
+}
+
+/// One stack's points and the exact reference values at them, which every
+/// other method's row is measured against.
+struct StackReference<'a> {
+    bench: &'a BenchStack,
+    points: Vec<(f64, f64)>,
+    reference: Vec<[f64; 3]>,
+}
+
+impl StackReference<'_> {
+    /// `method`'s row: `eval` timed over the points and compared with the
+    /// reference; `setup_s` is its bake time, if any.
+    fn row(
+        &self,
+        method: Method,
+        eval: impl FnMut(f64, f64) -> [f64; 3],
+        setup_s: Option<f64>,
+    ) -> Row {
+        let (ns, out) = time_all(&self.points, eval);
+        row(self.bench, method, ns, &out, &self.reference, setup_s)
+    }
+
+    /// The rows of the f32 table with these node counts and, with `half`,
+    /// of its f16 copy, or that copy as skipped when its values exceed
+    /// f16's range.
+    fn lut_rows(
+        &self,
+        thickness_nodes: usize,
+        angle_nodes: usize,
+        half: bool,
+    ) -> Result<(Vec<Row>, Option<Skipped>)> {
         let lut_method = |half| Method::Lut {
             thickness_nodes,
             angle_nodes,
             half,
         };
         let start = Instant::now();
-        let table = lut::bake(&bench.bake_spec(thickness_nodes, angle_nodes, false))?;
+        let table = lut::bake(&self.bench.bake_spec(thickness_nodes, angle_nodes, false))?;
         let bake_s = start.elapsed().as_secs_f64();
-        let (ns, out) = time_all(&points, |t, c| lut_reflectance(&table, t, c));
-        rows.push(row(
-            bench,
+        let mut rows = vec![self.row(
             lut_method(false),
-            ns,
-            &out,
-            &reference,
+            |t, c| lut_reflectance(&table, t, c),
             Some(bake_s),
-        ));
-        if !options.lut_half {
-            continue;
+        )];
+        if !half {
+            return Ok((rows, None));
         }
         // The f16 table is the f32 one rounded (its setup is both), not a
         // second bake: the bake check that one would repeat is not used here.
@@ -264,41 +303,23 @@ pub fn run_stack(bench: &BenchStack, options: &Options) -> Result<(Vec<Row>, Vec
             // Values beyond f16's range (a gain film near its resonances)
             // would be stored as infinity: report that instead.
             Err(Error::HalfOverflow { why }) => {
-                skipped.push(Skipped {
-                    stack: bench.name.to_string(),
+                let refused = Skipped {
+                    stack: self.bench.name.to_string(),
                     method: lut_method(true),
                     why,
-                });
-                continue;
+                };
+                return Ok((rows, Some(refused)));
             }
             Err(e) => return Err(e),
         };
         let setup_s = bake_s + start.elapsed().as_secs_f64();
-        let (ns, out) = time_all(&points, |t, c| lut_reflectance(&half, t, c));
-        rows.push(row(
-            bench,
+        rows.push(self.row(
             lut_method(true),
-            ns,
-            &out,
-            &reference,
+            |t, c| lut_reflectance(&half, t, c),
             Some(setup_s),
         ));
+        Ok((rows, None))
     }
-
-    if let Some(film) = AnalyticFilm::from_stack(&bench.stack) {
-        for variant in [Variant::BelcourBarla, Variant::Gltf] {
-            let (ns, out) = time_all(&points, |t, c| film.reflectance_rgb(variant, t, c));
-            rows.push(row(
-                bench,
-                Method::Analytic(variant),
-                ns,
-                &out,
-                &reference,
-                None,
-            ));
-        }
-    }
-    Ok((rows, skipped))
 }
 
 #[inline]

@@ -1,8 +1,47 @@
 //! Argument forms shared by several subcommands.
 
 use std::fmt::Display;
+use std::path::PathBuf;
 
 use anyhow::{anyhow, bail, Result};
+use irid::lut::DEFAULT_COS_MIN;
+use irid::optics::Stack;
+
+/// The options `irid bake` and `irid export` share word for word: the stack
+/// file, its varying layer and the angle range. (`--thickness`,
+/// `--sampling`, `--white` and `--max-error` are alike but their help
+/// differs between the two: each names what it means for its output.)
+#[derive(clap::Args)]
+pub struct FilmArgs {
+    /// Stack file (TOML).
+    pub stack: PathBuf,
+    /// The varying layer, counted from 1 at the ambient side.
+    #[arg(long, default_value_t = 1)]
+    pub layer: usize,
+    /// cos θ range COS_MIN:COS_MAX in the ambient [default: cos 89°:1].
+    #[arg(long)]
+    pub angles: Option<String>,
+}
+
+impl FilmArgs {
+    /// The varying layer's thickness in the stack file, the thickness range
+    /// when `--thickness` is not given; `None` when `--layer` names no layer
+    /// (the spec's check then says so).
+    pub fn layer_thickness_nm(&self, stack: &Stack) -> Option<f64> {
+        stack
+            .layers
+            .get(self.layer.wrapping_sub(1))
+            .map(|layer| layer.thickness_nm)
+    }
+
+    /// `--angles`, or cos 89° to 1 when not given.
+    pub fn cos_theta(&self) -> Result<(f64, f64)> {
+        match &self.angles {
+            Some(a) => parse_range("--angles", a),
+            None => Ok((DEFAULT_COS_MIN, 1.0)),
+        }
+    }
+}
 
 /// One number of `spec`, which must be finite; errors name the flag and spec.
 fn number(flag: &str, spec: &str, text: &str) -> Result<f64> {

@@ -6,17 +6,13 @@ use std::time::Instant;
 
 use anyhow::{anyhow, bail, Context, Result};
 use irid::color::Sampling;
-use irid::lut::{
-    bake_with_progress, validate, BakeSpec, Kind, Resolution, DEFAULT_COS_MIN, VALIDATION_SEED,
-};
+use irid::lut::{bake_with_progress, validate, BakeSpec, Kind, Resolution, VALIDATION_SEED};
 use irid::optics::Stack;
 
-use super::args::parse_range;
+use super::args::{parse_range, FilmArgs};
 
 #[derive(clap::Args)]
 pub struct Args {
-    /// Stack file (TOML).
-    pub stack: PathBuf,
     /// Output table (OpenEXR); written atomically.
     #[arg(short, long)]
     pub output: PathBuf,
@@ -24,12 +20,8 @@ pub struct Args {
     /// thickness in the stack file, a single node].
     #[arg(long)]
     pub thickness: Option<String>,
-    /// The varying layer, counted from 1 at the ambient side.
-    #[arg(long, default_value_t = 1)]
-    pub layer: usize,
-    /// cos θ range COS_MIN:COS_MAX in the ambient [default: cos 89°:1].
-    #[arg(long)]
-    pub angles: Option<String>,
+    #[command(flatten)]
+    pub film: FilmArgs,
     /// rgb (linear sRGB under D65) or spectral (R and T per wavelength).
     #[arg(long, default_value = "rgb")]
     pub kind: String,
@@ -67,19 +59,16 @@ pub struct Args {
 }
 
 pub fn run(args: Args) -> Result<ExitCode> {
-    let stack = Stack::load(&args.stack)?;
+    let stack = Stack::load(&args.film.stack)?;
     let mut spec = BakeSpec::new(stack);
-    spec.layer = args.layer;
-    if let Some(layer) = spec.stack.layers.get(args.layer.wrapping_sub(1)) {
-        spec.thickness_nm = (layer.thickness_nm, layer.thickness_nm);
+    spec.layer = args.film.layer;
+    if let Some(t) = args.film.layer_thickness_nm(&spec.stack) {
+        spec.thickness_nm = (t, t);
     }
     if let Some(t) = &args.thickness {
         spec.thickness_nm = parse_range("--thickness", t)?;
     }
-    spec.cos_theta = match &args.angles {
-        Some(a) => parse_range("--angles", a)?,
-        None => (DEFAULT_COS_MIN, 1.0),
-    };
+    spec.cos_theta = args.film.cos_theta()?;
     spec.kind = args.kind.parse::<Kind>().map_err(|e| anyhow!("--{e}"))?;
     spec.sampling = args
         .sampling
@@ -111,7 +100,7 @@ pub fn run(args: Args) -> Result<ExitCode> {
             bar.set_position((f * 1000.0) as u64);
         }
     })
-    .with_context(|| args.stack.display().to_string())?;
+    .with_context(|| args.film.stack.display().to_string())?;
     let baked = started.elapsed();
     if let Some(bar) = &bar {
         bar.finish_and_clear();

@@ -195,6 +195,44 @@ fn run_grid(name: &str, args: &Args) -> Result<()> {
             stacks::names().join(", ")
         )
     })?;
+    let requested = requested_grid(args)?;
+    check_count("--repeat", args.repeat, MAX_REPEAT)?;
+    let (bake, g) = match &args.bake_nodes {
+        Some(spec) => {
+            let (t, a) = parse_bake_nodes(spec)?;
+            let (s, g) = grid::time_bake(&bench, t, a, args.threads, args.repeat)?;
+            (Some(s), g)
+        }
+        None => (None, requested),
+    };
+    let out = grid::evaluate(
+        &bench.stack,
+        bench.varying_layer,
+        &g,
+        args.threads,
+        args.repeat,
+    )?;
+    let mut doc = grid_json(&bench, &g, &out, args.threads, bake);
+    match &args.raw {
+        Some(path) => {
+            write_raw(path, &out.r, &out.t)?;
+            doc["raw"] = serde_json::json!(path);
+        }
+        None => {
+            doc["r"] = serde_json::json!(out.r);
+            doc["t"] = serde_json::json!(out.t);
+        }
+    }
+    let mut stdout = std::io::stdout().lock();
+    serde_json::to_writer(&mut stdout, &doc)?;
+    writeln!(stdout)?;
+    Ok(())
+}
+
+/// The grid `--wavelengths`, `--angles` and `--thicknesses` give. Its
+/// values are checked even under `--bake-nodes`, which replaces it; its
+/// size only when it is the grid evaluated.
+fn requested_grid(args: &Args) -> Result<grid::Grid> {
     let wavelengths_nm = parse_list("--wavelengths", &args.wavelengths)?;
     let angles_deg = parse_list("--angles", &args.angles)?;
     check_angles("--angles", &angles_deg)?;
@@ -216,36 +254,33 @@ fn run_grid(name: &str, args: &Args) -> Result<()> {
             &[wavelengths_nm.len(), angles_deg.len(), t],
         )?;
     }
-    check_count("--repeat", args.repeat, MAX_REPEAT)?;
-    let (bake, g) = match &args.bake_nodes {
-        Some(spec) => {
-            let nodes = parse_list("--bake-nodes", spec)?;
-            let [t, a] = nodes[..] else {
-                anyhow::bail!("--bake-nodes '{spec}': expected two node counts, T,A");
-            };
-            if t < 1.0 || a < 2.0 || t.fract() != 0.0 || a.fract() != 0.0 {
-                anyhow::bail!("--bake-nodes '{spec}': need whole numbers, T ≥ 1 and A ≥ 2");
-            }
-            let (s, g) =
-                grid::time_bake(&bench, t as usize, a as usize, args.threads, args.repeat)?;
-            (Some(s), g)
-        }
-        None => (
-            None,
-            grid::Grid {
-                wavelengths_nm,
-                angles_deg,
-                thicknesses_nm,
-            },
-        ),
+    Ok(grid::Grid {
+        wavelengths_nm,
+        angles_deg,
+        thicknesses_nm,
+    })
+}
+
+/// `--bake-nodes T,A`: thickness and angle node counts.
+fn parse_bake_nodes(spec: &str) -> Result<(usize, usize)> {
+    let nodes = parse_list("--bake-nodes", spec)?;
+    let [t, a] = nodes[..] else {
+        anyhow::bail!("--bake-nodes '{spec}': expected two node counts, T,A");
     };
-    let out = grid::evaluate(
-        &bench.stack,
-        bench.varying_layer,
-        &g,
-        args.threads,
-        args.repeat,
-    )?;
+    if t < 1.0 || a < 2.0 || t.fract() != 0.0 || a.fract() != 0.0 {
+        anyhow::bail!("--bake-nodes '{spec}': need whole numbers, T ≥ 1 and A ≥ 2");
+    }
+    Ok((t as usize, a as usize))
+}
+
+/// The grid run's JSON, without R and T (printed in it or written raw).
+fn grid_json(
+    bench: &stacks::BenchStack,
+    g: &grid::Grid,
+    out: &grid::GridOutput,
+    threads: usize,
+    bake: Option<grid::BakeTimes>,
+) -> serde_json::Value {
     let (indices_re, indices_im): (Vec<Vec<f64>>, Vec<Vec<f64>>) = out
         .indices
         .chunks(out.media)
@@ -256,7 +291,7 @@ fn run_grid(name: &str, args: &Args) -> Result<()> {
             )
         })
         .unzip();
-    let mut doc = serde_json::json!({
+    serde_json::json!({
         "stack": bench.name,
         "description": bench.description,
         "layer_thicknesses_nm": bench.stack.thicknesses_nm(),
@@ -266,7 +301,7 @@ fn run_grid(name: &str, args: &Args) -> Result<()> {
         "thicknesses_nm": g.thicknesses_nm,
         "indices_re": indices_re,
         "indices_im": indices_im,
-        "threads": args.threads,
+        "threads": threads,
         "points": g.points(),
         "seconds": out.seconds,
         // The default bake, which also evaluates the grid with every
@@ -277,21 +312,7 @@ fn run_grid(name: &str, args: &Args) -> Result<()> {
         "bake_table_seconds": bake.map(|b| b.table_s),
         "bake_table_points": bake.map(|b| b.table_points),
         "layout": ["angle", "thickness", "wavelength"],
-    });
-    match &args.raw {
-        Some(path) => {
-            write_raw(path, &out.r, &out.t)?;
-            doc["raw"] = serde_json::json!(path);
-        }
-        None => {
-            doc["r"] = serde_json::json!(out.r);
-            doc["t"] = serde_json::json!(out.t);
-        }
-    }
-    let mut stdout = std::io::stdout().lock();
-    serde_json::to_writer(&mut stdout, &doc)?;
-    writeln!(stdout)?;
-    Ok(())
+    })
 }
 
 /// R then T as little-endian f64, written atomically.

@@ -47,9 +47,6 @@ pub fn run(args: Args) -> Result<ExitCode> {
 fn run_all(args: &Args) -> Result<ExitCode> {
     let cache = super::render::cache_dir(args.cache.as_deref())?;
     let lut = FilmMode::lut(&cache);
-    let exact = FilmMode::Direct {
-        sampling: Sampling::Exact,
-    };
     println!(
         "irid demo: {} thread(s); LUT renders at full size into {}/; the direct exact (1 nm) \
          reference renders at {:.0}% of each side, compared with a LUT render of the same size",
@@ -63,46 +60,61 @@ fn run_all(args: &Args) -> Result<ExitCode> {
         "scene", "size", "bake s", "render s", "ref size", "direct s", "dE00 mean", "dE00 p99"
     );
     for name in builtin_names() {
-        let scene = Scene::builtin(name).expect("a built-in name")?;
-        let s = scene.settings;
-        let opts = RenderOptions::new(lut.clone());
-        let films = render::prepare_films(&scene, &lut)?;
-        let (image, render_s) = timed(|| render::render_with(&scene, &films, &opts));
-        image.write_png(&args.out.join(format!("{name}.png")))?;
-
-        let mut small = RenderOptions::new(exact.clone());
-        small.width = Some(((f64::from(s.width) * args.reference_scale).round() as u32).max(1));
-        small.height = Some(((f64::from(s.height) * args.reference_scale).round() as u32).max(1));
-        let direct_films = render::prepare_films(&scene, &exact)?;
-        let (reference, direct_s) = timed(|| render::render_with(&scene, &direct_films, &small));
-        reference.write_png(&args.out.join(format!("{name}.direct.png")))?;
-        small.film = lut.clone();
-        let lut_small = render::render_with(&scene, &films, &small);
-        let de = lut_small.delta_e2000(&reference)?;
-        println!(
-            "{:<18} {:>9} {:>9.3} {:>10.3} {:>9} {:>11.2} {:>10.3} {:>9.3}",
-            name,
-            format!("{}x{}", s.width, s.height),
-            films.bake_time.as_secs_f64(),
-            render_s,
-            format!("{}x{}", reference.width, reference.height),
-            direct_s,
-            de.mean,
-            de.p99
-        );
+        render_and_compare(name, args, &lut)?;
     }
     println!(
         "(bake s is 0 when every table came from the cache in {})",
         cache.display()
     );
+    time_film_cost(&lut)?;
+    Ok(ExitCode::SUCCESS)
+}
 
-    // The paper's timing scene: LUT vs the paper's direct 41-wavelength
-    // method, and the same scene with the film replaced by bare glass.
+/// Renders the built-in scene `name` with tables into `args.out`, then at
+/// the reference scale both by direct exact evaluation and with tables, and
+/// prints a table row: times and the colour error between the two.
+fn render_and_compare(name: &str, args: &Args, lut: &FilmMode) -> Result<()> {
+    let exact = FilmMode::Direct {
+        sampling: Sampling::Exact,
+    };
+    let scene = Scene::builtin(name).expect("a built-in name")?;
+    let s = scene.settings;
+    let opts = RenderOptions::new(lut.clone());
+    let films = render::prepare_films(&scene, lut)?;
+    let (image, render_s) = timed(|| render::render_with(&scene, &films, &opts));
+    image.write_png(&args.out.join(format!("{name}.png")))?;
+
+    let mut small = RenderOptions::new(exact.clone());
+    small.width = Some(((f64::from(s.width) * args.reference_scale).round() as u32).max(1));
+    small.height = Some(((f64::from(s.height) * args.reference_scale).round() as u32).max(1));
+    let direct_films = render::prepare_films(&scene, &exact)?;
+    let (reference, direct_s) = timed(|| render::render_with(&scene, &direct_films, &small));
+    reference.write_png(&args.out.join(format!("{name}.direct.png")))?;
+    small.film = lut.clone();
+    let lut_small = render::render_with(&scene, &films, &small);
+    let de = lut_small.delta_e2000(&reference)?;
+    println!(
+        "{:<18} {:>9} {:>9.3} {:>10.3} {:>9} {:>11.2} {:>10.3} {:>9.3}",
+        name,
+        format!("{}x{}", s.width, s.height),
+        films.bake_time.as_secs_f64(),
+        render_s,
+        format!("{}x{}", reference.width, reference.height),
+        direct_s,
+        de.mean,
+        de.p99
+    );
+    Ok(())
+}
+
+/// The paper's timing scene: LUT vs the paper's direct 41-wavelength
+/// method, and the same scene with the film replaced by bare glass.
+fn time_film_cost(lut: &FilmMode) -> Result<()> {
     let scene = Scene::builtin("two-layer-noise").expect("built in")?;
     let opts = RenderOptions::new(lut.clone());
-    let films = render::prepare_films(&scene, &lut)?;
+    let films = render::prepare_films(&scene, lut)?;
     let plain = scene.without_films(bare_metal);
-    let plain_films = render::prepare_films(&plain, &lut)?;
+    let plain_films = render::prepare_films(&plain, lut)?;
     // Sub-second renders on a shared machine: the best of several runs, the
     // two kinds interleaved so that both see the same load. Fifteen: with
     // seven, two runs minutes apart differed by several points of the
@@ -140,7 +152,7 @@ fn run_all(args: &Args) -> Result<ExitCode> {
         "  on one thread: LUT {lut_1:.4} s, plain glass {plain_1:.4} s: film shading adds {:+.1}%",
         (lut_1 / plain_1 - 1.0) * 100.0
     );
-    Ok(ExitCode::SUCCESS)
+    Ok(())
 }
 
 /// Runs of each timed render in the timing comparison; the best counts.

@@ -11,12 +11,10 @@ use irid::color::{Sampling, White};
 use irid::export::{export, write_dir, ExportSpec};
 use irid::optics::Stack;
 
-use super::args::parse_range;
+use super::args::{parse_range, FilmArgs};
 
 #[derive(clap::Args)]
 pub struct Args {
-    /// Stack file (TOML).
-    pub stack: PathBuf,
     /// Output directory; written atomically (a temporary directory beside
     /// it is renamed into place). An existing one is replaced only if it is
     /// empty or an earlier export.
@@ -26,12 +24,8 @@ pub struct Args {
     /// thickness in the stack file, a single texel column].
     #[arg(long)]
     pub thickness: Option<String>,
-    /// The varying layer, counted from 1 at the ambient side.
-    #[arg(long, default_value_t = 1)]
-    pub layer: usize,
-    /// cos θ range COS_MIN:COS_MAX in the ambient [default: cos 89°:1].
-    #[arg(long)]
-    pub angles: Option<String>,
+    #[command(flatten)]
+    pub film: FilmArgs,
     /// Spectral integration: exact (1 nm), uniform:N, rgb3.
     #[arg(long, default_value = "exact")]
     pub sampling: String,
@@ -55,18 +49,16 @@ pub struct Args {
 }
 
 pub fn run(args: Args) -> Result<ExitCode> {
-    let stack = Stack::load(&args.stack)?;
+    let stack = Stack::load(&args.film.stack)?;
     let mut spec = ExportSpec::new(stack);
-    spec.layer = args.layer;
-    if let Some(layer) = spec.stack.layers.get(args.layer.wrapping_sub(1)) {
-        spec.thickness_nm = (layer.thickness_nm, layer.thickness_nm);
+    spec.layer = args.film.layer;
+    if let Some(t) = args.film.layer_thickness_nm(&spec.stack) {
+        spec.thickness_nm = (t, t);
     }
     if let Some(t) = &args.thickness {
         spec.thickness_nm = parse_range("--thickness", t)?;
     }
-    if let Some(a) = &args.angles {
-        spec.cos_theta = parse_range("--angles", a)?;
-    }
+    spec.cos_theta = args.film.cos_theta()?;
     spec.sampling = args
         .sampling
         .parse::<Sampling>()
@@ -92,7 +84,7 @@ pub fn run(args: Args) -> Result<ExitCode> {
             eprintln!("  {line}");
         }
     })
-    .with_context(|| args.stack.display().to_string())?;
+    .with_context(|| args.film.stack.display().to_string())?;
     write_dir(&result, &args.output)?;
     if !quiet {
         let e = &result.error;

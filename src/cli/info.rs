@@ -4,7 +4,7 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use anyhow::Result;
-use irid::lut::Lut;
+use irid::lut::{Header, Lut};
 
 #[derive(clap::Args)]
 pub struct Args {
@@ -27,6 +27,25 @@ pub fn run(args: Args) -> Result<ExitCode> {
         h.tool
     );
     super::say!(out, "  cache key {}", h.cache_key);
+    say_axes(&mut out, h);
+    super::say!(out, "channels:");
+    for c in &h.channels {
+        super::say!(out, "  {:<16} {}", c.name, c.meaning);
+    }
+    say_stack(&mut out, h);
+    super::say!(
+        out,
+        "colour: {}, {}, {}, sampling {}",
+        h.color.space,
+        h.color.illuminant,
+        h.color.observer,
+        h.color.sampling
+    );
+    print_with_error(&mut out, h);
+    Ok(ExitCode::SUCCESS)
+}
+
+fn say_axes(out: &mut String, h: &Header) {
     super::say!(
         out,
         "axes (x = {}, y = {}{}):",
@@ -39,17 +58,6 @@ pub fn run(args: Args) -> Result<ExitCode> {
     );
     for a in &h.axes {
         let n = &a.nodes;
-        let steps: Vec<f64> = n.windows(2).map(|w| w[1] - w[0]).collect();
-        let spacing = match (
-            steps.iter().cloned().reduce(f64::min),
-            steps.iter().cloned().reduce(f64::max),
-        ) {
-            (Some(lo), Some(hi)) if hi - lo <= 1e-9 * hi.abs().max(1.0) => {
-                format!("uniform step {lo:.6}")
-            }
-            (Some(lo), Some(hi)) => format!("non-uniform, steps {lo:.3e} to {hi:.3e}"),
-            _ => "single node".into(),
-        };
         let unit = if a.unit == "1" {
             String::new()
         } else {
@@ -57,17 +65,32 @@ pub fn run(args: Args) -> Result<ExitCode> {
         };
         super::say!(
             out,
-            "  {:<14} {:>6} nodes  {} .. {}{unit}  ({spacing})",
+            "  {:<14} {:>6} nodes  {} .. {}{unit}  ({})",
             a.name,
             n.len(),
             n[0],
             n[n.len() - 1],
+            spacing(n),
         );
     }
-    super::say!(out, "channels:");
-    for c in &h.channels {
-        super::say!(out, "  {:<16} {}", c.name, c.meaning);
+}
+
+/// "uniform step …", "non-uniform, steps … to …" or "single node".
+fn spacing(nodes: &[f64]) -> String {
+    let steps: Vec<f64> = nodes.windows(2).map(|w| w[1] - w[0]).collect();
+    match (
+        steps.iter().cloned().reduce(f64::min),
+        steps.iter().cloned().reduce(f64::max),
+    ) {
+        (Some(lo), Some(hi)) if hi - lo <= 1e-9 * hi.abs().max(1.0) => {
+            format!("uniform step {lo:.6}")
+        }
+        (Some(lo), Some(hi)) => format!("non-uniform, steps {lo:.3e} to {hi:.3e}"),
+        _ => "single node".into(),
     }
+}
+
+fn say_stack(out: &mut String, h: &Header) {
     super::say!(out, "stack:");
     super::say!(out, "  ambient    {}", h.stack.ambient.name);
     for (i, l) in h.stack.layers.iter().enumerate() {
@@ -85,14 +108,11 @@ pub fn run(args: Args) -> Result<ExitCode> {
         );
     }
     super::say!(out, "  substrate  {}", h.stack.substrate.name);
-    super::say!(
-        out,
-        "colour: {}, {}, {}, sampling {}",
-        h.color.space,
-        h.color.illuminant,
-        h.color.observer,
-        h.color.sampling
-    );
+}
+
+/// Prints `out` followed by the error section. The validation statistics
+/// print themselves, so `out` is flushed before them.
+fn print_with_error(out: &mut String, h: &Header) {
     super::say!(out, "error:");
     if let Some(e) = h.error.target_max_abs {
         super::say!(out, "  target (--max-error)  {e:e}");
@@ -117,7 +137,7 @@ pub fn run(args: Args) -> Result<ExitCode> {
             v.points,
             v.seed
         );
-        super::print_escaped(&out);
+        super::print_escaped(out);
         out.clear();
         crate::cli::validate::print_stats(v);
     } else {
@@ -125,7 +145,6 @@ pub fn run(args: Args) -> Result<ExitCode> {
             out,
             "  validation            not recorded (run `irid validate`)"
         );
-        super::print_escaped(&out);
+        super::print_escaped(out);
     }
-    Ok(ExitCode::SUCCESS)
 }

@@ -7,7 +7,7 @@ use std::time::Instant;
 
 use anyhow::{bail, Context, Result};
 use irid::color::Sampling;
-use irid::render::{self, scene_file, FilmMode, RenderOptions, Scene};
+use irid::render::{self, scene_file, FilmMode, PreparedFilms, RenderOptions, Scene};
 
 use super::args::check_count;
 
@@ -108,6 +108,29 @@ pub fn run(args: Args) -> Result<ExitCode> {
         mode => mode,
     };
     let scene = Scene::load_named(&args.scene)?;
+    check_size_flags(&args)?;
+    let output = checked_output(&args, &scene)?;
+    let mut opts = RenderOptions::new(mode);
+    opts.width = args.width;
+    opts.height = args.height;
+    opts.spp = args.spp;
+    opts.max_depth = args.max_depth;
+    opts.seed = args.seed;
+    render::check_image_size(&scene, &opts)?;
+
+    let (films, image, render_s) = with_threads(args.threads, || render_with_bar(&scene, &opts))??;
+    image.write_outputs(&output, args.exr.as_deref())?;
+    print_summary(&scene, &films, &opts, &image, render_s, args.threads);
+    println!("wrote   {}", output.display());
+    if let Some(exr) = &args.exr {
+        println!("wrote   {}", exr.display());
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+/// `--width`, `--height`, `--spp` and `--max-depth` within what a scene
+/// file may ask for.
+fn check_size_flags(args: &Args) -> Result<()> {
     let (side, spp) = (scene_file::MAX_IMAGE_SIDE, scene_file::MAX_SPP);
     for (flag, v, max) in [
         ("--width", args.width, side),
@@ -126,6 +149,13 @@ pub fn run(args: Args) -> Result<ExitCode> {
             );
         }
     }
+    Ok(())
+}
+
+/// The PNG's path (`-o`, else out/SCENE.png, creating out/), refused
+/// before a long render rather than after it when it and `--exr` name one
+/// file or either's directory is missing.
+fn checked_output(args: &Args, scene: &Scene) -> Result<PathBuf> {
     let output = match &args.output {
         Some(p) => p.clone(),
         None => {
@@ -133,7 +163,6 @@ pub fn run(args: Args) -> Result<ExitCode> {
             PathBuf::from("out").join(format!("{}.png", file_stem(&scene.name)))
         }
     };
-    // Fail before a long render, not after it.
     if let Some(exr) = &args.exr {
         if same_file(&output, exr) {
             bail!(
@@ -149,30 +178,38 @@ pub fn run(args: Args) -> Result<ExitCode> {
             bail!("{}: output directory does not exist", path.display());
         }
     }
-    let mut opts = RenderOptions::new(mode);
-    opts.width = args.width;
-    opts.height = args.height;
-    opts.spp = args.spp;
-    opts.max_depth = args.max_depth;
-    opts.seed = args.seed;
-    render::check_image_size(&scene, &opts)?;
+    Ok(output)
+}
 
-    let (films, image, render_s) = with_threads(args.threads, || -> Result<_> {
-        let films = render::prepare_films(&scene, &opts.film)?;
-        let bar = progress_bar("rendering {bar:40} {percent:>3}% {elapsed} (eta {eta})");
-        let (image, render_s) = timed(|| {
-            render::render_with_progress(&scene, &films, &opts, &|f| {
-                if let Some(bar) = &bar {
-                    bar.set_position((f * 1000.0) as u64);
-                }
-            })
-        });
-        if let Some(bar) = &bar {
-            bar.finish_and_clear();
-        }
-        Ok((films, image, render_s))
-    })??;
-    image.write_outputs(&output, args.exr.as_deref())?;
+/// Prepares the films and renders, with a progress bar on a terminal.
+/// Returns the films, the image and the render's wall time in seconds.
+fn render_with_bar(
+    scene: &Scene,
+    opts: &RenderOptions,
+) -> Result<(PreparedFilms, render::Image, f64)> {
+    let films = render::prepare_films(scene, &opts.film)?;
+    let bar = progress_bar("rendering {bar:40} {percent:>3}% {elapsed} (eta {eta})");
+    let (image, render_s) = timed(|| {
+        render::render_with_progress(scene, &films, opts, &|f| {
+            if let Some(bar) = &bar {
+                bar.set_position((f * 1000.0) as u64);
+            }
+        })
+    });
+    if let Some(bar) = &bar {
+        bar.finish_and_clear();
+    }
+    Ok((films, image, render_s))
+}
+
+fn print_summary(
+    scene: &Scene,
+    films: &PreparedFilms,
+    opts: &RenderOptions,
+    image: &render::Image,
+    render_s: f64,
+    threads: Option<usize>,
+) {
     let film = match &opts.film {
         FilmMode::Lut { .. } => format!(
             "lut: {} table(s) baked, {} from cache, {:.3} s",
@@ -204,13 +241,8 @@ pub fn run(args: Args) -> Result<ExitCode> {
         image.height,
         opts.spp.unwrap_or(scene.settings.spp),
         render_s,
-        args.threads.unwrap_or_else(rayon::current_num_threads)
+        threads.unwrap_or_else(rayon::current_num_threads)
     );
-    println!("wrote   {}", output.display());
-    if let Some(exr) = &args.exr {
-        println!("wrote   {}", exr.display());
-    }
-    Ok(ExitCode::SUCCESS)
 }
 
 /// Whether two output paths name the same file (the same name in the same

@@ -614,49 +614,13 @@ pub fn export(spec: &ExportSpec, progress: &dyn Fn(&str)) -> Result<Export> {
             .flat_map(|j| (0..nu).map(move |i| (i, j)))
             .map(|(i, j)| fine[2 * j * fine_map.size_u + 2 * i])
             .collect();
-        // f16 rounds each value by up to half its ulp: that part of the
-        // budget no grid can buy back.
-        let largest = coarse
-            .iter()
-            .flat_map(|v| v.iter())
-            .fold(0.0f64, |a, &b| a.max(b.abs()));
-        let rounding = f16_half_ulp(largest);
-        if rounding >= 0.9 * target {
-            return Err(Error::invalid(
-                "max-error",
-                format!(
-                    "{target} cannot be met with f16 texels: values reach {largest:.3}, which f16 rounds by up to {rounding:.2e}"
-                ),
-            ));
-        }
-        let budget = target - rounding;
+        let budget = budget_after_f16_rounding(&coarse, target)?;
         progress(&format!(
             "{nu}×{nv}: midpoint error {:.2e} (u) {:.2e} (v) {:.2e} (centre)",
             e_u, e_v, e_c
         ));
-        if e_u.max(e_v).max(e_c) <= target {
-            let (reflectance, transmittance) = textures(&mapping, &coarse);
-            let mut export = Export {
-                spec: spec.clone(),
-                mapping,
-                weights_8bit_extra: f64::from(
-                    reflectance
-                        .max_neighbour_step()
-                        .max(transmittance.max_neighbour_step()),
-                ) / 256.0,
-                opaque: transmittance
-                    .texels
-                    .iter()
-                    .all(|t| t[..3].iter().all(|&x| x == 0.0)),
-                reflectance,
-                transmittance,
-                error: reference.measure(|_, _| [0.0; 6]),
-                png: None,
-            };
-            export.error = reference.measure(|t, c| {
-                let (r, tr) = export.sample(t, c);
-                [r[0], r[1], r[2], tr[0], tr[1], tr[2]].map(f64::from)
-            });
+        let (gu, gv) = if e_u.max(e_v).max(e_c) <= target {
+            let mut export = measured_export(spec, mapping, &coarse, &reference);
             progress(&format!(
                 "{nu}×{nv}: {} random points, max error {:.2e}",
                 spec.points,
@@ -665,33 +629,16 @@ pub fn export(spec: &ExportSpec, progress: &dyn Fn(&str)) -> Result<Export> {
             let measured = export.error.max_all();
             if measured <= target {
                 if spec.png {
-                    let scale = files::png_scale(&export);
-                    let quantized = files::png_textures(&export, scale);
-                    let error = reference.measure(|t, c| {
-                        let uv = export.mapping.uv(t, c);
-                        let r = quantized.0.sample_bilinear(uv);
-                        let tr = quantized.1.sample_bilinear(uv);
-                        [r[0], r[1], r[2], tr[0], tr[1], tr[2]].map(f64::from)
-                    });
-                    export.png = Some((scale, error));
+                    export.png = Some(png_error(&export, &reference));
                 }
                 return Ok(export);
             }
             // A feature between the midpoints: refine both axes.
             let grow = ((measured / target).sqrt() * 1.1).clamp(1.15, 2.0);
-            mapping = mapping.resized(grown(nu, grow, t_flat), grown(nv, grow, c_flat));
-            continue;
-        }
-        // Bilinear error falls as h²: grow each axis by what its own
-        // midpoint error asks, aiming at half the budget each.
-        let share = 0.5 * budget;
-        let factor = |e: f64| ((e / share).sqrt() * 1.1).clamp(1.0, 4.0);
-        let (mut gu, mut gv) = (factor(e_u), factor(e_v));
-        if gu == 1.0 && gv == 1.0 {
-            // Only cell centres fail: both axes a little.
-            gu = factor(e_c).max(1.15);
-            gv = gu;
-        }
+            (grow, grow)
+        } else {
+            growth_for_midpoint_errors([e_u, e_v, e_c], budget)
+        };
         mapping = mapping.resized(grown(nu, gu, t_flat), grown(nv, gv, c_flat));
     }
     Err(Error::invalid(
@@ -705,6 +652,88 @@ pub fn export(spec: &ExportSpec, progress: &dyn Fn(&str)) -> Result<Export> {
             }
         ),
     ))
+}
+
+/// What remains of `target` for the bilinear error once f16 has rounded
+/// the largest of `values`: f16 rounds each value by up to half its ulp, a
+/// part of the budget no grid can buy back.
+fn budget_after_f16_rounding(values: &[[f64; 6]], target: f64) -> Result<f64> {
+    let largest = values
+        .iter()
+        .flat_map(|v| v.iter())
+        .fold(0.0f64, |a, &b| a.max(b.abs()));
+    let rounding = f16_half_ulp(largest);
+    if rounding >= 0.9 * target {
+        return Err(Error::invalid(
+            "max-error",
+            format!(
+                "{target} cannot be met with f16 texels: values reach {largest:.3}, which f16 rounds by up to {rounding:.2e}"
+            ),
+        ));
+    }
+    Ok(target - rounding)
+}
+
+/// The growth of each axis (u, v) for midpoint errors (u, v, centre) over
+/// `budget`. Bilinear error falls as h²: each axis grows by what its own
+/// midpoint error asks, aiming at half the budget each.
+fn growth_for_midpoint_errors([e_u, e_v, e_c]: [f64; 3], budget: f64) -> (f64, f64) {
+    let share = 0.5 * budget;
+    let factor = |e: f64| ((e / share).sqrt() * 1.1).clamp(1.0, 4.0);
+    let (gu, gv) = (factor(e_u), factor(e_v));
+    if gu == 1.0 && gv == 1.0 {
+        // Only cell centres fail: both axes a little.
+        let g = factor(e_c).max(1.15);
+        return (g, g);
+    }
+    (gu, gv)
+}
+
+/// The export of the node values `coarse` on `mapping`, its error measured
+/// at the reference points as the GPU samples it.
+fn measured_export(
+    spec: &ExportSpec,
+    mapping: Mapping,
+    coarse: &[[f64; 6]],
+    reference: &Reference,
+) -> Export {
+    let (reflectance, transmittance) = textures(&mapping, coarse);
+    let mut export = Export {
+        spec: spec.clone(),
+        mapping,
+        weights_8bit_extra: f64::from(
+            reflectance
+                .max_neighbour_step()
+                .max(transmittance.max_neighbour_step()),
+        ) / 256.0,
+        opaque: transmittance
+            .texels
+            .iter()
+            .all(|t| t[..3].iter().all(|&x| x == 0.0)),
+        reflectance,
+        transmittance,
+        error: reference.measure(|_, _| [0.0; 6]),
+        png: None,
+    };
+    export.error = reference.measure(|t, c| {
+        let (r, tr) = export.sample(t, c);
+        [r[0], r[1], r[2], tr[0], tr[1], tr[2]].map(f64::from)
+    });
+    export
+}
+
+/// The 16-bit PNGs' scale and the error of sampling the textures through
+/// them.
+fn png_error(export: &Export, reference: &Reference) -> (f64, ExportError) {
+    let scale = files::png_scale(export);
+    let quantized = files::png_textures(export, scale);
+    let error = reference.measure(|t, c| {
+        let uv = export.mapping.uv(t, c);
+        let r = quantized.0.sample_bilinear(uv);
+        let tr = quantized.1.sample_bilinear(uv);
+        [r[0], r[1], r[2], tr[0], tr[1], tr[2]].map(f64::from)
+    });
+    (scale, error)
 }
 
 /// The axis warps for `spec`: a dense-side stack's critical angle inside

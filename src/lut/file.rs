@@ -4,6 +4,7 @@
 
 use std::path::Path;
 
+use exr::meta::header::Header as ExrHeader;
 use exr::meta::MetaData;
 use exr::prelude::{
     read, AnyChannel, AnyChannels, AttributeValue, Encoding, FlatSamples, Image, Layer,
@@ -89,120 +90,155 @@ impl Lut {
         if exr_header.deep {
             return Err(bad("a deep OpenEXR image is not an irid table".into()));
         }
-        let text = exr_header
-            .own_attributes
-            .other
-            .get(&Text::from(ATTRIBUTE))
-            .or_else(|| {
-                exr_header
-                    .shared_attributes
-                    .other
-                    .get(&Text::from(ATTRIBUTE))
-            })
-            .ok_or_else(|| {
-                bad(format!(
-                    "no '{ATTRIBUTE}' header attribute: not an irid table"
-                ))
-            })?;
-        let AttributeValue::Text(text) = text else {
-            return Err(bad(format!("the '{ATTRIBUTE}' attribute is not text")));
-        };
-        let json: String = text.bytes().iter().map(|&b| b as char).collect();
-        let value: serde_json::Value = serde_json::from_str(&json)
-            .map_err(|e| bad(format!("'{ATTRIBUTE}' header is not JSON: {e}")))?;
-        if value.get("format").and_then(|f| f.as_str()) != Some(FORMAT_NAME) {
-            return Err(bad(format!("header 'format' is not \"{FORMAT_NAME}\"")));
-        }
-        let version = value.get("version").and_then(|v| v.as_u64());
-        if !version.is_some_and(readable_version) {
-            return Err(bad(format!(
-                "format version {} (this irid reads versions {OLDEST_READABLE_VERSION} to {WHITE_E_VERSION})",
-                version.map_or("missing".into(), |v| v.to_string()),
-            )));
-        }
-        let header: Header =
-            serde_json::from_value(value).map_err(|e| bad(format!("'{ATTRIBUTE}' header: {e}")))?;
+        let header = parse_header(exr_header).map_err(bad)?;
         let (width, height) = check_header(&header).map_err(bad)?;
-        let names = channel_names(header.kind);
-        let size = exr_header.layer_size;
-        if (size.0, size.1) != (width, height) {
-            return Err(bad(format!(
-                "the image is {}x{} pixels but the header's axes give {width}x{height} ({} thickness nodes across, cos θ{} nodes down)",
-                size.0,
-                size.1,
-                header.axes[0].nodes.len(),
-                if header.kind == Kind::Spectral { " × wavelength" } else { "" },
-            )));
-        }
-        let stored = &exr_header.channels.list;
-        if stored.len() != names.len() {
-            return Err(bad(format!(
-                "{} channels, a {} table has exactly {names:?}",
-                stored.len(),
-                header.kind
-            )));
-        }
-        let want_type = if header.precision == "f16" {
-            SampleType::F16
-        } else {
-            SampleType::F32
-        };
-        for name in names {
-            let channel = stored
-                .iter()
-                .find(|c| c.name == **name)
-                .ok_or_else(|| bad(format!("missing channel '{name}'")))?;
-            if channel.sample_type != want_type || channel.sampling != Vec2(1, 1) {
-                return Err(bad(format!(
-                    "channel '{name}' sample type differs from header precision {}",
-                    header.precision
-                )));
-            }
-        }
-        // The reader's planes (stored sample size), their f32 copies, the
-        // interleaved table and, for rgb, its SIMD layout (32 bytes a node).
-        let values = (width as u64).checked_mul(height as u64);
-        let per_value = want_type.bytes_per_sample() as u64 + 8;
-        let estimate = values.and_then(|v| {
-            let nodes_extra = if header.kind == Kind::Rgb { 32 } else { 0 };
-            crate::limits::product(&[v, names.len() as u64], per_value)?
-                .checked_add(v.checked_mul(nodes_extra)?)
-        });
-        crate::limits::check_allocation(
-            &format!("{}: loading the table", path.display()),
-            estimate,
-        )?;
-
-        let image = read()
-            .no_deep_data()
-            .largest_resolution_level()
-            .all_channels()
-            .first_valid_layer()
-            .all_attributes()
-            .from_file(path)
-            .map_err(|e| bad(format!("not a readable OpenEXR file: {e}")))?;
-        let layer = &image.layer_data;
-        if (layer.size.0, layer.size.1) != (width, height) {
-            return Err(bad("the image's size changed while it was read".into()));
-        }
-        let pixels = width * height;
-        let mut data = vec![0.0f32; pixels * names.len()];
-        for (k, name) in names.iter().enumerate() {
-            let channel = layer
-                .channel_data
-                .list
-                .iter()
-                .find(|c| c.name == **name)
-                .ok_or_else(|| bad(format!("missing channel '{name}'")))?;
-            if channel.sample_data.len() != pixels {
-                return Err(bad(format!("channel '{name}' holds too few samples")));
-            }
-            for (p, v) in channel.sample_data.values_as_f32().enumerate() {
-                data[p * names.len() + k] = v;
-            }
-        }
+        let sample_type = check_image(exr_header, &header, width, height).map_err(bad)?;
+        check_load_allocation(path, &header, width, height, sample_type)?;
+        let data = read_pixels(path, &header, width, height).map_err(bad)?;
         Lut::from_parts(header, data).map_err(bad)
     }
+}
+
+/// The `irid` attribute as a [`Header`]. The format name and version are
+/// checked on the raw JSON first, so a table from another format or a
+/// newer irid is named as such rather than as a field serde cannot parse.
+fn parse_header(exr_header: &ExrHeader) -> std::result::Result<Header, String> {
+    let text = exr_header
+        .own_attributes
+        .other
+        .get(&Text::from(ATTRIBUTE))
+        .or_else(|| {
+            exr_header
+                .shared_attributes
+                .other
+                .get(&Text::from(ATTRIBUTE))
+        })
+        .ok_or_else(|| format!("no '{ATTRIBUTE}' header attribute: not an irid table"))?;
+    let AttributeValue::Text(text) = text else {
+        return Err(format!("the '{ATTRIBUTE}' attribute is not text"));
+    };
+    let json: String = text.bytes().iter().map(|&b| b as char).collect();
+    let value: serde_json::Value = serde_json::from_str(&json)
+        .map_err(|e| format!("'{ATTRIBUTE}' header is not JSON: {e}"))?;
+    if value.get("format").and_then(|f| f.as_str()) != Some(FORMAT_NAME) {
+        return Err(format!("header 'format' is not \"{FORMAT_NAME}\""));
+    }
+    let version = value.get("version").and_then(|v| v.as_u64());
+    if !version.is_some_and(readable_version) {
+        return Err(format!(
+            "format version {} (this irid reads versions {OLDEST_READABLE_VERSION} to {WHITE_E_VERSION})",
+            version.map_or("missing".into(), |v| v.to_string()),
+        ));
+    }
+    serde_json::from_value(value).map_err(|e| format!("'{ATTRIBUTE}' header: {e}"))
+}
+
+/// The image's size and channels against the header, from the file's
+/// headers alone. Returns the sample type every channel is stored in.
+fn check_image(
+    exr_header: &ExrHeader,
+    header: &Header,
+    width: usize,
+    height: usize,
+) -> std::result::Result<SampleType, String> {
+    let names = channel_names(header.kind);
+    let size = exr_header.layer_size;
+    if (size.0, size.1) != (width, height) {
+        return Err(format!(
+            "the image is {}x{} pixels but the header's axes give {width}x{height} ({} thickness nodes across, cos θ{} nodes down)",
+            size.0,
+            size.1,
+            header.axes[0].nodes.len(),
+            if header.kind == Kind::Spectral { " × wavelength" } else { "" },
+        ));
+    }
+    let stored = &exr_header.channels.list;
+    if stored.len() != names.len() {
+        return Err(format!(
+            "{} channels, a {} table has exactly {names:?}",
+            stored.len(),
+            header.kind
+        ));
+    }
+    let want_type = if header.precision == "f16" {
+        SampleType::F16
+    } else {
+        SampleType::F32
+    };
+    for name in names {
+        let channel = stored
+            .iter()
+            .find(|c| c.name == **name)
+            .ok_or_else(|| format!("missing channel '{name}'"))?;
+        if channel.sample_type != want_type || channel.sampling != Vec2(1, 1) {
+            return Err(format!(
+                "channel '{name}' sample type differs from header precision {}",
+                header.precision
+            ));
+        }
+    }
+    Ok(want_type)
+}
+
+/// Refuses a table whose loading would exceed the memory budget, before
+/// the reader allocates its planes.
+fn check_load_allocation(
+    path: &Path,
+    header: &Header,
+    width: usize,
+    height: usize,
+    sample_type: SampleType,
+) -> Result<()> {
+    // The reader's planes (stored sample size), their f32 copies, the
+    // interleaved table and, for rgb, its SIMD layout (32 bytes a node).
+    let channels = channel_names(header.kind).len() as u64;
+    let values = (width as u64).checked_mul(height as u64);
+    let per_value = sample_type.bytes_per_sample() as u64 + 8;
+    let estimate = values.and_then(|v| {
+        let nodes_extra = if header.kind == Kind::Rgb { 32 } else { 0 };
+        crate::limits::product(&[v, channels], per_value)?.checked_add(v.checked_mul(nodes_extra)?)
+    });
+    crate::limits::check_allocation(&format!("{}: loading the table", path.display()), estimate)
+}
+
+/// The pixels, interleaved channel by channel in the header's order.
+fn read_pixels(
+    path: &Path,
+    header: &Header,
+    width: usize,
+    height: usize,
+) -> std::result::Result<Vec<f32>, String> {
+    let names = channel_names(header.kind);
+    let image = read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .all_channels()
+        .first_valid_layer()
+        .all_attributes()
+        .from_file(path)
+        .map_err(|e| format!("not a readable OpenEXR file: {e}"))?;
+    let layer = &image.layer_data;
+    // The headers were checked on an earlier read of the file.
+    if (layer.size.0, layer.size.1) != (width, height) {
+        return Err("the image's size changed while it was read".into());
+    }
+    let pixels = width * height;
+    let mut data = vec![0.0f32; pixels * names.len()];
+    for (k, name) in names.iter().enumerate() {
+        let channel = layer
+            .channel_data
+            .list
+            .iter()
+            .find(|c| c.name == **name)
+            .ok_or_else(|| format!("missing channel '{name}'"))?;
+        if channel.sample_data.len() != pixels {
+            return Err(format!("channel '{name}' holds too few samples"));
+        }
+        for (p, v) in channel.sample_data.values_as_f32().enumerate() {
+            data[p * names.len() + k] = v;
+        }
+    }
+    Ok(data)
 }
 
 /// EXR text is bytes; JSON allows any character as a \u escape, so the

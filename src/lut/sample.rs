@@ -123,6 +123,36 @@ pub(crate) fn check_header(header: &Header) -> Result<(usize, usize), String> {
             header.version
         ));
     }
+    check_axes(header)?;
+    let want_channels = channel_names(header.kind);
+    let channels: Vec<String> = header
+        .channels
+        .iter()
+        .map(|c| crate::error::escape(&c.name).into_owned())
+        .collect();
+    if channels != want_channels {
+        return Err(format!(
+            "header channels {channels:?}, a {} table has {want_channels:?}",
+            header.kind
+        ));
+    }
+    if header.precision != "f32" && header.precision != "f16" {
+        return Err(format!(
+            "header precision '{}', expected f32 or f16",
+            crate::error::escape(&header.precision)
+        ));
+    }
+    header
+        .stack
+        .validate()
+        .map_err(|e| format!("header stack: {e}"))?;
+    check_layer(header)?;
+    check_error_entries(header, want_channels.len())?;
+    image_size(header)
+}
+
+/// The axes' names and order for the table's kind, then each axis's nodes.
+fn check_axes(header: &Header) -> Result<(), String> {
     let want_axes: &[&str] = match header.kind {
         Kind::Rgb => &[THICKNESS_AXIS, COS_AXIS],
         Kind::Spectral => &[THICKNESS_AXIS, COS_AXIS, WAVELENGTH_AXIS],
@@ -149,28 +179,11 @@ pub(crate) fn check_header(header: &Header) -> Result<(usize, usize), String> {
     for (axis, (lo, hi)) in header.axes.iter().zip(ranges) {
         check_axis(axis, lo, hi)?;
     }
-    let want_channels = channel_names(header.kind);
-    let channels: Vec<String> = header
-        .channels
-        .iter()
-        .map(|c| crate::error::escape(&c.name).into_owned())
-        .collect();
-    if channels != want_channels {
-        return Err(format!(
-            "header channels {channels:?}, a {} table has {want_channels:?}",
-            header.kind
-        ));
-    }
-    if header.precision != "f32" && header.precision != "f16" {
-        return Err(format!(
-            "header precision '{}', expected f32 or f16",
-            crate::error::escape(&header.precision)
-        ));
-    }
-    header
-        .stack
-        .validate()
-        .map_err(|e| format!("header stack: {e}"))?;
+    Ok(())
+}
+
+/// `layer` is one of the stack's layers, or 0 for a stack without layers.
+fn check_layer(header: &Header) -> Result<(), String> {
     let layers = header.stack.layers.len();
     let layer_ok = if layers == 0 {
         header.layer == 0
@@ -188,7 +201,11 @@ pub(crate) fn check_header(header: &Header) -> Result<(usize, usize), String> {
             }
         ));
     }
-    let n = want_channels.len();
+    Ok(())
+}
+
+/// The error statistics' per-channel lists have one entry per channel.
+fn check_error_entries(header: &Header, n: usize) -> Result<(), String> {
     let per_channel = |what: &str, len: usize| {
         if len == n {
             Ok(())
@@ -207,6 +224,12 @@ pub(crate) fn check_header(header: &Header) -> Result<(usize, usize), String> {
         per_channel("error.validation.mean_abs", v.mean_abs.len())?;
         per_channel("error.validation.p99_abs", v.p99_abs.len())?;
     }
+    Ok(())
+}
+
+/// (thickness nodes, cos θ nodes × wavelength nodes), refused beyond what
+/// an OpenEXR image's i32 dimensions hold.
+fn image_size(header: &Header) -> Result<(usize, usize), String> {
     let width = header.axes[0].nodes.len();
     let height = header.axes[1]
         .nodes

@@ -144,6 +144,16 @@ impl MediumSpec {
     /// `finite` says whether it is a layer, which must carry a thickness
     /// (the ambient and substrate must not).
     pub fn resolve(&self, field: &str, base_dir: &Path, finite: bool) -> Result<Material> {
+        self.check_one_form(field)?;
+        self.check_thickness(field, finite)?;
+        let mut material = self.material_of_form(field, base_dir)?;
+        if let Some(name) = &self.name {
+            material.name = name.clone();
+        }
+        Ok(material)
+    }
+
+    fn check_one_form(&self, field: &str) -> Result<()> {
         let forms: Vec<&str> = [
             ("n", self.n.is_some()),
             ("material", self.material.is_some()),
@@ -168,23 +178,28 @@ impl MediumSpec {
                 ),
             ));
         }
+        Ok(())
+    }
+
+    fn check_thickness(&self, field: &str, finite: bool) -> Result<()> {
         match (finite, self.thickness_nm) {
-            (true, None) => {
-                return Err(Error::invalid(
-                    format!("{field}.thickness_nm"),
-                    "missing (every layer needs a thickness)",
-                ))
-            }
-            (false, Some(_)) => {
-                return Err(Error::invalid(
-                    format!("{field}.thickness_nm"),
-                    "not allowed: the ambient and substrate are semi-infinite",
-                ))
-            }
-            _ => {}
+            (true, None) => Err(Error::invalid(
+                format!("{field}.thickness_nm"),
+                "missing (every layer needs a thickness)",
+            )),
+            (false, Some(_)) => Err(Error::invalid(
+                format!("{field}.thickness_nm"),
+                "not allowed: the ambient and substrate are semi-infinite",
+            )),
+            _ => Ok(()),
         }
+    }
+
+    /// The material of the one form given (see [`Self::check_one_form`]),
+    /// named after it.
+    fn material_of_form(&self, field: &str, base_dir: &Path) -> Result<Material> {
         let sub = |name: &str| format!("{field}.{name}");
-        let mut material = if let Some(IndexSpec { n, k }) = self.n {
+        Ok(if let Some(IndexSpec { n, k }) = self.n {
             Material::constant(n, k)
         } else if let Some(name) = &self.material {
             library::builtin(name).ok_or_else(|| {
@@ -232,12 +247,8 @@ impl MediumSpec {
                 dispersion: Dispersion::Table(table),
             }
         } else {
-            unreachable!("exactly one form was checked above")
-        };
-        if let Some(name) = &self.name {
-            material.name = name.clone();
-        }
-        Ok(material)
+            unreachable!("resolve checked that exactly one form is given")
+        })
     }
 }
 

@@ -4,14 +4,22 @@
 // Each test binary compiles its own copy and uses only part of it.
 #![allow(dead_code)]
 
+#[cfg(feature = "cli")]
 use std::ffi::OsStr;
 use std::ops::Deref;
 use std::path::{Path, PathBuf};
+#[cfg(feature = "cli")]
 use std::process::Command;
+
+// The binary is built only with the `cli` feature, and without it a stale
+// one from an earlier build may still sit in target/: the helpers that run
+// it exist only with the feature, so a test that runs it and is not gated
+// on the feature does not compile.
 
 /// The `irid` binary, to run in the crate's root unless told otherwise,
 /// with tables baked on demand kept in the build's scratch folder rather
 /// than the user's cache.
+#[cfg(feature = "cli")]
 pub fn command() -> Command {
     let mut cmd = Command::new(env!("CARGO_BIN_EXE_irid"));
     cmd.current_dir(env!("CARGO_MANIFEST_DIR"));
@@ -50,15 +58,18 @@ impl Run {
 }
 
 /// Runs `irid args...` in the crate's root and waits for it.
+#[cfg(feature = "cli")]
 pub fn irid<I: IntoIterator<Item = S>, S: AsRef<OsStr>>(args: I) -> Run {
     run(command().args(args))
 }
 
 /// Runs `irid args...` in `dir` and waits for it.
+#[cfg(feature = "cli")]
 pub fn irid_in<I: IntoIterator<Item = S>, S: AsRef<OsStr>>(dir: &Path, args: I) -> Run {
     run(command().args(args).current_dir(dir))
 }
 
+#[cfg(feature = "cli")]
 fn run(cmd: &mut Command) -> Run {
     let out = cmd.output().expect("irid runs");
     Run {
