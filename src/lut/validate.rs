@@ -94,36 +94,22 @@ pub fn validate(lut: &Lut, points: usize, seed: u64) -> Result<ErrorStats> {
         ));
     }
     let h = lut.header();
-    let stack = &h.stack;
-    let kind = h.kind;
     let range = |k: usize| {
         let n = &h.axes[k].nodes;
         (n[0], n[n.len() - 1])
     };
     let (t_range, c_range) = (range(0), range(1));
-    let w_range = if kind == Kind::Spectral {
+    let w_range = if h.kind == Kind::Spectral {
         range(2)
     } else {
         (0.0, 0.0)
     };
-    let sampling: Sampling = h.color.sampling.parse()?;
-    let integrator = SpectralIntegrator::with_white(sampling, h.color.white);
-    let wavelengths = integrator.wavelengths_nm();
-    let color_covered = match kind {
-        Kind::Rgb => true,
-        Kind::Spectral => wavelengths
-            .iter()
-            .all(|&w| w >= w_range.0 && w <= w_range.1),
-    };
-    let color_grid = StackGrid::new(stack, if color_covered { wavelengths } else { &[] })?;
-
+    let checker = PointChecker::new(lut)?;
     let mut rng = rand_pcg::Pcg64::seed_from_u64(seed);
     let mut draw = |(lo, hi): (f64, f64)| (lo + rng.random::<f64>() * (hi - lo)) as f32;
 
-    let layer = h.layer;
-    let base_thicknesses = stack.thicknesses_nm();
-    let n_channels = channel_names(kind).len();
-    let critical = critical_cos(stack, kind, w_range)
+    let n_channels = channel_names(h.kind).len();
+    let critical = critical_cos(&h.stack, h.kind, w_range)
         .filter(|&cc| cc >= c_range.0 - CRITICAL_BAND && cc <= c_range.1 + CRITICAL_BAND);
     let mut totals = Totals::new(n_channels, critical);
     // Points are drawn and evaluated a chunk at a time and folded into
@@ -139,88 +125,161 @@ pub fn validate(lut: &Lut, points: usize, seed: u64) -> Result<ErrorStats> {
         let errors: Vec<PointError> = chunk
             .par_iter()
             .map_init(
-                || {
-                    (
-                        base_thicknesses.clone(),
-                        vec![0.0; wavelengths.len()],
-                        vec![0.0; wavelengths.len()],
-                        vec![Response::default(); color_grid.wavelengths_nm().len()],
-                        Vec::new(),
-                    )
-                },
-                |(thick, spec_r, spec_t, spectrum, idx), &[t, c, w]| -> Result<PointError> {
-                    if layer > 0 {
-                        thick[layer - 1] = f64::from(t);
-                    }
-                    let cos = f64::from(c);
-                    let mut color = |table_r: &[f64; 3], table_t: &[f64; 3]| {
-                        // The whole spectrum of this point at once, four
-                        // wavelengths per vector, indices laid out up front.
-                        color_grid.solve_spectrum(thick, cos, spectrum);
-                        for ((resp, r), t) in spectrum
-                            .iter()
-                            .zip(spec_r.iter_mut())
-                            .zip(spec_t.iter_mut())
-                        {
-                            *r = resp.r();
-                            *t = resp.t();
-                        }
-                        let (r, t) = (integrator.rgb(spec_r), integrator.rgb(spec_t));
-                        (
-                            r,
-                            t,
-                            [delta_e2000_rgb(*table_r, r), delta_e2000_rgb(*table_t, t)],
-                        )
-                    };
-                    let mut abs = [0.0; 6];
-                    let de = match kind {
-                        Kind::Rgb => {
-                            let s = lut.sample_rgb(t, c);
-                            let table_r = s.reflectance.map(f64::from);
-                            let table_t = s.transmittance.map(f64::from);
-                            let (r, tr, de) = color(&table_r, &table_t);
-                            for k in 0..3 {
-                                abs[k] = (table_r[k] - r[k]).abs();
-                                abs[3 + k] = (table_t[k] - tr[k]).abs();
-                            }
-                            Some(de)
-                        }
-                        Kind::Spectral => {
-                            stack.indices_at(f64::from(w), idx)?;
-                            let resp = solve(idx, thick, f64::from(w), cos);
-                            let (r, tr) = lut.sample_spectral(t, c, w);
-                            abs[0] = (f64::from(r) - resp.r()).abs();
-                            abs[1] = (f64::from(tr) - resp.t()).abs();
-                            if color_covered {
-                                let mut table_r = vec![0.0; wavelengths.len()];
-                                let mut table_t = vec![0.0; wavelengths.len()];
-                                for (k, &wl) in wavelengths.iter().enumerate() {
-                                    let (r, t) = lut.sample_spectral(t, c, wl as f32);
-                                    table_r[k] = f64::from(r);
-                                    table_t[k] = f64::from(t);
-                                }
-                                let rgb_r = integrator.rgb(&table_r);
-                                let rgb_t = integrator.rgb(&table_t);
-                                Some(color(&rgb_r, &rgb_t).2)
-                            } else {
-                                None
-                            }
-                        }
-                    };
-                    Ok(PointError {
-                        at: [f64::from(t), cos, f64::from(w)],
-                        cos_theta: cos,
-                        abs,
-                        de,
-                    })
-                },
+                || checker.scratch(),
+                |scratch, &point| checker.check(scratch, point),
             )
             .collect::<Result<_>>()?;
         for e in &errors {
             totals.add(e);
         }
     }
-    Ok(totals.finish(points, seed, channel_names(kind), critical))
+    Ok(totals.finish(points, seed, channel_names(h.kind), critical))
+}
+
+/// What every point's comparison needs: the table, the stack's indices at
+/// the colour integration's wavelengths, and the integrator.
+struct PointChecker<'a> {
+    lut: &'a Lut,
+    integrator: SpectralIntegrator,
+    /// The stack at the integration's wavelengths; empty when a spectral
+    /// table does not span them (its points then get no colour).
+    color_grid: StackGrid,
+    color_covered: bool,
+}
+
+/// One thread's buffers for [`PointChecker::check`].
+struct PointScratch {
+    thicknesses_nm: Vec<f64>,
+    spec_r: Vec<f64>,
+    spec_t: Vec<f64>,
+    spectrum: Vec<Response>,
+    indices: Vec<num_complex::Complex64>,
+}
+
+impl<'a> PointChecker<'a> {
+    fn new(lut: &'a Lut) -> Result<Self> {
+        let h = lut.header();
+        let sampling: Sampling = h.color.sampling.parse()?;
+        let integrator = SpectralIntegrator::with_white(sampling, h.color.white);
+        let color_covered = match h.kind {
+            Kind::Rgb => true,
+            Kind::Spectral => {
+                let w = &h.axes[2].nodes;
+                let (lo, hi) = (w[0], w[w.len() - 1]);
+                integrator
+                    .wavelengths_nm()
+                    .iter()
+                    .all(|&x| x >= lo && x <= hi)
+            }
+        };
+        let wavelengths: &[f64] = if color_covered {
+            integrator.wavelengths_nm()
+        } else {
+            &[]
+        };
+        let color_grid = StackGrid::new(&h.stack, wavelengths)?;
+        Ok(PointChecker {
+            lut,
+            integrator,
+            color_grid,
+            color_covered,
+        })
+    }
+
+    fn scratch(&self) -> PointScratch {
+        let n_w = self.integrator.wavelengths_nm().len();
+        PointScratch {
+            thicknesses_nm: self.lut.header().stack.thicknesses_nm(),
+            spec_r: vec![0.0; n_w],
+            spec_t: vec![0.0; n_w],
+            spectrum: vec![Response::default(); self.color_grid.wavelengths_nm().len()],
+            indices: Vec::new(),
+        }
+    }
+
+    /// The exact colour of one point, its whole spectrum solved at once
+    /// (four wavelengths per vector), compared with the table's: the exact
+    /// (R, T) colours and their CIEDE2000 from the table's.
+    fn exact_color(
+        &self,
+        s: &mut PointScratch,
+        cos: f64,
+        table_r: &[f64; 3],
+        table_t: &[f64; 3],
+    ) -> ([f64; 3], [f64; 3], [f64; 2]) {
+        self.color_grid
+            .solve_spectrum(&s.thicknesses_nm, cos, &mut s.spectrum);
+        for ((resp, r), t) in s
+            .spectrum
+            .iter()
+            .zip(s.spec_r.iter_mut())
+            .zip(s.spec_t.iter_mut())
+        {
+            *r = resp.r();
+            *t = resp.t();
+        }
+        let (r, t) = (
+            self.integrator.rgb(&s.spec_r),
+            self.integrator.rgb(&s.spec_t),
+        );
+        let de = [delta_e2000_rgb(*table_r, r), delta_e2000_rgb(*table_t, t)];
+        (r, t, de)
+    }
+
+    /// The table against the solver at one point (thickness, cos θ,
+    /// wavelength; the wavelength is unused for rgb tables).
+    fn check(&self, s: &mut PointScratch, [t, c, w]: [f32; 3]) -> Result<PointError> {
+        let h = self.lut.header();
+        if h.layer > 0 {
+            s.thicknesses_nm[h.layer - 1] = f64::from(t);
+        }
+        let cos = f64::from(c);
+        let mut abs = [0.0; 6];
+        let de = match h.kind {
+            Kind::Rgb => {
+                let sample = self.lut.sample_rgb(t, c);
+                let table_r = sample.reflectance.map(f64::from);
+                let table_t = sample.transmittance.map(f64::from);
+                let (r, tr, de) = self.exact_color(s, cos, &table_r, &table_t);
+                for k in 0..3 {
+                    abs[k] = (table_r[k] - r[k]).abs();
+                    abs[3 + k] = (table_t[k] - tr[k]).abs();
+                }
+                Some(de)
+            }
+            Kind::Spectral => {
+                h.stack.indices_at(f64::from(w), &mut s.indices)?;
+                let resp = solve(&s.indices, &s.thicknesses_nm, f64::from(w), cos);
+                let (r, tr) = self.lut.sample_spectral(t, c, w);
+                abs[0] = (f64::from(r) - resp.r()).abs();
+                abs[1] = (f64::from(tr) - resp.t()).abs();
+                self.color_covered
+                    .then(|| self.spectral_color_error(s, t, c))
+            }
+        };
+        Ok(PointError {
+            at: [f64::from(t), cos, f64::from(w)],
+            cos_theta: cos,
+            abs,
+            de,
+        })
+    }
+
+    /// CIEDE2000 of a spectral table's colour at (t, c), its spectrum read
+    /// at every integration wavelength, against the exact colour.
+    fn spectral_color_error(&self, s: &mut PointScratch, t: f32, c: f32) -> [f64; 2] {
+        let wavelengths = self.integrator.wavelengths_nm();
+        let mut table_r = vec![0.0; wavelengths.len()];
+        let mut table_t = vec![0.0; wavelengths.len()];
+        for (k, &wl) in wavelengths.iter().enumerate() {
+            let (r, t) = self.lut.sample_spectral(t, c, wl as f32);
+            table_r[k] = f64::from(r);
+            table_t[k] = f64::from(t);
+        }
+        let rgb_r = self.integrator.rgb(&table_r);
+        let rgb_t = self.integrator.rgb(&table_t);
+        self.exact_color(s, f64::from(c), &rgb_r, &rgb_t).2
+    }
 }
 
 /// Points evaluated at once: enough to keep every thread busy, few enough

@@ -307,16 +307,7 @@ fn recurse_beta(
                 ts *= scale;
                 tp *= scale;
             } else {
-                let phase = k0 * d * q_below;
-                let decay = (-phase.im).exp();
-                // Past e^{-745} nothing comes back up through this layer;
-                // skipping the trigonometry also avoids sin(huge) there.
-                let one_way = if decay == 0.0 {
-                    zero
-                } else {
-                    let (sin, cos) = phase.re.sin_cos();
-                    C64::new(cos * decay, sin * decay)
-                };
+                let one_way = one_way(k0 * d * q_below);
                 let round_trip = one_way * one_way;
                 gamma_s *= round_trip;
                 gamma_p *= round_trip;
@@ -372,6 +363,20 @@ fn recurse_beta(
         },
         q_sub,
     )
+}
+
+/// A layer's one-way factor e^{iφ} = e^{−Im φ} (cos Re φ + i sin Re φ).
+/// Past e^{−745} nothing comes back up through the layer: the factor is
+/// exactly zero, and skipping the trigonometry also avoids sin(huge) there.
+#[inline]
+pub(super) fn one_way(phase: C64) -> C64 {
+    let decay = (-phase.im).exp();
+    if decay == 0.0 {
+        C64::new(0.0, 0.0)
+    } else {
+        let (sin, cos) = phase.re.sin_cos();
+        C64::new(cos * decay, sin * decay)
+    }
 }
 
 /// |q|² < 10⁻⁴ |n|²: within this the Γ recursion would lose more than

@@ -535,14 +535,9 @@ pub(super) fn one_way<V: Lanes>(phase: Cv<V>) -> Cv<V> {
 /// Every lane's bit of a mask.
 pub(super) const ALL_LANES: u32 = (1 << LANES) - 1;
 
-/// The scalar solver's one-way factor, written as it writes it.
+/// The scalar solver's one-way factor, kept out of line: lanes need it only
+/// past the polynomials' range.
 #[inline(never)]
 fn scalar_one_way(phase: C64) -> C64 {
-    let decay = (-phase.im).exp();
-    if decay == 0.0 {
-        C64::new(0.0, 0.0)
-    } else {
-        let (sin, cos) = phase.re.sin_cos();
-        C64::new(cos * decay, sin * decay)
-    }
+    crate::optics::solver::one_way(phase)
 }

@@ -122,35 +122,54 @@ fn solve_lanes<V: Lanes>(
         q_below = q_above;
     }
 
-    // Power, as the scalar solver's `to_power`.
-    let q0 = n0.mul(cos);
+    for (l, s) in scalar.iter_mut().enumerate() {
+        *s |= near_critical & (1 << l) != 0;
+    }
+    let power = Amplitudes {
+        gamma_s,
+        gamma_p,
+        ts,
+        tp,
+    };
+    let mut out = to_power(&power, n0.mul(cos), n_sub, q_sub);
+    for l in 0..LANES {
+        if scalar[l] {
+            out[l] = solve(indices[l], thicknesses_nm, wavelength_nm[l], cos_theta0[l]);
+        }
+    }
+    out
+}
+
+/// The recursion's result in four lanes: Γ at the top and the transmitted
+/// amplitude t, for s and p.
+struct Amplitudes<V> {
+    gamma_s: Cv<V>,
+    gamma_p: Cv<V>,
+    ts: Cv<V>,
+    tp: Cv<V>,
+}
+
+/// Power, as the scalar solver's `to_power`: R = |Γ|², T from the Poynting
+/// flux into the substrate over the incident one (q0 = n0 cos θ0).
+#[inline(always)]
+fn to_power<V: Lanes>(a: &Amplitudes<V>, q0: V, n_sub: Cv<V>, q_sub: Cv<V>) -> [Response; LANES] {
+    let one = V::splat(1.0);
     let conj_q = Cv {
         re: q_sub.re,
         im: q_sub.im.neg(),
     };
     let p_flux = conj_q.mul(n_sub).mul(n_sub).re.div(n_sub.norm_sqr());
-    let rs = gamma_s.norm_sqr().to_array();
-    let rp = gamma_p.norm_sqr().to_array();
+    let rs = a.gamma_s.norm_sqr().to_array();
+    let rp = a.gamma_p.norm_sqr().to_array();
     let inv_q0 = one.div(q0);
-    let t_s = ts.norm_sqr().mul(q_sub.re).mul(inv_q0).to_array();
-    let t_p = tp.norm_sqr().mul(p_flux).mul(inv_q0).to_array();
-    for (l, s) in scalar.iter_mut().enumerate() {
-        *s |= near_critical & (1 << l) != 0;
-    }
-    let mut out = [Response::default(); LANES];
-    for l in 0..LANES {
-        out[l] = if scalar[l] {
-            solve(indices[l], thicknesses_nm, wavelength_nm[l], cos_theta0[l])
-        } else {
-            Response {
-                rs: rs[l],
-                rp: rp[l],
-                ts: t_s[l],
-                tp: t_p[l],
-            }
-        };
-    }
-    out
+    let t_s = a.ts.norm_sqr().mul(q_sub.re).mul(inv_q0).to_array();
+    let t_p = a.tp.norm_sqr().mul(p_flux).mul(inv_q0).to_array();
+    std::array::from_fn(|l| Response {
+        rs: rs[l],
+        rp: rp[l],
+        ts: t_s[l],
+        tp: t_p[l],
+    })
 }
 
 /// The kernel's loop over groups of four output points. Point `i` of `out`
