@@ -45,10 +45,13 @@ use super::solver::{solve, Response};
 /// lane l's N + 2 indices (ambient, layers, substrate) at `wavelength_nm[l]`;
 /// the preconditions are [`solve`]'s.
 /// `medium(j)` gives medium j's n and n² in every lane (n² as `n * n`
-/// computes it), `k0` is 2π over each lane's wavelength.
+/// computes it), `k0` is 2π over each lane's wavelength. `repeats` says
+/// which media share one index (one material used by several layers, as in
+/// a Bragg mirror); their q is computed once.
 #[inline(always)]
 fn solve_lanes<V: Lanes>(
     medium: impl Fn(usize) -> (Cv<V>, Cv<V>),
+    repeats: &Repeats,
     k0: V,
     indices: [&[C64]; LANES],
     thicknesses_nm: &[f64],
@@ -68,10 +71,16 @@ fn solve_lanes<V: Lanes>(
     let n0 = medium(0).0.re;
     let beta_sq = n0.mul(n0).mul(one.sub(cos).mul(one.add(cos)));
 
+    // The q of every medium whose index another medium repeats, once each.
+    let mut shared_q = [Cv::real(zero); SHARED_SLOTS];
+    for &(j, slot) in &repeats.first[..repeats.count] {
+        shared_q[usize::from(slot)] = sqrt_upper(medium(usize::from(j)).1.sub_real(beta_sq));
+    }
+
     let (n_sub, nsq_sub) = medium(last);
     let mut n_below = n_sub;
     let mut nsq_below = nsq_sub;
-    let q_sub = sqrt_upper(nsq_below.sub_real(beta_sq));
+    let q_sub = normal_index(repeats.slot(last), &shared_q, nsq_sub, beta_sq);
     let mut q_below = q_sub;
     let (mut gamma_s, mut gamma_p) = (Cv::real(zero), Cv::real(zero));
     let (mut ts, mut tp) = (Cv::real(one), Cv::real(one));
@@ -82,7 +91,11 @@ fn solve_lanes<V: Lanes>(
             (Cv::real(n0), Cv::real(n0.mul(n0)), Cv::real(n0.mul(cos)))
         } else {
             let (n, nsq) = medium(j);
-            (n, nsq, sqrt_upper(nsq.sub_real(beta_sq)))
+            (
+                n,
+                nsq,
+                normal_index(repeats.slot(j), &shared_q, nsq, beta_sq),
+            )
         };
         if j + 1 < last {
             let k0_d = k0.mul(V::splat(thicknesses_nm[j]));
@@ -172,6 +185,22 @@ fn to_power<V: Lanes>(a: &Amplitudes<V>, q0: V, n_sub: Cv<V>, q_sub: Cv<V>) -> [
     })
 }
 
+/// A medium's q: its material's shared value where it has one, else
+/// sqrt_upper(n² − β²). A function, not a closure, so that it is always
+/// inlined into the AVX2 copy.
+#[inline(always)]
+fn normal_index<V: Lanes>(
+    slot: Option<usize>,
+    shared_q: &[Cv<V>; SHARED_SLOTS],
+    nsq: Cv<V>,
+    beta_sq: V,
+) -> Cv<V> {
+    match slot {
+        Some(s) => shared_q[s],
+        None => sqrt_upper(nsq.sub_real(beta_sq)),
+    }
+}
+
 /// The kernel's loop over groups of four output points. Point `i` of `out`
 /// is wavelength `i / cos_theta0.len()` at angle `i % cos_theta0.len()`;
 /// a last partial group repeats its final point in the unused lanes.
@@ -206,7 +235,7 @@ fn batch_body<V: Lanes>(
             (n, n.mul(n))
         };
         let k0 = V::splat(std::f64::consts::TAU).div(V::from_array(wl));
-        let res = solve_lanes::<V>(gather, k0, idx, thicknesses_nm, wl, cos);
+        let res = solve_lanes::<V>(gather, &Repeats::NONE, k0, idx, thicknesses_nm, wl, cos);
         store(out, start, &res);
         start = (start + LANES).min(total);
     }
@@ -229,6 +258,73 @@ pub struct Spectrum {
     /// Every medium has the same index at every wavelength: the spectrum
     /// can take the non-dispersive kernel ([`constant`]).
     non_dispersive: bool,
+    /// Media that share their index at every wavelength with another.
+    repeats: Repeats,
+}
+
+/// Distinct materials whose q the kernel keeps for their repeats.
+const SHARED_SLOTS: usize = 8;
+
+/// Which media (below the ambient) have the same index as another medium at
+/// every wavelength, so that one square root gives the q of all of them.
+/// Up to [`SHARED_SLOTS`] such materials, among the first 256 media; the
+/// others compute their own q.
+#[derive(Clone, Debug, PartialEq)]
+struct Repeats {
+    /// Per medium: 0 for none, else 1 + its material's slot.
+    slot_of: Vec<u8>,
+    /// (medium, slot) of each slot's first medium, which computes its q.
+    first: [(u8, u8); SHARED_SLOTS],
+    count: usize,
+}
+
+impl Default for Repeats {
+    fn default() -> Self {
+        Repeats::NONE
+    }
+}
+
+impl Repeats {
+    const NONE: Repeats = Repeats {
+        slot_of: Vec::new(),
+        first: [(0, 0); SHARED_SLOTS],
+        count: 0,
+    };
+
+    /// `indices` wavelength-major, `media` per wavelength.
+    fn new(indices: &[C64], media: usize) -> Repeats {
+        let mut r = Repeats::NONE;
+        let rows = || indices.chunks_exact(media.max(1));
+        let same = |a: usize, b: usize| rows().all(|row| row[a] == row[b]);
+        let media = media.min(256);
+        r.slot_of = vec![0; media];
+        for j in 1..media {
+            if r.slot_of[j] != 0 || r.count == SHARED_SLOTS {
+                continue;
+            }
+            let twins: Vec<usize> = (j + 1..media)
+                .filter(|&k| r.slot_of[k] == 0 && same(j, k))
+                .collect();
+            if twins.is_empty() {
+                continue;
+            }
+            let slot = r.count as u8;
+            r.first[r.count] = (j as u8, slot);
+            r.count += 1;
+            for k in std::iter::once(j).chain(twins) {
+                r.slot_of[k] = slot + 1;
+            }
+        }
+        r
+    }
+
+    #[inline(always)]
+    fn slot(&self, j: usize) -> Option<usize> {
+        match self.slot_of.get(j) {
+            Some(&s) if s != 0 => Some(usize::from(s - 1)),
+            _ => None,
+        }
+    }
 }
 
 impl Spectrum {
@@ -263,6 +359,7 @@ impl Spectrum {
         let non_dispersive = indices.chunks_exact(media.max(1)).all(|row| row == first);
         Spectrum {
             non_dispersive,
+            repeats: Repeats::new(indices, media),
             media,
             wavelengths: wavelengths_nm.len(),
             lanes,
@@ -314,6 +411,7 @@ fn spectrum_body<V: Lanes>(
         });
         let res = solve_lanes::<V>(
             medium,
+            &spectrum.repeats,
             V::from_array(*k0),
             idx,
             thicknesses_nm,
