@@ -71,11 +71,7 @@ fn solve_lanes<V: Lanes>(
     let n0 = medium(0).0.re;
     let beta_sq = n0.mul(n0).mul(one.sub(cos).mul(one.add(cos)));
 
-    // The q of every medium whose index another medium repeats, once each.
-    let mut shared_q = [Cv::real(zero); SHARED_SLOTS];
-    for &(j, slot) in &repeats.first[..repeats.count] {
-        shared_q[usize::from(slot)] = sqrt_upper(medium(usize::from(j)).1.sub_real(beta_sq));
-    }
+    let shared_q = shared_normal_indices(&medium, repeats, beta_sq);
 
     let (n_sub, nsq_sub) = medium(last);
     let mut n_below = n_sub;
@@ -183,6 +179,20 @@ fn to_power<V: Lanes>(a: &Amplitudes<V>, q0: V, n_sub: Cv<V>, q_sub: Cv<V>) -> [
         ts: t_s[l],
         tp: t_p[l],
     })
+}
+
+/// The q of every medium whose index another medium repeats, once each.
+#[inline(always)]
+fn shared_normal_indices<V: Lanes>(
+    medium: &impl Fn(usize) -> (Cv<V>, Cv<V>),
+    repeats: &Repeats,
+    beta_sq: V,
+) -> [Cv<V>; SHARED_SLOTS] {
+    let mut shared_q = [Cv::real(V::splat(0.0)); SHARED_SLOTS];
+    for &(j, slot) in &repeats.first[..repeats.count] {
+        shared_q[usize::from(slot)] = sqrt_upper(medium(usize::from(j)).1.sub_real(beta_sq));
+    }
+    shared_q
 }
 
 /// A medium's q: its material's shared value where it has one, else
