@@ -45,6 +45,34 @@ fn same_bits(a: &Response, b: &Response) -> bool {
         .all(|(x, y)| x.to_bits() == y.to_bits())
 }
 
+/// The AVX2 copy's result `best` equals the portable one's bit for bit, and
+/// both equal the scalar solver's `want` to [`TOLERANCE`].
+fn assert_agrees(
+    what: &str,
+    best: &Response,
+    portable: &Response,
+    want: &Response,
+    wl: f64,
+    cos: f64,
+) {
+    assert!(
+        same_bits(best, portable),
+        "{what}: AVX2 and portable differ at {wl} nm, cos {cos}: {best:?} vs {portable:?}"
+    );
+    for (got, want, name) in [
+        (best.rs, want.rs, "Rs"),
+        (best.rp, want.rp, "Rp"),
+        (best.ts, want.ts, "Ts"),
+        (best.tp, want.tp, "Tp"),
+    ] {
+        assert!(
+            !differs(got, want),
+            "{what}: {name} at {wl} nm, cos {cos}: batched {got:e}, scalar {want:e} (Δ {:e})",
+            got - want
+        );
+    }
+}
+
 /// Runs both copies of the kernel and the scalar solver; returns the
 /// largest difference seen (for the report in a failure message).
 fn check(case: &Case) {
@@ -74,24 +102,7 @@ fn check(case: &Case) {
         let wl = case.wavelengths_nm[w];
         let cos = case.cos_theta0[a];
         let want = solve(n, &case.thicknesses_nm, wl, cos);
-        assert!(
-            same_bits(b, p),
-            "{}: AVX2 and portable differ at {wl} nm, cos {cos}: {b:?} vs {p:?}",
-            case.what
-        );
-        for (got, want, name) in [
-            (b.rs, want.rs, "Rs"),
-            (b.rp, want.rp, "Rp"),
-            (b.ts, want.ts, "Ts"),
-            (b.tp, want.tp, "Tp"),
-        ] {
-            assert!(
-                !differs(got, want),
-                "{}: {name} at {wl} nm, cos {cos}: batched {got:e}, scalar {want:e} (Δ {:e})",
-                case.what,
-                got - want
-            );
-        }
+        assert_agrees(&case.what, b, p, &want, wl, cos);
     }
 }
 
@@ -406,23 +417,7 @@ fn check_spectrum(what: &str, stack: &Stack, wavelengths: &[f64], cosines: &[f64
         grid.solve_spectrum(&thick, cos, &mut best);
         grid.solve_spectrum_on(Path::Portable, &thick, cos, &mut portable);
         for ((b, p), (w, n)) in best.iter().zip(&portable).zip(grid.iter()) {
-            assert!(
-                same_bits(b, p),
-                "{what} at {w} nm, cos {cos}: AVX2 vs portable"
-            );
-            let want = solve(n, &thick, w, cos);
-            for (got, want, name) in [
-                (b.rs, want.rs, "Rs"),
-                (b.rp, want.rp, "Rp"),
-                (b.ts, want.ts, "Ts"),
-                (b.tp, want.tp, "Tp"),
-            ] {
-                assert!(
-                    !differs(got, want),
-                    "{what}: {name} at {w} nm, cos {cos}: spectrum {got:e}, scalar {want:e} (Δ {:e})",
-                    got - want
-                );
-            }
+            assert_agrees(what, b, p, &solve(n, &thick, w, cos), w, cos);
         }
     }
 }
