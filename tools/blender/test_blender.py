@@ -31,6 +31,10 @@ Checks, each counted as one test:
 table between the markers in docs/blender.md; --image PNG renders the
 spheres picture of docs/blender.md. Prints "N passed, N failed" last and
 exits non-zero on any failure.
+
+The helpers live beside this file: colour_exr.py (CIEDE2000, EXR files, the
+export's closed-form mapping) and cycles_scene.py (the Cycles scene, the
+materials, the irid command line, the spheres picture).
 """
 
 import argparse
@@ -38,90 +42,43 @@ import json
 import math
 import os
 import re
-import subprocess
 import sys
 import tempfile
 import time
 from pathlib import Path
 
 import numpy as np
-import OpenEXR
 
 import bpy
 
 HERE = Path(__file__).resolve().parent
 REPO = HERE.parent.parent
+# Python puts the script's directory on sys.path, Blender's --python does not.
 sys.path.insert(0, str(HERE))
 import irid_blender  # noqa: E402
+from colour_exr import (  # noqa: E402
+    delta_e2000,
+    delta_e2000_rgb,
+    expected_x,
+    expected_y,
+    write_exr,
+    write_synthetic_export,
+)
+from cycles_scene import (  # noqa: E402
+    RESOLUTION,
+    SAMPLES,
+    Bench,
+    Irid,
+    emission_material,
+    principled_material,
+    render_picture,
+    stack_with_thickness,
+)
 
 ANGLES_DEG = (0.0, 30.0, 60.0, 75.0)
 MEAN_BOUND = 0.3
 MAX_BOUND = 1.0
-RESOLUTION = 4  # pixels a side: every pixel sees the same angle
-SAMPLES = 2  # a mirror under a uniform world is noise-free; 2 checks that
 DOC_MARKERS = ("<!-- blender-table:start -->", "<!-- blender-table:end -->")
-
-# ---------------------------------------------------------------- colour
-
-# Linear sRGB (IEC 61966-2-1 primaries, D65) to CIE XYZ; (1, 1, 1) is the
-# reference white of Lab, as in irid's own delta_e2000_rgb.
-SRGB_TO_XYZ = np.array(
-    [[0.4124, 0.3576, 0.1805], [0.2126, 0.7152, 0.0722], [0.0193, 0.1192, 0.9505]]
-)
-
-
-def rgb_to_lab(rgb):
-    xyz = np.asarray(rgb, float) @ SRGB_TO_XYZ.T
-    t = xyz / SRGB_TO_XYZ.sum(axis=1)
-    d = 6.0 / 29.0
-    f = np.where(t > d**3, np.cbrt(t), t / (3 * d * d) + 4.0 / 29.0)
-    return np.stack(
-        [116 * f[..., 1] - 16, 500 * (f[..., 0] - f[..., 1]), 200 * (f[..., 1] - f[..., 2])], -1
-    )
-
-
-def delta_e2000(lab1, lab2):
-    """CIEDE2000 (Sharma, Wu and Dalal 2005), elementwise over the last axis."""
-    L1, a1, b1 = np.moveaxis(np.asarray(lab1, float), -1, 0)
-    L2, a2, b2 = np.moveaxis(np.asarray(lab2, float), -1, 0)
-    c_bar = 0.5 * (np.hypot(a1, b1) + np.hypot(a2, b2))
-    g = 0.5 * (1 - np.sqrt(c_bar**7 / (c_bar**7 + 25.0**7)))
-    a1p, a2p = (1 + g) * a1, (1 + g) * a2
-    c1p, c2p = np.hypot(a1p, b1), np.hypot(a2p, b2)
-    h1p = np.degrees(np.arctan2(b1, a1p)) % 360
-    h2p = np.degrees(np.arctan2(b2, a2p)) % 360
-    chroma_zero = c1p * c2p == 0
-    dh = h2p - h1p
-    dh = np.where(dh > 180, dh - 360, np.where(dh < -180, dh + 360, dh))
-    dh = np.where(chroma_zero, 0.0, dh)
-    d_big_h = 2 * np.sqrt(c1p * c2p) * np.sin(np.radians(dh / 2))
-    l_bar = 0.5 * (L1 + L2)
-    c_bar_p = 0.5 * (c1p + c2p)
-    h_sum = h1p + h2p
-    h_bar = np.where(
-        np.abs(h1p - h2p) > 180, np.where(h_sum < 360, h_sum + 360, h_sum - 360), h_sum
-    ) / 2
-    h_bar = np.where(chroma_zero, h_sum, h_bar)
-    t = (
-        1
-        - 0.17 * np.cos(np.radians(h_bar - 30))
-        + 0.24 * np.cos(np.radians(2 * h_bar))
-        + 0.32 * np.cos(np.radians(3 * h_bar + 6))
-        - 0.20 * np.cos(np.radians(4 * h_bar - 63))
-    )
-    d_theta = 30 * np.exp(-(((h_bar - 275) / 25) ** 2))
-    r_c = 2 * np.sqrt(c_bar_p**7 / (c_bar_p**7 + 25.0**7))
-    s_l = 1 + 0.015 * (l_bar - 50) ** 2 / np.sqrt(20 + (l_bar - 50) ** 2)
-    s_c = 1 + 0.045 * c_bar_p
-    s_h = 1 + 0.015 * c_bar_p * t
-    r_t = -np.sin(np.radians(2 * d_theta)) * r_c
-    dl, dc, dhh = (L2 - L1) / s_l, (c2p - c1p) / s_c, d_big_h / s_h
-    return np.sqrt(dl**2 + dc**2 + dhh**2 + r_t * dc * dhh)
-
-
-def delta_e2000_rgb(a, b):
-    return delta_e2000(rgb_to_lab(a), rgb_to_lab(b))
-
 
 # Test pairs from G. Sharma, W. Wu, E. N. Dalal, "The CIEDE2000 color-difference
 # formula: implementation notes, supplementary test data, and mathematical
@@ -138,326 +95,6 @@ SHARMA_PAIRS = [
     ((60.2574, -34.0099, 36.2677), (60.4626, -34.1751, 39.4387), 1.2644),
     ((2.0776, 0.0795, -1.1350), (0.9033, -0.0636, -0.5514), 0.9082),
 ]
-
-# ---------------------------------------------------------------- files
-
-
-def write_exr(path, rgba_rows):
-    """An RGBA half-float EXR whose first stored row is rgba_rows[0]."""
-    pixels = np.ascontiguousarray(np.asarray(rgba_rows, np.float32).astype(np.float16))
-    header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
-    with OpenEXR.File(header, {"RGBA": pixels}) as f:
-        f.write(str(path))
-
-
-def read_exr_rgb(path):
-    with OpenEXR.File(str(path)) as f:
-        channels = f.channels()
-        if "RGBA" in channels:
-            return np.asarray(channels["RGBA"].pixels, float)[..., :3]
-        if "RGB" in channels:
-            return np.asarray(channels["RGB"].pixels, float)
-        return np.stack([np.asarray(channels[c].pixels, float) for c in "RGB"], -1)
-
-
-def write_synthetic_export(
-    directory, size_u, size_v, cos_range, cos_crit, y_crit, opaque, thickness_power=1
-):
-    """A film table for the mapping test: texel (i, j) holds reflectance
-    (i / (N_u - 1), j / (N_v - 1), 0.25) and transmittance
-    (1 - i / (N_u - 1), 1 - j / (N_v - 1), 0.75), so bilinear sampling gives
-    back the continuous texel coordinates (x, y) the mapping produced."""
-    directory.mkdir(parents=True, exist_ok=True)
-    i = np.arange(size_u) / (size_u - 1)
-    j = np.arange(size_v) / (size_v - 1)
-    x, y = np.meshgrid(i, j)  # row r = j-th angle node: row 0 is y = 0
-    one = np.ones_like(x)
-    write_exr(directory / "reflectance.exr", np.stack([x, y, 0.25 * one, one], -1))
-    write_exr(directory / "transmittance.exr", np.stack([1 - x, 1 - y, 0.75 * one, one], -1))
-    film = {
-        "format": "irid-film",
-        "version": 1,
-        "texture": {
-            "width": size_u,
-            "height": size_v,
-            "format": "rgba16f",
-            "files": {"reflectance": "reflectance.exr", "transmittance": "transmittance.exr"},
-            "png": None,
-        },
-        "domain": {"thickness_nm": [100.0, 900.0], "cos_theta": list(cos_range)},
-        "params": {
-            "thickness_min_nm": 100.0,
-            "thickness_max_nm": 900.0,
-            "cos_min": cos_range[0],
-            "cos_max": cos_range[1],
-            "cos_crit": cos_crit,
-            "y_crit": y_crit,
-            "size_u": size_u,
-            "size_v": size_v,
-            "thickness_power": thickness_power,
-        },
-        "white": "e",
-        "stack": {
-            "ambient": {"name": "n=1", "dispersion": {"constant": {"n": 1.0, "k": 0.0}}},
-            "layers": [],
-            "substrate": {"name": "n=1.5", "dispersion": {"constant": {"n": 1.5, "k": 0.0}}},
-        },
-        "layer": 1,
-        "sampling": "exact",
-        "opaque": opaque,
-    }
-    (directory / "film.json").write_text(json.dumps(film, indent=1))
-
-
-def expected_x(fraction, thickness_power):
-    """The export's thickness warp (docs/gpu.md), written out directly."""
-    x = min(max(fraction, 0.0), 1.0)
-    return math.sqrt(x) if thickness_power == 2 else x
-
-
-def expected_y(c, cos_min, cos_max, cos_crit, y_crit):
-    """The export's angle warp (docs/gpu.md), written out directly."""
-    c = min(max(c, cos_min), cos_max)
-    if cos_crit < 0:
-        return (c - cos_min) / (cos_max - cos_min)
-    if c >= cos_crit:
-        return y_crit + (1 - y_crit) * math.sqrt((c - cos_crit) / (cos_max - cos_crit))
-    return y_crit - y_crit * math.sqrt((cos_crit - c) / (cos_crit - cos_min))
-
-
-# ---------------------------------------------------------------- Blender scene
-
-
-class Bench:
-    """A Cycles scene: one large plane, an orthographic camera, a white world."""
-
-    def __init__(self, workdir):
-        self.workdir = Path(workdir)
-        bpy.ops.wm.read_factory_settings(use_empty=True)
-        scene = bpy.context.scene
-        self.scene = scene
-        scene.render.engine = "CYCLES"
-        scene.cycles.device = "CPU"
-        scene.cycles.samples = SAMPLES
-        scene.cycles.use_adaptive_sampling = False
-        scene.cycles.use_denoising = False
-        scene.cycles.seed = 1
-        scene.cycles.sample_clamp_direct = 0.0
-        scene.cycles.sample_clamp_indirect = 0.0
-        scene.cycles.blur_glossy = 0.0
-        scene.render.threads_mode = "FIXED"
-        scene.render.threads = 2
-        scene.view_settings.view_transform = "Standard"
-        scene.view_settings.look = "None"
-        scene.render.resolution_x = RESOLUTION
-        scene.render.resolution_y = RESOLUTION
-        scene.render.resolution_percentage = 100
-        settings = scene.render.image_settings
-        settings.file_format = "OPEN_EXR"
-        settings.color_depth = "32"
-        settings.exr_codec = "ZIP"
-        # Renders are written in linear Rec.709 (irid's linear sRGB) whatever
-        # the working space.
-        settings.color_management = "OVERRIDE"
-        settings.linear_colorspace_settings.name = "Linear Rec.709"
-
-        world = bpy.data.worlds.new("white")
-        scene.world = world
-        if world.node_tree is None:
-            world.use_nodes = True
-        self.world = world
-        self.set_world("white")
-
-        mesh = bpy.data.meshes.new("plane")
-        half = 1.0e4
-        mesh.from_pydata(
-            [(-half, -half, 0), (half, -half, 0), (half, half, 0), (-half, half, 0)],
-            [],
-            [(0, 1, 2, 3)],
-        )
-        self.plane = bpy.data.objects.new("plane", mesh)
-        # Keep the quad's diagonal edge away from the view: a refracted ray that
-        # starts on the edge between its two triangles can hit the plane again.
-        self.plane.location = (2000.0, 700.0, 0.0)
-        scene.collection.objects.link(self.plane)
-
-        camera = bpy.data.cameras.new("camera")
-        camera.type = "ORTHO"
-        camera.ortho_scale = 0.1
-        camera.clip_start = 0.01
-        camera.clip_end = 100.0
-        self.camera = bpy.data.objects.new("camera", camera)
-        scene.collection.objects.link(self.camera)
-        scene.camera = self.camera
-        self.renders = 0
-
-    def set_world(self, mode):
-        """white: uniform white for every ray. reflection: white except for rays
-        that have refracted (so the plane shows R alone); transmission: white only
-        for those (the plane shows T alone)."""
-        tree = self.world.node_tree
-        tree.nodes.clear()
-        background = tree.nodes.new("ShaderNodeBackground")
-        background.inputs["Color"].default_value = (1.0, 1.0, 1.0, 1.0)
-        background.inputs["Strength"].default_value = 1.0
-        out = tree.nodes.new("ShaderNodeOutputWorld")
-        tree.links.new(background.outputs[0], out.inputs["Surface"])
-        if mode == "white":
-            return
-        path = tree.nodes.new("ShaderNodeLightPath")
-        strength = path.outputs["Is Transmission Ray"]
-        if mode == "reflection":
-            invert = tree.nodes.new("ShaderNodeMath")
-            invert.operation = "SUBTRACT"
-            invert.inputs[0].default_value = 1.0
-            tree.links.new(strength, invert.inputs[1])
-            strength = invert.outputs[0]
-        elif mode != "transmission":
-            raise ValueError(mode)
-        tree.links.new(strength, background.inputs["Strength"])
-
-    def set_working_space(self, name):
-        """Blender 5.0's scene-linear working space: Linear Rec.709 (the default) or ACEScg."""
-        done = bpy.ops.wm.set_working_color_space(working_space=name, convert_colors=False)
-        if done != {"FINISHED"} or bpy.data.colorspace.working_space != name:
-            raise RuntimeError(f"cannot set the working colour space to {name}")
-
-    def render(self, material, angle_deg, samples=SAMPLES):
-        """Linear Rec.709 RGB of every pixel, shape (H, W, 3)."""
-        self.scene.cycles.samples = samples
-        self.plane.data.materials.clear()
-        self.plane.data.materials.append(material)
-        theta = math.radians(angle_deg)
-        distance = 10.0
-        self.camera.location = (0.0, -distance * math.sin(theta), distance * math.cos(theta))
-        self.camera.rotation_euler = (theta, 0.0, 0.0)
-        path = self.workdir / f"render-{self.renders}.exr"
-        self.renders += 1
-        self.scene.render.filepath = str(path)
-        with quiet_stdout():
-            bpy.ops.render.render(write_still=True)
-        return read_exr_rgb(path)
-
-
-class quiet_stdout:
-    """Silences Blender's per-render progress lines (written to file descriptor 1)."""
-
-    def __enter__(self):
-        sys.stdout.flush()
-        self.saved = os.dup(1)
-        devnull = os.open(os.devnull, os.O_WRONLY)
-        os.dup2(devnull, 1)
-        os.close(devnull)
-
-    def __exit__(self, *exc):
-        os.dup2(self.saved, 1)
-        os.close(self.saved)
-
-
-def emission_material(name, group, output, thickness_fraction):
-    """A material showing one of a film group's colour outputs as emission."""
-    material = bpy.data.materials.new(name)
-    if material.node_tree is None:
-        material.use_nodes = True
-    tree = material.node_tree
-    tree.nodes.clear()
-    film = tree.nodes.new("ShaderNodeGroup")
-    film.node_tree = group
-    film.inputs["Thickness"].default_value = thickness_fraction
-    emission = tree.nodes.new("ShaderNodeEmission")
-    emission.inputs["Strength"].default_value = 1.0
-    out = tree.nodes.new("ShaderNodeOutputMaterial")
-    tree.links.new(film.outputs[output], emission.inputs["Color"])
-    tree.links.new(emission.outputs[0], out.inputs["Surface"])
-    return material
-
-
-def principled_material(name, base_color, metallic, ior, film_thickness_nm, film_ior, workdir):
-    """Cycles' own thin film: a Principled BSDF with Thin Film inputs, no diffuse.
-    The base colour (linear Rec.709) goes through a one-texel image tagged
-    Linear Rec.709, so Blender converts it into the working space."""
-    material = bpy.data.materials.new(name)
-    if material.node_tree is None:
-        material.use_nodes = True
-    tree = material.node_tree
-    tree.nodes.clear()
-    bsdf = tree.nodes.new("ShaderNodeBsdfPrincipled")
-    path = Path(workdir) / f"base-{len(bpy.data.images)}.exr"
-    texel = np.array([[[*base_color, 1.0]]], np.float32)
-    pixels = np.ascontiguousarray(texel)
-    with OpenEXR.File({"compression": OpenEXR.NO_COMPRESSION}, {"RGBA": pixels}) as f:
-        f.write(str(path))
-    image = bpy.data.images.load(str(path), check_existing=False)
-    image.colorspace_settings.name = "Linear Rec.709"
-    texture = tree.nodes.new("ShaderNodeTexImage")
-    texture.image = image
-    texture.interpolation = "Closest"
-    tree.links.new(texture.outputs["Color"], bsdf.inputs["Base Color"])
-    bsdf.inputs["Metallic"].default_value = metallic
-    bsdf.inputs["Roughness"].default_value = 0.0
-    bsdf.inputs["IOR"].default_value = ior
-    bsdf.inputs["Thin Film Thickness"].default_value = film_thickness_nm
-    bsdf.inputs["Thin Film IOR"].default_value = film_ior
-    out = tree.nodes.new("ShaderNodeOutputMaterial")
-    tree.links.new(bsdf.outputs[0], out.inputs["Surface"])
-    return material
-
-
-# ---------------------------------------------------------------- irid
-
-
-class Irid:
-    def __init__(self, binary, workdir):
-        self.binary = str(binary)
-        self.workdir = Path(workdir)
-
-    def run(self, *args):
-        done = subprocess.run(
-            [self.binary, *map(str, args)], capture_output=True, text=True, check=False
-        )
-        if done.returncode != 0:
-            raise RuntimeError(f"irid {' '.join(map(str, args))}: {done.stderr.strip()}")
-        return done.stdout
-
-    def colours(self, stack_path, angles_deg):
-        """Exact (reflectance, transmittance) linear RGB per angle, white E."""
-        angles = ",".join(f"{a:g}" for a in angles_deg)
-        rows = json.loads(
-            self.run("color", stack_path, "--white", "e", "--angles", angles, "--json")
-        )
-        got = [row["angle_deg"] for row in rows]
-        if not np.allclose(got, angles_deg):
-            raise RuntimeError(f"irid color answered angles {got}, asked {list(angles_deg)}")
-        return (
-            np.array([row["reflectance_rgb"] for row in rows]),
-            np.array([row["transmittance_rgb"] for row in rows]),
-        )
-
-    def export(self, stack_path, out_dir, layer, thickness_range):
-        self.run(
-            "export",
-            stack_path,
-            "-o",
-            out_dir,
-            "--white",
-            "e",
-            "--layer",
-            layer,
-            "--thickness",
-            f"{thickness_range[0]:g}:{thickness_range[1]:g}",
-        )
-        return out_dir
-
-
-def stack_with_thickness(source_text, layer, thickness_nm):
-    """A stack file's text with the layer-th (from 1) layer's thickness replaced."""
-    pattern = re.compile(r"^(\s*thickness_nm\s*=\s*)([0-9.eE+-]+)", re.M)
-    matches = list(pattern.finditer(source_text))
-    if len(matches) < layer:
-        raise ValueError(f"the stack has fewer than {layer} layers with thickness_nm")
-    m = matches[layer - 1]
-    return source_text[: m.start(2)] + f"{thickness_nm!r}" + source_text[m.end(2) :]
-
 
 # ---------------------------------------------------------------- the cases
 
@@ -739,122 +376,6 @@ def cycles_figures(bench, irid, workdir, case, nominal, stack):
     return float(e.mean()), float(e.max())
 
 
-def render_picture(irid, workdir, png_path):
-    """Two mirror spheres under a white world, film on copper with a noise
-    thickness: irid's material on the left, Cycles' Principled thin film on the
-    right (copper as its base colour), the same thickness texture driving both."""
-    case = next(c for c in CASES if c["name"] == "film on copper")
-    t_min, t_max = case["range"]
-    directory = irid.export(REPO / case["stack"], workdir / "export-picture", 1, (t_min, t_max))
-    bare = workdir / "bare-picture.toml"
-    bare.write_text(f'ambient = {{ n = 1.0 }}\nsubstrate = {{ material = "{case["cycles"]["metal"]}" }}\n')
-    base, _ = irid.colours(bare, (0.0,))
-
-    bpy.ops.wm.read_factory_settings(use_empty=True)
-    scene = bpy.context.scene
-    scene.render.engine = "CYCLES"
-    scene.cycles.device = "CPU"
-    scene.cycles.samples = 32
-    scene.cycles.use_denoising = False
-    scene.view_settings.view_transform = "Standard"
-    scene.render.resolution_x, scene.render.resolution_y = 560, 320
-    scene.render.image_settings.file_format = "PNG"
-    scene.render.image_settings.color_mode = "RGB"
-    scene.render.image_settings.compression = 100
-    world = bpy.data.worlds.new("white")
-    scene.world = world
-    if world.node_tree is None:
-        world.use_nodes = True
-    tree = world.node_tree
-    tree.nodes.clear()
-    # White light on the spheres; a grey backdrop for the camera only.
-    background = tree.nodes.new("ShaderNodeBackground")
-    mix = tree.nodes.new("ShaderNodeMix")
-    mix.data_type = "RGBA"
-    mix.inputs["A"].default_value = (1.0, 1.0, 1.0, 1.0)
-    mix.inputs["B"].default_value = (0.45, 0.45, 0.45, 1.0)
-    path = tree.nodes.new("ShaderNodeLightPath")
-    tree.links.new(path.outputs["Is Camera Ray"], mix.inputs["Factor"])
-    tree.links.new(mix.outputs["Result"], background.inputs["Color"])
-    out = tree.nodes.new("ShaderNodeOutputWorld")
-    tree.links.new(background.outputs[0], out.inputs["Surface"])
-
-    def noise_fraction(tree):
-        """A 0-1 thickness pattern over the sphere's own coordinates."""
-        coords = tree.nodes.new("ShaderNodeTexCoord")
-        noise = tree.nodes.new("ShaderNodeTexNoise")
-        noise.inputs["Scale"].default_value = 1.5
-        noise.inputs["Detail"].default_value = 1.0
-        tree.links.new(coords.outputs["Object"], noise.inputs["Vector"])
-        remap = tree.nodes.new("ShaderNodeMapRange")
-        remap.inputs["From Min"].default_value = 0.3
-        remap.inputs["From Max"].default_value = 0.7
-        remap.clamp = True
-        tree.links.new(noise.outputs["Fac"], remap.inputs["Value"])
-        return remap.outputs["Result"]
-
-    irid_material = irid_blender.make_material(directory, name="irid film on copper")
-    tree = irid_material.node_tree
-    film = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeGroup")
-    tree.links.new(noise_fraction(tree), film.inputs["Thickness"])
-
-    spec = case["cycles"]
-    cycles_material = principled_material(
-        "Cycles thin film on copper", tuple(base[0]), 1.0, 1.5, t_min, spec["film_ior"], workdir
-    )
-    tree = cycles_material.node_tree
-    to_nm = tree.nodes.new("ShaderNodeMath")
-    to_nm.operation = "MULTIPLY_ADD"
-    tree.links.new(noise_fraction(tree), to_nm.inputs[0])
-    to_nm.inputs[1].default_value = t_max - t_min
-    to_nm.inputs[2].default_value = t_min
-    bsdf = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeBsdfPrincipled")
-    tree.links.new(to_nm.outputs[0], bsdf.inputs["Thin Film Thickness"])
-
-    label_material = bpy.data.materials.new("label")
-    if label_material.node_tree is None:
-        label_material.use_nodes = True
-    tree = label_material.node_tree
-    tree.nodes.clear()
-    emission = tree.nodes.new("ShaderNodeEmission")
-    emission.inputs["Color"].default_value = (0.0, 0.0, 0.0, 1.0)
-    out = tree.nodes.new("ShaderNodeOutputMaterial")
-    tree.links.new(emission.outputs[0], out.inputs["Surface"])
-
-    for x, material, label in (
-        (-1.15, irid_material, "irid export"),
-        (1.15, cycles_material, "Cycles thin film"),
-    ):
-        bpy.ops.mesh.primitive_uv_sphere_add(segments=96, ring_count=48, location=(x, 0, 0.15))
-        sphere = bpy.context.active_object
-        bpy.ops.object.shade_smooth()
-        sphere.data.materials.append(material)
-        sphere.visible_glossy = False  # each sphere shows the white world only
-        sphere.visible_transmission = False
-        curve = bpy.data.curves.new(label, "FONT")
-        curve.body = label
-        curve.size = 0.2
-        curve.align_x = "CENTER"
-        text = bpy.data.objects.new(label, curve)
-        text.location = (x, 0, -1.2)
-        text.rotation_euler = (math.radians(90), 0, 0)
-        text.data.materials.append(label_material)
-        text.visible_glossy = False
-        scene.collection.objects.link(text)
-
-    camera = bpy.data.cameras.new("camera")
-    camera.type = "ORTHO"
-    camera.ortho_scale = 4.9
-    camera_object = bpy.data.objects.new("camera", camera)
-    camera_object.location = (0, -10, 0)
-    camera_object.rotation_euler = (math.radians(90), 0, 0)
-    scene.collection.objects.link(camera_object)
-    scene.camera = camera_object
-    png_path.parent.mkdir(parents=True, exist_ok=True)
-    scene.render.filepath = str(png_path)
-    bpy.ops.render.render(write_still=True)
-    print(f"wrote {png_path}")
-
 
 def format_table(table):
     angles = ", ".join(f"{a:g}°" for a in ANGLES_DEG)
@@ -921,7 +442,8 @@ def main():
         if args.docs:
             update_docs(table_text)
         if args.image:
-            render_picture(irid, workdir, Path(args.image))
+            case = next(c for c in CASES if c["name"] == "film on copper")
+            render_picture(irid, case, REPO / case["stack"], workdir, Path(args.image))
     print(f"{bench.renders} renders in {time.monotonic() - started:.0f} s")
     print(f"{results.passed} passed, {results.failed} failed")
     return 1 if results.failed else 0

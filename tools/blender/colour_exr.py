@@ -1,0 +1,159 @@
+"""Colour difference and EXR files for tools/blender/test_blender.py.
+
+CIEDE2000 as irid computes it, half-float EXR tables written with the
+OpenEXR package rather than with Blender (so the orientation check does not
+test Blender against itself), and the export's closed-form mapping that the
+synthetic tables check.
+"""
+
+import json
+import math
+
+import numpy as np
+import OpenEXR
+
+# ---------------------------------------------------------------- colour
+
+# Linear sRGB (IEC 61966-2-1 primaries, D65) to CIE XYZ; (1, 1, 1) is the
+# reference white of Lab, as in irid's own delta_e2000_rgb.
+SRGB_TO_XYZ = np.array(
+    [[0.4124, 0.3576, 0.1805], [0.2126, 0.7152, 0.0722], [0.0193, 0.1192, 0.9505]]
+)
+
+
+def rgb_to_lab(rgb):
+    xyz = np.asarray(rgb, float) @ SRGB_TO_XYZ.T
+    t = xyz / SRGB_TO_XYZ.sum(axis=1)
+    d = 6.0 / 29.0
+    f = np.where(t > d**3, np.cbrt(t), t / (3 * d * d) + 4.0 / 29.0)
+    return np.stack(
+        [116 * f[..., 1] - 16, 500 * (f[..., 0] - f[..., 1]), 200 * (f[..., 1] - f[..., 2])], -1
+    )
+
+
+def delta_e2000(lab1, lab2):
+    """CIEDE2000 (Sharma, Wu and Dalal 2005), elementwise over the last axis."""
+    L1, a1, b1 = np.moveaxis(np.asarray(lab1, float), -1, 0)
+    L2, a2, b2 = np.moveaxis(np.asarray(lab2, float), -1, 0)
+    c_bar = 0.5 * (np.hypot(a1, b1) + np.hypot(a2, b2))
+    g = 0.5 * (1 - np.sqrt(c_bar**7 / (c_bar**7 + 25.0**7)))
+    a1p, a2p = (1 + g) * a1, (1 + g) * a2
+    c1p, c2p = np.hypot(a1p, b1), np.hypot(a2p, b2)
+    h1p = np.degrees(np.arctan2(b1, a1p)) % 360
+    h2p = np.degrees(np.arctan2(b2, a2p)) % 360
+    chroma_zero = c1p * c2p == 0
+    dh = h2p - h1p
+    dh = np.where(dh > 180, dh - 360, np.where(dh < -180, dh + 360, dh))
+    dh = np.where(chroma_zero, 0.0, dh)
+    d_big_h = 2 * np.sqrt(c1p * c2p) * np.sin(np.radians(dh / 2))
+    l_bar = 0.5 * (L1 + L2)
+    c_bar_p = 0.5 * (c1p + c2p)
+    h_sum = h1p + h2p
+    h_bar = np.where(
+        np.abs(h1p - h2p) > 180, np.where(h_sum < 360, h_sum + 360, h_sum - 360), h_sum
+    ) / 2
+    h_bar = np.where(chroma_zero, h_sum, h_bar)
+    t = (
+        1
+        - 0.17 * np.cos(np.radians(h_bar - 30))
+        + 0.24 * np.cos(np.radians(2 * h_bar))
+        + 0.32 * np.cos(np.radians(3 * h_bar + 6))
+        - 0.20 * np.cos(np.radians(4 * h_bar - 63))
+    )
+    d_theta = 30 * np.exp(-(((h_bar - 275) / 25) ** 2))
+    r_c = 2 * np.sqrt(c_bar_p**7 / (c_bar_p**7 + 25.0**7))
+    s_l = 1 + 0.015 * (l_bar - 50) ** 2 / np.sqrt(20 + (l_bar - 50) ** 2)
+    s_c = 1 + 0.045 * c_bar_p
+    s_h = 1 + 0.015 * c_bar_p * t
+    r_t = -np.sin(np.radians(2 * d_theta)) * r_c
+    dl, dc, dhh = (L2 - L1) / s_l, (c2p - c1p) / s_c, d_big_h / s_h
+    return np.sqrt(dl**2 + dc**2 + dhh**2 + r_t * dc * dhh)
+
+
+def delta_e2000_rgb(a, b):
+    return delta_e2000(rgb_to_lab(a), rgb_to_lab(b))
+
+# ---------------------------------------------------------------- files
+
+
+def write_exr(path, rgba_rows):
+    """An RGBA half-float EXR whose first stored row is rgba_rows[0]."""
+    pixels = np.ascontiguousarray(np.asarray(rgba_rows, np.float32).astype(np.float16))
+    header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
+    with OpenEXR.File(header, {"RGBA": pixels}) as f:
+        f.write(str(path))
+
+
+def read_exr_rgb(path):
+    with OpenEXR.File(str(path)) as f:
+        channels = f.channels()
+        if "RGBA" in channels:
+            return np.asarray(channels["RGBA"].pixels, float)[..., :3]
+        if "RGB" in channels:
+            return np.asarray(channels["RGB"].pixels, float)
+        return np.stack([np.asarray(channels[c].pixels, float) for c in "RGB"], -1)
+
+
+def write_synthetic_export(
+    directory, size_u, size_v, cos_range, cos_crit, y_crit, opaque, thickness_power=1
+):
+    """A film table for the mapping test: texel (i, j) holds reflectance
+    (i / (N_u - 1), j / (N_v - 1), 0.25) and transmittance
+    (1 - i / (N_u - 1), 1 - j / (N_v - 1), 0.75), so bilinear sampling gives
+    back the continuous texel coordinates (x, y) the mapping produced."""
+    directory.mkdir(parents=True, exist_ok=True)
+    i = np.arange(size_u) / (size_u - 1)
+    j = np.arange(size_v) / (size_v - 1)
+    x, y = np.meshgrid(i, j)  # row r = j-th angle node: row 0 is y = 0
+    one = np.ones_like(x)
+    write_exr(directory / "reflectance.exr", np.stack([x, y, 0.25 * one, one], -1))
+    write_exr(directory / "transmittance.exr", np.stack([1 - x, 1 - y, 0.75 * one, one], -1))
+    film = {
+        "format": "irid-film",
+        "version": 1,
+        "texture": {
+            "width": size_u,
+            "height": size_v,
+            "format": "rgba16f",
+            "files": {"reflectance": "reflectance.exr", "transmittance": "transmittance.exr"},
+            "png": None,
+        },
+        "domain": {"thickness_nm": [100.0, 900.0], "cos_theta": list(cos_range)},
+        "params": {
+            "thickness_min_nm": 100.0,
+            "thickness_max_nm": 900.0,
+            "cos_min": cos_range[0],
+            "cos_max": cos_range[1],
+            "cos_crit": cos_crit,
+            "y_crit": y_crit,
+            "size_u": size_u,
+            "size_v": size_v,
+            "thickness_power": thickness_power,
+        },
+        "white": "e",
+        "stack": {
+            "ambient": {"name": "n=1", "dispersion": {"constant": {"n": 1.0, "k": 0.0}}},
+            "layers": [],
+            "substrate": {"name": "n=1.5", "dispersion": {"constant": {"n": 1.5, "k": 0.0}}},
+        },
+        "layer": 1,
+        "sampling": "exact",
+        "opaque": opaque,
+    }
+    (directory / "film.json").write_text(json.dumps(film, indent=1))
+
+
+def expected_x(fraction, thickness_power):
+    """The export's thickness warp (docs/gpu.md), written out directly."""
+    x = min(max(fraction, 0.0), 1.0)
+    return math.sqrt(x) if thickness_power == 2 else x
+
+
+def expected_y(c, cos_min, cos_max, cos_crit, y_crit):
+    """The export's angle warp (docs/gpu.md), written out directly."""
+    c = min(max(c, cos_min), cos_max)
+    if cos_crit < 0:
+        return (c - cos_min) / (cos_max - cos_min)
+    if c >= cos_crit:
+        return y_crit + (1 - y_crit) * math.sqrt((c - cos_crit) / (cos_max - cos_crit))
+    return y_crit - y_crit * math.sqrt((cos_crit - c) / (cos_crit - cos_min))

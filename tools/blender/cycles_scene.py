@@ -1,0 +1,375 @@
+"""Cycles helpers for tools/blender/test_blender.py: the measuring scene,
+the materials it renders beside irid's, the irid command line, and the
+spheres picture of docs/blender.md."""
+
+import json
+import math
+import os
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import OpenEXR
+
+import bpy
+
+import irid_blender
+from colour_exr import read_exr_rgb
+
+RESOLUTION = 4  # pixels a side: every pixel sees the same angle
+SAMPLES = 2  # a mirror under a uniform world is noise-free; 2 checks that
+
+# ---------------------------------------------------------------- Blender scene
+
+
+class Bench:
+    """A Cycles scene: one large plane, an orthographic camera, a white world."""
+
+    def __init__(self, workdir):
+        self.workdir = Path(workdir)
+        bpy.ops.wm.read_factory_settings(use_empty=True)
+        scene = bpy.context.scene
+        self.scene = scene
+        scene.render.engine = "CYCLES"
+        scene.cycles.device = "CPU"
+        scene.cycles.samples = SAMPLES
+        scene.cycles.use_adaptive_sampling = False
+        scene.cycles.use_denoising = False
+        scene.cycles.seed = 1
+        scene.cycles.sample_clamp_direct = 0.0
+        scene.cycles.sample_clamp_indirect = 0.0
+        scene.cycles.blur_glossy = 0.0
+        scene.render.threads_mode = "FIXED"
+        scene.render.threads = 2
+        scene.view_settings.view_transform = "Standard"
+        scene.view_settings.look = "None"
+        scene.render.resolution_x = RESOLUTION
+        scene.render.resolution_y = RESOLUTION
+        scene.render.resolution_percentage = 100
+        settings = scene.render.image_settings
+        settings.file_format = "OPEN_EXR"
+        settings.color_depth = "32"
+        settings.exr_codec = "ZIP"
+        # Renders are written in linear Rec.709 (irid's linear sRGB) whatever
+        # the working space.
+        settings.color_management = "OVERRIDE"
+        settings.linear_colorspace_settings.name = "Linear Rec.709"
+
+        world = bpy.data.worlds.new("white")
+        scene.world = world
+        if world.node_tree is None:
+            world.use_nodes = True
+        self.world = world
+        self.set_world("white")
+
+        mesh = bpy.data.meshes.new("plane")
+        half = 1.0e4
+        mesh.from_pydata(
+            [(-half, -half, 0), (half, -half, 0), (half, half, 0), (-half, half, 0)],
+            [],
+            [(0, 1, 2, 3)],
+        )
+        self.plane = bpy.data.objects.new("plane", mesh)
+        # Keep the quad's diagonal edge away from the view: a refracted ray that
+        # starts on the edge between its two triangles can hit the plane again.
+        self.plane.location = (2000.0, 700.0, 0.0)
+        scene.collection.objects.link(self.plane)
+
+        camera = bpy.data.cameras.new("camera")
+        camera.type = "ORTHO"
+        camera.ortho_scale = 0.1
+        camera.clip_start = 0.01
+        camera.clip_end = 100.0
+        self.camera = bpy.data.objects.new("camera", camera)
+        scene.collection.objects.link(self.camera)
+        scene.camera = self.camera
+        self.renders = 0
+
+    def set_world(self, mode):
+        """white: uniform white for every ray. reflection: white except for rays
+        that have refracted (so the plane shows R alone); transmission: white only
+        for those (the plane shows T alone)."""
+        tree = self.world.node_tree
+        tree.nodes.clear()
+        background = tree.nodes.new("ShaderNodeBackground")
+        background.inputs["Color"].default_value = (1.0, 1.0, 1.0, 1.0)
+        background.inputs["Strength"].default_value = 1.0
+        out = tree.nodes.new("ShaderNodeOutputWorld")
+        tree.links.new(background.outputs[0], out.inputs["Surface"])
+        if mode == "white":
+            return
+        path = tree.nodes.new("ShaderNodeLightPath")
+        strength = path.outputs["Is Transmission Ray"]
+        if mode == "reflection":
+            invert = tree.nodes.new("ShaderNodeMath")
+            invert.operation = "SUBTRACT"
+            invert.inputs[0].default_value = 1.0
+            tree.links.new(strength, invert.inputs[1])
+            strength = invert.outputs[0]
+        elif mode != "transmission":
+            raise ValueError(mode)
+        tree.links.new(strength, background.inputs["Strength"])
+
+    def set_working_space(self, name):
+        """Blender 5.0's scene-linear working space: Linear Rec.709 (the default) or ACEScg."""
+        done = bpy.ops.wm.set_working_color_space(working_space=name, convert_colors=False)
+        if done != {"FINISHED"} or bpy.data.colorspace.working_space != name:
+            raise RuntimeError(f"cannot set the working colour space to {name}")
+
+    def render(self, material, angle_deg, samples=SAMPLES):
+        """Linear Rec.709 RGB of every pixel, shape (H, W, 3)."""
+        self.scene.cycles.samples = samples
+        self.plane.data.materials.clear()
+        self.plane.data.materials.append(material)
+        theta = math.radians(angle_deg)
+        distance = 10.0
+        self.camera.location = (0.0, -distance * math.sin(theta), distance * math.cos(theta))
+        self.camera.rotation_euler = (theta, 0.0, 0.0)
+        path = self.workdir / f"render-{self.renders}.exr"
+        self.renders += 1
+        self.scene.render.filepath = str(path)
+        with quiet_stdout():
+            bpy.ops.render.render(write_still=True)
+        return read_exr_rgb(path)
+
+
+class quiet_stdout:
+    """Silences Blender's per-render progress lines (written to file descriptor 1)."""
+
+    def __enter__(self):
+        sys.stdout.flush()
+        self.saved = os.dup(1)
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, 1)
+        os.close(devnull)
+
+    def __exit__(self, *exc):
+        os.dup2(self.saved, 1)
+        os.close(self.saved)
+
+
+def emission_material(name, group, output, thickness_fraction):
+    """A material showing one of a film group's colour outputs as emission."""
+    material = bpy.data.materials.new(name)
+    if material.node_tree is None:
+        material.use_nodes = True
+    tree = material.node_tree
+    tree.nodes.clear()
+    film = tree.nodes.new("ShaderNodeGroup")
+    film.node_tree = group
+    film.inputs["Thickness"].default_value = thickness_fraction
+    emission = tree.nodes.new("ShaderNodeEmission")
+    emission.inputs["Strength"].default_value = 1.0
+    out = tree.nodes.new("ShaderNodeOutputMaterial")
+    tree.links.new(film.outputs[output], emission.inputs["Color"])
+    tree.links.new(emission.outputs[0], out.inputs["Surface"])
+    return material
+
+
+def principled_material(name, base_color, metallic, ior, film_thickness_nm, film_ior, workdir):
+    """Cycles' own thin film: a Principled BSDF with Thin Film inputs, no diffuse.
+    The base colour (linear Rec.709) goes through a one-texel image tagged
+    Linear Rec.709, so Blender converts it into the working space."""
+    material = bpy.data.materials.new(name)
+    if material.node_tree is None:
+        material.use_nodes = True
+    tree = material.node_tree
+    tree.nodes.clear()
+    bsdf = tree.nodes.new("ShaderNodeBsdfPrincipled")
+    path = Path(workdir) / f"base-{len(bpy.data.images)}.exr"
+    texel = np.array([[[*base_color, 1.0]]], np.float32)
+    pixels = np.ascontiguousarray(texel)
+    with OpenEXR.File({"compression": OpenEXR.NO_COMPRESSION}, {"RGBA": pixels}) as f:
+        f.write(str(path))
+    image = bpy.data.images.load(str(path), check_existing=False)
+    image.colorspace_settings.name = "Linear Rec.709"
+    texture = tree.nodes.new("ShaderNodeTexImage")
+    texture.image = image
+    texture.interpolation = "Closest"
+    tree.links.new(texture.outputs["Color"], bsdf.inputs["Base Color"])
+    bsdf.inputs["Metallic"].default_value = metallic
+    bsdf.inputs["Roughness"].default_value = 0.0
+    bsdf.inputs["IOR"].default_value = ior
+    bsdf.inputs["Thin Film Thickness"].default_value = film_thickness_nm
+    bsdf.inputs["Thin Film IOR"].default_value = film_ior
+    out = tree.nodes.new("ShaderNodeOutputMaterial")
+    tree.links.new(bsdf.outputs[0], out.inputs["Surface"])
+    return material
+
+# ---------------------------------------------------------------- irid
+
+
+class Irid:
+    def __init__(self, binary, workdir):
+        self.binary = str(binary)
+        self.workdir = Path(workdir)
+
+    def run(self, *args):
+        done = subprocess.run(
+            [self.binary, *map(str, args)], capture_output=True, text=True, check=False
+        )
+        if done.returncode != 0:
+            raise RuntimeError(f"irid {' '.join(map(str, args))}: {done.stderr.strip()}")
+        return done.stdout
+
+    def colours(self, stack_path, angles_deg):
+        """Exact (reflectance, transmittance) linear RGB per angle, white E."""
+        angles = ",".join(f"{a:g}" for a in angles_deg)
+        rows = json.loads(
+            self.run("color", stack_path, "--white", "e", "--angles", angles, "--json")
+        )
+        got = [row["angle_deg"] for row in rows]
+        if not np.allclose(got, angles_deg):
+            raise RuntimeError(f"irid color answered angles {got}, asked {list(angles_deg)}")
+        return (
+            np.array([row["reflectance_rgb"] for row in rows]),
+            np.array([row["transmittance_rgb"] for row in rows]),
+        )
+
+    def export(self, stack_path, out_dir, layer, thickness_range):
+        self.run(
+            "export",
+            stack_path,
+            "-o",
+            out_dir,
+            "--white",
+            "e",
+            "--layer",
+            layer,
+            "--thickness",
+            f"{thickness_range[0]:g}:{thickness_range[1]:g}",
+        )
+        return out_dir
+
+
+def stack_with_thickness(source_text, layer, thickness_nm):
+    """A stack file's text with the layer-th (from 1) layer's thickness replaced."""
+    pattern = re.compile(r"^(\s*thickness_nm\s*=\s*)([0-9.eE+-]+)", re.M)
+    matches = list(pattern.finditer(source_text))
+    if len(matches) < layer:
+        raise ValueError(f"the stack has fewer than {layer} layers with thickness_nm")
+    m = matches[layer - 1]
+    return source_text[: m.start(2)] + f"{thickness_nm!r}" + source_text[m.end(2) :]
+
+
+# ---------------------------------------------------------------- the docs' picture
+
+
+def render_picture(irid, case, stack, workdir, png_path):
+    """Two mirror spheres under a white world, film on copper with a noise
+    thickness: irid's material on the left, Cycles' Principled thin film on the
+    right (copper as its base colour), the same thickness texture driving both.
+    case is the film-on-copper entry of test_blender.CASES, stack its file."""
+    t_min, t_max = case["range"]
+    directory = irid.export(stack, workdir / "export-picture", 1, (t_min, t_max))
+    bare = workdir / "bare-picture.toml"
+    bare.write_text(f'ambient = {{ n = 1.0 }}\nsubstrate = {{ material = "{case["cycles"]["metal"]}" }}\n')
+    base, _ = irid.colours(bare, (0.0,))
+
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    scene = bpy.context.scene
+    scene.render.engine = "CYCLES"
+    scene.cycles.device = "CPU"
+    scene.cycles.samples = 32
+    scene.cycles.use_denoising = False
+    scene.view_settings.view_transform = "Standard"
+    scene.render.resolution_x, scene.render.resolution_y = 560, 320
+    scene.render.image_settings.file_format = "PNG"
+    scene.render.image_settings.color_mode = "RGB"
+    scene.render.image_settings.compression = 100
+    world = bpy.data.worlds.new("white")
+    scene.world = world
+    if world.node_tree is None:
+        world.use_nodes = True
+    tree = world.node_tree
+    tree.nodes.clear()
+    # White light on the spheres; a grey backdrop for the camera only.
+    background = tree.nodes.new("ShaderNodeBackground")
+    mix = tree.nodes.new("ShaderNodeMix")
+    mix.data_type = "RGBA"
+    mix.inputs["A"].default_value = (1.0, 1.0, 1.0, 1.0)
+    mix.inputs["B"].default_value = (0.45, 0.45, 0.45, 1.0)
+    path = tree.nodes.new("ShaderNodeLightPath")
+    tree.links.new(path.outputs["Is Camera Ray"], mix.inputs["Factor"])
+    tree.links.new(mix.outputs["Result"], background.inputs["Color"])
+    out = tree.nodes.new("ShaderNodeOutputWorld")
+    tree.links.new(background.outputs[0], out.inputs["Surface"])
+
+    def noise_fraction(tree):
+        """A 0-1 thickness pattern over the sphere's own coordinates."""
+        coords = tree.nodes.new("ShaderNodeTexCoord")
+        noise = tree.nodes.new("ShaderNodeTexNoise")
+        noise.inputs["Scale"].default_value = 1.5
+        noise.inputs["Detail"].default_value = 1.0
+        tree.links.new(coords.outputs["Object"], noise.inputs["Vector"])
+        remap = tree.nodes.new("ShaderNodeMapRange")
+        remap.inputs["From Min"].default_value = 0.3
+        remap.inputs["From Max"].default_value = 0.7
+        remap.clamp = True
+        tree.links.new(noise.outputs["Fac"], remap.inputs["Value"])
+        return remap.outputs["Result"]
+
+    irid_material = irid_blender.make_material(directory, name="irid film on copper")
+    tree = irid_material.node_tree
+    film = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeGroup")
+    tree.links.new(noise_fraction(tree), film.inputs["Thickness"])
+
+    spec = case["cycles"]
+    cycles_material = principled_material(
+        "Cycles thin film on copper", tuple(base[0]), 1.0, 1.5, t_min, spec["film_ior"], workdir
+    )
+    tree = cycles_material.node_tree
+    to_nm = tree.nodes.new("ShaderNodeMath")
+    to_nm.operation = "MULTIPLY_ADD"
+    tree.links.new(noise_fraction(tree), to_nm.inputs[0])
+    to_nm.inputs[1].default_value = t_max - t_min
+    to_nm.inputs[2].default_value = t_min
+    bsdf = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeBsdfPrincipled")
+    tree.links.new(to_nm.outputs[0], bsdf.inputs["Thin Film Thickness"])
+
+    label_material = bpy.data.materials.new("label")
+    if label_material.node_tree is None:
+        label_material.use_nodes = True
+    tree = label_material.node_tree
+    tree.nodes.clear()
+    emission = tree.nodes.new("ShaderNodeEmission")
+    emission.inputs["Color"].default_value = (0.0, 0.0, 0.0, 1.0)
+    out = tree.nodes.new("ShaderNodeOutputMaterial")
+    tree.links.new(emission.outputs[0], out.inputs["Surface"])
+
+    for x, material, label in (
+        (-1.15, irid_material, "irid export"),
+        (1.15, cycles_material, "Cycles thin film"),
+    ):
+        bpy.ops.mesh.primitive_uv_sphere_add(segments=96, ring_count=48, location=(x, 0, 0.15))
+        sphere = bpy.context.active_object
+        bpy.ops.object.shade_smooth()
+        sphere.data.materials.append(material)
+        sphere.visible_glossy = False  # each sphere shows the white world only
+        sphere.visible_transmission = False
+        curve = bpy.data.curves.new(label, "FONT")
+        curve.body = label
+        curve.size = 0.2
+        curve.align_x = "CENTER"
+        text = bpy.data.objects.new(label, curve)
+        text.location = (x, 0, -1.2)
+        text.rotation_euler = (math.radians(90), 0, 0)
+        text.data.materials.append(label_material)
+        text.visible_glossy = False
+        scene.collection.objects.link(text)
+
+    camera = bpy.data.cameras.new("camera")
+    camera.type = "ORTHO"
+    camera.ortho_scale = 4.9
+    camera_object = bpy.data.objects.new("camera", camera)
+    camera_object.location = (0, -10, 0)
+    camera_object.rotation_euler = (math.radians(90), 0, 0)
+    scene.collection.objects.link(camera_object)
+    scene.camera = camera_object
+    png_path.parent.mkdir(parents=True, exist_ok=True)
+    scene.render.filepath = str(png_path)
+    bpy.ops.render.render(write_still=True)
+    print(f"wrote {png_path}")
+
