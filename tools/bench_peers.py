@@ -508,7 +508,9 @@ def main():
         args.bake_nodes, args.bake_stacks = "256,64", ["soap", "mirror-front"]
         args.process_bake = "128,64"
         args.byrnes_samples = 500
-    command = "IRID_BIN=" + irid_bin() + " python tools/bench_peers.py " + " ".join(sys.argv[1:])
+    # The binary as the reader would name it from the repository's root.
+    shown_bin = os.path.relpath(irid_bin()) if os.path.isabs(irid_bin()) else irid_bin()
+    command = "IRID_BIN=" + shown_bin + " python tools/bench_peers.py " + " ".join(sys.argv[1:])
     failures = []
     print("general evaluation:", flush=True)
     findings = []

@@ -6,9 +6,10 @@ side's threads fare on a loaded machine (OpenMP's waiting threads suffer far
 more than rayon's from other processes), so it checks the ratios of
 bench_peers.py, which are wall times on 2 threads.
 
-irid's figure is the process's CPU time over --repeat evaluations (start-up
-included, divided among them); tmm-faster's is the best of 5 calls' thread
-CPU time.
+irid's figure is the difference in process CPU time between a run of
+2 × REPEAT evaluations and one of REPEAT, divided by REPEAT: start-up and
+`irid bench`'s untimed warm-up cancel out. tmm-faster's is the best of 5
+calls' thread CPU time.
 
 Usage: IRID_BIN=target/release/irid python tools/bench_single_thread.py [REPEAT]
 """
@@ -33,15 +34,18 @@ def main():
     irid = os.environ.get("IRID_BIN", "target/release/irid")
     repeat = int(sys.argv[1]) if len(sys.argv) > 1 else 50
     for stack in STACKS:
-        with tempfile.TemporaryDirectory() as tmp:
-            raw = os.path.join(tmp, "grid.raw")
-            before = resource.getrusage(resource.RUSAGE_CHILDREN)
-            out = subprocess.run([irid, "bench", "--grid", stack, "--threads", "1",
-                                  "--repeat", str(repeat), "--raw", raw],
-                                 check=True, capture_output=True, text=True)
-            after = resource.getrusage(resource.RUSAGE_CHILDREN)
+        cpu = {}
+        for count in (repeat, 2 * repeat):
+            with tempfile.TemporaryDirectory() as tmp:
+                raw = os.path.join(tmp, "grid.raw")
+                before = resource.getrusage(resource.RUSAGE_CHILDREN)
+                out = subprocess.run([irid, "bench", "--grid", stack, "--threads", "1",
+                                      "--repeat", str(count), "--raw", raw],
+                                     check=True, capture_output=True, text=True)
+                after = resource.getrusage(resource.RUSAGE_CHILDREN)
+            cpu[count] = after.ru_utime - before.ru_utime + after.ru_stime - before.ru_stime
         doc = json.loads(out.stdout)
-        irid_cpu = (after.ru_utime - before.ru_utime + after.ru_stime - before.ru_stime) / repeat
+        irid_cpu = (cpu[2 * repeat] - cpu[repeat]) / repeat
         n = np.array(doc["indices_re"]) + 1j * np.array(doc["indices_im"])
         d = [np.inf, *doc["layer_thicknesses_nm"], np.inf]
         a = np.array(doc["angles_deg"])
