@@ -22,7 +22,6 @@ use serde::{Deserialize, Serialize};
 
 use crate::color::{delta_e2000_rgb, Sampling, SpectralIntegrator, White};
 use crate::error::{Error, Result};
-use crate::optics::twoport::{Scratch, VaryingLayer};
 use crate::optics::{solve, Layer, Stack, StackGrid};
 
 /// The shaders, as committed in `shaders/` (the GLSL and HLSL forms are
@@ -209,8 +208,6 @@ struct Film {
     stack: Stack,
     layer: usize,
     grid: StackGrid,
-    /// Linear-RGB weight of each integration wavelength.
-    weights: Vec<[f64; 3]>,
     integrator: SpectralIntegrator,
 }
 
@@ -228,93 +225,25 @@ impl Film {
         };
         let integrator = SpectralIntegrator::with_white(spec.sampling, spec.white);
         let grid = StackGrid::new(&stack, integrator.wavelengths_nm())?;
-        let [r, g, b] = integrator.rgb_weights();
-        let weights = r
-            .iter()
-            .zip(g)
-            .zip(b)
-            .map(|((&r, &g), &b)| [r, g, b])
-            .collect();
         Ok(Film {
             stack,
             layer,
             grid,
-            weights,
             integrator,
         })
     }
 
     /// Exact RGB of R and T at every node of `mapping`, row-major (row =
-    /// cos θ node), six values per node. On a uniform thickness axis the
-    /// layer's phase factor advances by one complex multiplication per node
-    /// and is recomputed exactly every [`PHASE_RESYNC`] nodes; otherwise it
-    /// is computed at every node.
-    fn eval(&self, mapping: &Mapping) -> Vec<[f64; 6]> {
-        let t_nodes = mapping.thickness_nodes();
-        let c_nodes = mapping.cos_nodes();
-        let n = t_nodes.len();
-        // Uniform nodes advance the phase by one multiplication each.
-        let uniform = mapping.thickness_power == 1.0;
-        let step = if n > 1 {
-            (mapping.thickness_max_nm - mapping.thickness_min_nm) / (n - 1) as f64
-        } else {
-            0.0
-        };
-        let mut out = vec![[0.0; 6]; n * c_nodes.len()];
-        out.par_chunks_mut(n).zip(&c_nodes).for_each_init(
-            || RowBuffers::new(n, self.grid.thicknesses_nm()),
-            |buf, (row, &cos)| {
-                row.fill([0.0; 6]);
-                for (i, w) in self.weights.iter().enumerate() {
-                    let indices = self.grid.indices_at(i);
-                    let wavelength = self.grid.wavelengths_nm()[i];
-                    let split = VaryingLayer::new(
-                        indices,
-                        self.grid.thicknesses_nm(),
-                        self.layer,
-                        wavelength,
-                        cos,
-                        &mut buf.scratch,
-                    );
-                    if split.is_degenerate() {
-                        // The layer at its own critical angle: no split.
-                        for (j, &t) in t_nodes.iter().enumerate() {
-                            buf.thicknesses[self.layer - 1] = t;
-                            let resp = solve(indices, &buf.thicknesses, wavelength, cos);
-                            buf.r[j] = resp.r();
-                            buf.t[j] = resp.t();
-                        }
-                    } else {
-                        if uniform {
-                            let delta = split.phase(step);
-                            let mut phase = split.phase(t_nodes[0]);
-                            for (j, &t) in t_nodes.iter().enumerate() {
-                                if j % PHASE_RESYNC == 0 {
-                                    phase = split.phase(t);
-                                }
-                                buf.re[j] = phase.re;
-                                buf.im[j] = phase.im;
-                                phase *= delta;
-                            }
-                        } else {
-                            for (j, &t) in t_nodes.iter().enumerate() {
-                                let phase = split.phase(t);
-                                buf.re[j] = phase.re;
-                                buf.im[j] = phase.im;
-                            }
-                        }
-                        split.responses(&buf.re, &buf.im, &mut buf.r, &mut buf.t);
-                    }
-                    for (o, (&r, &t)) in row.iter_mut().zip(buf.r.iter().zip(&buf.t)) {
-                        for c in 0..3 {
-                            o[c] += w[c] * r;
-                            o[3 + c] += w[c] * t;
-                        }
-                    }
-                }
-            },
-        );
-        out
+    /// cos θ node), six values per node: the baker's sweep on the
+    /// mapping's nodes.
+    fn eval(&self, mapping: &Mapping) -> Result<Vec<[f64; 6]>> {
+        crate::lut::rgb_at_nodes(
+            &self.stack,
+            self.layer,
+            self.integrator.clone(),
+            &mapping.thickness_nodes(),
+            &mapping.cos_nodes(),
+        )
     }
 
     /// Exact RGB of R and T at each (thickness, cos θ) point.
@@ -351,31 +280,6 @@ impl Film {
         let r = self.integrator.rgb(&spectra[0]);
         let tr = self.integrator.rgb(&spectra[1]);
         [r[0], r[1], r[2], tr[0], tr[1], tr[2]]
-    }
-}
-
-/// How often the stepped phase factor is recomputed exactly.
-const PHASE_RESYNC: usize = 64;
-
-struct RowBuffers {
-    scratch: Scratch,
-    thicknesses: Vec<f64>,
-    re: Vec<f64>,
-    im: Vec<f64>,
-    r: Vec<f64>,
-    t: Vec<f64>,
-}
-
-impl RowBuffers {
-    fn new(n: usize, thicknesses: &[f64]) -> RowBuffers {
-        RowBuffers {
-            scratch: Scratch::default(),
-            thicknesses: thicknesses.to_vec(),
-            re: vec![0.0; n],
-            im: vec![0.0; n],
-            r: vec![0.0; n],
-            t: vec![0.0; n],
-        }
     }
 }
 
@@ -607,7 +511,7 @@ pub fn export(spec: &ExportSpec, progress: &dyn Fn(&str)) -> Result<Export> {
         if nu > MAX_SIZE || nv > MAX_SIZE || work > MAX_WORK {
             break;
         }
-        let fine = film.eval(&fine_map);
+        let fine = film.eval(&fine_map)?;
         check_representable(&fine_map, &fine, gain)?;
         let [e_u, e_v, e_c] = midpoint_errors(&mapping, &fine);
         let coarse: Vec<[f64; 6]> = (0..nv)
@@ -780,7 +684,7 @@ fn choose_warps(
     let share = 0.5 * spec.max_error;
     let predicted = |m: &Mapping| -> Result<f64> {
         let fine_map = m.resized(2 * m.size_u - 1, 2 * m.size_v - 1);
-        let fine = film.eval(&fine_map);
+        let fine = film.eval(&fine_map)?;
         check_representable(&fine_map, &fine, gain)?;
         let [e_u, e_v, e_c] = midpoint_errors(m, &fine);
         let e_u = e_u.max(0.5 * e_c);

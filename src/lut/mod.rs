@@ -6,6 +6,7 @@
 
 mod axis;
 mod bake;
+pub(crate) use bake::rgb_at_nodes;
 mod file;
 mod header;
 mod sample;

@@ -28,6 +28,31 @@ impl AxisGrid {
     }
 }
 
+impl AxisGrid {
+    /// An axis with exactly these nodes (increasing), each interval its own
+    /// segment: evenly spaced runs are still recognised by the sweep, which
+    /// compares the intervals' steps.
+    pub(super) fn from_nodes(nodes: &[f64]) -> AxisGrid {
+        let segments: Vec<Segment> = match nodes {
+            [only] => vec![uniform(*only, *only, 0)],
+            _ => nodes
+                .windows(2)
+                .map(|w| Segment {
+                    start: w[0],
+                    end: w[1],
+                    grading: Grading::Uniform,
+                    intervals: 1,
+                })
+                .collect(),
+        };
+        AxisGrid {
+            segment_of_interval: (0..nodes.len().saturating_sub(1)).collect(),
+            segments,
+            nodes: nodes.to_vec(),
+        }
+    }
+}
+
 /// Node positions of one grid: thickness, cos θ, wavelength (a single
 /// unused node for the rgb kind).
 #[derive(Clone)]
@@ -37,6 +62,18 @@ pub(super) struct Grid {
 }
 
 impl Grid {
+    /// The rgb grid of these thickness and cos θ nodes.
+    pub(super) fn rgb_of_nodes(thickness_nm: &[f64], cos_theta: &[f64]) -> Grid {
+        Grid {
+            axes: [
+                AxisGrid::from_nodes(thickness_nm),
+                AxisGrid::from_nodes(cos_theta),
+                AxisGrid::from_nodes(&[0.0]),
+            ],
+            spectral: false,
+        }
+    }
+
     pub(super) fn new(axes: &[Vec<Segment>; 3], kind: Kind) -> Grid {
         Grid {
             axes: [

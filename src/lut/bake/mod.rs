@@ -260,6 +260,27 @@ fn refine_to_share(axes: &mut [Vec<Segment>; 3], coarse: &Grid, check: &Check, e
 /// The substrate's critical cos θ (where its normal index has a square-root
 /// branch point), when it is lossless and optically thinner than the
 /// ambient, at 550 nm for rgb tables or mid-range for spectral ones.
+/// Exact linear-RGB reflectance and transmittance (`[R; 3]` then `[T; 3]`)
+/// of `stack` with its `layer` (from 1) at every thickness × cos θ node,
+/// row-major with one row per cos θ node, integrated by `integrator`: the
+/// baker's sweep (the stack split once per wavelength and angle) on nodes
+/// the caller chose, as the GPU export lays out its own.
+pub(crate) fn rgb_at_nodes(
+    stack: &Stack,
+    layer: usize,
+    integrator: crate::color::SpectralIntegrator,
+    thickness_nm: &[f64],
+    cos_theta: &[f64],
+) -> Result<Vec<[f64; 6]>> {
+    let prep = Prepared::of(stack, layer, Kind::Rgb, integrator, (380.0, 780.0))?;
+    let grid = Grid::rgb_of_nodes(thickness_nm, cos_theta);
+    let values = prep.eval(&grid, None, &|_| {})?;
+    Ok(values
+        .chunks_exact(6)
+        .map(|v| [v[0], v[1], v[2], v[3], v[4], v[5]])
+        .collect())
+}
+
 pub(crate) fn critical_cos(stack: &Stack, kind: Kind, wavelength_nm: (f64, f64)) -> Option<f64> {
     let reference_nm = match kind {
         Kind::Rgb => 550.0,

@@ -39,7 +39,25 @@ pub(super) struct Prepared {
 
 impl Prepared {
     pub(super) fn new(spec: &BakeSpec) -> Result<Prepared> {
-        let mut stack = spec.stack.clone();
+        Prepared::of(
+            &spec.stack,
+            spec.layer,
+            spec.kind,
+            SpectralIntegrator::with_white(spec.sampling, spec.white),
+            spec.wavelength_nm,
+        )
+    }
+
+    /// The stack with `layer` varying, for a table of `kind` integrated by
+    /// `integrator` (rgb) or over `wavelength_nm` (spectral).
+    pub(super) fn of(
+        stack: &Stack,
+        layer: usize,
+        kind: Kind,
+        integrator: SpectralIntegrator,
+        wavelength_nm: (f64, f64),
+    ) -> Result<Prepared> {
+        let mut stack = stack.clone();
         let layer = if stack.layers.is_empty() {
             stack.layers.push(Layer {
                 material: stack.ambient.clone(),
@@ -47,23 +65,20 @@ impl Prepared {
             });
             1
         } else {
-            spec.layer
+            layer
         };
-        let (stack_grid, weights) = match spec.kind {
-            Kind::Rgb => {
-                let integrator = SpectralIntegrator::with_white(spec.sampling, spec.white);
-                (
-                    StackGrid::new(&stack, integrator.wavelengths_nm())?,
-                    rgb_weights(&integrator),
-                )
-            }
+        let (stack_grid, weights) = match kind {
+            Kind::Rgb => (
+                StackGrid::new(&stack, integrator.wavelengths_nm())?,
+                rgb_weights(&integrator),
+            ),
             Kind::Spectral => (StackGrid::new(&stack, &[])?, Vec::new()),
         };
-        let critical_cos = critical_cos(&stack, spec.kind, spec.wavelength_nm);
+        let critical_cos = critical_cos(&stack, kind, wavelength_nm);
         Ok(Prepared {
             stack,
             layer,
-            channels: channel_names(spec.kind).len(),
+            channels: channel_names(kind).len(),
             stack_grid,
             weights,
             critical_cos,

@@ -274,3 +274,47 @@ fn frustrated_tir_gap_at_its_critical_angle() {
     assert!(lut.header().axes[1].nodes.contains(&cc));
     assert!(lut.data().iter().all(|v| v.is_finite()));
 }
+
+/// `rgb_at_nodes` (the sweep on caller-chosen nodes, as the GPU export uses
+/// it) against the solver and the integrator node by node, on a
+/// square-root thickness axis, an evenly spaced one and an uneven cos θ
+/// axis, for a two-layer stack with an absorbing film on gold.
+#[test]
+fn sweep_on_given_nodes_matches_the_solver() {
+    let stack = crate::bench::stacks::find("two-layer")
+        .unwrap()
+        .unwrap()
+        .stack;
+    let integrator = SpectralIntegrator::new(crate::color::Sampling::Exact);
+    let cos: Vec<f64> = (0..7)
+        .map(|i| (f64::from(i) / 6.0).powf(0.7).max(0.01))
+        .collect();
+    let sqrt_axis: Vec<f64> = (0..150)
+        .map(|i| 500.0 * (f64::from(i) / 149.0).powi(2))
+        .collect();
+    let even_axis: Vec<f64> = (0..150).map(|i| 500.0 * f64::from(i) / 149.0).collect();
+    let grid = crate::optics::StackGrid::new(&stack, integrator.wavelengths_nm()).unwrap();
+    for axis in [&sqrt_axis, &even_axis, &vec![250.0]] {
+        let values = rgb_at_nodes(&stack, 1, integrator.clone(), axis, &cos).unwrap();
+        assert_eq!(values.len(), axis.len() * cos.len());
+        let mut worst = 0.0f64;
+        for (c_index, &c) in cos.iter().enumerate() {
+            for (t_index, &t) in axis.iter().enumerate().step_by(7) {
+                let mut thick = grid.thicknesses_nm().to_vec();
+                thick[0] = t;
+                let mut spectrum =
+                    vec![crate::optics::Response::default(); grid.wavelengths_nm().len()];
+                grid.solve_spectrum(&thick, c, &mut spectrum);
+                let r: Vec<f64> = spectrum.iter().map(|x| x.r()).collect();
+                let tr: Vec<f64> = spectrum.iter().map(|x| x.t()).collect();
+                let (want_r, want_t) = (integrator.rgb(&r), integrator.rgb(&tr));
+                let got = values[c_index * axis.len() + t_index];
+                for k in 0..3 {
+                    worst = worst.max((got[k] - want_r[k]).abs());
+                    worst = worst.max((got[3 + k] - want_t[k]).abs());
+                }
+            }
+        }
+        assert!(worst < 1e-12, "{} nodes: worst {worst:e}", axis.len());
+    }
+}
