@@ -11,9 +11,9 @@ use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg64;
 
 use irid::optics::lanes::{avx2_available, solve_batch_on, Path};
-use irid::optics::{solve, Response};
 #[cfg(feature = "bench")]
-use irid::optics::{solve_batch, Stack, StackGrid};
+use irid::optics::solve_batch;
+use irid::optics::{solve, Response, Stack, StackGrid};
 
 fn c(n: f64, k: f64) -> C64 {
     C64::new(n, k)

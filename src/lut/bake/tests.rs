@@ -281,10 +281,20 @@ fn frustrated_tir_gap_at_its_critical_angle() {
 /// axis, for a two-layer stack with an absorbing film on gold.
 #[test]
 fn sweep_on_given_nodes_matches_the_solver() {
-    let stack = crate::bench::stacks::find("two-layer")
-        .unwrap()
-        .unwrap()
-        .stack;
+    let stack = crate::optics::Stack {
+        ambient: crate::optics::Material::constant(1.0, 0.0),
+        layers: vec![
+            Layer {
+                material: crate::optics::Material::constant(1.5, 0.15),
+                thickness_nm: 300.0,
+            },
+            Layer {
+                material: crate::optics::library::builtin("TiO2").unwrap(),
+                thickness_nm: 80.0,
+            },
+        ],
+        substrate: crate::optics::library::builtin("gold").unwrap(),
+    };
     let integrator = SpectralIntegrator::new(crate::color::Sampling::Exact);
     let cos: Vec<f64> = (0..7)
         .map(|i| (f64::from(i) / 6.0).powf(0.7).max(0.01))
