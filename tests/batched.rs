@@ -508,3 +508,16 @@ fn non_dispersive_hard_cases() {
         &cosines,
     );
 }
+
+#[test]
+fn a_grid_from_raw_indices_is_the_grid_of_the_stack() {
+    // StackGrid::from_indices (the Python package's path: indices given as
+    // arrays) lays out exactly what StackGrid::new does for the same stack.
+    let glass = c(1.52, 0.0);
+    let stack = non_dispersive(1.0, &[(c(2.1, 0.02), 140.0), (c(1.38, 0.0), 90.0)], glass);
+    let wl: Vec<f64> = (0..23).map(|i| 400.0 + 15.0 * f64::from(i)).collect();
+    let grid = StackGrid::new(&stack, &wl).unwrap();
+    let raw = StackGrid::from_indices(grid.indices().to_vec(), grid.thicknesses_nm().to_vec(), &wl);
+    assert_eq!(raw, grid);
+    check_spectrum("from raw indices", &stack, &wl, &[1.0, 0.6, 0.2]);
+}

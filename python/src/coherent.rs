@@ -5,7 +5,7 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use rayon::prelude::*;
 
-use irid::optics::{solve_batch, Material, Response, MAX_THICKNESS_NM, WAVELENGTH_RANGE_NM};
+use irid::optics::{Material, Response, StackGrid, MAX_THICKNESS_NM, WAVELENGTH_RANGE_NM};
 
 use crate::arrays::{array, real_list, values};
 use crate::invalid;
@@ -102,32 +102,77 @@ fn cos_deg(angle_deg: f64) -> f64 {
     }
 }
 
-/// Solves every (wavelength, angle) pair, wavelength-major, on rayon's
-/// threads: each task takes a run of wavelengths to the batched solver.
+/// The six results of [`solve_grid`], in the order of their keys.
+const KEYS: [&str; 6] = ["R_s", "R_p", "T_s", "T_p", "R_avg", "T_avg"];
+
+/// Solves every (wavelength, angle) pair on rayon's threads into one buffer
+/// laid out [angle][key][wavelength] (keys as [`KEYS`]), so that each key is
+/// a strided (wavelengths, angles) view of it and nothing is transposed.
+/// Each task solves one angle over a run of wavelengths through
+/// `StackGrid::solve_spectrum` (four wavelengths per vector; a run whose
+/// indices do not change with wavelength takes the non-dispersive kernel).
+/// The wavelengths are cut into runs only when there are too few angles to
+/// keep every thread busy.
 pub fn solve_grid(
     indices: &[C64],
     thicknesses_nm: &[f64],
     wavelengths_nm: &[f64],
     cos_theta0: &[f64],
-) -> Vec<Response> {
+) -> Vec<f64> {
     let media = thicknesses_nm.len() + 2;
-    let angles = cos_theta0.len();
-    let mut out = vec![Response::default(); wavelengths_nm.len() * angles];
+    let (n_w, n_a) = (wavelengths_nm.len(), cos_theta0.len());
+    let mut out = vec![0.0; n_a * KEYS.len() * n_w];
     if out.is_empty() {
         return out;
     }
-    // A few tasks per thread balance the load; each still holds enough
-    // points to amortize the hand-off.
-    let tasks = 4 * rayon::current_num_threads();
-    let rows = wavelengths_nm.len().div_ceil(tasks).max(1);
-    out.par_chunks_mut(rows * angles)
-        .zip(indices.par_chunks(rows * media))
-        .zip(wavelengths_nm.par_chunks(rows))
-        .for_each(|((out, indices), wavelengths_nm)| {
-            solve_batch(indices, thicknesses_nm, wavelengths_nm, cos_theta0, out)
-        });
+    let tasks_wanted = 4 * rayon::current_num_threads();
+    let runs = tasks_wanted.div_ceil(n_a).clamp(1, n_w.div_ceil(MIN_RUN));
+    let run_len = n_w.div_ceil(runs);
+    let grids: Vec<StackGrid> = (0..n_w)
+        .step_by(run_len)
+        .map(|start| {
+            let end = (start + run_len).min(n_w);
+            StackGrid::from_indices(
+                indices[start * media..end * media].to_vec(),
+                thicknesses_nm.to_vec(),
+                &wavelengths_nm[start..end],
+            )
+        })
+        .collect();
+    // One task per (angle, run): the run's slice of each key's row.
+    let mut tasks = Vec::with_capacity(n_a * grids.len());
+    for (block, &cos) in out.chunks_mut(KEYS.len() * n_w).zip(cos_theta0) {
+        let mut rows: Vec<_> = block
+            .chunks_mut(n_w)
+            .map(|r| r.chunks_mut(run_len))
+            .collect();
+        for grid in &grids {
+            let slices: [&mut [f64]; 6] = std::array::from_fn(|k| rows[k].next().unwrap());
+            tasks.push((cos, grid, slices));
+        }
+    }
+    tasks.into_par_iter().for_each_init(
+        || Vec::with_capacity(run_len),
+        |spectrum, (cos, grid, [rs, rp, ts, tp, r, t])| {
+            spectrum.clear();
+            spectrum.resize(grid.wavelengths_nm().len(), Response::default());
+            grid.solve_spectrum(thicknesses_nm, cos, spectrum);
+            for (w, x) in spectrum.iter().enumerate() {
+                rs[w] = x.rs;
+                rp[w] = x.rp;
+                ts[w] = x.ts;
+                tp[w] = x.tp;
+                r[w] = x.r();
+                t[w] = x.t();
+            }
+        },
+    );
     out
 }
+
+/// Fewest wavelengths in a run of [`solve_grid`]: enough groups of four to
+/// amortize laying the run's indices out.
+const MIN_RUN: usize = 64;
 
 /// R and T of a coherent multilayer at every wavelength and angle, with the
 /// arguments and result of tmm-faster's `calc_coherent`.
@@ -177,29 +222,22 @@ pub fn coherent<'py>(
     check(&indices, media, &d, &angles_deg, &wavelengths_nm)?;
     let thicknesses_nm = &d[1..media - 1];
     let cos_theta0: Vec<f64> = angles_deg.iter().map(|&a| cos_deg(a)).collect();
-    let columns = py.allow_threads(|| {
-        let out = solve_grid(&indices, thicknesses_nm, &wavelengths_nm, &cos_theta0);
-        let mut columns: [Vec<f64>; 6] = Default::default();
-        for c in columns.iter_mut() {
-            c.reserve_exact(out.len());
-        }
-        for r in &out {
-            columns[0].push(r.rs);
-            columns[1].push(r.rp);
-            columns[2].push(r.ts);
-            columns[3].push(r.tp);
-            columns[4].push(r.r());
-            columns[5].push(r.t());
-        }
-        columns
-    });
-    let shape = [wavelengths_nm.len(), angles_deg.len()];
+    let values =
+        py.allow_threads(|| solve_grid(&indices, thicknesses_nm, &wavelengths_nm, &cos_theta0));
+    // One (angles, keys, wavelengths) array; each key is its (wavelengths,
+    // angles) transposed slice, a view with no copy.
+    let all = array(
+        py,
+        values,
+        &[angles_deg.len(), KEYS.len(), wavelengths_nm.len()],
+    )?;
     let result = PyDict::new(py);
-    for (key, column) in ["R_s", "R_p", "T_s", "T_p", "R_avg", "T_avg"]
-        .into_iter()
-        .zip(columns)
-    {
-        result.set_item(key, array(py, column, &shape)?)?;
+    for (k, key) in KEYS.into_iter().enumerate() {
+        let view = all
+            .as_any()
+            .get_item((pyo3::types::PySlice::full(py), k))?
+            .getattr("T")?;
+        result.set_item(key, view)?;
     }
     Ok(result)
 }

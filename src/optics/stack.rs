@@ -175,6 +175,32 @@ impl StackGrid {
         })
     }
 
+    /// A grid of indices the caller already has: `indices` wavelength-major,
+    /// N + 2 per wavelength (ambient, layers, substrate), for the N layers of
+    /// `thicknesses_nm`. The caller has checked the physics ([`Stack::validate`]'s
+    /// constraints on each row); this only lays the indices out.
+    ///
+    /// # Panics
+    /// If `indices` does not hold N + 2 values per wavelength.
+    pub fn from_indices(
+        indices: Vec<C64>,
+        thicknesses_nm: Vec<f64>,
+        wavelengths_nm: &[f64],
+    ) -> StackGrid {
+        let media = thicknesses_nm.len() + 2;
+        assert_eq!(
+            indices.len(),
+            media * wavelengths_nm.len(),
+            "indices: N + 2 per wavelength"
+        );
+        StackGrid {
+            spectrum: lanes::Spectrum::new(&indices, media, wavelengths_nm),
+            wavelengths_nm: wavelengths_nm.to_vec(),
+            indices,
+            thicknesses_nm,
+        }
+    }
+
     /// The vacuum wavelengths in nm the indices were evaluated at, in the
     /// order given to [`StackGrid::new`].
     pub fn wavelengths_nm(&self) -> &[f64] {
