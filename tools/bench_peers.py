@@ -30,12 +30,14 @@ import platform
 import subprocess
 import sys
 import tempfile
-import time
 
 THREADS_DEFAULT = 2
 os.environ.setdefault("OMP_NUM_THREADS", str(THREADS_DEFAULT))
 
 import numpy as np  # noqa: E402
+
+import peer_calls  # noqa: E402
+from peer_calls import best_of  # noqa: E402
 
 TOLERANCE = 1e-9
 STACKS = ["soap", "absorbing", "gain-on-gold", "two-layer", "mirror-front", "mirror-back"]
@@ -72,15 +74,6 @@ def indices(doc):
     return np.array(doc["indices_re"]) + 1j * np.array(doc["indices_im"])
 
 
-def best_of(repeat, fn):
-    best, result = math.inf, None
-    for _ in range(repeat):
-        start = time.perf_counter()
-        result = fn()
-        best = min(best, time.perf_counter() - start)
-    return best, result
-
-
 def tmm_faster_grid(n_matrix, thicknesses_nm, angles_deg, wavelengths_nm):
     import tmm_faster
 
@@ -91,32 +84,15 @@ def tmm_faster_grid(n_matrix, thicknesses_nm, angles_deg, wavelengths_nm):
 
 
 def colour_grid(n_matrix, thicknesses_nm, angles_deg, wavelengths_nm):
-    import warnings
-
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        from colour.phenomena import multilayer_tmm
-
-        r, t = multilayer_tmm(n_matrix.T, thicknesses_nm, wavelengths_nm, angles_deg)
-    # (W, A, 1, 2) -> unpolarized [angle][wavelength]
-    return r[:, :, 0, :].mean(axis=-1).T, t[:, :, 0, :].mean(axis=-1).T
+    """colour-science's R, T as [angle][wavelength], irid's layout."""
+    r, t = peer_calls.colour_grid(n_matrix, thicknesses_nm, angles_deg, wavelengths_nm)
+    return r.T, t.T
 
 
 def byrnes_grid(n_matrix, thicknesses_nm, angles_deg, wavelengths_nm):
-    import tmm
-
-    d = [np.inf, *thicknesses_nm, np.inf]
-    r = np.empty((len(angles_deg), len(wavelengths_nm)))
-    t = np.empty_like(r)
-    for ai, a in enumerate(angles_deg):
-        th = math.radians(a)
-        for wi, w in enumerate(wavelengths_nm):
-            n_list = list(n_matrix[wi])
-            s = tmm.coh_tmm("s", n_list, d, th, w)
-            p = tmm.coh_tmm("p", n_list, d, th, w)
-            r[ai, wi] = 0.5 * (s["R"] + p["R"])
-            t[ai, wi] = 0.5 * (s["T"] + p["T"])
-    return r, t
+    """Byrnes' tmm's R, T as [angle][wavelength], irid's layout."""
+    r, t = peer_calls.byrnes_grid(n_matrix, thicknesses_nm, angles_deg, wavelengths_nm)
+    return r.T, t.T
 
 
 def compare(r, t, pr, pt, grazing):

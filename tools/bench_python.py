@@ -23,8 +23,10 @@ import math
 import os
 import re
 import sys
-import time
 from pathlib import Path
+
+import peer_calls
+from peer_calls import best_of
 
 THREADS_DEFAULT = 2
 REPO = Path(__file__).resolve().parent.parent
@@ -53,40 +55,12 @@ def arrays(irid, file, reversed_, wavelengths):
     return np.ascontiguousarray(n), d
 
 
-def best_of(repeat, fn):
-    best, result = math.inf, None
-    for _ in range(repeat):
-        start = time.perf_counter()
-        result = fn()
-        best = min(best, time.perf_counter() - start)
-    return best, result
-
-
 def byrnes(n, d, angles, wavelengths):
-    import numpy as np
-    import tmm
-
-    r = np.empty((len(wavelengths), len(angles)))
-    t = np.empty_like(r)
-    for i, w in enumerate(wavelengths):
-        n_list = list(n[i])
-        for j, a in enumerate(angles):
-            s = tmm.coh_tmm("s", n_list, d, math.radians(a), w)
-            p = tmm.coh_tmm("p", n_list, d, math.radians(a), w)
-            r[i, j] = 0.5 * (s["R"] + p["R"])
-            t[i, j] = 0.5 * (s["T"] + p["T"])
-    return r, t
+    return peer_calls.byrnes_grid(n, d[1:-1], angles, wavelengths)
 
 
 def colour_grid(n, d, angles, wavelengths):
-    import warnings
-
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        from colour.phenomena import multilayer_tmm
-
-        r, t = multilayer_tmm(n.T, d[1:-1], wavelengths, angles)
-    return r[:, :, 0, :].mean(axis=-1), t[:, :, 0, :].mean(axis=-1)
+    return peer_calls.colour_grid(n, d[1:-1], angles, wavelengths)
 
 
 def main():
