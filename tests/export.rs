@@ -21,15 +21,7 @@ fn film_json(dir: &Path) -> serde_json::Value {
 
 /// The channel names, sample type and size of an EXR texture.
 fn exr_layout(path: &Path) -> (Vec<String>, bool, (usize, usize)) {
-    use exr::prelude::{ReadChannels, ReadLayers};
-    let image = exr::prelude::read()
-        .no_deep_data()
-        .largest_resolution_level()
-        .all_channels()
-        .first_valid_layer()
-        .all_attributes()
-        .from_file(path)
-        .unwrap();
+    let image = common::read_exr(path);
     let layer = &image.layer_data;
     let names = layer
         .channel_data

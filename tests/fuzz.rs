@@ -20,8 +20,8 @@ use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::path::Path;
 
 use exr::prelude::{
-    read, AnyChannel, AnyChannels, AttributeValue, Encoding, FlatSamples, Image, Layer,
-    LayerAttributes, ReadChannels, ReadLayers, SmallVec, Text, WritableImage,
+    AnyChannel, AnyChannels, AttributeValue, Encoding, FlatSamples, Image, Layer, LayerAttributes,
+    SmallVec, Text, WritableImage,
 };
 use irid::lut::{BakeSpec, Kind, Lut, Resolution};
 use irid::optics::{IndexTable, Stack};
@@ -250,14 +250,7 @@ struct TableParts {
 }
 
 fn table_parts(path: &Path) -> TableParts {
-    let image = read()
-        .no_deep_data()
-        .largest_resolution_level()
-        .all_channels()
-        .first_valid_layer()
-        .all_attributes()
-        .from_file(path)
-        .unwrap();
+    let image = common::read_exr(path);
     let layer = &image.layer_data;
     let Some(AttributeValue::Text(text)) = layer.attributes.other.get(&Text::from("irid")) else {
         panic!("no irid header in {}", path.display());

@@ -34,6 +34,20 @@ impl FilmArgs {
             .map(|layer| layer.thickness_nm)
     }
 
+    /// The thickness range of the varying layer: `--thickness` when given,
+    /// else the layer's own thickness in the stack file; `None` when neither
+    /// applies (the spec's default and its check then stand).
+    pub fn thickness_nm(
+        &self,
+        stack: &Stack,
+        thickness: Option<&str>,
+    ) -> Result<Option<(f64, f64)>> {
+        match thickness {
+            Some(t) => parse_range("--thickness", t).map(Some),
+            None => Ok(self.layer_thickness_nm(stack).map(|t| (t, t))),
+        }
+    }
+
     /// `--angles`, or cos 89° to 1 when not given.
     pub fn cos_theta(&self) -> Result<(f64, f64)> {
         match &self.angles {
@@ -41,6 +55,15 @@ impl FilmArgs {
             None => Ok((DEFAULT_COS_MIN, 1.0)),
         }
     }
+}
+
+/// A named choice (`--sampling`, `--white`, `--kind`): the value's own
+/// parser, whose error begins with the flag's name.
+pub fn parse_choice<T: std::str::FromStr>(text: &str) -> Result<T>
+where
+    T::Err: Display,
+{
+    text.parse().map_err(|e| anyhow!("--{e}"))
 }
 
 /// One number of `spec`, which must be finite; errors name the flag and spec.

@@ -5,11 +5,10 @@ use std::process::ExitCode;
 use std::time::Instant;
 
 use anyhow::{anyhow, bail, Context, Result};
-use irid::color::Sampling;
 use irid::lut::{bake_with_progress, validate, BakeSpec, Kind, Resolution, VALIDATION_SEED};
 use irid::optics::Stack;
 
-use super::args::{parse_range, FilmArgs};
+use super::args::{parse_choice, parse_range, FilmArgs};
 
 #[derive(clap::Args)]
 pub struct Args {
@@ -62,23 +61,17 @@ pub fn run(args: Args) -> Result<ExitCode> {
     let stack = Stack::load(&args.film.stack)?;
     let mut spec = BakeSpec::new(stack);
     spec.layer = args.film.layer;
-    if let Some(t) = args.film.layer_thickness_nm(&spec.stack) {
-        spec.thickness_nm = (t, t);
-    }
-    if let Some(t) = &args.thickness {
-        spec.thickness_nm = parse_range("--thickness", t)?;
+    if let Some(range) = args
+        .film
+        .thickness_nm(&spec.stack, args.thickness.as_deref())?
+    {
+        spec.thickness_nm = range;
     }
     spec.cos_theta = args.film.cos_theta()?;
-    spec.kind = args.kind.parse::<Kind>().map_err(|e| anyhow!("--{e}"))?;
-    spec.sampling = args
-        .sampling
-        .parse::<Sampling>()
-        .map_err(|e| anyhow!("--{e}"))?;
+    spec.kind = parse_choice(&args.kind)?;
+    spec.sampling = parse_choice(&args.sampling)?;
     spec.wavelength_nm = parse_range("--wavelengths", &args.wavelengths)?;
-    spec.white = args
-        .white
-        .parse::<irid::color::White>()
-        .map_err(|e| anyhow!("--{e}"))?;
+    spec.white = parse_choice(&args.white)?;
     spec.half = args.half;
     spec.validation_points = args.validate_points;
     spec.resolution = match (&args.resolution, args.max_error) {

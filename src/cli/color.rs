@@ -9,7 +9,7 @@ use anyhow::{anyhow, Result};
 use irid::color::{linear_to_srgb8, stack_colors, Sampling, SpectralIntegrator, White};
 use irid::optics::Stack;
 
-use super::args::{check_angles, check_grid, parse_list};
+use super::args::{check_angles, check_grid, parse_choice, parse_list};
 
 #[derive(clap::Args)]
 pub struct Args {
@@ -32,8 +32,8 @@ pub struct Args {
 }
 
 pub fn run(args: Args) -> Result<ExitCode> {
-    let sampling: Sampling = args.sampling.parse().map_err(|e| anyhow!("--{e}"))?;
-    let white: White = args.white.parse().map_err(|e| anyhow!("--{e}"))?;
+    let sampling: Sampling = parse_choice(&args.sampling)?;
+    let white: White = parse_choice(&args.white)?;
     let angles_deg = parse_list("--angles", &args.angles)?;
     check_angles("--angles", &angles_deg)?;
     let stack = Stack::load(&args.stack)?;

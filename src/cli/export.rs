@@ -7,11 +7,10 @@ use std::process::ExitCode;
 use std::time::Instant;
 
 use anyhow::{anyhow, Context, Result};
-use irid::color::{Sampling, White};
 use irid::export::{export, write_dir, ExportSpec};
 use irid::optics::Stack;
 
-use super::args::{parse_range, FilmArgs};
+use super::args::{parse_choice, FilmArgs};
 
 #[derive(clap::Args)]
 pub struct Args {
@@ -52,18 +51,15 @@ pub fn run(args: Args) -> Result<ExitCode> {
     let stack = Stack::load(&args.film.stack)?;
     let mut spec = ExportSpec::new(stack);
     spec.layer = args.film.layer;
-    if let Some(t) = args.film.layer_thickness_nm(&spec.stack) {
-        spec.thickness_nm = (t, t);
-    }
-    if let Some(t) = &args.thickness {
-        spec.thickness_nm = parse_range("--thickness", t)?;
+    if let Some(range) = args
+        .film
+        .thickness_nm(&spec.stack, args.thickness.as_deref())?
+    {
+        spec.thickness_nm = range;
     }
     spec.cos_theta = args.film.cos_theta()?;
-    spec.sampling = args
-        .sampling
-        .parse::<Sampling>()
-        .map_err(|e| anyhow!("--{e}"))?;
-    spec.white = args.white.parse::<White>().map_err(|e| anyhow!("--{e}"))?;
+    spec.sampling = parse_choice(&args.sampling)?;
+    spec.white = parse_choice(&args.white)?;
     spec.max_error = args.max_error;
     spec.points = args.points;
     spec.png = args.png;

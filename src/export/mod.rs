@@ -22,7 +22,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::color::{delta_e2000_rgb, Sampling, SpectralIntegrator, White};
 use crate::error::{Error, Result};
-use crate::optics::{solve, Layer, Stack, StackGrid};
+use crate::optics::{solve, Stack, StackGrid};
 
 /// The shaders, as committed in `shaders/` (the GLSL and HLSL forms are
 /// generated from the WGSL by `cargo run -p irid-gpu --bin gen-shaders`).
@@ -213,16 +213,7 @@ struct Film {
 
 impl Film {
     fn new(spec: &ExportSpec) -> Result<Film> {
-        let mut stack = spec.stack.clone();
-        let layer = if stack.layers.is_empty() {
-            stack.layers.push(Layer {
-                material: stack.ambient.clone(),
-                thickness_nm: 0.0,
-            });
-            1
-        } else {
-            spec.layer
-        };
+        let (stack, layer) = crate::lut::with_varying_layer(&spec.stack, spec.layer);
         let integrator = SpectralIntegrator::with_white(spec.sampling, spec.white);
         let grid = StackGrid::new(&stack, integrator.wavelengths_nm())?;
         Ok(Film {

@@ -119,3 +119,20 @@ impl AsRef<Path> for Scratch {
         self.0.path()
     }
 }
+
+/// An OpenEXR file read whole: its first layer, every channel as flat
+/// samples, and every attribute (the irid header among them).
+pub fn read_exr(
+    path: &Path,
+) -> exr::prelude::Image<exr::prelude::Layer<exr::prelude::AnyChannels<exr::prelude::FlatSamples>>>
+{
+    use exr::prelude::{ReadChannels, ReadLayers};
+    exr::prelude::read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .all_channels()
+        .first_valid_layer()
+        .all_attributes()
+        .from_file(path)
+        .unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+}

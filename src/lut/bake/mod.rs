@@ -24,6 +24,7 @@ use check::{even_subgrid, measure, Check};
 use grid::{doubled, initial_axes, refine, Grid};
 use header::header;
 use store::{representable, stored};
+pub(crate) use sweep::with_varying_layer;
 use sweep::Prepared;
 
 /// Bakes a table (no progress output; see [`bake_with_progress`]).

@@ -21,6 +21,21 @@ use crate::simd::avx2_dispatch;
 /// (a sincos) is paid on one node in 64.
 pub(super) const PHASE_RESYNC: usize = 64;
 
+/// The stack a sweep evaluates and its varying layer: a layerless stack gets
+/// a zero-thickness layer of the ambient medium (layer 1), which changes
+/// nothing optically but gives the sweep a layer to vary.
+pub(crate) fn with_varying_layer(stack: &Stack, layer: usize) -> (Stack, usize) {
+    let mut stack = stack.clone();
+    if stack.layers.is_empty() {
+        stack.layers.push(Layer {
+            material: stack.ambient.clone(),
+            thickness_nm: 0.0,
+        });
+        return (stack, 1);
+    }
+    (stack, layer)
+}
+
 /// The stack and everything about it that is fixed for the whole bake.
 pub(super) struct Prepared {
     /// The stack actually evaluated: a layerless stack gets a zero-thickness
@@ -57,16 +72,7 @@ impl Prepared {
         integrator: SpectralIntegrator,
         wavelength_nm: (f64, f64),
     ) -> Result<Prepared> {
-        let mut stack = stack.clone();
-        let layer = if stack.layers.is_empty() {
-            stack.layers.push(Layer {
-                material: stack.ambient.clone(),
-                thickness_nm: 0.0,
-            });
-            1
-        } else {
-            layer
-        };
+        let (stack, layer) = with_varying_layer(stack, layer);
         let (stack_grid, weights) = match kind {
             Kind::Rgb => (
                 StackGrid::new(&stack, integrator.wavelengths_nm())?,
