@@ -22,7 +22,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::color::{delta_e2000_rgb, Sampling, SpectralIntegrator, White};
 use crate::error::{Error, Result};
-use crate::optics::{solve, Stack, StackGrid};
+use crate::optics::{Response, Stack, StackGrid};
 
 /// The shaders, as committed in `shaders/` (the GLSL and HLSL forms are
 /// generated from the WGSL by `cargo run -p irid-gpu --bin gen-shaders`).
@@ -246,25 +246,30 @@ impl Film {
                 || {
                     (
                         self.grid.thicknesses_nm().to_vec(),
+                        vec![Response::default(); waves],
                         [vec![0.0; waves], vec![0.0; waves]],
                     )
                 },
-                |(thick, spectra), p| self.exact(thick, spectra, f64::from(p[0]), f64::from(p[1])),
+                |(thick, spectrum, spectra), p| {
+                    self.exact(thick, spectrum, spectra, f64::from(p[0]), f64::from(p[1]))
+                },
             )
             .collect()
     }
 
-    /// Exact RGB of R and T at one point.
+    /// Exact RGB of R and T at one point: its whole spectrum through the
+    /// batched solver, then the colour integration.
     fn exact(
         &self,
         thicknesses: &mut [f64],
+        spectrum: &mut [Response],
         spectra: &mut [Vec<f64>; 2],
         t: f64,
         c: f64,
     ) -> [f64; 6] {
         thicknesses[self.layer - 1] = t;
-        for (k, (wl, n)) in self.grid.iter().enumerate() {
-            let resp = solve(n, thicknesses, wl, c);
+        self.grid.solve_spectrum(thicknesses, c, spectrum);
+        for (k, resp) in spectrum.iter().enumerate() {
             spectra[0][k] = resp.r();
             spectra[1][k] = resp.t();
         }
