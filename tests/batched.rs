@@ -521,3 +521,71 @@ fn a_grid_from_raw_indices_is_the_grid_of_the_stack() {
     assert_eq!(raw, grid);
     check_spectrum("from raw indices", &stack, &wl, &[1.0, 0.6, 0.2]);
 }
+
+/// `StackGrid::weighted_spectrum` folds the spectrum into the colour as it
+/// solves it; it must give the bits of integrating the stored spectrum, on
+/// every copy of the kernel, dispersive or not, whatever the wavelength
+/// count's remainder mod the lane width.
+#[test]
+fn weighted_spectrum_is_the_integrated_stored_spectrum() {
+    use irid::color::{Sampling, SpectralIntegrator};
+    use irid::optics::{Layer, Material};
+    let dispersive = Stack {
+        ambient: Material::constant(1.0, 0.0),
+        layers: vec![Layer {
+            material: irid::optics::library::builtin("TiO2").unwrap(),
+            thickness_nm: 300.0,
+        }],
+        substrate: irid::optics::library::builtin("fused-silica").unwrap(),
+    };
+    let stacks = [
+        (
+            "soap",
+            non_dispersive(1.0, &[(c(1.33, 0.0), 500.0)], c(1.0, 0.0)),
+        ),
+        (
+            "absorbing pair on glass",
+            non_dispersive(
+                1.0,
+                &[(c(2.0, 0.3), 120.0), (c(1.38, 0.0), 90.0)],
+                c(1.52, 0.0),
+            ),
+        ),
+        ("TiO2 on fused silica (dispersive)", dispersive),
+    ];
+    let mut rng = Pcg64::seed_from_u64(19);
+    for sampling in [
+        Sampling::Exact,
+        Sampling::Rgb3,
+        Sampling::Uniform(2),
+        Sampling::Uniform(5),
+        Sampling::Uniform(6),
+        Sampling::Uniform(7),
+        Sampling::Uniform(41),
+    ] {
+        let integ = SpectralIntegrator::new(sampling);
+        let weights = integ.rgb_lane_weights();
+        for (name, stack) in &stacks {
+            let grid = StackGrid::new(stack, integ.wavelengths_nm()).unwrap();
+            let mut thick = grid.thicknesses_nm().to_vec();
+            for _ in 0..8 {
+                thick[0] = rng.random_range(0.0..2000.0);
+                let cos = rng.random_range(0.0..=1.0);
+                let mut spectrum = vec![Response::default(); grid.wavelengths_nm().len()];
+                for path in [Path::Best, Path::Portable] {
+                    grid.solve_spectrum_on(path, &thick, cos, &mut spectrum);
+                    let r: Vec<f64> = spectrum.iter().map(Response::r).collect();
+                    let t: Vec<f64> = spectrum.iter().map(Response::t).collect();
+                    let got = grid.weighted_spectrum_on(path, &thick, cos, &weights);
+                    let bits = |v: [f64; 3]| v.map(f64::to_bits);
+                    assert_eq!(
+                        (bits(got.reflectance), bits(got.transmittance)),
+                        (bits(integ.rgb(&r)), bits(integ.rgb(&t))),
+                        "{name}, {sampling:?}, {path:?}, d {}, cos {cos}",
+                        thick[0]
+                    );
+                }
+            }
+        }
+    }
+}

@@ -9,6 +9,7 @@ use serde::{Deserialize, Serialize};
 use super::cie_tables::{CMF_1931_2DEG, CMF_START_NM, D65_5NM, D65_START_NM};
 use super::space::{mat_vec, srgb};
 use crate::error::{Error, Result};
+use crate::optics::lanes::SpectralWeights;
 
 /// The paper's three wavelengths, taken directly as R, G and B.
 pub const RGB3_WAVELENGTHS_NM: [f64; 3] = [650.0, 510.0, 475.0];
@@ -278,6 +279,15 @@ impl SpectralIntegrator {
     /// callers that fold the integration into their own loops.
     pub fn rgb_weights(&self) -> &[Vec<f64>; 3] {
         &self.rgb_weights
+    }
+
+    /// [`Self::rgb_weights`] laid out for the batched solver, which then
+    /// integrates a spectrum to linear sRGB as it solves it
+    /// ([`StackGrid::weighted_spectrum`](crate::optics::StackGrid::weighted_spectrum)),
+    /// with the same bits as [`Self::rgb`] on the stored spectrum.
+    pub fn rgb_lane_weights(&self) -> SpectralWeights {
+        let [r, g, b] = &self.rgb_weights;
+        SpectralWeights::new([r, g, b])
     }
 
     /// CIE XYZ (Y = 1 for a perfect reflector) of a spectrum sampled at

@@ -22,7 +22,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::color::{delta_e2000_rgb, Sampling, SpectralIntegrator, White};
 use crate::error::{Error, Result};
-use crate::optics::{Response, Stack, StackGrid};
+use crate::optics::{Stack, StackGrid};
 
 /// The shaders, as committed in `shaders/` (the GLSL and HLSL forms are
 /// generated from the WGSL by `cargo run -p irid-gpu --bin gen-shaders`).
@@ -237,45 +237,24 @@ impl Film {
         )
     }
 
-    /// Exact RGB of R and T at each (thickness, cos θ) point.
+    /// Exact RGB of R and T at each (thickness, cos θ) point: its whole
+    /// spectrum through the batched solver, integrated as it is solved.
     fn exact_at(&self, points: &[[f32; 2]]) -> Vec<[f64; 6]> {
-        let waves = self.grid.wavelengths_nm().len();
+        let weights = self.integrator.rgb_lane_weights();
         points
             .par_iter()
             .map_init(
-                || {
-                    (
-                        self.grid.thicknesses_nm().to_vec(),
-                        vec![Response::default(); waves],
-                        [vec![0.0; waves], vec![0.0; waves]],
-                    )
-                },
-                |(thick, spectrum, spectra), p| {
-                    self.exact(thick, spectrum, spectra, f64::from(p[0]), f64::from(p[1]))
+                || self.grid.thicknesses_nm().to_vec(),
+                |thick, p| {
+                    thick[self.layer - 1] = f64::from(p[0]);
+                    let sums = self
+                        .grid
+                        .weighted_spectrum(thick, f64::from(p[1]), &weights);
+                    let (r, t) = (sums.reflectance, sums.transmittance);
+                    [r[0], r[1], r[2], t[0], t[1], t[2]]
                 },
             )
             .collect()
-    }
-
-    /// Exact RGB of R and T at one point: its whole spectrum through the
-    /// batched solver, then the colour integration.
-    fn exact(
-        &self,
-        thicknesses: &mut [f64],
-        spectrum: &mut [Response],
-        spectra: &mut [Vec<f64>; 2],
-        t: f64,
-        c: f64,
-    ) -> [f64; 6] {
-        thicknesses[self.layer - 1] = t;
-        self.grid.solve_spectrum(thicknesses, c, spectrum);
-        for (k, resp) in spectrum.iter().enumerate() {
-            spectra[0][k] = resp.r();
-            spectra[1][k] = resp.t();
-        }
-        let r = self.integrator.rgb(&spectra[0]);
-        let tr = self.integrator.rgb(&spectra[1]);
-        [r[0], r[1], r[2], tr[0], tr[1], tr[2]]
     }
 }
 

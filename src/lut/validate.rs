@@ -10,7 +10,8 @@ use super::sample::{channel_names, Lut};
 use super::Kind;
 use crate::color::{delta_e2000_rgb, Sampling, SpectralIntegrator};
 use crate::error::{Error, Result};
-use crate::optics::{solve, Response, StackGrid};
+use crate::optics::lanes::SpectralWeights;
+use crate::optics::{solve, StackGrid};
 
 /// Error of a table against the solver. Arrays named `*_abs` have one
 /// entry per channel (in `channels` order); `*_de2000` have two entries,
@@ -141,6 +142,8 @@ pub fn validate(lut: &Lut, points: usize, seed: u64) -> Result<ErrorStats> {
 struct PointChecker<'a> {
     lut: &'a Lut,
     integrator: SpectralIntegrator,
+    /// The integrator's weights laid out for the batched solver.
+    weights: SpectralWeights,
     /// The stack at the integration's wavelengths; empty when a spectral
     /// table does not span them (its points then get no colour).
     color_grid: StackGrid,
@@ -150,9 +153,6 @@ struct PointChecker<'a> {
 /// One thread's buffers for [`PointChecker::check`].
 struct PointScratch {
     thicknesses_nm: Vec<f64>,
-    spec_r: Vec<f64>,
-    spec_t: Vec<f64>,
-    spectrum: Vec<Response>,
     indices: Vec<num_complex::Complex64>,
 }
 
@@ -178,8 +178,14 @@ impl<'a> PointChecker<'a> {
             &[]
         };
         let color_grid = StackGrid::new(&h.stack, wavelengths)?;
+        let weights = if color_covered {
+            integrator.rgb_lane_weights()
+        } else {
+            SpectralWeights::new([&[], &[], &[]])
+        };
         Ok(PointChecker {
             lut,
+            weights,
             integrator,
             color_grid,
             color_covered,
@@ -187,19 +193,16 @@ impl<'a> PointChecker<'a> {
     }
 
     fn scratch(&self) -> PointScratch {
-        let n_w = self.integrator.wavelengths_nm().len();
         PointScratch {
             thicknesses_nm: self.lut.header().stack.thicknesses_nm(),
-            spec_r: vec![0.0; n_w],
-            spec_t: vec![0.0; n_w],
-            spectrum: vec![Response::default(); self.color_grid.wavelengths_nm().len()],
             indices: Vec::new(),
         }
     }
 
     /// The exact colour of one point, its whole spectrum solved at once
-    /// (four wavelengths per vector), compared with the table's: the exact
-    /// (R, T) colours and their CIEDE2000 from the table's.
+    /// (four wavelengths per vector) and integrated as it is solved,
+    /// compared with the table's: the exact (R, T) colours and their
+    /// CIEDE2000 from the table's.
     fn exact_color(
         &self,
         s: &mut PointScratch,
@@ -207,21 +210,10 @@ impl<'a> PointChecker<'a> {
         table_r: &[f64; 3],
         table_t: &[f64; 3],
     ) -> ([f64; 3], [f64; 3], [f64; 2]) {
-        self.color_grid
-            .solve_spectrum(&s.thicknesses_nm, cos, &mut s.spectrum);
-        for ((resp, r), t) in s
-            .spectrum
-            .iter()
-            .zip(s.spec_r.iter_mut())
-            .zip(s.spec_t.iter_mut())
-        {
-            *r = resp.r();
-            *t = resp.t();
-        }
-        let (r, t) = (
-            self.integrator.rgb(&s.spec_r),
-            self.integrator.rgb(&s.spec_t),
-        );
+        let sums = self
+            .color_grid
+            .weighted_spectrum(&s.thicknesses_nm, cos, &self.weights);
+        let (r, t) = (sums.reflectance, sums.transmittance);
         let de = [delta_e2000_rgb(*table_r, r), delta_e2000_rgb(*table_t, t)];
         (r, t, de)
     }

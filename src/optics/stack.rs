@@ -263,6 +263,40 @@ impl StackGrid {
         );
     }
 
+    /// [`StackGrid::solve_spectrum`] folded into three weighted sums of R and
+    /// of T (a colour) as it is solved: the same sums as integrating the
+    /// stored spectrum with the same weights, without storing it.
+    ///
+    /// # Panics
+    /// If `thicknesses_nm` has the wrong length or `weights` does not have one
+    /// weight per wavelength.
+    pub fn weighted_spectrum(
+        &self,
+        thicknesses_nm: &[f64],
+        cos_theta0: f64,
+        weights: &lanes::SpectralWeights,
+    ) -> lanes::WeightedPower {
+        self.weighted_spectrum_on(lanes::Path::Best, thicknesses_nm, cos_theta0, weights)
+    }
+
+    /// [`StackGrid::weighted_spectrum`] on a chosen copy of the kernel.
+    pub fn weighted_spectrum_on(
+        &self,
+        path: lanes::Path,
+        thicknesses_nm: &[f64],
+        cos_theta0: f64,
+        weights: &lanes::SpectralWeights,
+    ) -> lanes::WeightedPower {
+        lanes::weighted_spectrum_on(
+            path,
+            &self.spectrum,
+            &self.indices,
+            thicknesses_nm,
+            cos_theta0,
+            weights,
+        )
+    }
+
     /// R and T at every (wavelength, cos θ0) pair, wavelength-major, into
     /// `out` (length wavelengths × angles). Allocates nothing.
     pub fn solve(&self, cos_theta0: &[f64], out: &mut [Response]) {

@@ -10,7 +10,8 @@ use super::scene::Film;
 use crate::color::{Sampling, SpectralIntegrator};
 use crate::error::Result;
 use crate::lut::FilmRgb;
-use crate::optics::{Response, Stack, StackGrid};
+use crate::optics::lanes::SpectralWeights;
+use crate::optics::{Stack, StackGrid};
 
 /// Which side of the film the light arrives from.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -32,7 +33,7 @@ pub trait FilmShading: Sync + Send {
 /// The reference: the full transfer-matrix solution at every wavelength of
 /// a sampling strategy, integrated to colour, at every hit (the paper's method).
 pub struct DirectFilm {
-    integrator: SpectralIntegrator,
+    weights: SpectralWeights,
     front: DirectSide,
     back: Option<DirectSide>,
 }
@@ -54,10 +55,8 @@ impl DirectSide {
 }
 
 thread_local! {
-    /// Per-thread scratch: thicknesses, the spectrum, its R and its T.
-    #[allow(clippy::type_complexity)]
-    static SCRATCH: RefCell<(Vec<f64>, Vec<Response>, Vec<f64>, Vec<f64>)> =
-        const { RefCell::new((Vec::new(), Vec::new(), Vec::new(), Vec::new())) };
+    /// Per-thread scratch: the thicknesses with the shaded one put in.
+    static THICKNESSES: RefCell<Vec<f64>> = const { RefCell::new(Vec::new()) };
 }
 
 impl DirectFilm {
@@ -77,7 +76,7 @@ impl DirectFilm {
             None
         };
         Ok(DirectFilm {
-            integrator,
+            weights: integrator.rgb_lane_weights(),
             front,
             back,
         })
@@ -90,22 +89,20 @@ impl FilmShading for DirectFilm {
             Side::Back => self.back.as_ref().unwrap_or(&self.front),
             Side::Front => &self.front,
         };
-        SCRATCH.with_borrow_mut(|(d, spectrum, r, t)| {
+        THICKNESSES.with_borrow_mut(|d| {
             d.clear();
             d.extend_from_slice(s.grid.thicknesses_nm());
             if let Some(x) = d.get_mut(s.layer) {
                 *x = f64::from(thickness_nm);
             }
-            spectrum.resize(s.grid.wavelengths_nm().len(), Response::default());
-            // Every wavelength of the sampling in one batch, four per vector.
-            s.grid.solve_spectrum(d, f64::from(cos_theta), spectrum);
-            r.clear();
-            t.clear();
-            r.extend(spectrum.iter().map(Response::r));
-            t.extend(spectrum.iter().map(Response::t));
+            // Every wavelength of the sampling in one batch, four per
+            // vector, integrated as it is solved.
+            let sums = s
+                .grid
+                .weighted_spectrum(d, f64::from(cos_theta), &self.weights);
             FilmRgb {
-                reflectance: self.integrator.rgb(r).map(|v| v as f32),
-                transmittance: self.integrator.rgb(t).map(|v| v as f32),
+                reflectance: sums.reflectance.map(|v| v as f32),
+                transmittance: sums.transmittance.map(|v| v as f32),
             }
         })
     }

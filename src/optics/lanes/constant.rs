@@ -19,8 +19,8 @@
 
 use num_complex::Complex64 as C64;
 
-use super::arith::{one_way, Cv, Lanes, LANES};
-use crate::optics::solver::Response;
+use super::arith::{one_way, Cv, Lanes};
+use super::sink::Power;
 
 /// Most media the interfaces are laid out for on the stack; deeper stacks
 /// take the general kernel (they are dominated by their layers anyway).
@@ -136,7 +136,7 @@ fn step<V: Lanes>(gamma: &mut Cv<V>, r: Cv<V>, rho: Cv<V>) -> V {
 
 /// R and T of four wavelengths (2π/λ in `k0`) of the stack `f` describes.
 #[inline(always)]
-pub(super) fn solve_lanes<V: Lanes>(f: &Interfaces, k0: V) -> [Response; LANES] {
+pub(super) fn solve_lanes<V: Lanes>(f: &Interfaces, k0: V) -> Power<V> {
     let splat = |z: C64| Cv {
         re: V::splat(z.re),
         im: V::splat(z.im),
@@ -157,14 +157,10 @@ pub(super) fn solve_lanes<V: Lanes>(f: &Interfaces, k0: V) -> [Response; LANES] 
             .mul(decay)
             .mul(step(&mut gamma_p, splat(face.rp), rho));
     }
-    let rs = gamma_s.norm_sqr().to_array();
-    let rp = gamma_p.norm_sqr().to_array();
-    let ts = ts_norm.mul(V::splat(f.ts_scale)).to_array();
-    let tp = tp_norm.mul(V::splat(f.tp_scale)).to_array();
-    std::array::from_fn(|l| Response {
-        rs: rs[l],
-        rp: rp[l],
-        ts: ts[l],
-        tp: tp[l],
-    })
+    Power {
+        rs: gamma_s.norm_sqr(),
+        rp: gamma_p.norm_sqr(),
+        ts: ts_norm.mul(V::splat(f.ts_scale)),
+        tp: tp_norm.mul(V::splat(f.tp_scale)),
+    }
 }

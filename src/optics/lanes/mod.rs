@@ -31,11 +31,14 @@
 
 mod arith;
 mod constant;
+mod sink;
 
 #[cfg(target_arch = "x86_64")]
 use arith::avx2;
 pub use arith::LANES;
 use arith::{one_way, sqrt_upper, Cv, Lanes, Portable};
+use sink::{Integrate, Power, Sink, Store};
+pub use sink::{SpectralWeights, WeightedPower};
 
 use num_complex::Complex64 as C64;
 
@@ -57,7 +60,7 @@ fn solve_lanes<V: Lanes>(
     thicknesses_nm: &[f64],
     wavelength_nm: [f64; LANES],
     cos_theta0: [f64; LANES],
-) -> [Response; LANES] {
+) -> Power<V> {
     let last = thicknesses_nm.len() + 1;
     for lane in &indices {
         assert_eq!(lane.len(), last + 1, "indices: N + 2 per lane");
@@ -140,13 +143,17 @@ fn solve_lanes<V: Lanes>(
         ts,
         tp,
     };
-    let mut out = to_power(&power, n0.mul(cos), n_sub, q_sub);
+    let out = to_power(&power, n0.mul(cos), n_sub, q_sub);
+    if !scalar.contains(&true) {
+        return out;
+    }
+    let mut res = out.responses();
     for l in 0..LANES {
         if scalar[l] {
-            out[l] = solve(indices[l], thicknesses_nm, wavelength_nm[l], cos_theta0[l]);
+            res[l] = solve(indices[l], thicknesses_nm, wavelength_nm[l], cos_theta0[l]);
         }
     }
-    out
+    Power::from_responses(&res)
 }
 
 /// The recursion's result in four lanes: Γ at the top and the transmitted
@@ -161,24 +168,20 @@ struct Amplitudes<V> {
 /// Power, as the scalar solver's `to_power`: R = |Γ|², T from the Poynting
 /// flux into the substrate over the incident one (q0 = n0 cos θ0).
 #[inline(always)]
-fn to_power<V: Lanes>(a: &Amplitudes<V>, q0: V, n_sub: Cv<V>, q_sub: Cv<V>) -> [Response; LANES] {
+fn to_power<V: Lanes>(a: &Amplitudes<V>, q0: V, n_sub: Cv<V>, q_sub: Cv<V>) -> Power<V> {
     let one = V::splat(1.0);
     let conj_q = Cv {
         re: q_sub.re,
         im: q_sub.im.neg(),
     };
     let p_flux = conj_q.mul(n_sub).mul(n_sub).re.div(n_sub.norm_sqr());
-    let rs = a.gamma_s.norm_sqr().to_array();
-    let rp = a.gamma_p.norm_sqr().to_array();
     let inv_q0 = one.div(q0);
-    let t_s = a.ts.norm_sqr().mul(q_sub.re).mul(inv_q0).to_array();
-    let t_p = a.tp.norm_sqr().mul(p_flux).mul(inv_q0).to_array();
-    std::array::from_fn(|l| Response {
-        rs: rs[l],
-        rp: rp[l],
-        ts: t_s[l],
-        tp: t_p[l],
-    })
+    Power {
+        rs: a.gamma_s.norm_sqr(),
+        rp: a.gamma_p.norm_sqr(),
+        ts: a.ts.norm_sqr().mul(q_sub.re).mul(inv_q0),
+        tp: a.tp.norm_sqr().mul(p_flux).mul(inv_q0),
+    }
 }
 
 /// The q of every medium whose index another medium repeats, once each.
@@ -246,8 +249,8 @@ fn batch_body<V: Lanes>(
         };
         let k0 = V::splat(std::f64::consts::TAU).div(V::from_array(wl));
         let res = solve_lanes::<V>(gather, &Repeats::NONE, k0, idx, thicknesses_nm, wl, cos);
-        store(out, start, &res);
-        start = (start + LANES).min(total);
+        Store(&mut *out).take(start / LANES, &res);
+        start += LANES;
     }
 }
 
@@ -390,15 +393,14 @@ fn spectrum_body<V: Lanes>(
     indices: &[C64],
     thicknesses_nm: &[f64],
     cos_theta0: f64,
-    out: &mut [Response],
+    sink: &mut impl Sink<V>,
 ) {
     let media = spectrum.media;
     let total = spectrum.wavelengths;
     if spectrum.non_dispersive {
         if let Some(f) = constant::Interfaces::new(&indices[..media], thicknesses_nm, cos_theta0) {
             for (g, k0) in spectrum.k0.iter().enumerate() {
-                let res = constant::solve_lanes::<V>(&f, V::from_array(*k0));
-                store(out, g * LANES, &res);
+                sink.take(g, &constant::solve_lanes::<V>(&f, V::from_array(*k0)));
             }
             return;
         }
@@ -432,22 +434,7 @@ fn spectrum_body<V: Lanes>(
             *wl,
             [cos_theta0; LANES],
         );
-        store(out, start, &res);
-    }
-}
-
-/// Writes a group's results from `start` on: all four, or as many as `out`
-/// still has room for (a last partial group). The whole-group copy has a
-/// fixed length, so it compiles to a few moves instead of a call.
-#[inline(always)]
-fn store(out: &mut [Response], start: usize, res: &[Response; LANES]) {
-    match out.get_mut(start..start + LANES) {
-        Some(group) => group.copy_from_slice(res),
-        None => {
-            let rest = &mut out[start..];
-            let n = rest.len();
-            rest.copy_from_slice(&res[..n]);
-        }
+        sink.take(g, &res);
     }
 }
 
@@ -460,7 +447,8 @@ fn spectrum_avx2(
     cos_theta0: f64,
     out: &mut [Response],
 ) {
-    spectrum_body::<avx2::Avx2>(spectrum, indices, thicknesses_nm, cos_theta0, out)
+    let sink = &mut Store(out);
+    spectrum_body::<avx2::Avx2>(spectrum, indices, thicknesses_nm, cos_theta0, sink)
 }
 
 fn spectrum_portable(
@@ -470,7 +458,44 @@ fn spectrum_portable(
     cos_theta0: f64,
     out: &mut [Response],
 ) {
-    spectrum_body::<Portable>(spectrum, indices, thicknesses_nm, cos_theta0, out)
+    let sink = &mut Store(out);
+    spectrum_body::<Portable>(spectrum, indices, thicknesses_nm, cos_theta0, sink)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn weighted_avx2(
+    spectrum: &Spectrum,
+    indices: &[C64],
+    thicknesses_nm: &[f64],
+    cos_theta0: f64,
+    weights: &SpectralWeights,
+) -> WeightedPower {
+    let mut sink = Integrate::<avx2::Avx2>::new(weights);
+    spectrum_body(spectrum, indices, thicknesses_nm, cos_theta0, &mut sink);
+    sink.finish()
+}
+
+fn weighted_portable(
+    spectrum: &Spectrum,
+    indices: &[C64],
+    thicknesses_nm: &[f64],
+    cos_theta0: f64,
+    weights: &SpectralWeights,
+) -> WeightedPower {
+    let mut sink = Integrate::<Portable>::new(weights);
+    spectrum_body(spectrum, indices, thicknesses_nm, cos_theta0, &mut sink);
+    sink.finish()
+}
+
+/// The lengths [`solve_spectrum_on`] and [`weighted_spectrum_on`] need.
+fn check_spectrum_lengths(spectrum: &Spectrum, indices: &[C64], thicknesses_nm: &[f64]) {
+    assert_eq!(spectrum.media, thicknesses_nm.len() + 2, "media");
+    assert_eq!(
+        indices.len(),
+        spectrum.media * spectrum.wavelengths,
+        "indices"
+    );
 }
 
 /// R and T at every wavelength of `spectrum` at one angle, into `out` (one
@@ -487,12 +512,7 @@ pub fn solve_spectrum_on(
     cos_theta0: f64,
     out: &mut [Response],
 ) {
-    assert_eq!(spectrum.media, thicknesses_nm.len() + 2, "media");
-    assert_eq!(
-        indices.len(),
-        spectrum.media * spectrum.wavelengths,
-        "indices"
-    );
+    check_spectrum_lengths(spectrum, indices, thicknesses_nm);
     assert_eq!(out.len(), spectrum.wavelengths, "out: one per wavelength");
     if out.is_empty() {
         return;
@@ -504,6 +524,39 @@ pub fn solve_spectrum_on(
     }
     let _ = path;
     spectrum_portable(spectrum, indices, thicknesses_nm, cos_theta0, out)
+}
+
+/// The spectrum of [`solve_spectrum_on`] folded into `weights`' three
+/// weighted sums of R and of T as it is solved, without being stored; the
+/// sums have the bits of [`SpectralIntegrator`](crate::color::SpectralIntegrator)'s
+/// dot product over the stored spectrum.
+///
+/// # Panics
+/// If the lengths disagree (`weights` needs one weight per wavelength).
+pub fn weighted_spectrum_on(
+    path: Path,
+    spectrum: &Spectrum,
+    indices: &[C64],
+    thicknesses_nm: &[f64],
+    cos_theta0: f64,
+    weights: &SpectralWeights,
+) -> WeightedPower {
+    check_spectrum_lengths(spectrum, indices, thicknesses_nm);
+    assert_eq!(
+        weights.len(),
+        spectrum.wavelengths,
+        "weights: one per wavelength"
+    );
+    if weights.is_empty() {
+        return WeightedPower::default();
+    }
+    #[cfg(target_arch = "x86_64")]
+    if path == Path::Best && avx2_available() {
+        // SAFETY: the CPU has AVX2 (checked just above).
+        return unsafe { weighted_avx2(spectrum, indices, thicknesses_nm, cos_theta0, weights) };
+    }
+    let _ = path;
+    weighted_portable(spectrum, indices, thicknesses_nm, cos_theta0, weights)
 }
 
 #[cfg(target_arch = "x86_64")]
@@ -541,7 +594,7 @@ pub enum Path {
 pub fn avx2_available() -> bool {
     #[cfg(target_arch = "x86_64")]
     {
-        std::arch::is_x86_feature_detected!("avx2")
+        std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
     }
     #[cfg(not(target_arch = "x86_64"))]
     {
