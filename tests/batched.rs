@@ -2,15 +2,15 @@
 //! scalar one, over random stacks and the hard cases: thick absorbers,
 //! evanescent gaps, grazing and critical angles, hundreds of layers, gain,
 //! layers at their own critical angle, metal substrates, phases beyond the
-//! polynomial's range. Both copies of the kernel run: the AVX2 one (when
-//! the CPU has it) must equal the portable one bit for bit, and both must
-//! equal the scalar solver to 1e-12.
+//! polynomial's range. Every copy of the kernel runs: the AVX-512 and AVX2
+//! ones (when the CPU has them) must equal the portable one bit for bit, and
+//! all must equal the scalar solver to 1e-12.
 
 use num_complex::Complex64 as C64;
 use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg64;
 
-use irid::optics::lanes::{avx2_available, solve_batch_on, Path};
+use irid::optics::lanes::{avx2_available, avx512_available, best_copy, solve_batch_on, Path};
 #[cfg(feature = "bench")]
 use irid::optics::solve_batch;
 use irid::optics::{solve, Response, Stack, StackGrid};
@@ -45,8 +45,8 @@ fn same_bits(a: &Response, b: &Response) -> bool {
         .all(|(x, y)| x.to_bits() == y.to_bits())
 }
 
-/// The AVX2 copy's result `best` equals the portable one's bit for bit, and
-/// both equal the scalar solver's `want` to [`TOLERANCE`].
+/// The widest copy's result `best` equals the portable one's bit for bit,
+/// and both equal the scalar solver's `want` to [`TOLERANCE`].
 fn assert_agrees(
     what: &str,
     best: &Response,
@@ -57,7 +57,8 @@ fn assert_agrees(
 ) {
     assert!(
         same_bits(best, portable),
-        "{what}: AVX2 and portable differ at {wl} nm, cos {cos}: {best:?} vs {portable:?}"
+        "{what}: {} and portable differ at {wl} nm, cos {cos}: {best:?} vs {portable:?}",
+        best_copy()
     );
     for (got, want, name) in [
         (best.rs, want.rs, "Rs"),
@@ -78,25 +79,25 @@ fn assert_agrees(
 fn check(case: &Case) {
     let media = case.thicknesses_nm.len() + 2;
     let points = case.wavelengths_nm.len() * case.cos_theta0.len();
-    let mut best = vec![Response::default(); points];
-    let mut portable = vec![Response::default(); points];
-    solve_batch_on(
-        Path::Best,
-        &case.indices,
-        &case.thicknesses_nm,
-        &case.wavelengths_nm,
-        &case.cos_theta0,
-        &mut best,
-    );
-    solve_batch_on(
-        Path::Portable,
-        &case.indices,
-        &case.thicknesses_nm,
-        &case.wavelengths_nm,
-        &case.cos_theta0,
-        &mut portable,
-    );
-    for (i, (b, p)) in best.iter().zip(&portable).enumerate() {
+    let run = |path: Path| {
+        let mut out = vec![Response::default(); points];
+        solve_batch_on(
+            path,
+            &case.indices,
+            &case.thicknesses_nm,
+            &case.wavelengths_nm,
+            &case.cos_theta0,
+            &mut out,
+        );
+        out
+    };
+    let (best, avx2, portable) = (run(Path::Best), run(Path::Avx2), run(Path::Portable));
+    for (i, ((b, a2), p)) in best.iter().zip(&avx2).zip(&portable).enumerate() {
+        assert!(
+            same_bits(a2, p),
+            "{}: AVX2 and portable differ at point {i}",
+            case.what
+        );
         let (w, a) = (i / case.cos_theta0.len(), i % case.cos_theta0.len());
         let n = &case.indices[w * media..(w + 1) * media];
         let wl = case.wavelengths_nm[w];
@@ -180,7 +181,20 @@ fn random_case(
 #[test]
 fn kernel_copies_are_reported() {
     // Which copy Path::Best runs on this machine, for the test log.
-    println!("AVX2 available: {}", avx2_available());
+    println!(
+        "AVX-512F: {}, AVX2: {}; Path::Best runs the {} copy",
+        avx512_available(),
+        avx2_available(),
+        best_copy()
+    );
+    let expected = if avx512_available() {
+        "AVX-512"
+    } else if avx2_available() {
+        "AVX2"
+    } else {
+        "portable"
+    };
+    assert_eq!(best_copy(), expected);
 }
 
 #[test]
@@ -366,10 +380,15 @@ fn spectrum_path_equals_scalar_on_both_copies() {
                 let mut portable = vec![Response::default(); n_w];
                 grid.solve_spectrum(&thick, cos, &mut best);
                 grid.solve_spectrum_on(Path::Portable, &thick, cos, &mut portable);
+                let mut avx2 = vec![Response::default(); n_w];
+                grid.solve_spectrum_on(Path::Avx2, &thick, cos, &mut avx2);
+                for (a2, p) in avx2.iter().zip(&portable) {
+                    assert!(same_bits(a2, p), "{name}: AVX2 vs portable");
+                }
                 for (k, ((b_, p), (w, n))) in
                     best.iter().zip(&portable).zip(grid.iter()).enumerate()
                 {
-                    assert!(same_bits(b_, p), "{name} {k}: AVX2 vs portable");
+                    assert!(same_bits(b_, p), "{name} {k}: best copy vs portable");
                     let want = solve(n, &thick, w, cos);
                     for (got, want) in [
                         (b_.rs, want.rs),
@@ -416,6 +435,11 @@ fn check_spectrum(what: &str, stack: &Stack, wavelengths: &[f64], cosines: &[f64
         let mut portable = vec![Response::default(); wavelengths.len()];
         grid.solve_spectrum(&thick, cos, &mut best);
         grid.solve_spectrum_on(Path::Portable, &thick, cos, &mut portable);
+        let mut avx2 = vec![Response::default(); wavelengths.len()];
+        grid.solve_spectrum_on(Path::Avx2, &thick, cos, &mut avx2);
+        for (a2, p) in avx2.iter().zip(&portable) {
+            assert!(same_bits(a2, p), "{what}: AVX2 vs portable at cos {cos}");
+        }
         for ((b, p), (w, n)) in best.iter().zip(&portable).zip(grid.iter()) {
             assert_agrees(what, b, p, &solve(n, &thick, w, cos), w, cos);
         }
@@ -572,7 +596,7 @@ fn weighted_spectrum_is_the_integrated_stored_spectrum() {
                 thick[0] = rng.random_range(0.0..2000.0);
                 let cos = rng.random_range(0.0..=1.0);
                 let mut spectrum = vec![Response::default(); grid.wavelengths_nm().len()];
-                for path in [Path::Best, Path::Portable] {
+                for path in [Path::Best, Path::Avx2, Path::Portable] {
                     grid.solve_spectrum_on(path, &thick, cos, &mut spectrum);
                     let r: Vec<f64> = spectrum.iter().map(Response::r).collect();
                     let t: Vec<f64> = spectrum.iter().map(Response::t).collect();

@@ -1,12 +1,14 @@
-//! Four-lane arithmetic for the batched solver: the lane type (AVX2 or a
-//! portable array performing the same IEEE operations), complex numbers
-//! held as four real and four imaginary parts, and e^x, sin and cos by range
-//! reduction and polynomial.
+//! Lane arithmetic for the batched solver: the lane type (a portable array
+//! of four, or one AVX2 or AVX-512 register, all performing the same IEEE
+//! operations), complex numbers held as their real parts and their imaginary
+//! parts, and e^x, sin and cos by range reduction and polynomial.
 
 use num_complex::Complex64 as C64;
 
-/// Lanes per group: one AVX2 register of f64.
-pub const LANES: usize = 4;
+/// The most lanes a lane type has (an AVX-512 register of f64); arrays that
+/// pass lanes in and out have this length, of which a type uses its
+/// [`Lanes::WIDTH`] first.
+pub const MAX_LANES: usize = 8;
 
 /// |phase| up to which sin and cos reduce the argument exactly: the
 /// reduction multiplies the quadrant count by the first two 33-bit pieces
@@ -42,14 +44,29 @@ const INV_FACTORIAL: [f64; 18] = {
     f
 };
 
-/// Four f64 lanes and the operations the recursion needs. Two
-/// implementations perform the same IEEE operations: [`Portable`] (an
-/// array, one lane after the other) and, on x86-64, [`Avx2`] (one register).
+/// f64 lanes and the operations the recursion needs. Every implementation
+/// performs the same IEEE operations: [`Portable`] (an array of four, one
+/// lane after the other) and, on x86-64, `Avx2` and `Avx512` (one register
+/// of four or eight, in `x86`).
 pub(super) trait Lanes: Copy {
     type Mask: Copy;
+    /// How many f64 lanes: 4 or 8.
+    const WIDTH: usize;
+    /// The mask bits of all lanes.
+    const ALL: u32 = (1 << Self::WIDTH) - 1;
     fn splat(x: f64) -> Self;
-    fn from_array(a: [f64; LANES]) -> Self;
-    fn to_array(self) -> [f64; LANES];
+    /// Lanes from the first [`Self::WIDTH`] entries.
+    fn from_array(a: [f64; MAX_LANES]) -> Self;
+    /// The lanes in the first [`Self::WIDTH`] entries, zeros after.
+    fn to_array(self) -> [f64; MAX_LANES];
+    /// Lanes from the first [`Self::WIDTH`] values of `s`.
+    ///
+    /// # Panics
+    /// If `s` is shorter.
+    fn load(s: &[f64]) -> Self;
+    /// Adds each group of four lanes in turn to `acc`, lane by lane: the
+    /// order of four running partial sums over consecutive values.
+    fn add_quads_to(self, acc: &mut [f64; 4]);
     fn add(self, o: Self) -> Self;
     fn sub(self, o: Self) -> Self;
     fn mul(self, o: Self) -> Self;
@@ -75,7 +92,9 @@ pub(super) trait Lanes: Copy {
 
 /// The portable copy: plain per-lane loops.
 #[derive(Clone, Copy, Debug)]
-pub(crate) struct Portable([f64; LANES]);
+pub(crate) struct Portable([f64; PORTABLE_LANES]);
+
+const PORTABLE_LANES: usize = 4;
 
 impl Portable {
     #[inline(always)]
@@ -89,31 +108,46 @@ impl Portable {
     }
 
     #[inline(always)]
-    fn test(self, o: Self, f: impl Fn(f64, f64) -> bool) -> [bool; LANES] {
+    fn test(self, o: Self, f: impl Fn(f64, f64) -> bool) -> [bool; PORTABLE_LANES] {
         std::array::from_fn(|i| f(self.0[i], o.0[i]))
     }
 
     /// The integer k that `sum` = x + ROUND_MAGIC holds in its low bits.
     #[inline(always)]
-    fn rounded(sum: Self) -> [u64; LANES] {
+    fn rounded(sum: Self) -> [u64; PORTABLE_LANES] {
         sum.0
             .map(|v| v.to_bits().wrapping_sub(ROUND_MAGIC.to_bits()))
     }
 }
 
 impl Lanes for Portable {
-    type Mask = [bool; LANES];
+    type Mask = [bool; PORTABLE_LANES];
+    const WIDTH: usize = PORTABLE_LANES;
     #[inline(always)]
     fn splat(x: f64) -> Self {
-        Portable([x; LANES])
+        Portable([x; PORTABLE_LANES])
     }
     #[inline(always)]
-    fn from_array(a: [f64; LANES]) -> Self {
+    fn from_array(a: [f64; MAX_LANES]) -> Self {
+        Portable(std::array::from_fn(|i| a[i]))
+    }
+    #[inline(always)]
+    fn to_array(self) -> [f64; MAX_LANES] {
+        let mut a = [0.0; MAX_LANES];
+        a[..PORTABLE_LANES].copy_from_slice(&self.0);
+        a
+    }
+    #[inline(always)]
+    fn load(s: &[f64]) -> Self {
+        let mut a = [0.0; PORTABLE_LANES];
+        a.copy_from_slice(&s[..PORTABLE_LANES]);
         Portable(a)
     }
     #[inline(always)]
-    fn to_array(self) -> [f64; LANES] {
-        self.0
+    fn add_quads_to(self, acc: &mut [f64; 4]) {
+        for (a, x) in acc.iter_mut().zip(self.0) {
+            *a += x;
+        }
     }
     #[inline(always)]
     fn add(self, o: Self) -> Self {
@@ -157,8 +191,8 @@ impl Lanes for Portable {
     }
     #[inline(always)]
     fn select(m: Self::Mask, a: Self, b: Self) -> Self {
-        let mut r = [0.0; LANES];
-        for i in 0..LANES {
+        let mut r = [0.0; PORTABLE_LANES];
+        for i in 0..PORTABLE_LANES {
             r[i] = if m[i] { a.0[i] } else { b.0[i] };
         }
         Portable(r)
@@ -178,9 +212,9 @@ impl Lanes for Portable {
     #[inline(always)]
     fn quadrant(sum: Self, sin_r: Self, cos_r: Self) -> (Self, Self) {
         let k = Self::rounded(sum);
-        let mut sin = [0.0; LANES];
-        let mut cos = [0.0; LANES];
-        for i in 0..LANES {
+        let mut sin = [0.0; PORTABLE_LANES];
+        let mut cos = [0.0; PORTABLE_LANES];
+        for i in 0..PORTABLE_LANES {
             let (s, c) = if k[i] & 1 == 0 {
                 (sin_r.0[i], cos_r.0[i])
             } else {
@@ -193,147 +227,7 @@ impl Lanes for Portable {
     }
 }
 
-#[cfg(target_arch = "x86_64")]
-pub(super) mod avx2 {
-    //! The AVX2 copy: one `__m256d` per quantity. Every function here is
-    //! inlined into `batch_avx2`, which is compiled with AVX2 enabled and
-    //! only called once the CPU is known to have it.
-    #![allow(unsafe_code)]
-
-    use std::arch::x86_64::*;
-
-    use super::{Lanes, LANES, ROUND_MAGIC};
-
-    #[derive(Clone, Copy, Debug)]
-    pub(crate) struct Avx2(__m256d);
-
-    // SAFETY (every `unsafe` block below): these intrinsics need AVX or
-    // AVX2, and the only caller of code built from them is `batch_avx2`,
-    // entered after `is_x86_feature_detected!("avx2")`.
-    impl Avx2 {
-        #[inline(always)]
-        fn rounded(sum: Self) -> __m256i {
-            // SAFETY: AVX2 is present; see the note above `impl Avx2`.
-            unsafe {
-                _mm256_sub_epi64(
-                    _mm256_castpd_si256(sum.0),
-                    _mm256_set1_epi64x(ROUND_MAGIC.to_bits() as i64),
-                )
-            }
-        }
-    }
-
-    impl Lanes for Avx2 {
-        type Mask = __m256d;
-        #[inline(always)]
-        fn splat(x: f64) -> Self {
-            // SAFETY: AVX2 is present; see the note above `impl Avx2`.
-            unsafe { Avx2(_mm256_set1_pd(x)) }
-        }
-        #[inline(always)]
-        fn from_array(a: [f64; LANES]) -> Self {
-            // SAFETY: AVX2 is present; see the note above `impl Avx2`.
-            unsafe { Avx2(_mm256_loadu_pd(a.as_ptr())) }
-        }
-        #[inline(always)]
-        fn to_array(self) -> [f64; LANES] {
-            let mut a = [0.0; LANES];
-            // SAFETY: AVX2 is present; see the note above `impl Avx2`.
-            unsafe { _mm256_storeu_pd(a.as_mut_ptr(), self.0) };
-            a
-        }
-        #[inline(always)]
-        fn add(self, o: Self) -> Self {
-            // SAFETY: AVX2 is present; see the note above `impl Avx2`.
-            unsafe { Avx2(_mm256_add_pd(self.0, o.0)) }
-        }
-        #[inline(always)]
-        fn sub(self, o: Self) -> Self {
-            // SAFETY: AVX2 is present; see the note above `impl Avx2`.
-            unsafe { Avx2(_mm256_sub_pd(self.0, o.0)) }
-        }
-        #[inline(always)]
-        fn mul(self, o: Self) -> Self {
-            // SAFETY: AVX2 is present; see the note above `impl Avx2`.
-            unsafe { Avx2(_mm256_mul_pd(self.0, o.0)) }
-        }
-        #[inline(always)]
-        fn div(self, o: Self) -> Self {
-            // SAFETY: AVX2 is present; see the note above `impl Avx2`.
-            unsafe { Avx2(_mm256_div_pd(self.0, o.0)) }
-        }
-        #[inline(always)]
-        fn sqrt(self) -> Self {
-            // SAFETY: AVX2 is present; see the note above `impl Avx2`.
-            unsafe { Avx2(_mm256_sqrt_pd(self.0)) }
-        }
-        #[inline(always)]
-        fn abs(self) -> Self {
-            // SAFETY: AVX2 is present; see the note above `impl Avx2`.
-            unsafe { Avx2(_mm256_andnot_pd(_mm256_set1_pd(-0.0), self.0)) }
-        }
-        #[inline(always)]
-        fn neg(self) -> Self {
-            // SAFETY: AVX2 is present; see the note above `impl Avx2`.
-            unsafe { Avx2(_mm256_xor_pd(_mm256_set1_pd(-0.0), self.0)) }
-        }
-        #[inline(always)]
-        fn lt(self, o: Self) -> Self::Mask {
-            // SAFETY: AVX2 is present; see the note above `impl Avx2`.
-            unsafe { _mm256_cmp_pd::<_CMP_LT_OQ>(self.0, o.0) }
-        }
-        #[inline(always)]
-        fn ge(self, o: Self) -> Self::Mask {
-            // SAFETY: AVX2 is present; see the note above `impl Avx2`.
-            unsafe { _mm256_cmp_pd::<_CMP_GE_OQ>(self.0, o.0) }
-        }
-        #[inline(always)]
-        fn eq(self, o: Self) -> Self::Mask {
-            // SAFETY: AVX2 is present; see the note above `impl Avx2`.
-            unsafe { _mm256_cmp_pd::<_CMP_EQ_OQ>(self.0, o.0) }
-        }
-        #[inline(always)]
-        fn select(m: Self::Mask, a: Self, b: Self) -> Self {
-            // SAFETY: AVX2 is present; see the note above `impl Avx2`.
-            unsafe { Avx2(_mm256_blendv_pd(b.0, a.0, m)) }
-        }
-        #[inline(always)]
-        fn bits(m: Self::Mask) -> u32 {
-            // SAFETY: AVX2 is present; see the note above `impl Avx2`.
-            unsafe { _mm256_movemask_pd(m) as u32 }
-        }
-        #[inline(always)]
-        fn exp2_of_rounded(sum: Self) -> Self {
-            // SAFETY: AVX2 is present; see the note above `impl Avx2`.
-            unsafe {
-                let n = Self::rounded(sum);
-                let e = _mm256_slli_epi64::<52>(_mm256_add_epi64(n, _mm256_set1_epi64x(1023)));
-                Avx2(_mm256_castsi256_pd(e))
-            }
-        }
-        #[inline(always)]
-        fn quadrant(sum: Self, sin_r: Self, cos_r: Self) -> (Self, Self) {
-            // SAFETY: AVX2 is present; see the note above `impl Avx2`.
-            unsafe {
-                let k = Self::rounded(sum);
-                let one = _mm256_set1_epi64x(1);
-                let two = _mm256_set1_epi64x(2);
-                let odd = _mm256_castsi256_pd(_mm256_cmpeq_epi64(_mm256_and_si256(k, one), one));
-                let s = _mm256_blendv_pd(sin_r.0, cos_r.0, odd);
-                let c = _mm256_blendv_pd(cos_r.0, sin_r.0, odd);
-                let sin_sign = _mm256_slli_epi64::<62>(_mm256_and_si256(k, two));
-                let cos_sign =
-                    _mm256_slli_epi64::<62>(_mm256_and_si256(_mm256_add_epi64(k, one), two));
-                (
-                    Avx2(_mm256_xor_pd(s, _mm256_castsi256_pd(sin_sign))),
-                    Avx2(_mm256_xor_pd(c, _mm256_castsi256_pd(cos_sign))),
-                )
-            }
-        }
-    }
-}
-
-/// Four complex numbers, real and imaginary parts apart. The operations
+/// Complex numbers in lanes, real and imaginary parts apart. The operations
 /// repeat num_complex's formulas exactly (including 0 − x where it writes
 /// that, which differs from −x in the sign of a zero).
 #[derive(Clone, Copy, Debug)]
@@ -343,6 +237,15 @@ pub(super) struct Cv<V> {
 }
 
 impl<V: Lanes> Cv<V> {
+    /// `z` in every lane.
+    #[inline(always)]
+    pub(super) fn splat(z: C64) -> Self {
+        Cv {
+            re: V::splat(z.re),
+            im: V::splat(z.im),
+        }
+    }
+
     #[inline(always)]
     pub(super) fn real(re: V) -> Self {
         Cv {
@@ -502,7 +405,7 @@ pub(super) fn one_way<V: Lanes>(phase: Cv<V>) -> Cv<V> {
     let x = phase.im.neg();
     let zero = V::splat(0.0);
     // A lossless layer (the common case) decays by exactly 1 in every lane.
-    let decay = if V::bits(x.eq(zero)) == ALL_LANES {
+    let decay = if V::bits(x.eq(zero)) == V::ALL {
         V::splat(1.0)
     } else {
         exp_lanes(x)
@@ -514,12 +417,12 @@ pub(super) fn one_way<V: Lanes>(phase: Cv<V>) -> Cv<V> {
     };
     let in_range =
         V::bits(x.ge(V::splat(EXP_NORMAL_MIN))) & V::bits(V::splat(PHASE_LIMIT).ge(phase.re.abs()));
-    if in_range == ALL_LANES {
+    if in_range == V::ALL {
         return out;
     }
     let (mut re, mut im) = (out.re.to_array(), out.im.to_array());
     let (p_re, p_im) = (phase.re.to_array(), phase.im.to_array());
-    for l in 0..LANES {
+    for l in 0..V::WIDTH {
         if in_range & (1 << l) == 0 {
             let z = scalar_one_way(C64::new(p_re[l], p_im[l]));
             re[l] = z.re;
@@ -531,9 +434,6 @@ pub(super) fn one_way<V: Lanes>(phase: Cv<V>) -> Cv<V> {
         im: V::from_array(im),
     }
 }
-
-/// Every lane's bit of a mask.
-pub(super) const ALL_LANES: u32 = (1 << LANES) - 1;
 
 /// The scalar solver's one-way factor, kept out of line: lanes need it only
 /// past the polynomials' range.

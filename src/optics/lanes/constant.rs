@@ -137,10 +137,9 @@ fn step<V: Lanes>(gamma: &mut Cv<V>, r: Cv<V>, rho: Cv<V>) -> V {
 /// R and T of four wavelengths (2π/λ in `k0`) of the stack `f` describes.
 #[inline(always)]
 pub(super) fn solve_lanes<V: Lanes>(f: &Interfaces, k0: V) -> Power<V> {
-    let splat = |z: C64| Cv {
-        re: V::splat(z.re),
-        im: V::splat(z.im),
-    };
+    // `Cv::splat`, not a closure: a closure is compiled without the kernel
+    // copy's target features, and the intrinsics in it would not be inlined.
+    let splat = Cv::<V>::splat;
     let bottom = &f.at[f.count - 1];
     let (mut gamma_s, mut gamma_p) = (splat(bottom.rs), splat(bottom.rp));
     // |t|² without its constant factor: Π |e^{iφ}|² / |1 + rΓρ|².

@@ -1,14 +1,14 @@
-//! Where the kernels' results go, one group of four wavelengths at a time:
+//! Where the kernels' results go, one vector of wavelengths at a time:
 //! stored per wavelength as [`Response`]s, or folded straight into three
 //! weighted sums of R and of T (a colour), never stored. The second is what
 //! every caller that turns a spectrum into a colour wants, and it spares them
 //! the four-by-four transpose into `Response`s and a second pass over the
 //! spectrum.
 
-use super::arith::{Lanes, LANES};
+use super::arith::{Lanes, MAX_LANES};
 use crate::optics::solver::Response;
 
-/// R and T of four lanes, s and p apart.
+/// R and T in lanes, s and p apart.
 #[derive(Clone, Copy)]
 pub(super) struct Power<V> {
     pub(super) rs: V,
@@ -19,7 +19,8 @@ pub(super) struct Power<V> {
 
 impl<V: Lanes> Power<V> {
     #[inline(always)]
-    pub(super) fn responses(&self) -> [Response; LANES] {
+    /// The first [`Lanes::WIDTH`] entries hold the lanes.
+    pub(super) fn responses(&self) -> [Response; MAX_LANES] {
         let (rs, rp) = (self.rs.to_array(), self.rp.to_array());
         let (ts, tp) = (self.ts.to_array(), self.tp.to_array());
         std::array::from_fn(|l| Response {
@@ -31,7 +32,7 @@ impl<V: Lanes> Power<V> {
     }
 
     #[inline(always)]
-    pub(super) fn from_responses(r: &[Response; LANES]) -> Self {
+    pub(super) fn from_responses(r: &[Response; MAX_LANES]) -> Self {
         Power {
             rs: V::from_array(r.map(|x| x.rs)),
             rp: V::from_array(r.map(|x| x.rp)),
@@ -51,24 +52,23 @@ impl<V: Lanes> Power<V> {
     }
 }
 
-/// Takes each group's results; `group` counts groups of [`LANES`]
-/// wavelengths from the first.
+/// Takes the results of each vector of wavelengths, `start` the first
+/// one's index.
 pub(super) trait Sink<V: Lanes> {
-    fn take(&mut self, group: usize, power: &Power<V>);
+    fn take(&mut self, start: usize, power: &Power<V>);
 }
 
-/// Stores every wavelength's [`Response`]; a last partial group writes only
+/// Stores every wavelength's [`Response`]; a last partial vector writes only
 /// the wavelengths `out` has room for.
 pub(super) struct Store<'a>(pub(super) &'a mut [Response]);
 
 impl<V: Lanes> Sink<V> for Store<'_> {
     #[inline(always)]
-    fn take(&mut self, group: usize, power: &Power<V>) {
+    fn take(&mut self, start: usize, power: &Power<V>) {
         let res = power.responses();
-        let start = group * LANES;
-        match self.0.get_mut(start..start + LANES) {
+        match self.0.get_mut(start..start + V::WIDTH) {
             // A fixed-length copy compiles to a few moves instead of a call.
-            Some(dst) => dst.copy_from_slice(&res),
+            Some(dst) => dst.copy_from_slice(&res[..V::WIDTH]),
             None => {
                 let rest = &mut self.0[start..];
                 let n = rest.len();
@@ -80,12 +80,12 @@ impl<V: Lanes> Sink<V> for Store<'_> {
 
 /// Three rows of weights over a spectrum's wavelengths (say the colour
 /// matching functions times an illuminant, or the rows that give linear
-/// RGB), laid out per group of four wavelengths for the kernel.
+/// RGB), laid out for the kernel: each row padded with zeros to a whole
+/// number of the widest vector.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SpectralWeights {
     wavelengths: usize,
-    /// [group][channel][lane]; the unused lanes of a last partial group hold 0.
-    groups: Vec<[[f64; LANES]; 3]>,
+    rows: [Vec<f64>; 3],
 }
 
 impl SpectralWeights {
@@ -99,16 +99,14 @@ impl SpectralWeights {
             rows.iter().all(|r| r.len() == wavelengths),
             "weights: every channel needs one weight per wavelength"
         );
-        let groups = (0..wavelengths.div_ceil(LANES))
-            .map(|g| {
-                std::array::from_fn(|c| {
-                    std::array::from_fn(|l| rows[c].get(g * LANES + l).copied().unwrap_or(0.0))
-                })
-            })
-            .collect();
+        let padded = wavelengths.div_ceil(MAX_LANES) * MAX_LANES;
         SpectralWeights {
             wavelengths,
-            groups,
+            rows: rows.map(|r| {
+                let mut row = r.to_vec();
+                row.resize(padded, 0.0);
+                row
+            }),
         }
     }
 
@@ -133,24 +131,25 @@ pub struct WeightedPower {
     pub transmittance: [f64; 3],
 }
 
-/// Folds each group into running sums: per channel one vector of four partial
-/// sums (lane l sums the wavelengths i ≡ l mod 4) and, for a last partial
-/// group, a serial tail, combined as `(a0 + a1) + (a2 + a3) + tail`. That is
-/// the summation order of the colour integrator's dot product, so the sums
-/// have the same bits as integrating the stored spectrum.
-pub(super) struct Integrate<'a, V> {
+/// Folds each vector into running sums: per channel four partial sums
+/// (sum k takes the wavelengths i ≡ k mod 4, in order) and a serial tail for
+/// the last wavelengths short of a whole four, combined as
+/// `(a0 + a1) + (a2 + a3) + tail`. That is the summation order of the colour
+/// integrator's dot product, so the sums have the bits of integrating the
+/// stored spectrum, whatever the vector's width.
+pub(super) struct Integrate<'a> {
     weights: &'a SpectralWeights,
     /// R's three channels, then T's.
-    partial: [V; 6],
+    partial: [[f64; 4]; 6],
     tail: [f64; 6],
 }
 
-impl<'a, V: Lanes> Integrate<'a, V> {
+impl<'a> Integrate<'a> {
     #[inline(always)]
     pub(super) fn new(weights: &'a SpectralWeights) -> Self {
         Integrate {
             weights,
-            partial: [V::splat(0.0); 6],
+            partial: [[0.0; 4]; 6],
             tail: [-0.0; 6],
         }
     }
@@ -158,7 +157,7 @@ impl<'a, V: Lanes> Integrate<'a, V> {
     #[inline(always)]
     pub(super) fn finish(&self) -> WeightedPower {
         let sum = |k: usize| {
-            let a = self.partial[k].to_array();
+            let a = self.partial[k];
             (a[0] + a[1]) + (a[2] + a[3]) + self.tail[k]
         };
         WeightedPower {
@@ -168,27 +167,34 @@ impl<'a, V: Lanes> Integrate<'a, V> {
     }
 }
 
-impl<V: Lanes> Sink<V> for Integrate<'_, V> {
+impl<V: Lanes> Sink<V> for Integrate<'_> {
     #[inline(always)]
-    fn take(&mut self, group: usize, power: &Power<V>) {
-        let w = &self.weights.groups[group];
+    fn take(&mut self, start: usize, power: &Power<V>) {
+        // No closures here: a closure is compiled without the kernel copy's
+        // target features, and the intrinsics in it would not be inlined.
         let (r, t) = power.unpolarized();
-        let used = self.weights.wavelengths - group * LANES;
-        let (r_sums, t_sums) = self.partial.split_at_mut(3);
-        if used >= LANES {
-            for ((wc, r_sum), t_sum) in w.iter().zip(r_sums).zip(t_sums) {
-                let wc = V::from_array(*wc);
-                *r_sum = r_sum.add(wc.mul(r));
-                *t_sum = t_sum.add(wc.mul(t));
+        let n = self.weights.wavelengths;
+        let mut products = [r; 6];
+        for (c, row) in self.weights.rows.iter().enumerate() {
+            let w = V::load(&row[start..]);
+            products[c] = w.mul(r);
+            products[3 + c] = w.mul(t);
+        }
+        if start + V::WIDTH <= n {
+            for (p, sums) in products.iter().zip(&mut self.partial) {
+                p.add_quads_to(sums);
             }
             return;
         }
-        let (r, t) = (r.to_array(), t.to_array());
-        let (r_tail, t_tail) = self.tail.split_at_mut(3);
-        for l in 0..used {
-            for ((wc, r_sum), t_sum) in w.iter().zip(&mut *r_tail).zip(&mut *t_tail) {
-                *r_sum += wc[l] * r[l];
-                *t_sum += wc[l] * t[l];
+        for (k, p) in products.iter().enumerate() {
+            let p = p.to_array();
+            for (l, &x) in p.iter().enumerate().take(n - start) {
+                let i = start + l;
+                if i < n / 4 * 4 {
+                    self.partial[k][i % 4] += x;
+                } else {
+                    self.tail[k] += x;
+                }
             }
         }
     }

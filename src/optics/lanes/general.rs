@@ -1,0 +1,304 @@
+//! The general kernel: the scalar solver's recursion on one (wavelength,
+//! angle) pair per lane, for any stack, and its two loops: over arbitrary
+//! pairs ([`batch_body`]) and over a [`Spectrum`]'s wavelengths at one angle
+//! ([`spectrum_body`], which takes the non-dispersive kernel of
+//! [`constant`] when it can).
+
+use num_complex::Complex64 as C64;
+
+use super::arith::{one_way, sqrt_upper, Cv, Lanes, MAX_LANES};
+use super::constant;
+use super::sink::{Power, Sink, Store};
+use super::spectrum::{Repeats, Spectrum, SHARED_SLOTS};
+use crate::optics::solver::{solve, Response};
+
+/// Solves one (wavelength, angle) pair of one stack per lane. `indices[l]`
+/// holds lane l's N + 2 indices (ambient, layers, substrate) at `wavelength_nm[l]`;
+/// the preconditions are [`solve`]'s.
+/// `media.medium(j)` gives medium j's n and n² in every lane (n² as `n * n`
+/// computes it), `k0` is 2π over each lane's wavelength. `repeats` says
+/// which media share one index (one material used by several layers, as in
+/// a Bragg mirror); their q is computed once.
+#[inline(always)]
+fn solve_lanes<V: Lanes>(
+    media: &impl MediaLanes<V>,
+    repeats: &Repeats,
+    k0: V,
+    indices: [&[C64]; MAX_LANES],
+    thicknesses_nm: &[f64],
+    wavelength_nm: [f64; MAX_LANES],
+    cos_theta0: [f64; MAX_LANES],
+) -> Power<V> {
+    let last = thicknesses_nm.len() + 1;
+    for lane in &indices[..V::WIDTH] {
+        assert_eq!(lane.len(), last + 1, "indices: N + 2 per lane");
+    }
+    let zero = V::splat(0.0);
+    let one = V::splat(1.0);
+    // Lanes whose answer the scalar solver gives instead: grazing here,
+    // near-critical layers below.
+    let mut scalar = cos_theta0.map(|c| c.is_nan() || c <= 0.0);
+    let cos = V::from_array(cos_theta0.map(|c| c.min(1.0)));
+    let n0 = media.medium(0).0.re;
+    let beta_sq = n0.mul(n0).mul(one.sub(cos).mul(one.add(cos)));
+
+    let shared_q = shared_normal_indices(media, repeats, beta_sq);
+
+    let (n_sub, nsq_sub) = media.medium(last);
+    let mut n_below = n_sub;
+    let mut nsq_below = nsq_sub;
+    let q_sub = normal_index(repeats.slot(last), &shared_q, nsq_sub, beta_sq);
+    let mut q_below = q_sub;
+    let (mut gamma_s, mut gamma_p) = (Cv::real(zero), Cv::real(zero));
+    let (mut ts, mut tp) = (Cv::real(one), Cv::real(one));
+    let mut near_critical = 0u32;
+
+    for j in (0..last).rev() {
+        let (n_above, nsq_above, q_above) = if j == 0 {
+            (Cv::real(n0), Cv::real(n0.mul(n0)), Cv::real(n0.mul(cos)))
+        } else {
+            let (n, nsq) = media.medium(j);
+            (
+                n,
+                nsq,
+                normal_index(repeats.slot(j), &shared_q, nsq, beta_sq),
+            )
+        };
+        if j + 1 < last {
+            let k0_d = k0.mul(V::splat(thicknesses_nm[j]));
+            let one_way = one_way(q_below.scale(k0_d));
+            let round_trip = one_way.mul(one_way);
+            gamma_s = gamma_s.mul(round_trip);
+            gamma_p = gamma_p.mul(round_trip);
+            ts = ts.mul(one_way);
+            tp = tp.mul(one_way);
+        }
+        if j > 0 {
+            // The scalar solver's near-critical test: |q|⁴ < 10⁻⁸ |n²|².
+            let q2 = q_above.norm_sqr();
+            near_critical |= V::bits(q2.mul(q2).lt(V::splat(1e-8).mul(nsq_above.norm_sqr())));
+        }
+
+        let x = q_above.mul(gamma_s.one_plus());
+        let y = q_below.mul(gamma_s.one_minus());
+        let inv_s = x.add(y).inv();
+        gamma_s = x.sub(y).mul(inv_s);
+        ts = ts.mul(q_above.scale(V::splat(2.0)).mul(inv_s));
+
+        let x = nsq_below.mul(q_above).mul(gamma_p.one_plus());
+        let y = nsq_above.mul(q_below).mul(gamma_p.one_minus());
+        let inv_p = x.add(y).inv();
+        gamma_p = x.sub(y).mul(inv_p);
+        tp = tp.mul(
+            n_above
+                .scale(V::splat(2.0))
+                .mul(n_below)
+                .mul(q_above)
+                .mul(inv_p),
+        );
+
+        n_below = n_above;
+        nsq_below = nsq_above;
+        q_below = q_above;
+    }
+
+    for (l, s) in scalar.iter_mut().enumerate() {
+        *s |= near_critical & (1 << l) != 0;
+    }
+    let power = Amplitudes {
+        gamma_s,
+        gamma_p,
+        ts,
+        tp,
+    };
+    let out = to_power(&power, n0.mul(cos), n_sub, q_sub);
+    if !scalar[..V::WIDTH].contains(&true) {
+        return out;
+    }
+    let mut res = out.responses();
+    for l in 0..V::WIDTH {
+        if scalar[l] {
+            res[l] = solve(indices[l], thicknesses_nm, wavelength_nm[l], cos_theta0[l]);
+        }
+    }
+    Power::from_responses(&res)
+}
+
+/// The recursion's result in four lanes: Γ at the top and the transmitted
+/// amplitude t, for s and p.
+struct Amplitudes<V> {
+    gamma_s: Cv<V>,
+    gamma_p: Cv<V>,
+    ts: Cv<V>,
+    tp: Cv<V>,
+}
+
+/// Power, as the scalar solver's `to_power`: R = |Γ|², T from the Poynting
+/// flux into the substrate over the incident one (q0 = n0 cos θ0).
+#[inline(always)]
+fn to_power<V: Lanes>(a: &Amplitudes<V>, q0: V, n_sub: Cv<V>, q_sub: Cv<V>) -> Power<V> {
+    let one = V::splat(1.0);
+    let conj_q = Cv {
+        re: q_sub.re,
+        im: q_sub.im.neg(),
+    };
+    let p_flux = conj_q.mul(n_sub).mul(n_sub).re.div(n_sub.norm_sqr());
+    let inv_q0 = one.div(q0);
+    Power {
+        rs: a.gamma_s.norm_sqr(),
+        rp: a.gamma_p.norm_sqr(),
+        ts: a.ts.norm_sqr().mul(q_sub.re).mul(inv_q0),
+        tp: a.tp.norm_sqr().mul(p_flux).mul(inv_q0),
+    }
+}
+
+/// The q of every medium whose index another medium repeats, once each.
+#[inline(always)]
+fn shared_normal_indices<V: Lanes>(
+    media: &impl MediaLanes<V>,
+    repeats: &Repeats,
+    beta_sq: V,
+) -> [Cv<V>; SHARED_SLOTS] {
+    let mut shared_q = [Cv::real(V::splat(0.0)); SHARED_SLOTS];
+    for &(j, slot) in &repeats.first[..repeats.count] {
+        shared_q[usize::from(slot)] = sqrt_upper(media.medium(usize::from(j)).1.sub_real(beta_sq));
+    }
+    shared_q
+}
+
+/// A medium's q: its material's shared value where it has one, else
+/// sqrt_upper(n² − β²). A function, not a closure, so that it is always
+/// inlined into the AVX2 copy.
+#[inline(always)]
+fn normal_index<V: Lanes>(
+    slot: Option<usize>,
+    shared_q: &[Cv<V>; SHARED_SLOTS],
+    nsq: Cv<V>,
+    beta_sq: V,
+) -> Cv<V> {
+    match slot {
+        Some(s) => shared_q[s],
+        None => sqrt_upper(nsq.sub_real(beta_sq)),
+    }
+}
+
+/// Where the general kernel reads each medium's n and n² (as `n * n`
+/// computes it) in every lane. A trait rather than a closure: a closure is
+/// compiled without the kernel copy's target features, and the intrinsics
+/// in it would not be inlined.
+trait MediaLanes<V: Lanes> {
+    fn medium(&self, j: usize) -> (Cv<V>, Cv<V>);
+}
+
+/// Each lane's indices from its own slice, gathered lane by lane.
+struct Gathered<'a>([&'a [C64]; MAX_LANES]);
+
+impl<V: Lanes> MediaLanes<V> for Gathered<'_> {
+    #[inline(always)]
+    fn medium(&self, j: usize) -> (Cv<V>, Cv<V>) {
+        let lane = |l: usize| self.0[l].get(j).copied().unwrap_or_default();
+        let n = Cv {
+            re: V::from_array(std::array::from_fn(|l| lane(l).re)),
+            im: V::from_array(std::array::from_fn(|l| lane(l).im)),
+        };
+        (n, n.mul(n))
+    }
+}
+
+/// The lanes from `start` on of a [`Spectrum`]'s rows, one load each.
+struct Laid<'a> {
+    spectrum: &'a Spectrum,
+    start: usize,
+}
+
+impl<V: Lanes> MediaLanes<V> for Laid<'_> {
+    #[inline(always)]
+    fn medium(&self, j: usize) -> (Cv<V>, Cv<V>) {
+        let row = |quantity: usize| &self.spectrum.medium_row(j, quantity)[self.start..];
+        (
+            Cv {
+                re: V::load(row(0)),
+                im: V::load(row(1)),
+            },
+            Cv {
+                re: V::load(row(2)),
+                im: V::load(row(3)),
+            },
+        )
+    }
+}
+
+/// The kernel's loop over [`Lanes::WIDTH`] output points at a time. Point
+/// `i` of `out` is wavelength `i / cos_theta0.len()` at angle
+/// `i % cos_theta0.len()`; a last partial group repeats its final point in
+/// the unused lanes.
+#[inline(always)]
+pub(super) fn batch_body<V: Lanes>(
+    indices: &[C64],
+    thicknesses_nm: &[f64],
+    wavelengths_nm: &[f64],
+    cos_theta0: &[f64],
+    out: &mut [Response],
+) {
+    let media = thicknesses_nm.len() + 2;
+    let n_angles = cos_theta0.len();
+    let total = out.len();
+    for start in (0..total).step_by(V::WIDTH) {
+        let mut idx: [&[C64]; MAX_LANES] = [&[]; MAX_LANES];
+        let mut wl = [0.0; MAX_LANES];
+        let mut cos = [0.0; MAX_LANES];
+        for l in 0..V::WIDTH {
+            let i = (start + l).min(total - 1);
+            let (w, a) = (i / n_angles, i % n_angles);
+            idx[l] = &indices[w * media..(w + 1) * media];
+            wl[l] = wavelengths_nm[w];
+            cos[l] = cos_theta0[a];
+        }
+        let k0 = V::splat(std::f64::consts::TAU).div(V::from_array(wl));
+        let gathered = Gathered(idx);
+        let res = solve_lanes::<V>(&gathered, &Repeats::NONE, k0, idx, thicknesses_nm, wl, cos);
+        Store(&mut *out).take(start, &res);
+    }
+}
+
+/// Every wavelength of a [`Spectrum`] at one angle, [`Lanes::WIDTH`] per
+/// vector, handed to `sink` in order.
+#[inline(always)]
+pub(super) fn spectrum_body<V: Lanes>(
+    spectrum: &Spectrum,
+    indices: &[C64],
+    thicknesses_nm: &[f64],
+    cos_theta0: f64,
+    sink: &mut impl Sink<V>,
+) {
+    let media = spectrum.media();
+    let total = spectrum.wavelengths();
+    if spectrum.is_non_dispersive() {
+        if let Some(f) = constant::Interfaces::new(&indices[..media], thicknesses_nm, cos_theta0) {
+            for start in (0..total).step_by(V::WIDTH) {
+                let k0 = V::load(&spectrum.k0()[start..]);
+                sink.take(start, &constant::solve_lanes::<V>(&f, k0));
+            }
+            return;
+        }
+    }
+    for start in (0..total).step_by(V::WIDTH) {
+        let laid = Laid { spectrum, start };
+        let lane = |l: usize| (start + l).min(total - 1);
+        let idx: [&[C64]; MAX_LANES] = std::array::from_fn(|l| {
+            let w = lane(l);
+            &indices[w * media..(w + 1) * media]
+        });
+        let wl = std::array::from_fn(|l| spectrum.wavelengths_nm()[lane(l)]);
+        let res = solve_lanes::<V>(
+            &laid,
+            spectrum.repeats(),
+            V::load(&spectrum.k0()[start..]),
+            idx,
+            thicknesses_nm,
+            wl,
+            [cos_theta0; MAX_LANES],
+        );
+        sink.take(start, &res);
+    }
+}
