@@ -24,7 +24,12 @@ use super::sink::Power;
 
 /// Most media the interfaces are laid out for on the stack; deeper stacks
 /// take the general kernel (they are dominated by their layers anyway).
-const MAX_MEDIA: usize = 66;
+pub(super) const MAX_MEDIA: usize = 66;
+
+/// Most media of the small layout, which most stacks fit: the interfaces
+/// are built afresh for every spectrum, and clearing and moving room for
+/// [`MAX_MEDIA`] cost a few percent of a short stack's spectrum.
+pub(super) const FEW_MEDIA: usize = 8;
 
 /// One interface's coefficients, from the medium above into the one below.
 #[derive(Clone, Copy, Debug, Default)]
@@ -40,9 +45,11 @@ struct Interface {
 
 /// A non-dispersive stack at one angle: what stays the same at every
 /// wavelength.
-pub(super) struct Interfaces {
-    /// Top-down; interface i lies between medium i and medium i + 1.
-    at: [Interface; MAX_MEDIA - 1],
+/// `M` is the room for media: [`FEW_MEDIA`] or [`MAX_MEDIA`].
+pub(super) struct Interfaces<const M: usize> {
+    /// Top-down; interface i lies between medium i and medium i + 1. The
+    /// array has room for M media (one slot more than their interfaces).
+    at: [Interface; M],
     count: usize,
     /// |Π t_s|² Re(q_sub) / q0: the s transmittance's constant factor.
     ts_scale: f64,
@@ -50,7 +57,7 @@ pub(super) struct Interfaces {
     tp_scale: f64,
 }
 
-impl Interfaces {
+impl<const M: usize> Interfaces<M> {
     /// The interfaces of the stack with `indices` (N + 2: ambient, layers,
     /// substrate) and `thicknesses_nm` at incidence cos θ0, with the scalar
     /// solver's normal indices and branch; `None` where the general kernel
@@ -59,7 +66,7 @@ impl Interfaces {
         let media = indices.len();
         // Grazing (and NaN) incidence has its own closed form in the scalar solver.
         let grazing = cos_theta0.is_nan() || cos_theta0 <= 0.0;
-        if grazing || media > MAX_MEDIA || media != thicknesses_nm.len() + 2 {
+        if grazing || media > M || media != thicknesses_nm.len() + 2 {
             return None;
         }
         let cos = cos_theta0.min(1.0);
@@ -76,7 +83,7 @@ impl Interfaces {
                 (n, nsq, crate::optics::solver::normal_index(n, beta_sq))
             }
         };
-        let mut at = [Interface::default(); MAX_MEDIA - 1];
+        let mut at = [Interface::default(); M];
         let (mut ts_amp, mut tp_amp) = (C64::new(1.0, 0.0), C64::new(1.0, 0.0));
         let mut above = medium(0);
         for (i, slot) in at.iter_mut().enumerate().take(media - 1) {
@@ -136,7 +143,7 @@ fn step<V: Lanes>(gamma: &mut Cv<V>, r: Cv<V>, rho: Cv<V>) -> V {
 
 /// R and T of four wavelengths (2π/λ in `k0`) of the stack `f` describes.
 #[inline(always)]
-pub(super) fn solve_lanes<V: Lanes>(f: &Interfaces, k0: V) -> Power<V> {
+pub(super) fn solve_lanes<V: Lanes, const M: usize>(f: &Interfaces<M>, k0: V) -> Power<V> {
     // `Cv::splat`, not a closure: a closure is compiled without the kernel
     // copy's target features, and the intrinsics in it would not be inlined.
     let splat = Cv::<V>::splat;

@@ -261,6 +261,29 @@ pub(super) fn batch_body<V: Lanes>(
     }
 }
 
+/// The non-dispersive kernel over every wavelength of a [`Spectrum`] at one
+/// angle, interfaces laid out with room for `M` media; false, having done
+/// nothing, where the general kernel must run instead.
+#[inline(always)]
+fn constant_body<V: Lanes, const M: usize>(
+    spectrum: &Spectrum,
+    indices: &[C64],
+    thicknesses_nm: &[f64],
+    cos_theta0: f64,
+    sink: &mut impl Sink<V>,
+) -> bool {
+    let media = spectrum.media();
+    let Some(f) = constant::Interfaces::<M>::new(&indices[..media], thicknesses_nm, cos_theta0)
+    else {
+        return false;
+    };
+    for start in (0..spectrum.wavelengths()).step_by(V::WIDTH) {
+        let k0 = V::load(&spectrum.k0()[start..]);
+        sink.take(start, &constant::solve_lanes::<V, M>(&f, k0));
+    }
+    true
+}
+
 /// Every wavelength of a [`Spectrum`] at one angle, [`Lanes::WIDTH`] per
 /// vector, handed to `sink` in order.
 #[inline(always)]
@@ -274,11 +297,24 @@ pub(super) fn spectrum_body<V: Lanes>(
     let media = spectrum.media();
     let total = spectrum.wavelengths();
     if spectrum.is_non_dispersive() {
-        if let Some(f) = constant::Interfaces::new(&indices[..media], thicknesses_nm, cos_theta0) {
-            for start in (0..total).step_by(V::WIDTH) {
-                let k0 = V::load(&spectrum.k0()[start..]);
-                sink.take(start, &constant::solve_lanes::<V>(&f, k0));
-            }
+        let done = if media <= constant::FEW_MEDIA {
+            constant_body::<V, { constant::FEW_MEDIA }>(
+                spectrum,
+                indices,
+                thicknesses_nm,
+                cos_theta0,
+                sink,
+            )
+        } else {
+            constant_body::<V, { constant::MAX_MEDIA }>(
+                spectrum,
+                indices,
+                thicknesses_nm,
+                cos_theta0,
+                sink,
+            )
+        };
+        if done {
             return;
         }
     }
