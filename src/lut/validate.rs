@@ -423,13 +423,24 @@ impl Totals {
 
 /// Counts of non-negative errors in bins of their f64 bit pattern (the
 /// exponent and the top [`QUANTILE_BITS`] bits of the mantissa), so a
-/// quantile is found in bounded memory: at most one entry per bin that
-/// occurs, a few thousand in practice, whatever the number of points.
-#[derive(Default)]
+/// quantile is found in bounded memory whatever the number of points: a
+/// block of counts per binary exponent that occurs (a few dozen in
+/// practice, 2 kB each). Adding an error is two indexings, which matters
+/// because the errors are added one by one after each parallel chunk.
 struct QuantileHistogram {
-    bins: std::collections::BTreeMap<u64, u64>,
+    /// Indexed by the biased exponent; a block holds its mantissa bins.
+    by_exponent: Vec<Option<Box<[u64; 1 << QUANTILE_BITS]>>>,
     /// NaN errors, above every number.
     nan: u64,
+}
+
+impl Default for QuantileHistogram {
+    fn default() -> Self {
+        QuantileHistogram {
+            by_exponent: vec![None; 1 << 11],
+            nan: 0,
+        }
+    }
 }
 
 /// Mantissa bits kept per bin: a bin spans at most 2⁻⁸ of its values, so
@@ -441,7 +452,11 @@ impl QuantileHistogram {
         if e.is_nan() {
             self.nan += 1;
         } else {
-            *self.bins.entry(Self::bin(e)).or_insert(0) += 1;
+            let bin = Self::bin(e);
+            let (exponent, mantissa) = (bin >> QUANTILE_BITS, bin & ((1 << QUANTILE_BITS) - 1));
+            let block = self.by_exponent[exponent as usize]
+                .get_or_insert_with(|| Box::new([0; 1 << QUANTILE_BITS]));
+            block[mantissa as usize] += 1;
         }
     }
 
@@ -456,7 +471,18 @@ impl QuantileHistogram {
     fn p99(&self, points: usize, max: f64) -> f64 {
         let rank = ((0.99 * points as f64).ceil() as u64).clamp(1, points.max(1) as u64);
         let mut seen = 0;
-        for (&bin, &count) in &self.bins {
+        let bins = self
+            .by_exponent
+            .iter()
+            .enumerate()
+            .flat_map(|(exponent, block)| {
+                block.iter().flat_map(move |b| {
+                    b.iter().enumerate().map(move |(m, &count)| {
+                        (((exponent as u64) << QUANTILE_BITS) | m as u64, count)
+                    })
+                })
+            });
+        for (bin, count) in bins {
             seen += count;
             if seen >= rank {
                 let edge = f64::from_bits((bin + 1) << (52 - QUANTILE_BITS));
