@@ -71,6 +71,8 @@ pub(super) trait Lanes: Copy {
     fn sub(self, o: Self) -> Self;
     fn mul(self, o: Self) -> Self;
     fn div(self, o: Self) -> Self;
+    /// self × b + c with one rounding.
+    fn mul_add(self, b: Self, c: Self) -> Self;
     fn sqrt(self) -> Self;
     fn abs(self) -> Self;
     fn neg(self) -> Self;
@@ -164,6 +166,10 @@ impl Lanes for Portable {
     #[inline(always)]
     fn div(self, o: Self) -> Self {
         self.zip(o, |a, b| a / b)
+    }
+    #[inline(always)]
+    fn mul_add(self, b: Self, c: Self) -> Self {
+        Portable(std::array::from_fn(|i| self.0[i].mul_add(b.0[i], c.0[i])))
     }
     #[inline(always)]
     fn sqrt(self) -> Self {
@@ -354,7 +360,8 @@ pub(super) fn sqrt_upper<V: Lanes>(z: Cv<V>) -> Cv<V> {
 
 /// e^x for x in [EXP_NORMAL_MIN, 0] (anything else is the caller's to
 /// handle): x = n ln 2 + r with |r| ≤ ln 2 / 2, e^r by its Taylor series to
-/// r¹³ (the next term is below 5 × 10⁻¹⁸), times 2^n built in the exponent bits.
+/// r¹³ (the next term is below 5 × 10⁻¹⁸) in fused multiply-adds, times 2^n
+/// built in the exponent bits.
 #[inline(always)]
 fn exp_lanes<V: Lanes>(x: V) -> V {
     let magic = V::splat(ROUND_MAGIC);
@@ -363,14 +370,15 @@ fn exp_lanes<V: Lanes>(x: V) -> V {
     let r = x.sub(n.mul(V::splat(LN2_HI))).sub(n.mul(V::splat(LN2_LO)));
     let mut p = V::splat(INV_FACTORIAL[13]);
     for k in (0..13).rev() {
-        p = p.mul(r).add(V::splat(INV_FACTORIAL[k]));
+        p = p.mul_add(r, V::splat(INV_FACTORIAL[k]));
     }
     p.mul(V::exp2_of_rounded(sum))
 }
 
 /// (sin a, cos a) for |a| ≤ PHASE_LIMIT: a = kπ/2 + r with |r| ≤ π/4 + ε,
 /// the Taylor series of sin to r¹⁷ and of cos to r¹⁶ (next terms below
-/// 10⁻¹⁷), then the quadrant k mod 4 swaps and negates them.
+/// 10⁻¹⁷) in fused multiply-adds, then the quadrant k mod 4 swaps and
+/// negates them.
 #[inline(always)]
 fn sin_cos_lanes<V: Lanes>(a: V) -> (V, V) {
     let magic = V::splat(ROUND_MAGIC);
@@ -385,13 +393,13 @@ fn sin_cos_lanes<V: Lanes>(a: V) -> (V, V) {
     // sin r = r + r³ Σ_{k≥1} (−1)^k r^{2k−2}/(2k+1)!, to k = 8.
     let mut s = V::splat(INV_FACTORIAL[17]);
     for k in (1..8).rev() {
-        s = s.mul(r2).add(V::splat(sign(k) * INV_FACTORIAL[2 * k + 1]));
+        s = s.mul_add(r2, V::splat(sign(k) * INV_FACTORIAL[2 * k + 1]));
     }
     let sin_r = r.add(r.mul(r2).mul(s));
     // cos r = 1 + r² Σ_{k≥1} (−1)^k r^{2k−2}/(2k)!, to k = 8.
     let mut c = V::splat(INV_FACTORIAL[16]);
     for k in (1..8).rev() {
-        c = c.mul(r2).add(V::splat(sign(k) * INV_FACTORIAL[2 * k]));
+        c = c.mul_add(r2, V::splat(sign(k) * INV_FACTORIAL[2 * k]));
     }
     let cos_r = V::splat(1.0).add(r2.mul(c));
     V::quadrant(sum, sin_r, cos_r)
@@ -402,6 +410,13 @@ fn sin_cos_lanes<V: Lanes>(a: V) -> (V, V) {
 /// range take the scalar solver's own expression.
 #[inline(always)]
 pub(super) fn one_way<V: Lanes>(phase: Cv<V>) -> Cv<V> {
+    phase_factor(phase).0
+}
+
+/// [`one_way`] and its modulus e^{−Im φ}, which the polynomial gives on the
+/// way (and the C library's e^x in the lanes the scalar solver takes).
+#[inline(always)]
+pub(super) fn phase_factor<V: Lanes>(phase: Cv<V>) -> (Cv<V>, V) {
     let x = phase.im.neg();
     let zero = V::splat(0.0);
     // A lossless layer (the common case) decays by exactly 1 in every lane.
@@ -418,21 +433,24 @@ pub(super) fn one_way<V: Lanes>(phase: Cv<V>) -> Cv<V> {
     let in_range =
         V::bits(x.ge(V::splat(EXP_NORMAL_MIN))) & V::bits(V::splat(PHASE_LIMIT).ge(phase.re.abs()));
     if in_range == V::ALL {
-        return out;
+        return (out, decay);
     }
     let (mut re, mut im) = (out.re.to_array(), out.im.to_array());
+    let mut modulus = decay.to_array();
     let (p_re, p_im) = (phase.re.to_array(), phase.im.to_array());
     for l in 0..V::WIDTH {
         if in_range & (1 << l) == 0 {
             let z = scalar_one_way(C64::new(p_re[l], p_im[l]));
             re[l] = z.re;
             im[l] = z.im;
+            modulus[l] = (-p_im[l]).exp();
         }
     }
-    Cv {
+    let out = Cv {
         re: V::from_array(re),
         im: V::from_array(im),
-    }
+    };
+    (out, V::from_array(modulus))
 }
 
 /// The scalar solver's one-way factor, kept out of line: lanes need it only

@@ -19,7 +19,7 @@
 
 use num_complex::Complex64 as C64;
 
-use super::arith::{one_way, Cv, Lanes};
+use super::arith::{phase_factor, Cv, Lanes};
 use super::sink::Power;
 
 /// Most media the interfaces are laid out for on the stack; deeper stacks
@@ -153,9 +153,11 @@ pub(super) fn solve_lanes<V: Lanes, const M: usize>(f: &Interfaces<M>, k0: V) ->
     let (mut ts_norm, mut tp_norm) = (V::splat(1.0), V::splat(1.0));
     for i in (0..f.count - 1).rev() {
         let face = &f.at[i];
-        let w = one_way(splat(face.q).scale(k0.mul(V::splat(face.d))));
-        let rho = w.mul(w);
-        let decay = w.norm_sqr();
+        // The round trip e^{2iφ} straight from 2φ (doubling is exact), and
+        // |e^{iφ}|² as its modulus: one complex product fewer on the chain
+        // of dependent operations than squaring e^{iφ}.
+        let phase = splat(face.q).scale(k0.mul(V::splat(face.d)));
+        let (rho, decay) = phase_factor(phase.scale(V::splat(2.0)));
         ts_norm = ts_norm
             .mul(decay)
             .mul(step(&mut gamma_s, splat(face.rs), rho));

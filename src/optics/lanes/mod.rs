@@ -27,8 +27,12 @@
 //! The kernel is generic over its lane type, and three copies are compiled:
 //! AVX-512 (eight lanes per register), AVX2 (four) and portable (an array of
 //! four). [`Path::Best`] picks the widest the CPU has, at run time. All
-//! perform the same IEEE operations in the same order on each lane (Rust
-//! never fuses a multiply and an add on its own), so they agree bit for bit.
+//! perform the same IEEE operations in the same order on each lane, so they
+//! agree bit for bit: Rust never fuses a multiply and an add on its own, and
+//! where the polynomials fuse them on purpose (one rounding, and a shorter
+//! chain of dependent operations) every copy does, the portable one through
+//! `f64::mul_add`. The AVX2 copy therefore also needs FMA, which every CPU
+//! with AVX2 in practice has.
 //! On a CPU that runs the kernel's chain of dependent operations at the
 //! same latency in either width (as AMD's Zen 4 runs 512-bit operations
 //! in two halves), eight lanes still help: each instruction carries twice
@@ -91,11 +95,12 @@ impl Path {
     }
 }
 
-/// True when the CPU has AVX2, so that [`Path::Avx2`] runs the AVX2 copy.
+/// True when the CPU has AVX2 and FMA, so that [`Path::Avx2`] runs the
+/// AVX2 copy.
 pub fn avx2_available() -> bool {
     #[cfg(target_arch = "x86_64")]
     {
-        std::arch::is_x86_feature_detected!("avx2")
+        std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
     }
     #[cfg(not(target_arch = "x86_64"))]
     {
@@ -146,7 +151,7 @@ macro_rules! kernel_copies {
             }
 
             #[cfg(target_arch = "x86_64")]
-            #[target_feature(enable = "avx2")]
+            #[target_feature(enable = "avx2,fma")]
             fn avx2($($arg: $ty),*) -> $ret {
                 body::<x86::Avx2>($($arg),*)
             }

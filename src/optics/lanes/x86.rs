@@ -86,6 +86,11 @@ impl Lanes for Avx2 {
         unsafe { Avx2(_mm256_div_pd(self.0, o.0)) }
     }
     #[inline(always)]
+    fn mul_add(self, b: Self, c: Self) -> Self {
+        // SAFETY: AVX2 and FMA are present; see the note above `impl Avx2`.
+        unsafe { Avx2(_mm256_fmadd_pd(self.0, b.0, c.0)) }
+    }
+    #[inline(always)]
     fn sqrt(self) -> Self {
         // SAFETY: AVX2 is present; see the note above `impl Avx2`.
         unsafe { Avx2(_mm256_sqrt_pd(self.0)) }
@@ -238,6 +243,11 @@ impl Lanes for Avx512 {
     fn div(self, o: Self) -> Self {
         // SAFETY: AVX-512F is present; see the note above `impl Avx512`.
         unsafe { Avx512(_mm512_div_pd(self.0, o.0)) }
+    }
+    #[inline(always)]
+    fn mul_add(self, b: Self, c: Self) -> Self {
+        // SAFETY: AVX-512F is present; see the note above `impl Avx512`.
+        unsafe { Avx512(_mm512_fmadd_pd(self.0, b.0, c.0)) }
     }
     #[inline(always)]
     fn sqrt(self) -> Self {
