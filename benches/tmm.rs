@@ -1,6 +1,8 @@
 //! Solver speed: unpolarized R and T of stacks of 1, 2, 10 and 100 layers at
-//! one wavelength and angle (both polarizations), and the batched entry point
-//! over a wavelength × angle grid, scalar and four lanes at a time. The stacks are the ones
+//! one wavelength and angle (both polarizations), the batched entry point
+//! over a wavelength × angle grid (scalar, and each copy of the lane kernel),
+//! and one point's whole spectrum integrated to a colour as the validation
+//! and the direct film do it, on each copy. The layered stacks are the ones
 //! `tools/time_tmm.py` times in Python `tmm`.
 
 // Not an API: criterion's macros generate undocumented public functions.
@@ -11,7 +13,8 @@ use std::time::{Duration, Instant};
 use criterion::{black_box, criterion_group, criterion_main, Criterion, Throughput};
 use num_complex::Complex64 as C64;
 
-use irid::optics::lanes::{avx2_available, solve_batch_on, Path};
+use irid::color::{Sampling, SpectralIntegrator};
+use irid::optics::lanes::{avx2_available, best_copy, solve_batch_on, Path};
 use irid::optics::{solve, solve_batch, Response, Stack, StackGrid};
 
 /// Ambient air, `layers` films alternating lossless (n = 1.5) and absorbing
@@ -86,9 +89,9 @@ fn single_least_disturbed(c: &mut Criterion) {
 fn batched(c: &mut Criterion) {
     // 1 to 100 layers over 81 wavelengths × 32 angles, indices constant per
     // wavelength as in the single-sample bench; time per sample via
-    // throughput. The same points three ways: one `solve` call per point,
-    // the four-lane kernel's portable copy, and `solve_batch` (the AVX2 copy
-    // when the CPU has it).
+    // throughput. The same points four ways: one `solve` call per point,
+    // the lane kernel's portable copy, its AVX2 copy, and `solve_batch` (the
+    // widest copy the CPU has).
     let wavelengths: Vec<f64> = (0..81).map(|i| 380.0 + 5.0 * i as f64).collect();
     let cos: Vec<f64> = (0..32).map(|i| (i as f64 + 0.5) / 32.0).collect();
     let mut out = vec![Response::default(); wavelengths.len() * cos.len()];
@@ -120,11 +123,23 @@ fn batched(c: &mut Criterion) {
                 out[out.len() - 1].r()
             })
         });
+        if avx2_available() {
+            g.bench_function(format!("{layers} layers, AVX2 lanes"), |b| {
+                b.iter(|| {
+                    solve_batch_on(
+                        Path::Avx2,
+                        black_box(&indices),
+                        &d,
+                        &wavelengths,
+                        &cos,
+                        &mut out,
+                    );
+                    out[out.len() - 1].r()
+                })
+            });
+        }
         g.bench_function(
-            format!(
-                "{layers} layers, solve_batch ({})",
-                if avx2_available() { "AVX2" } else { "portable" }
-            ),
+            format!("{layers} layers, solve_batch ({})", best_copy()),
             |b| {
                 b.iter(|| {
                     solve_batch(black_box(&indices), &d, &wavelengths, &cos, &mut out);
@@ -168,5 +183,55 @@ fn dispersive(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, single, single_least_disturbed, batched, dispersive);
+fn spectrum(c: &mut Criterion) {
+    // One point's 471-wavelength spectrum (1 nm, 360–830 nm) integrated to
+    // linear sRGB as it is solved (`StackGrid::weighted_spectrum`), the
+    // validation's and the direct film's unit of work, at 200 (thickness,
+    // angle) points; time per wavelength via throughput.
+    let integrator = SpectralIntegrator::new(Sampling::Exact);
+    let weights = integrator.rgb_lane_weights();
+    let luts = concat!(env!("CARGO_MANIFEST_DIR"), "/luts/");
+    let mut g = c.benchmark_group("weighted_spectrum");
+    let points = 200;
+    g.throughput(Throughput::Elements(
+        (points * integrator.wavelengths_nm().len()) as u64,
+    ));
+    for name in ["soap-film", "two-layer", "mirror-10"] {
+        let stack = Stack::load(std::path::Path::new(&format!("{luts}{name}.toml"))).unwrap();
+        let grid = StackGrid::new(&stack, integrator.wavelengths_nm()).unwrap();
+        let mut thick = grid.thicknesses_nm().to_vec();
+        let mut copies = vec![("portable", Path::Portable)];
+        if avx2_available() {
+            copies.push(("AVX2", Path::Avx2));
+        }
+        if best_copy() != copies[copies.len() - 1].0 {
+            copies.push((best_copy(), Path::Best));
+        }
+        for (copy, path) in copies {
+            g.bench_function(format!("{name}, {copy}"), |b| {
+                b.iter(|| {
+                    let mut sum = 0.0;
+                    for i in 0..points {
+                        let f = (i as f64 + 0.5) / points as f64;
+                        thick[0] = 1000.0 * f;
+                        let cos = 0.05 + 0.95 * ((i * 89) % points) as f64 / points as f64;
+                        let w = grid.weighted_spectrum_on(path, black_box(&thick), cos, &weights);
+                        sum += w.reflectance[1];
+                    }
+                    sum
+                })
+            });
+        }
+    }
+    g.finish();
+}
+
+criterion_group!(
+    benches,
+    single,
+    single_least_disturbed,
+    batched,
+    dispersive,
+    spectrum
+);
 criterion_main!(benches);
