@@ -36,10 +36,11 @@ pub(super) const FEW_MEDIA: usize = 8;
 struct Interface {
     rs: C64,
     rp: C64,
-    /// The normal index q of the layer below the interface and its
-    /// thickness: its phase is (k0 d) q, multiplied in the scalar solver's
-    /// order. Unused for the bottom interface.
-    q: C64,
+    /// 2q and d of the layer below the interface (q its normal index, d its
+    /// thickness): the round trip's phase is (k0 d)(2q), which has the bits
+    /// of twice the scalar solver's (k0 d) q, since doubling is exact.
+    /// Unused for the bottom interface.
+    two_q: C64,
     d: f64,
 }
 
@@ -95,7 +96,7 @@ impl<const M: usize> Interfaces<M> {
                 if q2 * q2 < 1e-8 * nsq_b.norm_sqr() {
                     return None;
                 }
-                slot.q = q_b;
+                slot.two_q = q_b * 2.0;
                 slot.d = thicknesses_nm[i];
             }
             let s_den = (q_a + q_b).inv();
@@ -118,7 +119,7 @@ impl<const M: usize> Interfaces<M> {
         let finite = |z: C64| z.re.is_finite() && z.im.is_finite();
         let all_finite = out.at[..out.count]
             .iter()
-            .all(|f| finite(f.rs) && finite(f.rp) && finite(f.q) && f.d.is_finite())
+            .all(|f| finite(f.rs) && finite(f.rp) && finite(f.two_q) && f.d.is_finite())
             && out.ts_scale.is_finite()
             && out.tp_scale.is_finite();
         all_finite.then_some(out)
@@ -127,11 +128,13 @@ impl<const M: usize> Interfaces<M> {
 
 /// One step of the recursion up through an interface, for one polarization:
 /// Γ ← (r + g)/(1 + r g) with g = Γρ; returns 1/|1 + r g|², the factor
-/// |t|² picks up.
+/// |t|² picks up. The denominator is formed as 1 + (rΓ)ρ: rΓ does not wait
+/// for ρ, so once ρ is known g and the denominator are one product each,
+/// side by side (and rΓ is a constant on the bottom layer).
 #[inline(always)]
 fn step<V: Lanes>(gamma: &mut Cv<V>, r: Cv<V>, rho: Cv<V>) -> V {
     let g = gamma.mul(rho);
-    let den = r.mul(g).one_plus();
+    let den = r.mul(*gamma).mul(rho).one_plus();
     let inv_norm = V::splat(1.0).div(den.norm_sqr());
     let inv = Cv {
         re: den.re.mul(inv_norm),
@@ -141,7 +144,18 @@ fn step<V: Lanes>(gamma: &mut Cv<V>, r: Cv<V>, rho: Cv<V>) -> V {
     inv_norm
 }
 
-/// R and T of four wavelengths (2π/λ in `k0`) of the stack `f` describes.
+/// [`step`] through the top interface, where only |Γ|² is wanted: it is
+/// |r + g|² / |1 + r g|², without forming Γ. Returns it and 1/|1 + r g|².
+#[inline(always)]
+fn top_step<V: Lanes>(gamma: Cv<V>, r: Cv<V>, rho: Cv<V>) -> (V, V) {
+    let g = gamma.mul(rho);
+    let den = r.mul(gamma).mul(rho).one_plus();
+    let inv_norm = V::splat(1.0).div(den.norm_sqr());
+    (r.add(g).norm_sqr().mul(inv_norm), inv_norm)
+}
+
+/// R and T of one wavelength per lane (2π/λ in `k0`) of the stack `f`
+/// describes.
 #[inline(always)]
 pub(super) fn solve_lanes<V: Lanes, const M: usize>(f: &Interfaces<M>, k0: V) -> Power<V> {
     // `Cv::splat`, not a closure: a closure is compiled without the kernel
@@ -149,25 +163,31 @@ pub(super) fn solve_lanes<V: Lanes, const M: usize>(f: &Interfaces<M>, k0: V) ->
     let splat = Cv::<V>::splat;
     let bottom = &f.at[f.count - 1];
     let (mut gamma_s, mut gamma_p) = (splat(bottom.rs), splat(bottom.rp));
+    // With no layer, R is the single interface's.
+    let (mut rs, mut rp) = (gamma_s.norm_sqr(), gamma_p.norm_sqr());
     // |t|² without its constant factor: Π |e^{iφ}|² / |1 + rΓρ|².
     let (mut ts_norm, mut tp_norm) = (V::splat(1.0), V::splat(1.0));
     for i in (0..f.count - 1).rev() {
         let face = &f.at[i];
-        // The round trip e^{2iφ} straight from 2φ (doubling is exact), and
-        // |e^{iφ}|² as its modulus: one complex product fewer on the chain
-        // of dependent operations than squaring e^{iφ}.
-        let phase = splat(face.q).scale(k0.mul(V::splat(face.d)));
-        let (rho, decay) = phase_factor(phase.scale(V::splat(2.0)));
-        ts_norm = ts_norm
-            .mul(decay)
-            .mul(step(&mut gamma_s, splat(face.rs), rho));
-        tp_norm = tp_norm
-            .mul(decay)
-            .mul(step(&mut gamma_p, splat(face.rp), rho));
+        // The round trip e^{2iφ} straight from 2φ, and |e^{iφ}|² as its
+        // modulus: one complex product fewer on the chain of dependent
+        // operations than squaring e^{iφ}.
+        let (rho, decay) = phase_factor(splat(face.two_q).scale(k0.mul(V::splat(face.d))));
+        let (r_s, r_p) = (splat(face.rs), splat(face.rp));
+        let (inv_s, inv_p) = if i > 0 {
+            (step(&mut gamma_s, r_s, rho), step(&mut gamma_p, r_p, rho))
+        } else {
+            let (top_s, inv_s) = top_step(gamma_s, r_s, rho);
+            let (top_p, inv_p) = top_step(gamma_p, r_p, rho);
+            (rs, rp) = (top_s, top_p);
+            (inv_s, inv_p)
+        };
+        ts_norm = ts_norm.mul(decay).mul(inv_s);
+        tp_norm = tp_norm.mul(decay).mul(inv_p);
     }
     Power {
-        rs: gamma_s.norm_sqr(),
-        rp: gamma_p.norm_sqr(),
+        rs,
+        rp,
         ts: ts_norm.mul(V::splat(f.ts_scale)),
         tp: tp_norm.mul(V::splat(f.tp_scale)),
     }
