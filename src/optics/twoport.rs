@@ -13,12 +13,12 @@
 //! with φ = e^{i k0 q d}. r', t' are A seen from below. Everything except φ is
 //! fixed for one wavelength and angle, so a thickness sweep reuses it. The
 //! sub-stacks come from the solver's own recursion
-//! ([`solve_amplitudes_beta`]), whose t_ij t_ji product is sign-consistent,
+//! ([`solve_amplitudes_known`]), whose t_ij t_ji product is sign-consistent,
 //! so the composition agrees with [`super::solve`] to rounding.
 
 use num_complex::Complex64 as C64;
 
-use super::solver::{normal_index, solve_amplitudes_beta, Amplitudes, Response};
+use super::solver::{normal_index, solve_amplitudes_known, Amplitudes, Response};
 use crate::simd::avx2_dispatch;
 
 /// |q|² / |n|² below which the layer counts as at its critical angle. The
@@ -76,30 +76,44 @@ impl VaryingLayer {
         let n_layer = indices[layer];
         let q_layer = normal_index(n_layer, beta_sq);
 
+        let n_sub = indices[indices.len() - 1];
+        let q_sub = normal_index(n_sub, beta_sq);
+        // Each medium the three sub-stacks share gets its q once
+        // (solve_amplitudes_known).
+        let n_ambient = C64::new(n0, 0.0);
+        let ambient = [
+            n_ambient,
+            n_ambient * n_ambient,
+            normal_index(n_ambient, beta_sq),
+        ];
+        let varying = [n_layer, n_layer * n_layer, q_layer];
+
         // A from above: ambient, layers 1..layer-1, the varying medium.
         let mut top: Vec<C64> = std::mem::take(&mut scratch.indices);
         top.clear();
-        top.push(C64::new(n0, 0.0));
+        top.push(n_ambient);
         top.extend_from_slice(&indices[1..=layer]);
-        let a = solve_amplitudes_beta(&top, &thicknesses_nm[..layer - 1], wavelength_nm, beta_sq);
+        let above = &thicknesses_nm[..layer - 1];
+        let a = solve_amplitudes_known(&top, above, wavelength_nm, beta_sq, ambient, q_layer);
         // A from below: the same media reversed.
         top.reverse();
         let mut t_rev = std::mem::take(&mut scratch.thicknesses_nm);
         t_rev.clear();
-        t_rev.extend(thicknesses_nm[..layer - 1].iter().rev());
-        let a_up = solve_amplitudes_beta(&top, &t_rev, wavelength_nm, beta_sq);
+        t_rev.extend(above.iter().rev());
+        let a_up =
+            solve_amplitudes_known(&top, &t_rev, wavelength_nm, beta_sq, varying, ambient[2]);
         // B: the varying medium down to the substrate.
-        let b = solve_amplitudes_beta(
+        let b = solve_amplitudes_known(
             &indices[layer..],
             &thicknesses_nm[layer..],
             wavelength_nm,
             beta_sq,
+            varying,
+            q_sub,
         );
         scratch.indices = top;
         scratch.thicknesses_nm = t_rev;
 
-        let n_sub = indices[indices.len() - 1];
-        let q_sub = normal_index(n_sub, beta_sq);
         let q0 = n0 * cos_theta0;
         let cos_sub = q_sub / n_sub;
         VaryingLayer {
