@@ -1,10 +1,14 @@
 //! Run-time choice of vector width for the baker's hot loops.
 
-/// Defines a function whose body is compiled twice, portable and for AVX2
-/// (4-wide f64 vectors), and runs the AVX2 copy when the CPU has it
-/// (checked at run time, so one binary serves every x86-64 machine). Both
-/// copies inline the same body, and Rust never fuses a multiply and an add
-/// on its own, so they give the same result bit for bit.
+/// Defines a function whose body is compiled three times, portable, for AVX2
+/// (4-wide f64 vectors) and for AVX-512 (F, VL, DQ: 8-wide), and runs the
+/// widest copy the CPU has (checked at run time, so one binary serves every
+/// x86-64 machine). The loops are auto-vectorised; even on a CPU that splits
+/// 512-bit operations in two (Zen 4) the AVX-512 copy, issuing half the
+/// instructions, made a checked bake 1.17× faster than the AVX2 one (see
+/// docs/performance.md). All copies inline the same body, and Rust never
+/// fuses a multiply and an add on its own (not even where AVX-512 implies
+/// FMA), so they give the same result bit for bit.
 ///
 /// Arguments are `name: Type` only (no `self`: a method calls a free
 /// function defined with this).
@@ -24,6 +28,20 @@ macro_rules! avx2_dispatch {
                 body($($arg),*)
             }
 
+            #[cfg(target_arch = "x86_64")]
+            #[target_feature(enable = "avx512f,avx512vl,avx512dq")]
+            fn avx512($($arg: $ty),*) {
+                body($($arg),*)
+            }
+
+            #[cfg(target_arch = "x86_64")]
+            if std::arch::is_x86_feature_detected!("avx512f")
+                && std::arch::is_x86_feature_detected!("avx512vl")
+                && std::arch::is_x86_feature_detected!("avx512dq")
+            {
+                // SAFETY: the CPU has these AVX-512 extensions (checked just above).
+                return unsafe { avx512($($arg),*) };
+            }
             #[cfg(target_arch = "x86_64")]
             if std::arch::is_x86_feature_detected!("avx2") {
                 // SAFETY: the CPU has AVX2 (checked just above).

@@ -240,13 +240,10 @@ fn recurse(
         C64::new(n0 * n0, 0.0),
         C64::new(n0 * cos_theta0, 0.0),
     ];
-    recurse_beta(
-        indices,
-        thicknesses_nm,
-        wavelength_nm,
-        n0 * n0 * sin_sq(cos_theta0),
-        top,
-    )
+    let beta_sq = n0 * n0 * sin_sq(cos_theta0);
+    let q_sub = normal_index(indices[indices.len() - 1], beta_sq);
+    let amp = recurse_beta(indices, thicknesses_nm, wavelength_nm, beta_sq, top, q_sub);
+    (amp, q_sub)
 }
 
 /// r and t of a stack whose top medium may absorb or gain, given the
@@ -265,10 +262,42 @@ pub fn solve_amplitudes_beta(
     let n_top = indices[0];
     let nsq_top = n_top * n_top;
     let top = [n_top, nsq_top, sqrt_upper(nsq_top - beta_sq)];
-    recurse_beta(indices, thicknesses_nm, wavelength_nm, beta_sq, top).0
+    let q_bottom = normal_index(indices[indices.len() - 1], beta_sq);
+    recurse_beta(
+        indices,
+        thicknesses_nm,
+        wavelength_nm,
+        beta_sq,
+        top,
+        q_bottom,
+    )
 }
 
-/// The recursion for a given β², the top medium given as (n, n², q).
+/// [`solve_amplitudes_beta`] with the top medium's n, n² and q and the
+/// bottom medium's q given (as [`solve_amplitudes_beta`] and
+/// [`normal_index`] compute them, so the result is the same bit for bit):
+/// a caller that solves several sub-stacks sharing media computes each
+/// medium's q once (two square roots and a division each).
+pub fn solve_amplitudes_known(
+    indices: &[C64],
+    thicknesses_nm: &[f64],
+    wavelength_nm: f64,
+    beta_sq: f64,
+    top: [C64; 3],
+    q_bottom: C64,
+) -> Amplitudes {
+    recurse_beta(
+        indices,
+        thicknesses_nm,
+        wavelength_nm,
+        beta_sq,
+        top,
+        q_bottom,
+    )
+}
+
+/// The recursion for a given β², the top medium given as (n, n², q) and the
+/// bottom medium's q as `q_sub`.
 #[inline(always)]
 fn recurse_beta(
     indices: &[C64],
@@ -276,14 +305,14 @@ fn recurse_beta(
     wavelength_nm: f64,
     beta_sq: f64,
     top: [C64; 3],
-) -> (Amplitudes, C64) {
+    q_sub: C64,
+) -> Amplitudes {
     debug_assert_eq!(indices.len(), thicknesses_nm.len() + 2);
     let k0 = std::f64::consts::TAU / wavelength_nm;
 
     let last = indices.len() - 1;
     let mut n_below = indices[last];
     let mut nsq_below = n_below * n_below;
-    let q_sub = sqrt_upper(nsq_below - beta_sq);
     let mut q_below = q_sub;
     let zero = C64::new(0.0, 0.0);
     let one = C64::new(1.0, 0.0);
@@ -354,15 +383,12 @@ fn recurse_beta(
         nsq_below = nsq_above;
         q_below = q_above;
     }
-    (
-        Amplitudes {
-            rs: gamma_s,
-            rp: gamma_p,
-            ts,
-            tp,
-        },
-        q_sub,
-    )
+    Amplitudes {
+        rs: gamma_s,
+        rp: gamma_p,
+        ts,
+        tp,
+    }
 }
 
 /// A layer's one-way factor e^{iφ} = e^{−Im φ} (cos Re φ + i sin Re φ).

@@ -13,12 +13,12 @@
 //! with φ = e^{i k0 q d}. r', t' are A seen from below. Everything except φ is
 //! fixed for one wavelength and angle, so a thickness sweep reuses it. The
 //! sub-stacks come from the solver's own recursion
-//! ([`solve_amplitudes_beta`]), whose t_ij t_ji product is sign-consistent,
+//! ([`solve_amplitudes_known`]), whose t_ij t_ji product is sign-consistent,
 //! so the composition agrees with [`super::solve`] to rounding.
 
 use num_complex::Complex64 as C64;
 
-use super::solver::{normal_index, solve_amplitudes_beta, Amplitudes, Response};
+use super::solver::{normal_index, solve_amplitudes_known, Amplitudes, Response};
 use crate::simd::avx2_dispatch;
 
 /// |q|² / |n|² below which the layer counts as at its critical angle. The
@@ -76,30 +76,44 @@ impl VaryingLayer {
         let n_layer = indices[layer];
         let q_layer = normal_index(n_layer, beta_sq);
 
+        let n_sub = indices[indices.len() - 1];
+        let q_sub = normal_index(n_sub, beta_sq);
+        // Each medium the three sub-stacks share gets its q once
+        // (solve_amplitudes_known).
+        let n_ambient = C64::new(n0, 0.0);
+        let ambient = [
+            n_ambient,
+            n_ambient * n_ambient,
+            normal_index(n_ambient, beta_sq),
+        ];
+        let varying = [n_layer, n_layer * n_layer, q_layer];
+
         // A from above: ambient, layers 1..layer-1, the varying medium.
         let mut top: Vec<C64> = std::mem::take(&mut scratch.indices);
         top.clear();
-        top.push(C64::new(n0, 0.0));
+        top.push(n_ambient);
         top.extend_from_slice(&indices[1..=layer]);
-        let a = solve_amplitudes_beta(&top, &thicknesses_nm[..layer - 1], wavelength_nm, beta_sq);
+        let above = &thicknesses_nm[..layer - 1];
+        let a = solve_amplitudes_known(&top, above, wavelength_nm, beta_sq, ambient, q_layer);
         // A from below: the same media reversed.
         top.reverse();
         let mut t_rev = std::mem::take(&mut scratch.thicknesses_nm);
         t_rev.clear();
-        t_rev.extend(thicknesses_nm[..layer - 1].iter().rev());
-        let a_up = solve_amplitudes_beta(&top, &t_rev, wavelength_nm, beta_sq);
+        t_rev.extend(above.iter().rev());
+        let a_up =
+            solve_amplitudes_known(&top, &t_rev, wavelength_nm, beta_sq, varying, ambient[2]);
         // B: the varying medium down to the substrate.
-        let b = solve_amplitudes_beta(
+        let b = solve_amplitudes_known(
             &indices[layer..],
             &thicknesses_nm[layer..],
             wavelength_nm,
             beta_sq,
+            varying,
+            q_sub,
         );
         scratch.indices = top;
         scratch.thicknesses_nm = t_rev;
 
-        let n_sub = indices[indices.len() - 1];
-        let q_sub = normal_index(n_sub, beta_sq);
         let q0 = n0 * cos_theta0;
         let cos_sub = q_sub / n_sub;
         VaryingLayer {
@@ -183,6 +197,75 @@ impl VaryingLayer {
     pub fn responses(&self, phase_re: &[f64], phase_im: &[f64], r: &mut [f64], t: &mut [f64]) {
         batch_responses(self, phase_re, phase_im, r, t);
     }
+
+    /// Adds `weights` × R and × T (unpolarized, as [`Self::responses`] gives
+    /// them) to channel-major accumulators `acc` (`[channel][node]`, the
+    /// three R channels first, one node per phase factor). One pass instead
+    /// of [`Self::responses`] and a second loop over its output: R and T stay
+    /// in registers, and the accumulation's loads and adds fill the slots
+    /// the divisions leave idle.
+    pub fn accumulate_responses(
+        &self,
+        phase_re: &[f64],
+        phase_im: &[f64],
+        weights: [f64; 3],
+        acc: &mut [f64],
+    ) {
+        batch_accumulate(self, phase_re, phase_im, weights, acc);
+    }
+}
+
+/// The thickness-independent factors of [`VaryingLayer::response`] as the
+/// batched loops use them.
+#[derive(Clone, Copy)]
+struct Factors {
+    ra: [C64; 2],
+    x: [C64; 2],
+    y: [C64; 2],
+    /// |t_A t_B|² times the Poynting factor.
+    zt: [f64; 2],
+}
+
+impl Factors {
+    #[inline(always)]
+    fn of(v: &VaryingLayer) -> Factors {
+        Factors {
+            ra: v.r_above,
+            x: v.x,
+            y: v.y,
+            zt: [
+                v.z[0].norm_sqr() * v.t_power[0],
+                v.z[1].norm_sqr() * v.t_power[1],
+            ],
+        }
+    }
+
+    /// Unpolarized R and T at the phase factor `a + ib`: the same operations
+    /// in the same order as `response` (complex products written out as
+    /// num_complex does), so a table does not depend on which of the two
+    /// evaluated it.
+    #[inline(always)]
+    fn unpolarized(&self, a: f64, b: f64) -> (f64, f64) {
+        let p2 = C64::new(a * a - b * b, a * b + b * a);
+        let phase_sq = a * a + b * b;
+        #[inline(always)]
+        fn pol(p2: C64, phase_sq: f64, ra: C64, x: C64, y: C64, zt: f64) -> (f64, f64) {
+            let yp = C64::new(y.re * p2.re - y.im * p2.im, y.re * p2.im + y.im * p2.re);
+            let den = C64::new(1.0 - yp.re, 0.0 - yp.im);
+            let num = C64::new(
+                (ra.re * den.re - ra.im * den.im) + (x.re * p2.re - x.im * p2.im),
+                (ra.re * den.im + ra.im * den.re) + (x.re * p2.im + x.im * p2.re),
+            );
+            let inv = 1.0 / (den.re * den.re + den.im * den.im);
+            (
+                (num.re * num.re + num.im * num.im) * inv,
+                zt * phase_sq * inv,
+            )
+        }
+        let (rs, ts) = pol(p2, phase_sq, self.ra[0], self.x[0], self.y[0], self.zt[0]);
+        let (rp, tp) = pol(p2, phase_sq, self.ra[1], self.x[1], self.y[1], self.zt[1]);
+        (0.5 * (rs + rp), 0.5 * (ts + tp))
+    }
 }
 
 avx2_dispatch! {
@@ -201,36 +284,51 @@ avx2_dispatch! {
             t.fill(0.0);
             return;
         }
-        // The same operations in the same order as `response` (complex
-        // products written out as num_complex does), so a table does not
-        // depend on which of the two evaluated it.
-        let [ra_s, ra_p] = v.r_above;
-        let [x_s, x_p] = v.x;
-        let [y_s, y_p] = v.y;
-        let zt_s = v.z[0].norm_sqr() * v.t_power[0];
-        let zt_p = v.z[1].norm_sqr() * v.t_power[1];
+        let f = Factors::of(v);
         for j in 0..n {
-            let (a, b) = (phase_re[j], phase_im[j]);
-            let p2 = C64::new(a * a - b * b, a * b + b * a);
-            let phase_sq = a * a + b * b;
-            #[inline(always)]
-            fn pol(p2: C64, phase_sq: f64, ra: C64, x: C64, y: C64, zt: f64) -> (f64, f64) {
-                let yp = C64::new(y.re * p2.re - y.im * p2.im, y.re * p2.im + y.im * p2.re);
-                let den = C64::new(1.0 - yp.re, 0.0 - yp.im);
-                let num = C64::new(
-                    (ra.re * den.re - ra.im * den.im) + (x.re * p2.re - x.im * p2.im),
-                    (ra.re * den.im + ra.im * den.re) + (x.re * p2.im + x.im * p2.re),
-                );
-                let inv = 1.0 / (den.re * den.re + den.im * den.im);
-                (
-                    (num.re * num.re + num.im * num.im) * inv,
-                    zt * phase_sq * inv,
-                )
+            (r[j], t[j]) = f.unpolarized(phase_re[j], phase_im[j]);
+        }
+    }
+}
+
+avx2_dispatch! {
+    /// [`VaryingLayer::accumulate_responses`].
+    fn batch_accumulate(
+        v: &VaryingLayer,
+        phase_re: &[f64],
+        phase_im: &[f64],
+        weights: [f64; 3],
+        acc: &mut [f64],
+    ) {
+        let n = phase_re.len();
+        let phase_im = &phase_im[..n];
+        let (acc_r, acc_t) = acc[..6 * n].split_at_mut(3 * n);
+        let (r0, acc_r) = acc_r.split_at_mut(n);
+        let (r1, r2) = acc_r.split_at_mut(n);
+        let (t0, acc_t) = acc_t.split_at_mut(n);
+        let (t1, t2) = acc_t.split_at_mut(n);
+        let [w0, w1, w2] = weights;
+        if v.grazing {
+            for j in 0..n {
+                let (r, t) = (1.0, 0.0);
+                r0[j] += w0 * r;
+                r1[j] += w1 * r;
+                r2[j] += w2 * r;
+                t0[j] += w0 * t;
+                t1[j] += w1 * t;
+                t2[j] += w2 * t;
             }
-            let (rs, ts) = pol(p2, phase_sq, ra_s, x_s, y_s, zt_s);
-            let (rp, tp) = pol(p2, phase_sq, ra_p, x_p, y_p, zt_p);
-            r[j] = 0.5 * (rs + rp);
-            t[j] = 0.5 * (ts + tp);
+            return;
+        }
+        let f = Factors::of(v);
+        for j in 0..n {
+            let (r, t) = f.unpolarized(phase_re[j], phase_im[j]);
+            r0[j] += w0 * r;
+            r1[j] += w1 * r;
+            r2[j] += w2 * r;
+            t0[j] += w0 * t;
+            t1[j] += w1 * t;
+            t2[j] += w2 * t;
         }
     }
 }
