@@ -12,7 +12,7 @@
 ///
 /// Arguments are `name: Type` only (no `self`: a method calls a free
 /// function defined with this).
-macro_rules! avx2_dispatch {
+macro_rules! simd_dispatch {
     (
         $(#[$attr:meta])*
         $vis:vis fn $name:ident($($arg:ident: $ty:ty),* $(,)?) $body:block
@@ -52,4 +52,4 @@ macro_rules! avx2_dispatch {
     };
 }
 
-pub(crate) use avx2_dispatch;
+pub(crate) use simd_dispatch;

@@ -19,7 +19,7 @@
 use num_complex::Complex64 as C64;
 
 use super::solver::{normal_index, solve_amplitudes_known, Amplitudes, Response};
-use crate::simd::avx2_dispatch;
+use crate::simd::simd_dispatch;
 
 /// |q|² / |n|² below which the layer counts as at its critical angle. The
 /// split loses about ε|n|/|q| to rounding, so below |q|/|n| = 1e-4 it could
@@ -268,7 +268,7 @@ impl Factors {
     }
 }
 
-avx2_dispatch! {
+simd_dispatch! {
     /// [`VaryingLayer::responses`].
     fn batch_responses(
         v: &VaryingLayer,
@@ -291,7 +291,7 @@ avx2_dispatch! {
     }
 }
 
-avx2_dispatch! {
+simd_dispatch! {
     /// [`VaryingLayer::accumulate_responses`].
     fn batch_accumulate(
         v: &VaryingLayer,

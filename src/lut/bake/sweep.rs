@@ -13,7 +13,7 @@ use crate::lut::sample::channel_names;
 use crate::lut::{BakeSpec, Kind};
 use crate::optics::twoport::{Scratch, VaryingLayer};
 use crate::optics::{solve, Layer, Stack, StackGrid};
-use crate::simd::avx2_dispatch;
+use crate::simd::simd_dispatch;
 
 /// The phase factor along a uniform thickness axis is advanced by complex
 /// multiplications and recomputed exactly this often (see [`phases`]): the
@@ -331,7 +331,7 @@ pub(super) fn rgb_weights(integrator: &SpectralIntegrator) -> Vec<[f64; 3]> {
         .collect()
 }
 
-avx2_dispatch! {
+simd_dispatch! {
     /// Adds `weights` × R and × T to channel-major accumulators
     /// (`[channel][node]`, R channels first).
     fn accumulate(acc: &mut [f64], r: &[f64], t: &[f64], weights: [f64; 3]) {
@@ -494,7 +494,7 @@ pub(super) fn reuse_plan(chunks: &[Chunk], t_axis: &AxisGrid, old_axis: &AxisGri
     plan
 }
 
-avx2_dispatch! {
+simd_dispatch! {
     /// The phase factor at the nodes `chunks` cover, from the first chunk's
     /// start (`nodes`, `re` and `im` begin there). Each chunk starts from an
     /// exact exponential, its first [`PHASE_LANES`] nodes follow by one
