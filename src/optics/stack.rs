@@ -201,6 +201,11 @@ impl StackGrid {
         }
     }
 
+    /// True when every medium has the same index at every wavelength.
+    pub fn is_non_dispersive(&self) -> bool {
+        self.spectrum.is_non_dispersive()
+    }
+
     /// The vacuum wavelengths in nm the indices were evaluated at, in the
     /// order given to [`StackGrid::new`].
     pub fn wavelengths_nm(&self) -> &[f64] {

@@ -48,6 +48,8 @@ pub struct VaryingLayer {
     z: [C64; 2],
     /// i k0 q of the varying layer: φ = exp(ikq · d).
     ikq: C64,
+    /// q of the varying layer.
+    q: C64,
     /// Poynting factors turning |t|² into transmitted power (s, p).
     t_power: [f64; 2],
     /// cos θ0 = 0: no power enters, R = 1 and T = 0 whatever the stack.
@@ -122,9 +124,23 @@ impl VaryingLayer {
             y: [a_up.rs * b.rs, a_up.rp * b.rp],
             z: [a.ts * b.ts, a.tp * b.tp],
             ikq: C64::new(0.0, k0) * q_layer,
+            q: q_layer,
             t_power: [q_sub.re / q0, (n_sub * cos_sub.conj()).re / q0],
             grazing: cos_theta0 <= 0.0,
             degenerate: q_layer.norm_sqr() < DEGENERATE_Q * n_layer.norm_sqr(),
+        }
+    }
+
+    /// The same split at another wavelength, where only the varying layer's
+    /// phase changes: exactly [`Self::new`] there when the varying layer is
+    /// the stack's only layer and no medium disperses. The sub-stacks are
+    /// then single interfaces, whose coefficients do not depend on the
+    /// wavelength, so one split per angle serves the whole spectrum.
+    pub fn at_wavelength(&self, wavelength_nm: f64) -> VaryingLayer {
+        let k0 = std::f64::consts::TAU / wavelength_nm;
+        VaryingLayer {
+            ikq: C64::new(0.0, k0) * self.q,
+            ..*self
         }
     }
 
@@ -337,6 +353,36 @@ simd_dispatch! {
 mod tests {
     use super::*;
     use crate::optics::solve;
+
+    #[test]
+    fn a_single_constant_layer_splits_the_same_at_every_wavelength() {
+        // One layer, no dispersion: the split at one wavelength, moved to
+        // another, must be the split made there, bit for bit (the bake
+        // splits such a stack once per angle). Lossless, absorbing, gain,
+        // metal, and a dense ambient whose layer reaches its critical angle.
+        let stacks = [
+            [C64::new(1.0, 0.0), C64::new(1.33, 0.0), C64::new(1.0, 0.0)],
+            [C64::new(1.0, 0.0), C64::new(2.0, 0.4), C64::new(1.52, 0.0)],
+            [C64::new(1.0, 0.0), C64::new(1.6, -0.02), C64::new(0.2, 3.4)],
+            [C64::new(1.5, 0.0), C64::new(1.33, 0.0), C64::new(1.0, 0.0)],
+        ];
+        let mut scratch = Scratch::default();
+        for indices in &stacks {
+            for &c in &[1.0, 0.8, 0.6635, 0.5, 0.2, 0.0] {
+                let first = VaryingLayer::new(indices, &[0.0], 1, 360.0, c, &mut scratch);
+                for wl in [361.0, 455.5, 550.0, 830.0] {
+                    let moved = first.at_wavelength(wl);
+                    let made = VaryingLayer::new(indices, &[0.0], 1, wl, c, &mut scratch);
+                    assert_eq!(moved.is_degenerate(), made.is_degenerate());
+                    for d in [0.0, 1.0, 250.0, 1234.5] {
+                        let (a, b) = (moved.response(moved.phase(d)), made.response(made.phase(d)));
+                        let bits = |r: Response| [r.rs, r.rp, r.ts, r.tp].map(f64::to_bits);
+                        assert_eq!(bits(a), bits(b), "{indices:?} at cos {c}, {wl} nm, {d} nm");
+                    }
+                }
+            }
+        }
+    }
 
     fn check(indices: &[C64], thick: &[f64], layer: usize) {
         check_at(indices, thick, layer, &[1.0, 0.8, 0.5, 0.2, 0.03, 0.0]);

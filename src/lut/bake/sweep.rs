@@ -50,6 +50,10 @@ pub(super) struct Prepared {
     /// The substrate's critical cos θ (where its q has a branch point),
     /// when it is lossless and optically thinner than the ambient.
     pub(super) critical_cos: Option<f64>,
+    /// The split around the varying layer is the same at every wavelength
+    /// but for the layer's own phase (one layer, no dispersion: see
+    /// [`VaryingLayer::at_wavelength`]), so a row splits the stack once.
+    pub(super) split_per_angle: bool,
 }
 
 impl Prepared {
@@ -81,7 +85,9 @@ impl Prepared {
             Kind::Spectral => (StackGrid::new(&stack, &[])?, Vec::new()),
         };
         let critical_cos = critical_cos(&stack, kind, wavelength_nm);
+        let split_per_angle = stack.layers.len() == 1 && stack_grid.is_non_dispersive();
         Ok(Prepared {
+            split_per_angle,
             stack,
             layer,
             channels: channel_names(kind).len(),
@@ -164,8 +170,15 @@ impl Prepared {
                         Piece::Compute(range) => &chunks[range.clone()],
                     };
                     if wk.splits.is_empty() {
+                        let mut first = None;
                         for i in wavelengths.clone() {
-                            let v = self.split(stack_grid, i, cos, &mut wk.scratch);
+                            let v = match first {
+                                Some(f) if self.split_per_angle => {
+                                    VaryingLayer::at_wavelength(&f, stack_grid.wavelengths_nm()[i])
+                                }
+                                _ => self.split(stack_grid, i, cos, &mut wk.scratch),
+                            };
+                            first.get_or_insert(v);
                             wk.splits.push((i, v));
                         }
                     }

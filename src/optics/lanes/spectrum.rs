@@ -138,7 +138,8 @@ impl Spectrum {
         self.wavelengths
     }
 
-    pub(super) fn is_non_dispersive(&self) -> bool {
+    /// Every medium has the same index at every wavelength.
+    pub fn is_non_dispersive(&self) -> bool {
         self.non_dispersive
     }
 
