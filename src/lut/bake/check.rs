@@ -96,8 +96,8 @@ pub(super) fn measure(
                 }
                 // Edge midpoints measure one axis's spacing alone; cell
                 // centres mix them and only break ties (see the caller).
-                let odd: Vec<usize> = (0..3).filter(|&a| at_idx[a] % 2 == 1).collect();
-                if let [a] = odd[..] {
+                let mut odd = (0..3).filter(|&a| at_idx[a] % 2 == 1);
+                if let (Some(a), None) = (odd.next(), odd.next()) {
                     let k = coarse.axes[a].segment_of_interval[(at_idx[a] - 1) / 2];
                     let m = &mut check.segment_max[a][k];
                     *m = m.max(worst);
