@@ -109,7 +109,7 @@ const KEYS: [&str; 6] = ["R_s", "R_p", "T_s", "T_p", "R_avg", "T_avg"];
 /// laid out [angle][key][wavelength] (keys as [`KEYS`]), so that each key is
 /// a strided (wavelengths, angles) view of it and nothing is transposed.
 /// Each task solves one angle over a run of wavelengths through
-/// `StackGrid::solve_spectrum` (four wavelengths per vector; a run whose
+/// `StackGrid::solve_spectrum` (eight or four wavelengths per vector; a run whose
 /// indices do not change with wavelength takes the non-dispersive kernel).
 /// The wavelengths are cut into runs only when there are too few angles to
 /// keep every thread busy.

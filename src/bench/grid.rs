@@ -146,7 +146,7 @@ fn sweep(sg: &StackGrid, varying_layer: usize, grid: &Grid, r: &mut [f64], t: &m
             || AngleScratch::new(sg.thicknesses_nm(), n_w),
             |scratch, ((r_block, t_block), &cos)| match &grid.thicknesses_nm {
                 None => {
-                    // One angle's wavelengths in one batch, four per vector.
+                    // One angle's wavelengths in one batch, eight or four per vector.
                     sg.solve_spectrum(&scratch.thick, cos, &mut scratch.spectrum);
                     for ((resp, r), t) in scratch
                         .spectrum

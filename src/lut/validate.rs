@@ -200,7 +200,7 @@ impl<'a> PointChecker<'a> {
     }
 
     /// The exact colour of one point, its whole spectrum solved at once
-    /// (four wavelengths per vector) and integrated as it is solved,
+    /// (eight or four wavelengths per vector) and integrated as it is solved,
     /// compared with the table's: the exact (R, T) colours and their
     /// CIEDE2000 from the table's.
     fn exact_color(

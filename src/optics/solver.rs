@@ -504,8 +504,8 @@ impl NearCritical {
 /// `indices` holds, for each wavelength in turn, that wavelength's N + 2
 /// indices (ambient, layers, substrate), as [`StackGrid`](super::StackGrid)
 /// stores them. Nothing is allocated; the materials were evaluated once by
-/// whoever filled `indices`. Points are solved four at a time (AVX2 when the
-/// CPU has it), agreeing with [`solve`] point by point to about 10⁻¹⁵; see
+/// whoever filled `indices`. Points are solved eight or four at a time (the
+/// widest vectors the CPU has), agreeing with [`solve`] point by point to about 10⁻¹⁵; see
 /// [`lanes`](super::lanes).
 ///
 /// # Panics

@@ -95,8 +95,8 @@ impl FilmShading for DirectFilm {
             if let Some(x) = d.get_mut(s.layer) {
                 *x = f64::from(thickness_nm);
             }
-            // Every wavelength of the sampling in one batch, four per
-            // vector, integrated as it is solved.
+            // Every wavelength of the sampling in one batch, eight or four
+            // per vector, integrated as it is solved.
             let sums = s
                 .grid
                 .weighted_spectrum(d, f64::from(cos_theta), &self.weights);

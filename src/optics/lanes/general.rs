@@ -168,7 +168,7 @@ fn shared_normal_indices<V: Lanes>(
 
 /// A medium's q: its material's shared value where it has one, else
 /// sqrt_upper(n² − β²). A function, not a closure, so that it is always
-/// inlined into the AVX2 copy.
+/// inlined into the vector copies.
 #[inline(always)]
 fn normal_index<V: Lanes>(
     slot: Option<usize>,
