@@ -110,30 +110,14 @@ fn batched(c: &mut Criterion) {
                 out[out.len() - 1].r()
             })
         });
-        g.bench_function(format!("{layers} layers, portable lanes"), |b| {
-            b.iter(|| {
-                solve_batch_on(
-                    Path::Portable,
-                    black_box(&indices),
-                    &d,
-                    &wavelengths,
-                    &cos,
-                    &mut out,
-                );
-                out[out.len() - 1].r()
-            })
-        });
+        let mut copies = vec![("portable", Path::Portable)];
         if avx2_available() {
-            g.bench_function(format!("{layers} layers, AVX2 lanes"), |b| {
+            copies.push(("AVX2", Path::Avx2));
+        }
+        for (copy, path) in copies {
+            g.bench_function(format!("{layers} layers, {copy} lanes"), |b| {
                 b.iter(|| {
-                    solve_batch_on(
-                        Path::Avx2,
-                        black_box(&indices),
-                        &d,
-                        &wavelengths,
-                        &cos,
-                        &mut out,
-                    );
+                    solve_batch_on(path, black_box(&indices), &d, &wavelengths, &cos, &mut out);
                     out[out.len() - 1].r()
                 })
             });

@@ -263,7 +263,7 @@ pub fn solve_amplitudes_beta(
     let nsq_top = n_top * n_top;
     let top = [n_top, nsq_top, sqrt_upper(nsq_top - beta_sq)];
     let q_bottom = normal_index(indices[indices.len() - 1], beta_sq);
-    recurse_beta(
+    solve_amplitudes_known(
         indices,
         thicknesses_nm,
         wavelength_nm,

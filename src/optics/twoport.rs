@@ -324,21 +324,15 @@ simd_dispatch! {
         let (t0, acc_t) = acc_t.split_at_mut(n);
         let (t1, t2) = acc_t.split_at_mut(n);
         let [w0, w1, w2] = weights;
-        if v.grazing {
-            for j in 0..n {
-                let (r, t) = (1.0, 0.0);
-                r0[j] += w0 * r;
-                r1[j] += w1 * r;
-                r2[j] += w2 * r;
-                t0[j] += w0 * t;
-                t1[j] += w1 * t;
-                t2[j] += w2 * t;
-            }
-            return;
-        }
         let f = Factors::of(v);
         for j in 0..n {
-            let (r, t) = f.unpolarized(phase_re[j], phase_im[j]);
+            // At grazing incidence no power enters: R = 1, T = 0. The test
+            // does not change along the loop, which the compiler hoists.
+            let (r, t) = if v.grazing {
+                (1.0, 0.0)
+            } else {
+                f.unpolarized(phase_re[j], phase_im[j])
+            };
             r0[j] += w0 * r;
             r1[j] += w1 * r;
             r2[j] += w2 * r;
