@@ -263,29 +263,6 @@ pub fn solve_amplitudes_beta(
     let nsq_top = n_top * n_top;
     let top = [n_top, nsq_top, sqrt_upper(nsq_top - beta_sq)];
     let q_bottom = normal_index(indices[indices.len() - 1], beta_sq);
-    solve_amplitudes_known(
-        indices,
-        thicknesses_nm,
-        wavelength_nm,
-        beta_sq,
-        top,
-        q_bottom,
-    )
-}
-
-/// [`solve_amplitudes_beta`] with the top medium's n, n² and q and the
-/// bottom medium's q given (as [`solve_amplitudes_beta`] and
-/// [`normal_index`] compute them, so the result is the same bit for bit):
-/// a caller that solves several sub-stacks sharing media computes each
-/// medium's q once (two square roots and a division each).
-pub fn solve_amplitudes_known(
-    indices: &[C64],
-    thicknesses_nm: &[f64],
-    wavelength_nm: f64,
-    beta_sq: f64,
-    top: [C64; 3],
-    q_bottom: C64,
-) -> Amplitudes {
     recurse_beta(
         indices,
         thicknesses_nm,
@@ -297,9 +274,11 @@ pub fn solve_amplitudes_known(
 }
 
 /// The recursion for a given β², the top medium given as (n, n², q) and the
-/// bottom medium's q as `q_sub`.
+/// bottom medium's q as `q_sub` (as [`solve_amplitudes_beta`] and
+/// [`normal_index`] compute them): a caller that solves several sub-stacks
+/// sharing media, as the two-port split does, computes each medium's q once.
 #[inline(always)]
-fn recurse_beta(
+pub(super) fn recurse_beta(
     indices: &[C64],
     thicknesses_nm: &[f64],
     wavelength_nm: f64,

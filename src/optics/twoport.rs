@@ -13,12 +13,13 @@
 //! with φ = e^{i k0 q d}. r', t' are A seen from below. Everything except φ is
 //! fixed for one wavelength and angle, so a thickness sweep reuses it. The
 //! sub-stacks come from the solver's own recursion
-//! ([`solve_amplitudes_known`]), whose t_ij t_ji product is sign-consistent,
+//! (`recurse_beta`, as [`super::solve_amplitudes_beta`] runs it), whose
+//! t_ij t_ji product is sign-consistent,
 //! so the composition agrees with [`super::solve`] to rounding.
 
 use num_complex::Complex64 as C64;
 
-use super::solver::{normal_index, solve_amplitudes_known, Amplitudes, Response};
+use super::solver::{normal_index, recurse_beta, Amplitudes, Response};
 use crate::simd::simd_dispatch;
 
 /// |q|² / |n|² below which the layer counts as at its critical angle. The
@@ -80,8 +81,8 @@ impl VaryingLayer {
 
         let n_sub = indices[indices.len() - 1];
         let q_sub = normal_index(n_sub, beta_sq);
-        // Each medium the three sub-stacks share gets its q once
-        // (solve_amplitudes_known).
+        // Each medium the three sub-stacks share gets its q once, passed to
+        // the recursion.
         let n_ambient = C64::new(n0, 0.0);
         let ambient = [
             n_ambient,
@@ -96,16 +97,15 @@ impl VaryingLayer {
         top.push(n_ambient);
         top.extend_from_slice(&indices[1..=layer]);
         let above = &thicknesses_nm[..layer - 1];
-        let a = solve_amplitudes_known(&top, above, wavelength_nm, beta_sq, ambient, q_layer);
+        let a = recurse_beta(&top, above, wavelength_nm, beta_sq, ambient, q_layer);
         // A from below: the same media reversed.
         top.reverse();
         let mut t_rev = std::mem::take(&mut scratch.thicknesses_nm);
         t_rev.clear();
         t_rev.extend(above.iter().rev());
-        let a_up =
-            solve_amplitudes_known(&top, &t_rev, wavelength_nm, beta_sq, varying, ambient[2]);
+        let a_up = recurse_beta(&top, &t_rev, wavelength_nm, beta_sq, varying, ambient[2]);
         // B: the varying medium down to the substrate.
-        let b = solve_amplitudes_known(
+        let b = recurse_beta(
             &indices[layer..],
             &thicknesses_nm[layer..],
             wavelength_nm,
