@@ -213,6 +213,15 @@ fn write_read_round_trip_is_bit_exact() {
         assert_eq!(back.header(), lut.header());
         let bits = |l: &Lut| l.data().iter().map(|v| v.to_bits()).collect::<Vec<_>>();
         assert_eq!(bits(&back), bits(&lut), "half = {half}");
+        // Half floats are deflated; 32-bit floats, which deflate hardly
+        // shrinks, are stored as they are.
+        let compression = common::read_exr(&path).layer_data.encoding.compression;
+        let expected = if half {
+            exr::compression::Compression::ZIP16
+        } else {
+            exr::compression::Compression::Uncompressed
+        };
+        assert_eq!(compression, expected, "half = {half}");
         // No temporary file is left beside the table.
         let left: Vec<_> = std::fs::read_dir(&dir)
             .unwrap()

@@ -1,6 +1,7 @@
-//! Tables on disk: a single-part scanline OpenEXR image (ZIP, lossless),
-//! one channel per stored quantity, and the JSON header in a text
-//! attribute named `irid`. See `docs/lut-format.md`.
+//! Tables on disk: a single-part scanline OpenEXR image (half-float tables
+//! ZIP-compressed, float tables uncompressed: see [`encoding`]), one channel
+//! per stored quantity, and the JSON header in a text attribute named
+//! `irid`. See `docs/lut-format.md`.
 
 use std::path::Path;
 
@@ -17,6 +18,20 @@ use super::header::{
 use super::sample::{channel_names, check_header, Lut};
 use super::Kind;
 use crate::error::{Error, Result};
+
+/// How a table's pixels are stored. Deflate pays on half floats (5–25 %
+/// smaller on the tables of `luts/`) but hardly on 32-bit floats, whose low
+/// mantissa bits are noise to it: the default rgb bake's table is 2.4 %
+/// smaller with ZIP, and compressing it took four times as long as writing
+/// it uncompressed (about 8 ms against 2 of a 75 ms bake). Both are
+/// lossless, and every OpenEXR reader opens either.
+fn encoding(half: bool) -> Encoding {
+    if half {
+        Encoding::SMALL_LOSSLESS
+    } else {
+        Encoding::UNCOMPRESSED
+    }
+}
 
 /// The header attribute's name.
 pub const ATTRIBUTE: &str = "irid";
@@ -57,7 +72,7 @@ impl Lut {
         let layer = Layer::new(
             (width, height),
             attributes,
-            Encoding::SMALL_LOSSLESS,
+            encoding(half),
             AnyChannels::sort(list),
         );
         let image = Image::from_layer(layer);
