@@ -8,7 +8,11 @@
 /// instructions, made a checked bake 1.17× faster than the AVX2 one (see
 /// docs/performance.md). All copies inline the same body, and Rust never
 /// fuses a multiply and an add on its own (not even where AVX-512 implies
-/// FMA), so they give the same result bit for bit.
+/// FMA), so they give the same result bit for bit. Where a body fuses on
+/// purpose (`f64::mul_add`, one rounding), the AVX copies run one FMA
+/// instruction (the AVX2 copy therefore also needs FMA, which every CPU with
+/// AVX2 in practice has) and the portable one the C library's `fma`, which
+/// rounds the same way.
 ///
 /// Arguments are `name: Type` only (no `self`: a method calls a free
 /// function defined with this).
@@ -23,7 +27,7 @@ macro_rules! simd_dispatch {
             fn body($($arg: $ty),*) $body
 
             #[cfg(target_arch = "x86_64")]
-            #[target_feature(enable = "avx2")]
+            #[target_feature(enable = "avx2,fma")]
             fn avx2($($arg: $ty),*) {
                 body($($arg),*)
             }
@@ -43,8 +47,10 @@ macro_rules! simd_dispatch {
                 return unsafe { avx512($($arg),*) };
             }
             #[cfg(target_arch = "x86_64")]
-            if std::arch::is_x86_feature_detected!("avx2") {
-                // SAFETY: the CPU has AVX2 (checked just above).
+            if std::arch::is_x86_feature_detected!("avx2")
+                && std::arch::is_x86_feature_detected!("fma")
+            {
+                // SAFETY: the CPU has AVX2 and FMA (checked just above).
                 return unsafe { avx2($($arg),*) };
             }
             body($($arg),*)

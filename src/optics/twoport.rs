@@ -174,8 +174,12 @@ impl VaryingLayer {
     /// Power R and T for both polarizations at the layer's phase factor φ.
     ///
     /// Written without complex division: with D = 1 − r'_A r_B φ²,
-    /// R = |r_A D + t_A t'_A r_B φ²|² / |D|² and T = |t_A t_B|² |φ|² / |D|²
-    /// (times the Poynting factor), one real division per polarization.
+    /// R = |r_A + (t_A t'_A − r_A r'_A) r_B φ²|² / |D|² (the numerator
+    /// r_A D + t_A t'_A r_B φ² with its constant parts gathered) and
+    /// T = |t_A t_B|² |φ|² / |D|² (times the Poynting factor), one real
+    /// division per polarization. The batched loops run the same fused
+    /// operations, so a table does not depend on which of the two evaluated
+    /// it.
     #[inline]
     pub fn response(&self, phase: C64) -> Response {
         if self.grazing {
@@ -186,25 +190,8 @@ impl VaryingLayer {
                 tp: 0.0,
             };
         }
-        let p2 = phase * phase;
-        let phase_sq = phase.norm_sqr();
-        let one = C64::new(1.0, 0.0);
-        let mut out = [(0.0, 0.0); 2];
-        for (pol, o) in out.iter_mut().enumerate() {
-            let den = one - self.y[pol] * p2;
-            let num = self.r_above[pol] * den + self.x[pol] * p2;
-            let inv = 1.0 / den.norm_sqr();
-            *o = (
-                num.norm_sqr() * inv,
-                self.z[pol].norm_sqr() * self.t_power[pol] * phase_sq * inv,
-            );
-        }
-        Response {
-            rs: out[0].0,
-            rp: out[1].0,
-            ts: out[0].1,
-            tp: out[1].1,
-        }
+        let [rs, rp, ts, tp] = Factors::of(self).polarized(phase.re, phase.im);
+        Response { rs, rp, ts, tp }
     }
     /// Unpolarized R and T at many phase factors at once, bit for bit what
     /// [`Self::response`] gives node by node. The phases come as separate
@@ -215,7 +202,7 @@ impl VaryingLayer {
     }
 
     /// Adds `weights` × R and × T (unpolarized, as [`Self::responses`] gives
-    /// them) to channel-major accumulators `acc` (`[channel][node]`, the
+    /// them; each product and sum fused, one rounding) to channel-major accumulators `acc` (`[channel][node]`, the
     /// three R channels first, one node per phase factor). One pass instead
     /// of [`Self::responses`] and a second loop over its output: R and T stay
     /// in registers, and the accumulation's loads and adds fill the slots
@@ -231,13 +218,15 @@ impl VaryingLayer {
     }
 }
 
-/// The thickness-independent factors of [`VaryingLayer::response`] as the
-/// batched loops use them.
+/// The thickness-independent factors of [`VaryingLayer::response`], as the
+/// batched loops use them, per polarization.
 #[derive(Clone, Copy)]
 struct Factors {
     ra: [C64; 2],
-    x: [C64; 2],
-    y: [C64; 2],
+    /// t_A t'_A r_B − r_A r'_A r_B: the numerator's φ² coefficient.
+    x_net: [C64; 2],
+    /// −r'_A r_B: the denominator is 1 + (−y)φ².
+    neg_y: [C64; 2],
     /// |t_A t_B|² times the Poynting factor.
     zt: [f64; 2],
 }
@@ -247,8 +236,8 @@ impl Factors {
     fn of(v: &VaryingLayer) -> Factors {
         Factors {
             ra: v.r_above,
-            x: v.x,
-            y: v.y,
+            x_net: [0, 1].map(|k| v.x[k] - v.r_above[k] * v.y[k]),
+            neg_y: v.y.map(|y| -y),
             zt: [
                 v.z[0].norm_sqr() * v.t_power[0],
                 v.z[1].norm_sqr() * v.t_power[1],
@@ -256,31 +245,43 @@ impl Factors {
         }
     }
 
-    /// Unpolarized R and T at the phase factor `a + ib`: the same operations
-    /// in the same order as `response` (complex products written out as
-    /// num_complex does), so a table does not depend on which of the two
-    /// evaluated it.
+    /// Rs, Rp, Ts, Tp at the phase factor `a + ib`. Products and sums are
+    /// fused (`mul_add`, one rounding each), which takes the loop from about
+    /// a hundred operations a node to half that; every copy of the batched
+    /// loops and the scalar [`VaryingLayer::response`] run these same
+    /// operations, so they agree bit for bit.
     #[inline(always)]
-    fn unpolarized(&self, a: f64, b: f64) -> (f64, f64) {
-        let p2 = C64::new(a * a - b * b, a * b + b * a);
-        let phase_sq = a * a + b * b;
+    fn polarized(&self, a: f64, b: f64) -> [f64; 4] {
+        // φ² and |φ|²; 2ab is exact doubling of one rounded product.
+        let (p_re, p_im) = (a.mul_add(a, -(b * b)), 2.0 * (a * b));
+        let phase_sq = a.mul_add(a, b * b);
         #[inline(always)]
-        fn pol(p2: C64, phase_sq: f64, ra: C64, x: C64, y: C64, zt: f64) -> (f64, f64) {
-            let yp = C64::new(y.re * p2.re - y.im * p2.im, y.re * p2.im + y.im * p2.re);
-            let den = C64::new(1.0 - yp.re, 0.0 - yp.im);
-            let num = C64::new(
-                (ra.re * den.re - ra.im * den.im) + (x.re * p2.re - x.im * p2.im),
-                (ra.re * den.im + ra.im * den.re) + (x.re * p2.im + x.im * p2.re),
-            );
-            let inv = 1.0 / (den.re * den.re + den.im * den.im);
+        fn pol(p_re: f64, p_im: f64, ra: C64, x: C64, neg_y: C64) -> (f64, f64) {
+            let den_re = neg_y.re.mul_add(p_re, (-neg_y.im).mul_add(p_im, 1.0));
+            let den_im = neg_y.re.mul_add(p_im, neg_y.im * p_re);
+            let num_re = x.re.mul_add(p_re, (-x.im).mul_add(p_im, ra.re));
+            let num_im = x.re.mul_add(p_im, x.im.mul_add(p_re, ra.im));
             (
-                (num.re * num.re + num.im * num.im) * inv,
-                zt * phase_sq * inv,
+                num_re.mul_add(num_re, num_im * num_im),
+                den_re.mul_add(den_re, den_im * den_im),
             )
         }
-        let (rs, ts) = pol(p2, phase_sq, self.ra[0], self.x[0], self.y[0], self.zt[0]);
-        let (rp, tp) = pol(p2, phase_sq, self.ra[1], self.x[1], self.y[1], self.zt[1]);
-        (0.5 * (rs + rp), 0.5 * (ts + tp))
+        let (ns, ds) = pol(p_re, p_im, self.ra[0], self.x_net[0], self.neg_y[0]);
+        let (np, dp) = pol(p_re, p_im, self.ra[1], self.x_net[1], self.neg_y[1]);
+        let (inv_s, inv_p) = (1.0 / ds, 1.0 / dp);
+        [
+            ns * inv_s,
+            np * inv_p,
+            self.zt[0] * phase_sq * inv_s,
+            self.zt[1] * phase_sq * inv_p,
+        ]
+    }
+
+    /// The sums Rs + Rp and Ts + Tp (twice the unpolarized R and T).
+    #[inline(always)]
+    fn sums(&self, a: f64, b: f64) -> (f64, f64) {
+        let [rs, rp, ts, tp] = self.polarized(a, b);
+        (rs + rp, ts + tp)
     }
 }
 
@@ -302,7 +303,8 @@ simd_dispatch! {
         }
         let f = Factors::of(v);
         for j in 0..n {
-            (r[j], t[j]) = f.unpolarized(phase_re[j], phase_im[j]);
+            let (r_sum, t_sum) = f.sums(phase_re[j], phase_im[j]);
+            (r[j], t[j]) = (0.5 * r_sum, 0.5 * t_sum);
         }
     }
 }
@@ -323,22 +325,24 @@ simd_dispatch! {
         let (r1, r2) = acc_r.split_at_mut(n);
         let (t0, acc_t) = acc_t.split_at_mut(n);
         let (t1, t2) = acc_t.split_at_mut(n);
-        let [w0, w1, w2] = weights;
+        // w (½ (Rs + Rp)) and (½ w)(Rs + Rp) are the same exact product, so
+        // each fused step gives what weighting the unpolarized R would.
+        let [w0, w1, w2] = weights.map(|w| 0.5 * w);
         let f = Factors::of(v);
         for j in 0..n {
             // At grazing incidence no power enters: R = 1, T = 0. The test
             // does not change along the loop, which the compiler hoists.
             let (r, t) = if v.grazing {
-                (1.0, 0.0)
+                (2.0, 0.0)
             } else {
-                f.unpolarized(phase_re[j], phase_im[j])
+                f.sums(phase_re[j], phase_im[j])
             };
-            r0[j] += w0 * r;
-            r1[j] += w1 * r;
-            r2[j] += w2 * r;
-            t0[j] += w0 * t;
-            t1[j] += w1 * t;
-            t2[j] += w2 * t;
+            r0[j] = w0.mul_add(r, r0[j]);
+            r1[j] = w1.mul_add(r, r1[j]);
+            r2[j] = w2.mul_add(r, r2[j]);
+            t0[j] = w0.mul_add(t, t0[j]);
+            t1[j] = w1.mul_add(t, t1[j]);
+            t2[j] = w2.mul_add(t, t2[j]);
         }
     }
 }

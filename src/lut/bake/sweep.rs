@@ -346,14 +346,15 @@ pub(super) fn rgb_weights(integrator: &SpectralIntegrator) -> Vec<[f64; 3]> {
 
 simd_dispatch! {
     /// Adds `weights` × R and × T to channel-major accumulators
-    /// (`[channel][node]`, R channels first).
+    /// (`[channel][node]`, R channels first), each product and sum fused as
+    /// in [`VaryingLayer::accumulate_responses`].
     fn accumulate(acc: &mut [f64], r: &[f64], t: &[f64], weights: [f64; 3]) {
         let n = r.len();
         let (acc_r, acc_t) = acc.split_at_mut(3 * n);
         for (acc, values) in [(acc_r, r), (acc_t, t)] {
             for (a, wt) in acc.chunks_exact_mut(n).zip(weights) {
                 for (a, &v) in a.iter_mut().zip(values) {
-                    *a += wt * v;
+                    *a = wt.mul_add(v, *a);
                 }
             }
         }

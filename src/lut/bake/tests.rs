@@ -51,7 +51,7 @@ fn sweep_matches_exact_phase() {
         for (k, (a, s)) in acc.chunks_exact(n).zip(start.chunks_exact(n)).enumerate() {
             let values = if k < 3 { &r } else { &t };
             for j in 0..n {
-                let want = s[j] + weights[k % 3] * values[j];
+                let want = weights[k % 3].mul_add(values[j], s[j]);
                 assert_eq!(a[j].to_bits(), want.to_bits(), "channel {k} node {j}");
             }
         }
