@@ -551,10 +551,45 @@ simd_dispatch! {
                     phase[g] *= deltas[g];
                 }
             }
-            // Written in chunk order: the node two runs share gets the
-            // later run's value. A chunk runs on to whole vectors (the
-            // buffers have room): the values past its end are a later
-            // chunk's to overwrite or the caller's to discard.
+            // A chunk runs on to whole vectors (the buffers have room): the
+            // values past its end are a later chunk's to overwrite or the
+            // caller's to discard. Where the group's chunks tile their nodes
+            // in whole vectors (the chunks of one run, but for its last),
+            // none writes another's nodes, and their chains advance side by
+            // side: each alone waits on its own multiplications.
+            let tiled = group
+                .windows(2)
+                .all(|w| w[0].start + w[0].len == w[1].start && w[0].len % PHASE_LANES == 0);
+            if tiled {
+                let mut vectors = [0; PHASE_GROUP];
+                let mut at = [0; PHASE_GROUP];
+                for (g, c) in group.iter().enumerate() {
+                    vectors[g] = c.len.div_ceil(PHASE_LANES);
+                    at[g] = c.start - origin;
+                }
+                let longest = vectors.iter().copied().max().unwrap_or(0);
+                let mut lanes = heads;
+                for k in 0..longest {
+                    for g in 0..PHASE_GROUP {
+                        if k >= vectors[g] {
+                            continue;
+                        }
+                        let (a, b) = &mut lanes[g];
+                        if k > 0 {
+                            let s = steps[g];
+                            for l in 0..PHASE_LANES {
+                                (a[l], b[l]) = (a[l] * s.re - b[l] * s.im, a[l] * s.im + b[l] * s.re);
+                            }
+                        }
+                        let j = at[g] + k * PHASE_LANES;
+                        re[j..j + PHASE_LANES].copy_from_slice(a);
+                        im[j..j + PHASE_LANES].copy_from_slice(b);
+                    }
+                }
+                continue;
+            }
+            // Otherwise in chunk order: the node two runs share gets the
+            // later run's value.
             for ((c, (mut a, mut b)), s) in group.iter().zip(heads).zip(steps) {
                 let (start, end) = (c.start - origin, c.start - origin + c.len);
                 re[start..start + PHASE_LANES].copy_from_slice(&a);
