@@ -135,7 +135,7 @@ impl<const M: usize> Interfaces<M> {
 fn step<V: Lanes>(gamma: &mut Cv<V>, r: Cv<V>, rho: Cv<V>) -> V {
     let g = gamma.mul(rho);
     let den = r.mul(*gamma).mul(rho).one_plus();
-    let inv_norm = V::splat(1.0).div(den.norm_sqr());
+    let inv_norm = V::splat(1.0).div(den.norm_sqr_fused());
     let inv = Cv {
         re: den.re.mul(inv_norm),
         im: den.im.neg().mul(inv_norm),
@@ -150,8 +150,8 @@ fn step<V: Lanes>(gamma: &mut Cv<V>, r: Cv<V>, rho: Cv<V>) -> V {
 fn top_step<V: Lanes>(gamma: Cv<V>, r: Cv<V>, rho: Cv<V>) -> (V, V) {
     let g = gamma.mul(rho);
     let den = r.mul(gamma).mul(rho).one_plus();
-    let inv_norm = V::splat(1.0).div(den.norm_sqr());
-    (r.add(g).norm_sqr().mul(inv_norm), inv_norm)
+    let inv_norm = V::splat(1.0).div(den.norm_sqr_fused());
+    (r.add(g).norm_sqr_fused().mul(inv_norm), inv_norm)
 }
 
 /// R and T of one wavelength per lane (2π/λ in `k0`) of the stack `f`
