@@ -7,6 +7,7 @@
 //! sRGB has IEC 61966-2-1 primaries and a perfect reflector at (1, 1, 1).
 
 pub mod cie_tables;
+mod ciede2000;
 mod film;
 mod sampling;
 mod space;

@@ -1,11 +1,10 @@
-//! Colour spaces: linear sRGB ↔ XYZ, CIE Lab and CIEDE2000 (through the
-//! `palette` crate), and 8-bit sRGB encoding.
+//! Colour spaces: linear sRGB ↔ XYZ, CIE Lab and CIEDE2000 (see
+//! [`super::ciede2000`]), and 8-bit sRGB encoding (through the `palette`
+//! crate).
 
 use std::sync::LazyLock;
 
-use palette::color_difference::Ciede2000;
-use palette::white_point::{Any, WhitePoint};
-use palette::{FromColor, Lab, LinSrgb, Srgb, Xyz};
+use palette::{LinSrgb, Srgb};
 
 use super::sampling::exact_xyz_weights;
 
@@ -88,28 +87,16 @@ pub fn linear_srgb_to_xyz(rgb: [f64; 3]) -> [f64; 3] {
     mat_vec(&SRGB.rgb_to_xyz, rgb)
 }
 
-/// palette's white point set to the tables' D65 white, so Lab of a perfect
-/// reflector is exactly (100, 0, 0).
-struct TableD65;
-
-impl WhitePoint<f64> for TableD65 {
-    fn get_xyz() -> Xyz<Any, f64> {
-        let [x, y, z] = SRGB.white_xyz;
-        Xyz::new(x, y, z)
-    }
-}
-
-/// CIE Lab (D65 white, Y_white = 1) of an XYZ colour.
+/// CIE Lab (D65 white, Y_white = 1) of an XYZ colour: the white is the
+/// tables' own, so Lab of a perfect reflector is (100, 0, 0). Not clamped:
+/// a colour brighter than the white has L above 100.
 pub fn xyz_to_lab(xyz: [f64; 3]) -> [f64; 3] {
-    let lab = Lab::<TableD65, f64>::from_color(Xyz::<TableD65, f64>::new(xyz[0], xyz[1], xyz[2]));
-    [lab.l, lab.a, lab.b]
+    super::ciede2000::lab(xyz, SRGB.white_xyz)
 }
 
 /// CIEDE2000 colour difference (k_L = k_C = k_H = 1) between two Lab colours.
 pub fn delta_e2000(lab_a: [f64; 3], lab_b: [f64; 3]) -> f64 {
-    let a = Lab::<TableD65, f64>::new(lab_a[0], lab_a[1], lab_a[2]);
-    let b = Lab::<TableD65, f64>::new(lab_b[0], lab_b[1], lab_b[2]);
-    a.difference(b)
+    super::ciede2000::delta_e2000(lab_a, lab_b)
 }
 
 /// CIEDE2000 between two linear-sRGB colours.
@@ -158,6 +145,106 @@ mod tests {
         for (got, want) in m.xyz_to_rgb.iter().flatten().zip(iec.iter().flatten()) {
             assert!((got - want).abs() < 2e-3, "{got} vs {want}");
         }
+    }
+
+    /// palette's white point set to the tables' D65 white.
+    struct TableD65;
+
+    impl palette::white_point::WhitePoint<f64> for TableD65 {
+        fn get_xyz() -> palette::Xyz<palette::white_point::Any, f64> {
+            let [x, y, z] = SRGB.white_xyz;
+            palette::Xyz::new(x, y, z)
+        }
+    }
+
+    /// Lab and CIEDE2000 against `palette`'s implementation, over random
+    /// colours of every lightness and chroma, neutral ones, and pairs as
+    /// close as the validation's (a table's colour against the exact one).
+    #[test]
+    fn lab_and_ciede2000_match_palette() {
+        use palette::color_difference::Ciede2000;
+        use palette::convert::FromColorUnclamped;
+        use palette::{Lab, Xyz};
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_pcg::Pcg64::seed_from_u64(11);
+        let palette_lab = |xyz: [f64; 3]| {
+            let lab = Lab::<TableD65, f64>::from_color_unclamped(Xyz::<TableD65, f64>::new(
+                xyz[0], xyz[1], xyz[2],
+            ));
+            [lab.l, lab.a, lab.b]
+        };
+        let palette_de = |a: [f64; 3], b: [f64; 3]| {
+            Lab::<TableD65, f64>::new(a[0], a[1], a[2])
+                .difference(Lab::<TableD65, f64>::new(b[0], b[1], b[2]))
+        };
+        let mut worst_lab = 0.0f64;
+        let mut worst_de = 0.0f64;
+        let (mut worst_other_mean, mut other_mean) = (0.0f64, 0);
+        for i in 0..100_000 {
+            let rgb: [f64; 3] = std::array::from_fn(|_| rng.random_range(-0.2..1.5));
+            let near = match i % 3 {
+                0 => std::array::from_fn(|_| rng.random_range(-0.2..1.5)),
+                1 => rgb.map(|c| c + rng.random_range(-1e-3..1e-3)),
+                _ => {
+                    let grey = rng.random_range(0.0..1.0);
+                    [grey; 3]
+                }
+            };
+            for c in [rgb, near] {
+                let xyz = linear_srgb_to_xyz(c);
+                let (got, want) = (xyz_to_lab(xyz), palette_lab(xyz));
+                for k in 0..3 {
+                    worst_lab = worst_lab.max((got[k] - want[k]).abs());
+                }
+            }
+            let (a, b) = (
+                palette_lab(linear_srgb_to_xyz(rgb)),
+                palette_lab(linear_srgb_to_xyz(near)),
+            );
+            let (got, want) = (delta_e2000(a, b), palette_de(a, b));
+            let diff = (got - want).abs() / want.max(1e-3);
+            if mean_hues_differ(a, b) {
+                worst_other_mean = worst_other_mean.max(diff);
+                other_mean += 1;
+            } else {
+                worst_de = worst_de.max(diff);
+            }
+        }
+        assert!(
+            worst_lab < 1e-12,
+            "Lab differs from palette's by {worst_lab:e}"
+        );
+        assert!(
+            worst_de < 1e-9,
+            "CIEDE2000 differs from palette's by {worst_de:e} (relative)"
+        );
+        // Where the hues are more than 180° apart and sum to 360° or more,
+        // Sharma et al. take their mean as (h₁ + h₂ − 360°)/2 and palette as
+        // (h₁ + h₂ + 360°)/2: the hue weighting T agrees (it is periodic),
+        // the rotation term's Δθ does not, by a little.
+        assert!(
+            other_mean > 1000,
+            "{other_mean} pairs take the other mean hue"
+        );
+        assert!(worst_other_mean < 1e-5, "{worst_other_mean:e}");
+    }
+
+    /// Whether the pair's mean hue is where Sharma's rule and palette's part
+    /// (h' as CIEDE2000 defines it, from the chroma-adjusted a').
+    fn mean_hues_differ(lab1: [f64; 3], lab2: [f64; 3]) -> bool {
+        let chroma = |l: [f64; 3]| l[1].hypot(l[2]);
+        let c_bar = 0.5 * (chroma(lab1) + chroma(lab2));
+        let g = 0.5 * (1.0 - (c_bar.powi(7) / (c_bar.powi(7) + 25f64.powi(7))).sqrt());
+        let hue = |l: [f64; 3]| {
+            let h = l[2].atan2((1.0 + g) * l[1]).to_degrees();
+            if h < 0.0 {
+                h + 360.0
+            } else {
+                h
+            }
+        };
+        let (h1, h2) = (hue(lab1), hue(lab2));
+        chroma(lab1) > 0.0 && chroma(lab2) > 0.0 && (h2 - h1).abs() > 180.0 && h1 + h2 >= 360.0
     }
 
     #[test]
