@@ -234,8 +234,9 @@ impl Lanes for Portable {
 }
 
 /// Complex numbers in lanes, real and imaginary parts apart. The operations
-/// repeat num_complex's formulas exactly (including 0 − x where it writes
-/// that, which differs from −x in the sign of a zero).
+/// follow num_complex's formulas (including 0 − x where it writes that,
+/// which differs from −x in the sign of a zero), but for the product and
+/// [`Cv::norm_sqr_fused`], which fuse a sum into a product.
 #[derive(Clone, Copy, Debug)]
 pub(super) struct Cv<V> {
     pub(super) re: V,
