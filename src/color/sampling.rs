@@ -342,24 +342,27 @@ fn apply(weights: &[Vec<f64>; 3], spectrum: &[f64]) -> [f64; 3] {
     ]
 }
 
-/// Dot product with four independent partial sums, so the additions do not
-/// form one serial dependency chain and the loop vectorizes.
+/// Dot product with eight independent partial sums (sum k takes the terms
+/// i ≡ k mod 8), so the additions do not form one serial dependency chain and
+/// the loop vectorizes. The lane kernels' colour sink adds in this same order
+/// (one AVX-512 register of sums per channel), so a colour folded in as the
+/// spectrum is solved has the bits of this one.
 #[inline]
 fn dot(a: &[f64], b: &[f64]) -> f64 {
-    let mut acc = [0.0; 4];
-    let (a4, b4) = (a.chunks_exact(4), b.chunks_exact(4));
-    let tail: f64 = a4
+    let mut acc = [0.0; 8];
+    let (a8, b8) = (a.chunks_exact(8), b.chunks_exact(8));
+    let tail: f64 = a8
         .remainder()
         .iter()
-        .zip(b4.remainder())
+        .zip(b8.remainder())
         .map(|(x, y)| x * y)
         .sum();
-    for (x, y) in a4.zip(b4) {
-        for k in 0..4 {
+    for (x, y) in a8.zip(b8) {
+        for k in 0..8 {
             acc[k] += x[k] * y[k];
         }
     }
-    (acc[0] + acc[1]) + (acc[2] + acc[3]) + tail
+    ((acc[0] + acc[4]) + (acc[1] + acc[5])) + ((acc[2] + acc[6]) + (acc[3] + acc[7])) + tail
 }
 
 /// Exact-strategy XYZ weights, D65 × CMF at 1 nm over 360–830 nm, normalized by

@@ -64,9 +64,6 @@ pub(super) trait Lanes: Copy {
     /// # Panics
     /// If `s` is shorter.
     fn load(s: &[f64]) -> Self;
-    /// Adds each group of four lanes in turn to `acc`, lane by lane: the
-    /// order of four running partial sums over consecutive values.
-    fn add_quads_to(self, acc: &mut [f64; 4]);
     fn add(self, o: Self) -> Self;
     fn sub(self, o: Self) -> Self;
     fn mul(self, o: Self) -> Self;
@@ -144,12 +141,6 @@ impl Lanes for Portable {
         let mut a = [0.0; PORTABLE_LANES];
         a.copy_from_slice(&s[..PORTABLE_LANES]);
         Portable(a)
-    }
-    #[inline(always)]
-    fn add_quads_to(self, acc: &mut [f64; 4]) {
-        for (a, x) in acc.iter_mut().zip(self.0) {
-            *a += x;
-        }
     }
     #[inline(always)]
     fn add(self, o: Self) -> Self {

@@ -131,25 +131,36 @@ pub struct WeightedPower {
     pub transmittance: [f64; 3],
 }
 
-/// Folds each vector into running sums: per channel four partial sums
-/// (sum k takes the wavelengths i ≡ k mod 4, in order) and a serial tail for
-/// the last wavelengths short of a whole four, combined as
-/// `(a0 + a1) + (a2 + a3) + tail`. That is the summation order of the colour
-/// integrator's dot product, so the sums have the bits of integrating the
-/// stored spectrum, whatever the vector's width.
-pub(super) struct Integrate<'a> {
+/// Wavelengths the colour integrator's dot product sums apart: sum k takes
+/// the wavelengths i ≡ k (mod 8), so that the widest vector adds a whole
+/// register to its sums at once, with no shuffling (see
+/// `color::sampling::dot`, whose order this is).
+pub(super) const PARTIAL_SUMS: usize = 8;
+
+/// Folds each vector into running sums: per channel the eight partial sums of
+/// [`PARTIAL_SUMS`], each added in wavelength order, and a serial tail for
+/// the last wavelengths short of a whole eight, combined as
+/// `((a0 + a4) + (a1 + a5)) + ((a2 + a6) + (a3 + a7)) + tail`. That is the
+/// summation order of the colour integrator's dot product, so the sums have
+/// the bits of integrating the stored spectrum, whatever the vector's width.
+/// An eight-lane vector holds one set of sums per channel in a register
+/// (`low`); a four-lane one needs two (`low` for residues 0–3, `high` for
+/// 4–7), which alternate from vector to vector.
+pub(super) struct Integrate<'a, V> {
     weights: &'a SpectralWeights,
     /// R's three channels, then T's.
-    partial: [[f64; 4]; 6],
+    low: [V; 6],
+    high: [V; 6],
     tail: [f64; 6],
 }
 
-impl<'a> Integrate<'a> {
+impl<'a, V: Lanes> Integrate<'a, V> {
     #[inline(always)]
     pub(super) fn new(weights: &'a SpectralWeights) -> Self {
         Integrate {
             weights,
-            partial: [[0.0; 4]; 6],
+            low: [V::splat(0.0); 6],
+            high: [V::splat(0.0); 6],
             tail: [-0.0; 6],
         }
     }
@@ -157,8 +168,13 @@ impl<'a> Integrate<'a> {
     #[inline(always)]
     pub(super) fn finish(&self) -> WeightedPower {
         let sum = |k: usize| {
-            let a = self.partial[k];
-            (a[0] + a[1]) + (a[2] + a[3]) + self.tail[k]
+            let mut a = [0.0; PARTIAL_SUMS];
+            let low = self.low[k].to_array();
+            a[..V::WIDTH].copy_from_slice(&low[..V::WIDTH]);
+            if V::WIDTH < PARTIAL_SUMS {
+                a[V::WIDTH..].copy_from_slice(&self.high[k].to_array()[..PARTIAL_SUMS - V::WIDTH]);
+            }
+            ((a[0] + a[4]) + (a[1] + a[5])) + ((a[2] + a[6]) + (a[3] + a[7])) + self.tail[k]
         };
         WeightedPower {
             reflectance: [sum(0), sum(1), sum(2)],
@@ -167,7 +183,7 @@ impl<'a> Integrate<'a> {
     }
 }
 
-impl<V: Lanes> Sink<V> for Integrate<'_> {
+impl<V: Lanes> Sink<V> for Integrate<'_, V> {
     #[inline(always)]
     fn take(&mut self, start: usize, power: &Power<V>) {
         // No closures here: a closure is compiled without the kernel copy's
@@ -180,9 +196,16 @@ impl<V: Lanes> Sink<V> for Integrate<'_> {
             products[c] = w.mul(r);
             products[3 + c] = w.mul(t);
         }
-        if start + V::WIDTH <= n {
-            for (p, sums) in products.iter().zip(&mut self.partial) {
-                p.add_quads_to(sums);
+        if start + V::WIDTH <= n / PARTIAL_SUMS * PARTIAL_SUMS {
+            // Vectors start at multiples of their width, so a four-lane one
+            // covers residues 0–3 or 4–7 whole.
+            let sums = if start.is_multiple_of(PARTIAL_SUMS) {
+                &mut self.low
+            } else {
+                &mut self.high
+            };
+            for (p, s) in products.iter().zip(sums) {
+                *s = s.add(*p);
             }
             return;
         }
@@ -190,8 +213,15 @@ impl<V: Lanes> Sink<V> for Integrate<'_> {
             let p = p.to_array();
             for (l, &x) in p.iter().enumerate().take(n - start) {
                 let i = start + l;
-                if i < n / 4 * 4 {
-                    self.partial[k][i % 4] += x;
+                if i < n / PARTIAL_SUMS * PARTIAL_SUMS {
+                    let sums = if i % PARTIAL_SUMS < V::WIDTH {
+                        &mut self.low[k]
+                    } else {
+                        &mut self.high[k]
+                    };
+                    let mut a = sums.to_array();
+                    a[i % V::WIDTH] += x;
+                    *sums = V::from_array(a);
                 } else {
                     self.tail[k] += x;
                 }

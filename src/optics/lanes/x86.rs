@@ -57,15 +57,6 @@ impl Lanes for Avx2 {
         unsafe { Avx2(_mm256_loadu_pd(s.as_ptr())) }
     }
     #[inline(always)]
-    fn add_quads_to(self, acc: &mut [f64; 4]) {
-        // SAFETY: AVX2 is present; see the note above `impl Avx2`; `acc`
-        // holds the four values read and written.
-        unsafe {
-            let sum = _mm256_add_pd(_mm256_loadu_pd(acc.as_ptr()), self.0);
-            _mm256_storeu_pd(acc.as_mut_ptr(), sum);
-        }
-    }
-    #[inline(always)]
     fn add(self, o: Self) -> Self {
         // SAFETY: AVX2 is present; see the note above `impl Avx2`.
         unsafe { Avx2(_mm256_add_pd(self.0, o.0)) }
@@ -212,17 +203,6 @@ impl Lanes for Avx512 {
         // SAFETY: AVX-512F is present; see the note above `impl Avx512`;
         // `s` holds the eight values read.
         unsafe { Avx512(_mm512_loadu_pd(s.as_ptr())) }
-    }
-    #[inline(always)]
-    fn add_quads_to(self, acc: &mut [f64; 4]) {
-        // SAFETY: AVX-512F is present; see the note above `impl Avx512`;
-        // `acc` holds the four values read and written.
-        unsafe {
-            let low = _mm512_castpd512_pd256(self.0);
-            let high = _mm512_extractf64x4_pd::<1>(self.0);
-            let sum = _mm256_add_pd(_mm256_loadu_pd(acc.as_ptr()), low);
-            _mm256_storeu_pd(acc.as_mut_ptr(), _mm256_add_pd(sum, high));
-        }
     }
     #[inline(always)]
     fn add(self, o: Self) -> Self {
