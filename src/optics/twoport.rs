@@ -156,6 +156,14 @@ impl VaryingLayer {
         (self.ikq * thickness_nm).exp()
     }
 
+    /// The angle whose one-way factor is [`Self::phase`]: φ with
+    /// e^{iφ} = e^{i k0 q d}, for the lanes' exponential
+    /// ([`crate::optics::lanes::one_way_many`]).
+    #[inline]
+    pub fn phase_angle(&self, thickness_nm: f64) -> C64 {
+        C64::new(self.ikq.im * thickness_nm, -self.ikq.re * thickness_nm)
+    }
+
     /// The complex amplitudes for the layer's phase factor φ.
     #[inline]
     pub fn amplitudes(&self, phase: C64) -> Amplitudes {

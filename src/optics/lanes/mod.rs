@@ -48,6 +48,7 @@ mod spectrum;
 #[cfg(target_arch = "x86_64")]
 mod x86;
 
+pub use arith::MAX_LANES;
 use arith::{Lanes, Portable};
 use general::{batch_body, spectrum_body};
 use sink::{Integrate, Store};
@@ -207,6 +208,36 @@ kernel_copies! {
     ) -> () {
         batch_body::<V>(indices, thicknesses_nm, wavelengths_nm, cos_theta0, out)
     }
+}
+
+kernel_copies! {
+    fn one_way_copies<V>(phases: &[C64; MAX_LANES]) -> [C64; MAX_LANES] {
+        let mut out = [C64::new(0.0, 0.0); MAX_LANES];
+        for start in (0..MAX_LANES).step_by(V::WIDTH) {
+            let (mut re, mut im) = ([0.0; MAX_LANES], [0.0; MAX_LANES]);
+            for (l, z) in phases[start..].iter().enumerate() {
+                (re[l], im[l]) = (z.re, z.im);
+            }
+            let z = arith::one_way(arith::Cv {
+                re: V::from_array(re),
+                im: V::from_array(im),
+            });
+            let (re, im) = (z.re.to_array(), z.im.to_array());
+            for (l, o) in out[start..start + V::WIDTH].iter_mut().enumerate() {
+                *o = C64::new(re[l], im[l]);
+            }
+        }
+        out
+    }
+}
+
+/// e^{iφ} for eight phases φ at once, as the lanes compute a layer's
+/// one-way factor: e^{−Im φ} (cos Re φ + i sin Re φ), within an ulp or a
+/// few of the C library's (`tests/batched.rs`). For callers that need a
+/// handful of scattered exponentials, such as the baker's exact phase at
+/// the start of each stretch of thickness nodes.
+pub fn one_way_many(path: Path, phases: &[C64; MAX_LANES]) -> [C64; MAX_LANES] {
+    one_way_copies(path, phases)
 }
 
 /// The lengths [`solve_spectrum_on`] and [`weighted_spectrum_on`] need.
