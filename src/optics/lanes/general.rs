@@ -277,6 +277,13 @@ fn constant_body<V: Lanes, const M: usize>(
     else {
         return false;
     };
+    if let Some(one) = constant::OneLayer::<V>::new(&f) {
+        for start in (0..spectrum.wavelengths()).step_by(V::WIDTH) {
+            let k0 = V::load(&spectrum.k0()[start..]);
+            sink.take(start, &one.solve(k0));
+        }
+        return true;
+    }
     for start in (0..spectrum.wavelengths()).step_by(V::WIDTH) {
         let k0 = V::load(&spectrum.k0()[start..]);
         sink.take(start, &constant::solve_lanes::<V, M>(&f, k0));
