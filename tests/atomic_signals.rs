@@ -12,6 +12,15 @@ const CHILD_DIR: &str = "IRID_TEST_ATOMIC_CHILD_DIR";
 
 /// In the child: start writing `DIR/out.bin`, write half, say so, hang.
 fn child_writes_forever(dir: &Path) {
+    // A shell that starts a job in the background without job control
+    // makes it ignore SIGINT, and an ignored signal stays ignored across
+    // exec: the child would never die of it and the test would wait
+    // forever. Signals take their default action here, as in a terminal.
+    // SAFETY: setting a disposition to SIG_DFL installs no handler.
+    unsafe {
+        libc::signal(libc::SIGINT, libc::SIG_DFL);
+        libc::signal(libc::SIGTERM, libc::SIG_DFL);
+    }
     irid::atomic::write_with(&dir.join("out.bin"), |tmp| {
         std::fs::write(tmp, vec![7u8; 1 << 16]).unwrap();
         std::fs::write(dir.join("started"), b"").unwrap();
@@ -55,6 +64,23 @@ fn wait_for(path: &Path) {
     }
 }
 
+/// The child's exit status; a child still alive after `limit` is killed
+/// and the test fails, rather than hang.
+fn wait_at_most(child: &mut Child, limit: Duration) -> std::process::ExitStatus {
+    let start = Instant::now();
+    loop {
+        if let Some(status) = child.try_wait().unwrap() {
+            return status;
+        }
+        if start.elapsed() > limit {
+            let _ = child.kill();
+            let _ = child.wait();
+            panic!("the child outlived its signal by {limit:?}");
+        }
+        std::thread::sleep(Duration::from_millis(10));
+    }
+}
+
 #[test]
 fn interrupted_writes_leave_nothing() {
     if let Some(dir) = std::env::var_os(CHILD_DIR) {
@@ -74,7 +100,7 @@ fn interrupted_writes_leave_nothing() {
             }
             // SAFETY: signals a child process this test started.
             unsafe { libc::kill(child.id() as i32, signal) };
-            let status = child.wait().unwrap();
+            let status = wait_at_most(&mut child, Duration::from_secs(60));
             assert!(!status.success());
             let left = listing(dir.path());
             if named && signal == libc::SIGKILL {
