@@ -187,8 +187,9 @@ impl VaryingLayer {
     /// T = |t_A t_B|² |φ|² / |D|² (times the Poynting factor), one real
     /// division per polarization. The batched loops run the same fused
     /// operations, so a table does not depend on which of the two evaluated
-    /// it.
-    #[inline]
+    /// it. Always inlined, so that a caller compiled for FMA (such as a
+    /// `simd_dispatch!` copy) fuses them in instructions, not library calls.
+    #[inline(always)]
     pub fn response(&self, phase: C64) -> Response {
         if self.grazing {
             return Response {
