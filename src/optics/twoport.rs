@@ -19,7 +19,7 @@
 
 use num_complex::Complex64 as C64;
 
-use super::solver::{normal_index, recurse_beta, Amplitudes, Response};
+use super::solver::{normal_index, recurse_beta, Response};
 use crate::simd::simd_dispatch;
 
 /// |q|² / |n|² below which the layer counts as at its critical angle. The
@@ -39,20 +39,12 @@ pub struct Scratch {
 /// varying layer's thickness. Index 0 of each pair is s, index 1 is p.
 #[derive(Clone, Copy, Debug)]
 pub struct VaryingLayer {
-    /// r_A.
-    r_above: [C64; 2],
-    /// t_A t'_A r_B.
-    x: [C64; 2],
-    /// r'_A r_B.
-    y: [C64; 2],
-    /// t_A t_B.
-    z: [C64; 2],
-    /// i k0 q of the varying layer: φ = exp(ikq · d).
-    ikq: C64,
-    /// q of the varying layer.
+    /// The coefficients of R and T in φ², made once per split.
+    factors: Factors,
+    /// 2π/λ.
+    k0: f64,
+    /// q of the varying layer: φ = exp(i k0 q d).
     q: C64,
-    /// Poynting factors turning |t|² into transmitted power (s, p).
-    t_power: [f64; 2],
     /// cos θ0 = 0: no power enters, R = 1 and T = 0 whatever the stack.
     grazing: bool,
     /// The layer's q is (nearly) 0: it sits at its own critical angle, where
@@ -118,14 +110,22 @@ impl VaryingLayer {
 
         let q0 = n0 * cos_theta0;
         let cos_sub = q_sub / n_sub;
+        let r_above = [a.rs, a.rp];
+        // t_A t'_A r_B and r'_A r_B.
+        let x = [a.ts * a_up.ts * b.rs, a.tp * a_up.tp * b.rp];
+        let y = [a_up.rs * b.rs, a_up.rp * b.rp];
+        // t_A t_B, and the Poynting factors turning |t|² into power.
+        let z = [a.ts * b.ts, a.tp * b.tp];
+        let t_power = [q_sub.re / q0, (n_sub * cos_sub.conj()).re / q0];
         VaryingLayer {
-            r_above: [a.rs, a.rp],
-            x: [a.ts * a_up.ts * b.rs, a.tp * a_up.tp * b.rp],
-            y: [a_up.rs * b.rs, a_up.rp * b.rp],
-            z: [a.ts * b.ts, a.tp * b.tp],
-            ikq: C64::new(0.0, k0) * q_layer,
+            factors: Factors {
+                ra: r_above,
+                x_net: [0, 1].map(|k| x[k] - r_above[k] * y[k]),
+                neg_y: y.map(|y| -y),
+                zt: [z[0].norm_sqr() * t_power[0], z[1].norm_sqr() * t_power[1]],
+            },
+            k0,
             q: q_layer,
-            t_power: [q_sub.re / q0, (n_sub * cos_sub.conj()).re / q0],
             grazing: cos_theta0 <= 0.0,
             degenerate: q_layer.norm_sqr() < DEGENERATE_Q * n_layer.norm_sqr(),
         }
@@ -137,11 +137,16 @@ impl VaryingLayer {
     /// then single interfaces, whose coefficients do not depend on the
     /// wavelength, so one split per angle serves the whole spectrum.
     pub fn at_wavelength(&self, wavelength_nm: f64) -> VaryingLayer {
-        let k0 = std::f64::consts::TAU / wavelength_nm;
         VaryingLayer {
-            ikq: C64::new(0.0, k0) * self.q,
+            k0: std::f64::consts::TAU / wavelength_nm,
             ..*self
         }
+    }
+
+    /// i k0 q: φ = exp(ikq · d).
+    #[inline]
+    fn ikq(&self) -> C64 {
+        C64::new(0.0, self.k0) * self.q
     }
 
     /// True when the split is unusable (the layer's q ≈ 0, see the field):
@@ -153,7 +158,7 @@ impl VaryingLayer {
     /// φ = e^{i k0 q d} for a thickness of the varying layer.
     #[inline]
     pub fn phase(&self, thickness_nm: f64) -> C64 {
-        (self.ikq * thickness_nm).exp()
+        (self.ikq() * thickness_nm).exp()
     }
 
     /// The angle whose one-way factor is [`Self::phase`]: φ with
@@ -161,22 +166,8 @@ impl VaryingLayer {
     /// ([`crate::optics::lanes::one_way_many`]).
     #[inline]
     pub fn phase_angle(&self, thickness_nm: f64) -> C64 {
-        C64::new(self.ikq.im * thickness_nm, -self.ikq.re * thickness_nm)
-    }
-
-    /// The complex amplitudes for the layer's phase factor φ.
-    #[inline]
-    pub fn amplitudes(&self, phase: C64) -> Amplitudes {
-        let p2 = phase * phase;
-        let one = C64::new(1.0, 0.0);
-        let ds = (one - self.y[0] * p2).inv();
-        let dp = (one - self.y[1] * p2).inv();
-        Amplitudes {
-            rs: self.r_above[0] + self.x[0] * p2 * ds,
-            rp: self.r_above[1] + self.x[1] * p2 * dp,
-            ts: self.z[0] * phase * ds,
-            tp: self.z[1] * phase * dp,
-        }
+        let ikq = self.ikq();
+        C64::new(ikq.im * thickness_nm, -ikq.re * thickness_nm)
     }
 
     /// Power R and T for both polarizations at the layer's phase factor φ.
@@ -199,7 +190,7 @@ impl VaryingLayer {
                 tp: 0.0,
             };
         }
-        let [rs, rp, ts, tp] = Factors::of(self).polarized(phase.re, phase.im);
+        let [rs, rp, ts, tp] = self.factors.polarized(phase.re, phase.im);
         Response { rs, rp, ts, tp }
     }
     /// Unpolarized R and T at many phase factors at once, bit for bit what
@@ -229,7 +220,7 @@ impl VaryingLayer {
 
 /// The thickness-independent factors of [`VaryingLayer::response`], as the
 /// batched loops use them, per polarization.
-#[derive(Clone, Copy)]
+#[derive(Clone, Copy, Debug)]
 struct Factors {
     ra: [C64; 2],
     /// t_A t'_A r_B − r_A r'_A r_B: the numerator's φ² coefficient.
@@ -241,19 +232,6 @@ struct Factors {
 }
 
 impl Factors {
-    #[inline(always)]
-    fn of(v: &VaryingLayer) -> Factors {
-        Factors {
-            ra: v.r_above,
-            x_net: [0, 1].map(|k| v.x[k] - v.r_above[k] * v.y[k]),
-            neg_y: v.y.map(|y| -y),
-            zt: [
-                v.z[0].norm_sqr() * v.t_power[0],
-                v.z[1].norm_sqr() * v.t_power[1],
-            ],
-        }
-    }
-
     /// Rs, Rp, Ts, Tp at the phase factor `a + ib`. Products and sums are
     /// fused (`mul_add`, one rounding each), which takes the loop from about
     /// a hundred operations a node to half that; every copy of the batched
@@ -310,7 +288,7 @@ simd_dispatch! {
             t.fill(0.0);
             return;
         }
-        let f = Factors::of(v);
+        let f = v.factors;
         for j in 0..n {
             let (r_sum, t_sum) = f.sums(phase_re[j], phase_im[j]);
             (r[j], t[j]) = (0.5 * r_sum, 0.5 * t_sum);
@@ -337,7 +315,7 @@ simd_dispatch! {
         // w (½ (Rs + Rp)) and (½ w)(Rs + Rp) are the same exact product, so
         // each fused step gives what weighting the unpolarized R would.
         let [w0, w1, w2] = weights.map(|w| 0.5 * w);
-        let f = Factors::of(v);
+        let f = v.factors;
         for j in 0..n {
             // At grazing incidence no power enters: R = 1, T = 0. The test
             // does not change along the loop, which the compiler hoists.

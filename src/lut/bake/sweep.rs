@@ -534,11 +534,10 @@ simd_dispatch! {
             // 5 % of a bake.
             let mut angles = [C64::new(0.0, 0.0); MAX_LANES];
             let mut new_step = [false; PHASE_GROUP];
-            let mut bits = step_bits;
             for (g, c) in group.iter().enumerate() {
                 angles[g] = v.phase_angle(nodes[c.start - origin]);
-                if bits != Some(c.step.to_bits()) {
-                    bits = Some(c.step.to_bits());
+                if step_bits != Some(c.step.to_bits()) {
+                    step_bits = Some(c.step.to_bits());
                     new_step[g] = true;
                     angles[PHASE_GROUP + g] = v.phase_angle(c.step);
                 }
@@ -547,9 +546,8 @@ simd_dispatch! {
             let mut deltas = [one; PHASE_GROUP];
             let mut steps = [one; PHASE_GROUP];
             let mut phase = [one; PHASE_GROUP];
-            for (g, c) in group.iter().enumerate() {
+            for g in 0..group.len() {
                 if new_step[g] {
-                    step_bits = Some(c.step.to_bits());
                     delta = exact[PHASE_GROUP + g];
                     lanes_step = delta;
                     for _ in 0..PHASE_LANES.trailing_zeros() {
@@ -578,15 +576,16 @@ simd_dispatch! {
             let tiled = group
                 .windows(2)
                 .all(|w| w[0].start + w[0].len == w[1].start && w[0].len % PHASE_LANES == 0);
-            if tiled {
+            // Otherwise one chunk at a time, in chunk order: the node two
+            // runs share gets the later run's value.
+            let together = if tiled { group.len() } else { 1 };
+            let mut lanes = heads;
+            for first in (0..group.len()).step_by(together) {
                 let mut vectors = [0; PHASE_GROUP];
-                let mut at = [0; PHASE_GROUP];
-                for (g, c) in group.iter().enumerate() {
-                    vectors[g] = c.len.div_ceil(PHASE_LANES);
-                    at[g] = c.start - origin;
+                for g in first..(first + together).min(group.len()) {
+                    vectors[g] = group[g].len.div_ceil(PHASE_LANES);
                 }
                 let longest = vectors.iter().copied().max().unwrap_or(0);
-                let mut lanes = heads;
                 for k in 0..longest {
                     for g in 0..PHASE_GROUP {
                         if k >= vectors[g] {
@@ -599,25 +598,10 @@ simd_dispatch! {
                                 (a[l], b[l]) = (a[l] * s.re - b[l] * s.im, a[l] * s.im + b[l] * s.re);
                             }
                         }
-                        let j = at[g] + k * PHASE_LANES;
+                        let j = group[g].start - origin + k * PHASE_LANES;
                         re[j..j + PHASE_LANES].copy_from_slice(a);
                         im[j..j + PHASE_LANES].copy_from_slice(b);
                     }
-                }
-                continue;
-            }
-            // Otherwise in chunk order: the node two runs share gets the
-            // later run's value.
-            for ((c, (mut a, mut b)), s) in group.iter().zip(heads).zip(steps) {
-                let (start, end) = (c.start - origin, c.start - origin + c.len);
-                re[start..start + PHASE_LANES].copy_from_slice(&a);
-                im[start..start + PHASE_LANES].copy_from_slice(&b);
-                for j in (start + PHASE_LANES..end).step_by(PHASE_LANES) {
-                    for l in 0..PHASE_LANES {
-                        (a[l], b[l]) = (a[l] * s.re - b[l] * s.im, a[l] * s.im + b[l] * s.re);
-                    }
-                    re[j..j + PHASE_LANES].copy_from_slice(&a);
-                    im[j..j + PHASE_LANES].copy_from_slice(&b);
                 }
             }
         }

@@ -12,27 +12,24 @@ use super::sink::{Power, Sink, Store};
 use super::spectrum::{Repeats, Spectrum, SHARED_SLOTS};
 use crate::optics::solver::{solve, Response};
 
-/// Solves one (wavelength, angle) pair of one stack per lane. `indices[l]`
-/// holds lane l's N + 2 indices (ambient, layers, substrate) at `wavelength_nm[l]`;
-/// the preconditions are [`solve`]'s.
+/// Solves one (wavelength, angle) pair of one stack per lane.
+/// `lane_point(l)` gives lane l's N + 2 indices (ambient, layers, substrate)
+/// and its wavelength, for the lanes the scalar solver takes over; the
+/// preconditions are [`solve`]'s.
 /// `media.medium(j)` gives medium j's n and n² in every lane (n² as `n * n`
 /// computes it), `k0` is 2π over each lane's wavelength. `repeats` says
 /// which media share one index (one material used by several layers, as in
 /// a Bragg mirror); their q is computed once.
 #[inline(always)]
-fn solve_lanes<V: Lanes>(
+fn solve_lanes<'a, V: Lanes>(
     media: &impl MediaLanes<V>,
     repeats: &Repeats,
     k0: V,
-    indices: [&[C64]; MAX_LANES],
+    lane_point: impl Fn(usize) -> (&'a [C64], f64),
     thicknesses_nm: &[f64],
-    wavelength_nm: [f64; MAX_LANES],
     cos_theta0: [f64; MAX_LANES],
 ) -> Power<V> {
     let last = thicknesses_nm.len() + 1;
-    for lane in &indices[..V::WIDTH] {
-        assert_eq!(lane.len(), last + 1, "indices: N + 2 per lane");
-    }
     let zero = V::splat(0.0);
     let one = V::splat(1.0);
     // Lanes whose answer the scalar solver gives instead: grazing here,
@@ -118,7 +115,8 @@ fn solve_lanes<V: Lanes>(
     let mut res = out.responses();
     for l in 0..V::WIDTH {
         if scalar[l] {
-            res[l] = solve(indices[l], thicknesses_nm, wavelength_nm[l], cos_theta0[l]);
+            let (indices, wavelength_nm) = lane_point(l);
+            res[l] = solve(indices, thicknesses_nm, wavelength_nm, cos_theta0[l]);
         }
     }
     Power::from_responses(&res)
@@ -256,7 +254,8 @@ pub(super) fn batch_body<V: Lanes>(
         }
         let k0 = V::splat(std::f64::consts::TAU).div(V::from_array(wl));
         let gathered = Gathered(idx);
-        let res = solve_lanes::<V>(&gathered, &Repeats::NONE, k0, idx, thicknesses_nm, wl, cos);
+        let point = |l: usize| (idx[l], wl[l]);
+        let res = solve_lanes::<V>(&gathered, &Repeats::NONE, k0, point, thicknesses_nm, cos);
         Store(&mut *out).take(start, &res);
     }
 }
@@ -327,19 +326,21 @@ pub(super) fn spectrum_body<V: Lanes>(
     }
     for start in (0..total).step_by(V::WIDTH) {
         let laid = Laid { spectrum, start };
-        let lane = |l: usize| (start + l).min(total - 1);
-        let idx: [&[C64]; MAX_LANES] = std::array::from_fn(|l| {
-            let w = lane(l);
-            &indices[w * media..(w + 1) * media]
-        });
-        let wl = std::array::from_fn(|l| spectrum.wavelengths_nm()[lane(l)]);
+        // A lane's own indices and wavelength, which only the lanes handed
+        // to the scalar solver need: looked up then, not for every vector.
+        let point = |l: usize| {
+            let w = (start + l).min(total - 1);
+            (
+                &indices[w * media..(w + 1) * media],
+                spectrum.wavelengths_nm()[w],
+            )
+        };
         let res = solve_lanes::<V>(
             &laid,
             spectrum.repeats(),
             V::load(&spectrum.k0()[start..]),
-            idx,
+            point,
             thicknesses_nm,
-            wl,
             [cos_theta0; MAX_LANES],
         );
         sink.take(start, &res);
