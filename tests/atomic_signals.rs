@@ -12,10 +12,10 @@ const CHILD_DIR: &str = "IRID_TEST_ATOMIC_CHILD_DIR";
 
 /// In the child: start writing `DIR/out.bin`, write half, say so, hang.
 fn child_writes_forever(dir: &Path) {
-    // A shell that starts a job in the background without job control
-    // makes it ignore SIGINT, and an ignored signal stays ignored across
-    // exec: the child would never die of it and the test would wait
-    // forever. Signals take their default action here, as in a terminal.
+    // The child takes SIGINT and SIGTERM's default action whatever the test
+    // run inherited (a job a shell starts in the background without job
+    // control inherits SIGINT ignored, and exec keeps that), as in a
+    // terminal; the parent gives up after a minute rather than hang.
     // SAFETY: setting a disposition to SIG_DFL installs no handler.
     unsafe {
         libc::signal(libc::SIGINT, libc::SIG_DFL);
