@@ -126,21 +126,22 @@ pub fn product(counts: &[u64], bytes_each: u64) -> Option<u64> {
         .try_fold(bytes_each, |acc, &c| acc.checked_mul(c))
 }
 
-/// Refuses `what` when its estimated size (None: beyond u64) is above the
-/// budget: "WHAT: needs about 1.1 PB, above the memory limit of 3.9 GB (set
-/// IRID_MEMORY_LIMIT to change it)".
+/// Refuses `what` with [`Error::OverBudget`] when its estimated size (None:
+/// beyond u64) is above the budget: "WHAT: needs about 1.1 PB, above the
+/// memory limit of 3.9 GB (set IRID_MEMORY_LIMIT to change it)". A
+/// malformed [`MEMORY_LIMIT_ENV`] is an [`Error::InvalidInput`].
 pub fn check_allocation(what: &str, estimate: Option<u64>) -> Result<()> {
     let limit = memory_budget()?;
     match estimate {
         Some(bytes) if bytes <= limit => Ok(()),
-        _ => Err(Error::invalid(
-            what,
-            format!(
+        _ => Err(Error::OverBudget {
+            what: what.to_string(),
+            why: format!(
                 "needs about {}, above the memory limit of {} (set {MEMORY_LIMIT_ENV} to change it)",
                 estimate.map_or("more than 18 EB".to_string(), human_bytes),
                 human_bytes(limit)
             ),
-        )),
+        }),
     }
 }
 
