@@ -82,15 +82,20 @@ impl Error {
     }
 
     /// This error as part of `context` (a field, a file), its message
-    /// prefixed with `context: `. An I/O error stays one, so that a file
-    /// the system cannot read is still told from a malformed one (Python
-    /// raises OSError for it); any other error becomes `other(context,
+    /// prefixed with `context: `. An I/O error and a refused allocation keep
+    /// their kind, so that a file the system cannot read or one too large
+    /// is still told from a malformed one (Python raises OSError and
+    /// MemoryError for them); any other error becomes `other(context,
     /// message)`.
     pub fn within(self, context: &str, other: impl FnOnce(&str, String) -> Error) -> Error {
         match self {
             Error::Io { path, source } => {
                 Error::io(format!("{context}: {}", path.display()), source)
             }
+            Error::OverBudget { what, why } => Error::OverBudget {
+                what: format!("{context}: {what}"),
+                why,
+            },
             e => other(context, e.to_string()),
         }
     }

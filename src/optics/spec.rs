@@ -255,7 +255,7 @@ impl MediumSpec {
 impl Stack {
     /// Reads a stack file; table paths inside it are relative to its folder.
     pub fn load(path: &Path) -> Result<Stack> {
-        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+        let text = crate::limits::read_text(path)?;
         let base_dir = path.parent().unwrap_or(Path::new(""));
         Stack::from_toml_str(&text, base_dir, &path.display().to_string())
     }
