@@ -8,7 +8,9 @@ use rayon::prelude::*;
 use irid::optics::{Material, Response, StackGrid, MAX_THICKNESS_NM, WAVELENGTH_RANGE_NM};
 
 use crate::arrays::{array, real_list, values};
+use crate::budget::Footprint;
 use crate::invalid;
+use crate::pool::compute;
 
 /// Checks everything the solver relies on, naming the entry at fault in
 /// tmm-faster's terms (`n[i, j]`: wavelength i, medium j; `d[j]`).
@@ -57,13 +59,7 @@ fn check(
     if let Some(a) = angles_deg.iter().find(|a| !(0.0..=90.0).contains(*a)) {
         return Err(invalid("angles", format!("{a} is outside [0, 90] degrees")));
     }
-    let (lo, hi) = WAVELENGTH_RANGE_NM;
-    if let Some(w) = wavelengths_nm.iter().find(|w| !(lo..=hi).contains(*w)) {
-        return Err(invalid(
-            "wavelengths",
-            format!("{w} nm is outside {lo:e}–{hi:e} nm"),
-        ));
-    }
+    check_wavelengths(wavelengths_nm, "wavelengths")?;
     for (i, row) in indices.chunks_exact(media).enumerate() {
         for (j, z) in row.iter().enumerate() {
             Material::constant(z.re, z.im)
@@ -90,6 +86,15 @@ fn check(
         }
     }
     Ok(())
+}
+
+/// Every wavelength (nm) lies in the library's range (NaN does not).
+pub fn check_wavelengths(wavelengths_nm: &[f64], what: &str) -> PyResult<()> {
+    let (lo, hi) = WAVELENGTH_RANGE_NM;
+    match wavelengths_nm.iter().find(|w| !(lo..=hi).contains(*w)) {
+        Some(w) => Err(invalid(what, format!("{w} nm is outside {lo:e}–{hi:e} nm"))),
+        None => Ok(()),
+    }
 }
 
 /// cos θ of an angle in degrees, exactly 0 at 90° (grazing incidence, where
@@ -170,6 +175,19 @@ pub fn solve_grid(
     out
 }
 
+/// What `coherent` allocates beyond its converted arguments: the indices
+/// (a 1-D n repeated per wavelength, each run's copy, the grid's lane
+/// layout of n and n², 64 bytes per wavelength and medium in all), each
+/// wavelength's k0 and copy, and per angle cos θ and its tasks; the result
+/// (six f64 per point).
+fn grid_footprint(wavelengths: usize, angles: usize, media: usize) -> Footprint {
+    Footprint::new()
+        .items(&[wavelengths, media], 64)
+        .items(&[wavelengths], 16)
+        .items(&[angles], 8 + 256)
+        .items(&[angles, KEYS.len(), wavelengths], 8)
+}
+
 /// Fewest wavelengths in a run of [`solve_grid`]: enough groups of four to
 /// amortize laying the run's indices out.
 const MIN_RUN: usize = 64;
@@ -201,12 +219,7 @@ pub fn coherent<'py>(
     let d = real_list(d, "d")?;
     let (mut indices, shape) = values::<C64>(n, "complex128", "n")?;
     let media = match shape.as_slice() {
-        [m] => {
-            // One set of media for every wavelength.
-            let row = indices.clone();
-            indices = row.repeat(wavelengths_nm.len());
-            *m
-        }
+        [m] => *m,
         [w, m] if *w == wavelengths_nm.len() => *m,
         _ => {
             return Err(invalid(
@@ -219,11 +232,21 @@ pub fn coherent<'py>(
             ))
         }
     };
+    grid_footprint(wavelengths_nm.len(), angles_deg.len(), media).check(&format!(
+        "{} wavelengths × {} angles × {media} media",
+        wavelengths_nm.len(),
+        angles_deg.len()
+    ))?;
+    if shape.len() == 1 {
+        // One set of media for every wavelength.
+        indices = indices.repeat(wavelengths_nm.len());
+    }
     check(&indices, media, &d, &angles_deg, &wavelengths_nm)?;
     let thicknesses_nm = &d[1..media - 1];
     let cos_theta0: Vec<f64> = angles_deg.iter().map(|&a| cos_deg(a)).collect();
-    let values =
-        py.allow_threads(|| solve_grid(&indices, thicknesses_nm, &wavelengths_nm, &cos_theta0));
+    let values = compute(py, || {
+        solve_grid(&indices, thicknesses_nm, &wavelengths_nm, &cos_theta0)
+    })?;
     // One (angles, keys, wavelengths) array; each key is its (wavelengths,
     // angles) transposed slice, a view with no copy.
     let all = array(
