@@ -45,8 +45,27 @@ pub fn memory_budget() -> Result<u64> {
                 ),
             )
         }),
-        Err(_) => Ok(physical_memory()
+        Err(_) => Ok(physical_memory_once()
             .map_or(FALLBACK_BUDGET, |m| (m as f64 * DEFAULT_MEMORY_SHARE) as u64)),
+    }
+}
+
+/// [`physical_memory`], read on the first call only: the budget is looked
+/// up by every allocation check, thousands of times a second through the
+/// Python package's small calls, and reading the control group's file each
+/// time cost more than the call itself. An atomic rather than a lock, so a
+/// `fork()` at any moment leaves nothing held in the child.
+fn physical_memory_once() -> Option<u64> {
+    const UNKNOWN: u64 = u64::MAX;
+    static PHYSICAL: AtomicU64 = AtomicU64::new(0);
+    match PHYSICAL.load(Ordering::Relaxed) {
+        0 => {
+            let memory = physical_memory();
+            PHYSICAL.store(memory.unwrap_or(UNKNOWN), Ordering::Relaxed);
+            memory
+        }
+        UNKNOWN => None,
+        memory => Some(memory),
     }
 }
 

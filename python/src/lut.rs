@@ -115,7 +115,7 @@ pub fn bake(
     // Checks the memory a fixed resolution needs (an error target's
     // refinement checks each round's as it goes).
     spec.validate().map_err(py_error)?;
-    let lut = compute(py, || {
+    let lut = compute(py, true, || {
         let mut lut = irid::lut::bake(&spec)?;
         if lut.header().error.validation.is_none() && spec.validation_points > 0 {
             let stats = validate(&lut, spec.validation_points, VALIDATION_SEED)?;
@@ -163,39 +163,79 @@ fn fixed_resolution(kind: Kind, obj: &Bound<'_, PyAny>) -> PyResult<Resolution> 
     }
 }
 
-/// Points handed to one task of the samplers: enough to outweigh the task.
-const SAMPLE_TASK_MIN: usize = 4096;
+/// Points in one task of the samplers, and the fewest a call hands to the
+/// thread pool: below, sampling (nanoseconds a point) takes less than the
+/// handoff.
+const SAMPLE_BLOCK: usize = 4096;
 
 /// An rgb table's R and T (three f32 each, interleaved) at every
-/// (thickness, cos θ), on the current thread pool.
-fn sample_rgb(lut: &Lut, thickness_nm: &[f64], cos_theta: &[f64]) -> (Vec<f32>, Vec<f32>) {
+/// (thickness, cos θ): in blocks on the current thread pool when
+/// `parallel`, else on this thread.
+fn sample_rgb(
+    lut: &Lut,
+    thickness_nm: &[f64],
+    cos_theta: &[f64],
+    parallel: bool,
+) -> (Vec<f32>, Vec<f32>) {
     let mut r = vec![0f32; 3 * thickness_nm.len()];
     let mut t = vec![0f32; 3 * thickness_nm.len()];
-    r.par_chunks_mut(3)
-        .zip(t.par_chunks_mut(3))
-        .zip(thickness_nm.par_iter().zip(cos_theta.par_iter()))
-        .with_min_len(SAMPLE_TASK_MIN)
-        .for_each(|((r, t), (&thickness, &cos))| {
-            let film = lut.sample_rgb(thickness as f32, cos as f32);
+    let fill = |r: &mut [f32], t: &mut [f32], thickness_nm: &[f64], cos_theta: &[f64]| {
+        let films = thickness_nm
+            .iter()
+            .zip(cos_theta)
+            .map(|(&thickness, &cos)| lut.sample_rgb(thickness as f32, cos as f32));
+        for ((r, t), film) in r.chunks_exact_mut(3).zip(t.chunks_exact_mut(3)).zip(films) {
             r.copy_from_slice(&film.reflectance);
             t.copy_from_slice(&film.transmittance);
-        });
+        }
+    };
+    if parallel {
+        r.par_chunks_mut(3 * SAMPLE_BLOCK)
+            .zip(t.par_chunks_mut(3 * SAMPLE_BLOCK))
+            .zip(
+                thickness_nm
+                    .par_chunks(SAMPLE_BLOCK)
+                    .zip(cos_theta.par_chunks(SAMPLE_BLOCK)),
+            )
+            .for_each(|((r, t), (thickness_nm, cos_theta))| fill(r, t, thickness_nm, cos_theta));
+    } else {
+        fill(&mut r, &mut t, thickness_nm, cos_theta);
+    }
     (r, t)
 }
 
 /// A spectral table's R and T at every (thickness, cos θ, wavelength) of
-/// `coordinates`, on the current thread pool.
-fn sample_spectral(lut: &Lut, coordinates: &[Vec<f64>]) -> (Vec<f32>, Vec<f32>) {
+/// `coordinates`: in blocks on the current thread pool when `parallel`,
+/// else on this thread.
+fn sample_spectral(lut: &Lut, coordinates: &[Vec<f64>], parallel: bool) -> (Vec<f32>, Vec<f32>) {
     let [thickness_nm, cos_theta, wavelength_nm] = coordinates else {
         unreachable!("a spectral table is sampled at three coordinates")
     };
-    thickness_nm
-        .par_iter()
-        .zip(cos_theta.par_iter())
-        .zip(wavelength_nm.par_iter())
-        .with_min_len(SAMPLE_TASK_MIN)
-        .map(|((&t, &c), &w)| lut.sample_spectral(t as f32, c as f32, w as f32))
-        .unzip()
+    let mut r = vec![0f32; thickness_nm.len()];
+    let mut t = vec![0f32; thickness_nm.len()];
+    let fill = |r: &mut [f32], t: &mut [f32], points: [&[f64]; 3]| {
+        let [thickness_nm, cos_theta, wavelength_nm] = points;
+        let points = thickness_nm.iter().zip(cos_theta).zip(wavelength_nm);
+        for ((r, t), ((&thickness, &cos), &wavelength)) in r.iter_mut().zip(t).zip(points) {
+            (*r, *t) = lut.sample_spectral(thickness as f32, cos as f32, wavelength as f32);
+        }
+    };
+    if parallel {
+        r.par_chunks_mut(SAMPLE_BLOCK)
+            .zip(t.par_chunks_mut(SAMPLE_BLOCK))
+            .zip(
+                thickness_nm
+                    .par_chunks(SAMPLE_BLOCK)
+                    .zip(cos_theta.par_chunks(SAMPLE_BLOCK))
+                    .zip(wavelength_nm.par_chunks(SAMPLE_BLOCK)),
+            )
+            .for_each(|((r, t), ((thickness, cos), wavelength))| {
+                fill(r, t, [thickness, cos, wavelength])
+            });
+    } else {
+        fill(&mut r, &mut t, [thickness_nm, cos_theta, wavelength_nm]);
+    }
+    (r, t)
 }
 
 /// A lookup table of a stack's response over a layer's thickness and cos θ
@@ -212,13 +252,13 @@ impl PyLut {
     /// before a pixel is read.
     #[staticmethod]
     fn load(py: Python<'_>, path: PathBuf) -> PyResult<Self> {
-        let lut = compute(py, || Lut::load(&path))?.map_err(py_error)?;
+        let lut = compute(py, true, || Lut::load(&path))?.map_err(py_error)?;
         Ok(PyLut { lut })
     }
 
     /// Writes the table atomically (a partial file is never left behind).
     fn save(&self, py: Python<'_>, path: PathBuf) -> PyResult<()> {
-        compute(py, || self.lut.write(&path))?.map_err(py_error)
+        compute(py, true, || self.lut.write(&path))?.map_err(py_error)
     }
 
     /// The JSON header (axes, channels, stack, colour, error figures) as a dict.
@@ -302,11 +342,16 @@ impl PyLut {
                 ));
             }
         }
+        let parallel = coordinates[0].len() > SAMPLE_BLOCK;
         if spectral {
-            let (r, t) = compute(py, || sample_spectral(lut, &coordinates))?;
+            let (r, t) = compute(py, parallel, || {
+                sample_spectral(lut, &coordinates, parallel)
+            })?;
             PyTuple::new(py, [array(py, r, &shape)?, array(py, t, &shape)?])
         } else {
-            let (r, t) = compute(py, || sample_rgb(lut, &coordinates[0], &coordinates[1]))?;
+            let (r, t) = compute(py, parallel, || {
+                sample_rgb(lut, &coordinates[0], &coordinates[1], parallel)
+            })?;
             let mut shape3 = shape;
             shape3.push(3);
             PyTuple::new(py, [array(py, r, &shape3)?, array(py, t, &shape3)?])
@@ -334,7 +379,7 @@ impl PyLut {
             Some(s) => integer_in(s, "seed", 0..=u64::MAX as i128)? as u64,
             None => VALIDATION_SEED,
         };
-        let stats = compute(py, || validate(&self.lut, points, seed))?.map_err(py_error)?;
+        let stats = compute(py, true, || validate(&self.lut, points, seed))?.map_err(py_error)?;
         json_to_py(py, &stats)
     }
 

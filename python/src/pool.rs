@@ -8,7 +8,8 @@
 //! that built it, and a process whose id differs (a forked child) builds its
 //! own. Inside [`compute`] the library's parallel code (the bake's sweep,
 //! validation, anything using rayon's `par_iter`) runs on the current pool,
-//! which is this one.
+//! which is this one; work too small to split runs on the calling thread
+//! without touching rayon.
 
 use std::ptr::null_mut;
 use std::sync::atomic::{AtomicPtr, Ordering};
@@ -59,10 +60,21 @@ fn process_pool() -> PyResult<&'static ThreadPool> {
     }
 }
 
-/// Runs `work` on this process's pool with the GIL released: every entry
-/// point's computation goes through here, so that it works in a forked
-/// child as in its parent.
-pub fn compute<T: Send>(py: Python<'_>, work: impl FnOnce() -> T + Send) -> PyResult<T> {
+/// Runs `work` with the GIL released: on this process's pool when
+/// `parallel`, else on the calling thread, which saves the handoff to a
+/// worker and back (tens of microseconds on a busy machine, more than a
+/// small call's whole work). `work` may use rayon only when `parallel`: on
+/// the calling thread rayon's parallel iterators would split onto its
+/// global pool, whose threads a forked child lacks. Every entry point's
+/// computation goes through here.
+pub fn compute<T: Send>(
+    py: Python<'_>,
+    parallel: bool,
+    work: impl FnOnce() -> T + Send,
+) -> PyResult<T> {
+    if !parallel {
+        return Ok(py.allow_threads(work));
+    }
     let pool = process_pool()?;
     Ok(py.allow_threads(|| pool.install(work)))
 }

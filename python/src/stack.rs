@@ -386,7 +386,10 @@ impl PyStack {
             ))?;
         let grid = StackGrid::new(&self.stack, &wavelengths).map_err(py_error)?;
         let cos_theta0: Vec<f64> = angles.iter().map(|a| a.to_radians().cos()).collect();
-        let points = compute(py, || solve_points(&grid, &cos_theta0, sweep.as_ref()))?;
+        let parallel = shape.iter().product::<usize>() >= SOLVE_PARALLEL_MIN_POINTS;
+        let points = compute(py, parallel, || {
+            solve_points(&grid, &cos_theta0, sweep.as_ref(), parallel)
+        })?;
         let result = PyDict::new(py);
         for (k, key) in ["Rs", "Rp", "Ts", "Tp", "R", "T"].into_iter().enumerate() {
             let column = points.iter().map(|p| p.power[k]).collect();
@@ -436,8 +439,10 @@ impl PyStack {
                 std::mem::size_of::<FilmColor>() as u64 + 4 * 3 * 8,
             )
             .check(&format!("{} angles × {samples} wavelengths", angles.len()))?;
-        let colours =
-            compute(py, || stack_colors(&self.stack, &integrator, &angles))?.map_err(py_error)?;
+        let colours = compute(py, false, || {
+            stack_colors(&self.stack, &integrator, &angles)
+        })?
+        .map_err(py_error)?;
         let result = PyDict::new(py);
         result.set_item("angle_deg", array(py, angles.clone(), &[angles.len()])?)?;
         let triples =
@@ -496,29 +501,45 @@ struct Sweep {
     thicknesses_nm: Vec<f64>,
 }
 
+/// Fewest points of a `Stack.solve` call that go to the thread pool:
+/// below, the solve (about 0.2 µs a point) takes less than the handoff.
+const SOLVE_PARALLEL_MIN_POINTS: usize = 256;
+
 /// R, T and the amplitudes at every (thickness of the sweep, wavelength of
-/// the grid, angle) point, angles fastest, on the current thread pool.
-fn solve_points(grid: &StackGrid, cos_theta0: &[f64], sweep: Option<&Sweep>) -> Vec<Point> {
+/// the grid, angle) point, angles fastest: a row of angles per task on the
+/// current thread pool when `parallel`, else on this thread.
+fn solve_points(
+    grid: &StackGrid,
+    cos_theta0: &[f64],
+    sweep: Option<&Sweep>,
+    parallel: bool,
+) -> Vec<Point> {
     let wavelengths = grid.wavelengths_nm();
     let runs = sweep.map_or(1, |s| s.thicknesses_nm.len());
     let mut points = vec![Point::default(); runs * wavelengths.len() * cos_theta0.len()];
-    points
-        .par_chunks_mut(cos_theta0.len().max(1))
-        .enumerate()
-        .for_each(|(row, out)| {
-            let (run, i) = (row / wavelengths.len(), row % wavelengths.len());
-            let mut d = grid.thicknesses_nm().to_vec();
-            if let Some(s) = sweep {
-                d[s.layer - 1] = s.thicknesses_nm[run];
-            }
-            let n = grid.indices_at(i);
-            for (p, &c) in out.iter_mut().zip(cos_theta0) {
-                let r = solve(n, &d, wavelengths[i], c);
-                let a = solve_amplitudes(n, &d, wavelengths[i], c);
-                p.power = [r.rs, r.rp, r.ts, r.tp, r.r(), r.t()];
-                p.amplitudes = [a.rs, a.rp, a.ts, a.tp];
-            }
-        });
+    let fill_row = |(row, out): (usize, &mut [Point])| {
+        let (run, i) = (row / wavelengths.len(), row % wavelengths.len());
+        let mut d = grid.thicknesses_nm().to_vec();
+        if let Some(s) = sweep {
+            d[s.layer - 1] = s.thicknesses_nm[run];
+        }
+        let n = grid.indices_at(i);
+        for (p, &c) in out.iter_mut().zip(cos_theta0) {
+            let r = solve(n, &d, wavelengths[i], c);
+            let a = solve_amplitudes(n, &d, wavelengths[i], c);
+            p.power = [r.rs, r.rp, r.ts, r.tp, r.r(), r.t()];
+            p.amplitudes = [a.rs, a.rp, a.ts, a.tp];
+        }
+    };
+    let row_len = cos_theta0.len().max(1);
+    if parallel {
+        points
+            .par_chunks_mut(row_len)
+            .enumerate()
+            .for_each(fill_row);
+    } else {
+        points.chunks_mut(row_len).enumerate().for_each(fill_row);
+    }
     points
 }
 

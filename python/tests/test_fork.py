@@ -30,9 +30,10 @@ def film():
     return irid.Stack(ambient=1.0, layers=[(1.33, 300.0), ("TiO2", 60.0)], substrate=1.5)
 
 
-def every_parallel_path(tmp_dir):
+def every_path(tmp_dir):
     """One call of each entry point that runs on the thread pool, large
-    enough to be split across threads; returns the arrays they produce."""
+    enough to be split across threads, and small calls, which run on the
+    calling thread; returns the arrays they produce."""
     w = np.linspace(380.0, 780.0, 401)
     n = np.stack([np.ones_like(w), np.full_like(w, 1.33), np.full_like(w, 1.5)], axis=1)
     grid = irid.coherent(n, [np.inf, 300.0, np.inf], np.linspace(0.0, 89.0, 90), w)
@@ -44,7 +45,13 @@ def every_parallel_path(tmp_dir):
     r, t = loaded.sample(np.linspace(0, 500, 20_000), np.linspace(0.1, 1.0, 20_000))
     stats = lut.validate(points=2000, seed=3)
     colour = film().color([0.0, 45.0])
+    small = [
+        irid.coherent([1.0, 1.33, 1.5], [np.inf, 300.0, np.inf], [10.0], [550.0])["R_avg"],
+        film().solve([550.0], [10.0])["R"],
+        np.concatenate(loaded.sample(250.0, 0.5)),
+    ]
     return {
+        "small": np.concatenate([np.ravel(a) for a in small]),
         "coherent": grid["R_avg"],
         "solve": solved["R"],
         "bake": lut.data,
@@ -81,15 +88,15 @@ def in_forked_child(check):
 
 
 def test_os_fork_child_computes_after_the_parent(tmp_path):
-    parent = every_parallel_path(tmp_path)
-    assert in_forked_child(lambda: same_results(every_parallel_path(tmp_path), parent))
+    parent = every_path(tmp_path)
+    assert in_forked_child(lambda: same_results(every_path(tmp_path), parent))
 
 
 def test_multiprocessing_fork_workers_compute_after_the_parent(tmp_path):
-    parent = every_parallel_path(tmp_path)
+    parent = every_path(tmp_path)
     context = multiprocessing.get_context("fork")
     with context.Pool(2) as pool:
-        jobs = [pool.apply_async(every_parallel_path, (str(tmp_path),)) for _ in range(2)]
+        jobs = [pool.apply_async(every_path, (str(tmp_path),)) for _ in range(2)]
         children = [job.get(timeout=TIMEOUT_S) for job in jobs]
     for child in children:
         assert same_results(child, parent)
@@ -97,7 +104,7 @@ def test_multiprocessing_fork_workers_compute_after_the_parent(tmp_path):
 
 def test_a_child_of_a_child_computes_too(tmp_path):
     # The pool the first child builds must itself be replaced in its own child.
-    parent = every_parallel_path(tmp_path)
+    parent = every_path(tmp_path)
     context = multiprocessing.get_context("fork")
     with context.Pool(1) as pool:
         ok = pool.apply_async(child_and_grandchild_agree, (str(tmp_path), parent)).get(timeout=2 * TIMEOUT_S)
@@ -105,5 +112,5 @@ def test_a_child_of_a_child_computes_too(tmp_path):
 
 
 def child_and_grandchild_agree(tmp_dir, parent):
-    agree = lambda: same_results(every_parallel_path(tmp_dir), parent)  # noqa: E731
+    agree = lambda: same_results(every_path(tmp_dir), parent)  # noqa: E731
     return agree() and in_forked_child(agree)

@@ -66,6 +66,23 @@ def test_sample_broadcasts(table):
     np.testing.assert_array_equal(r[3, 2], r1)
 
 
+def test_sample_broadcasts_as_numpy_including_strided_views(table):
+    rng = np.random.default_rng(11)
+    t = rng.uniform(0, 1000, (4, 1, 3))
+    c = rng.uniform(0.1, 1.0, (10, 2))[::2, :1]  # a strided (5, 1) view
+    r, tr = table.sample(t, c)
+    assert r.shape == (4, 5, 3, 3)
+    tb, cb = np.broadcast_arrays(t, c)
+    want_r, want_t = table.sample(tb.ravel().copy(), cb.ravel().copy())
+    np.testing.assert_array_equal(r.reshape(-1, 3), want_r)
+    np.testing.assert_array_equal(tr.reshape(-1, 3), want_t)
+    # A transposed (Fortran-ordered) array is read in its logical order.
+    grid = rng.uniform(0, 1000, (3, 6))
+    np.testing.assert_array_equal(table.sample(grid.T, 0.5)[0], table.sample(grid.T.copy(), 0.5)[0])
+    with pytest.raises(ValueError, match=r"do not broadcast together \(shapes \[\[4, 1, 3\], \[2\]\]\)"):
+        table.sample(t, [0.5, 0.6])
+
+
 def test_nan_coordinates_raise_naming_the_argument_and_position(table):
     t = np.full((2, 3), 100.0)
     t[1, 2] = np.nan
