@@ -10,9 +10,10 @@ import numpy as np
 from .mitsuba import MAX_THICKNESS_NM, SPECTRAL_RANGE_NM, FilmError, _FilmSetup, ggx_lambda
 
 _SYMBOLIC = (
-    "irid_film: the solver runs between Dr.Jit kernels, which a symbolic loop or call cannot do: "
-    "render in the thread that called irid.mitsuba.register() (which turns Dr.Jit's symbolic loops "
-    "and calls off there), or give the film a table"
+    "irid_film: a film without a table was traced in a symbolic Dr.Jit loop or call, where its solver "
+    "cannot run (it runs between kernels); it gives zeros there. Render in the thread that called "
+    "irid.mitsuba.register() (which turns symbolic loops and calls off), or give the film a table. "
+    "(Dr.Jit traces every live BSDF, so a film of another, still referenced scene also shows this.)"
 )
 
 
@@ -64,18 +65,23 @@ class _SolverResponse:
     def __init__(self, setup):
         self.stack, self.layer = setup.stack, setup.layer
         self.jit = dr.is_jit_v(mi.Float)
+        self.warned = False
 
     def __call__(self, thickness, cos_theta, wavelengths, front, active):
         if self.jit and dr.flag(dr.JitFlag.SymbolicScope):
-            raise RuntimeError(_SYMBOLIC)
+            if not self.warned:
+                mi.Log(mi.LogLevel.Warn, _SYMBOLIC)
+                self.warned = True
+            return dr.zeros(mi.UnpolarizedSpectrum), dr.zeros(mi.UnpolarizedSpectrum)
         thickness, cos_theta, wavelengths, front = _sanitized(thickness, cos_theta, wavelengths, front, active)
         w = np.asarray(wavelengths, dtype=np.float64)
-        c, d, f = (
+        c, d, f, a = (
             np.broadcast_to(np.asarray(x, dtype=t), w.shape)
-            for x, t in ((cos_theta, np.float64), (thickness, np.float64), (front, bool))
+            for x, t in ((cos_theta, np.float64), (thickness, np.float64), (front, bool), (active, bool))
         )
         r, t = np.zeros(w.shape), np.zeros(w.shape)
-        for side, lanes in (("ambient", f), ("substrate", ~f)):
+        # Only the lanes that ask: a wavefront holds every path, finished or not.
+        for side, lanes in (("ambient", f & a), ("substrate", ~f & a)):
             if lanes.any():
                 r[lanes], t[lanes] = self.stack.response(c[lanes], w[lanes], d[lanes], layer=self.layer, side=side)
         return mi.UnpolarizedSpectrum(r.astype(np.float32)), mi.UnpolarizedSpectrum(t.astype(np.float32))
@@ -239,31 +245,44 @@ def _make_bsdf(symbolic):
             p_r = dr.select(total > 0.0, r_mean / dr.maximum(total, 1e-30), 1.0)
             return p_r if has_r else mi.Float(0.0)
 
+        def incidence(self, si, active):
+            """cos θ_i, whether light comes from the ambient side, and the
+            lanes this film answers (no grazing ray; an opaque film's back
+            side is black)."""
+            cos_i = mi.Frame3f.cos_theta(si.wi)
+            front = cos_i > 0.0
+            active = active & (cos_i != 0.0)
+            if not self.transmissive:
+                active = active & front
+            return cos_i, front, active
+
+        @staticmethod
+        def lobe_sample(selected_r, eta_it, glossy):
+            """A BSDFSample3f naming the lobe chosen (reflection or refraction)."""
+            bs = dr.zeros(mi.BSDFSample3f)
+            reflection = flags.GlossyReflection if glossy else flags.DeltaReflection
+            transmission = flags.GlossyTransmission if glossy else flags.DeltaTransmission
+            bs.eta = dr.select(selected_r, 1.0, eta_it)
+            bs.sampled_component = dr.select(selected_r, mi.UInt32(0), mi.UInt32(1))
+            bs.sampled_type = dr.select(selected_r, mi.UInt32(+reflection), mi.UInt32(+transmission))
+            return bs
+
         def radiance_scale(self, ctx, eta_ti):
             return dr.square(eta_ti) if ctx.mode == mi.TransportMode.Radiance else 1.0
 
         # -- smooth -----------------------------------------------------------
 
         def sample_smooth(self, ctx, si, sample1, active):
-            cos_i = mi.Frame3f.cos_theta(si.wi)
-            front = cos_i > 0.0
-            active = active & (cos_i != 0.0)
-            if not self.transmissive:
-                active = active & front
+            cos_i, front, active = self.incidence(si, active)
             r, t = self.film(si, dr.abs(cos_i), front, active)
             p_r = self.lobe_choice(ctx, r, t, dr.abs(cos_i), front, glossy=False)
-            bs = dr.zeros(mi.BSDFSample3f)
             if p_r is None:
-                return bs, dr.zeros(mi.Spectrum)
+                return dr.zeros(mi.BSDFSample3f), dr.zeros(mi.Spectrum)
             selected_r = sample1 < p_r
             _, cos_t, eta_it, eta_ti = mi.fresnel(cos_i, self.eta)
+            bs = self.lobe_sample(selected_r, eta_it, glossy=False)
             bs.wo = dr.select(selected_r, mi.reflect(si.wi), mi.refract(si.wi, cos_t, eta_ti))
             bs.pdf = dr.select(selected_r, p_r, 1.0 - p_r)
-            bs.eta = dr.select(selected_r, 1.0, eta_it)
-            bs.sampled_component = dr.select(selected_r, mi.UInt32(0), mi.UInt32(1))
-            bs.sampled_type = dr.select(
-                selected_r, mi.UInt32(+flags.DeltaReflection), mi.UInt32(+flags.DeltaTransmission)
-            )
             active = active & (bs.pdf > 0.0)
             weight = dr.select(selected_r, r, t * self.radiance_scale(ctx, eta_ti)) / dr.maximum(bs.pdf, 1e-30)
             return bs, dr.select(active, mi.Spectrum(weight), 0.0)
@@ -277,28 +296,19 @@ def _make_bsdf(symbolic):
             return 1.0 / (1.0 + lambda_i), 1.0 / (1.0 + lambda_i + lambda_o)
 
         def sample_rough(self, ctx, si, sample1, sample2, active):
-            cos_i = mi.Frame3f.cos_theta(si.wi)
-            front = cos_i > 0.0
-            active = active & (cos_i != 0.0)
-            if not self.transmissive:
-                active = active & front
+            cos_i, front, active = self.incidence(si, active)
             distr = mi.MicrofacetDistribution(mi.MicrofacetType.GGX, self.alpha, True)
             m, pdf_m = distr.sample(dr.mulsign(si.wi, cos_i), sample2)
             active = active & (pdf_m > 0.0)
             dot_wi_m = dr.dot(si.wi, m)
             r, t = self.film(si, dr.abs(dot_wi_m), front, active)
             p_r = self.lobe_choice(ctx, r, t, dr.abs(dot_wi_m), front, glossy=True)
-            bs = dr.zeros(mi.BSDFSample3f)
             if p_r is None:
-                return bs, dr.zeros(mi.Spectrum)
+                return dr.zeros(mi.BSDFSample3f), dr.zeros(mi.Spectrum)
             selected_r = sample1 < p_r
             _, cos_t, eta_it, eta_ti = mi.fresnel(dot_wi_m, self.eta)
+            bs = self.lobe_sample(selected_r, eta_it, glossy=True)
             bs.wo = dr.select(selected_r, mi.reflect(si.wi, m), mi.refract(si.wi, m, cos_t, eta_ti))
-            bs.eta = dr.select(selected_r, 1.0, eta_it)
-            bs.sampled_component = dr.select(selected_r, mi.UInt32(0), mi.UInt32(1))
-            bs.sampled_type = dr.select(
-                selected_r, mi.UInt32(+flags.GlossyReflection), mi.UInt32(+flags.GlossyTransmission)
-            )
             cos_o, dot_wo_m = mi.Frame3f.cos_theta(bs.wo), dr.dot(bs.wo, m)
             active = active & dr.select(selected_r, cos_o * cos_i > 0.0, cos_o * cos_i < 0.0)
             active = active & (dot_wo_m * cos_o > 0.0)

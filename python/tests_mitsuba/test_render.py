@@ -167,3 +167,20 @@ def test_table_render_matches_solver_render(glass_table):
     use(JIT)
     de = delta_e(rgb_to_xyz(images[0].reshape(-1, 3)), rgb_to_xyz(images[1].reshape(-1, 3)))
     assert de.max() <= 0.5, de.max()
+
+
+def test_a_solver_film_traced_symbolically_warns_and_gives_zeros(glass_table):
+    """Dr.Jit's symbolic calls trace every live BSDF, also those of other
+    scenes: a film without a table, alive while a table scene renders in
+    symbolic mode, must not change or break that render (it logs a warning
+    once and gives zeros where it is traced)."""
+    use(JIT, symbolic=True)
+    scene = orthographic_sphere(irid.mitsuba.bsdf(COATED_GLASS, thickness_nm=250.0, table=str(glass_table)), 8)
+    alone = np.array(mi.render(scene, spp=16, seed=5))
+    use(JIT)
+    stale = mi.load_dict(irid.mitsuba.bsdf(COATED_GLASS, thickness_nm=250.0, roughness=0.3))
+    use(JIT, symbolic=True)
+    beside = np.array(mi.render(scene, spp=16, seed=5))
+    use(JIT)
+    assert "solver" in str(stale)
+    np.testing.assert_array_equal(beside, alone)
