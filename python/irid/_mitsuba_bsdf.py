@@ -267,6 +267,19 @@ def _make_bsdf(symbolic):
             bs.sampled_type = dr.select(selected_r, mi.UInt32(+reflection), mi.UInt32(+transmission))
             return bs
 
+        def choose_lobe(self, ctx, si, cos_in, front, active, sample1, glossy):
+            """The film's (R, T) at ``cos_in`` (signed: cos θ_i, or wi·m for a
+            microfacet), the lobe ``sample1`` picks, and the refraction's
+            cos θ_t and η_ti there; None when no lobe is enabled."""
+            r, t = self.film(si, dr.abs(cos_in), front, active)
+            p_r = self.lobe_choice(ctx, r, t, dr.abs(cos_in), front, glossy)
+            if p_r is None:
+                return None
+            selected_r = sample1 < p_r
+            _, cos_t, eta_it, eta_ti = mi.fresnel(cos_in, self.eta)
+            bs = self.lobe_sample(selected_r, eta_it, glossy)
+            return r, t, p_r, selected_r, cos_t, eta_ti, bs
+
         def radiance_scale(self, ctx, eta_ti):
             return dr.square(eta_ti) if ctx.mode == mi.TransportMode.Radiance else 1.0
 
@@ -274,13 +287,10 @@ def _make_bsdf(symbolic):
 
         def sample_smooth(self, ctx, si, sample1, active):
             cos_i, front, active = self.incidence(si, active)
-            r, t = self.film(si, dr.abs(cos_i), front, active)
-            p_r = self.lobe_choice(ctx, r, t, dr.abs(cos_i), front, glossy=False)
-            if p_r is None:
+            chosen = self.choose_lobe(ctx, si, cos_i, front, active, sample1, glossy=False)
+            if chosen is None:
                 return dr.zeros(mi.BSDFSample3f), dr.zeros(mi.Spectrum)
-            selected_r = sample1 < p_r
-            _, cos_t, eta_it, eta_ti = mi.fresnel(cos_i, self.eta)
-            bs = self.lobe_sample(selected_r, eta_it, glossy=False)
+            r, t, p_r, selected_r, cos_t, eta_ti, bs = chosen
             bs.wo = dr.select(selected_r, mi.reflect(si.wi), mi.refract(si.wi, cos_t, eta_ti))
             bs.pdf = dr.select(selected_r, p_r, 1.0 - p_r)
             active = active & (bs.pdf > 0.0)
@@ -301,19 +311,16 @@ def _make_bsdf(symbolic):
             m, pdf_m = distr.sample(dr.mulsign(si.wi, cos_i), sample2)
             active = active & (pdf_m > 0.0)
             dot_wi_m = dr.dot(si.wi, m)
-            r, t = self.film(si, dr.abs(dot_wi_m), front, active)
-            p_r = self.lobe_choice(ctx, r, t, dr.abs(dot_wi_m), front, glossy=True)
-            if p_r is None:
+            chosen = self.choose_lobe(ctx, si, dot_wi_m, front, active, sample1, glossy=True)
+            if chosen is None:
                 return dr.zeros(mi.BSDFSample3f), dr.zeros(mi.Spectrum)
-            selected_r = sample1 < p_r
-            _, cos_t, eta_it, eta_ti = mi.fresnel(dot_wi_m, self.eta)
-            bs = self.lobe_sample(selected_r, eta_it, glossy=True)
+            r, t, p_r, selected_r, cos_t, eta_ti, bs = chosen
             bs.wo = dr.select(selected_r, mi.reflect(si.wi, m), mi.refract(si.wi, m, cos_t, eta_ti))
             cos_o, dot_wo_m = mi.Frame3f.cos_theta(bs.wo), dr.dot(bs.wo, m)
             active = active & dr.select(selected_r, cos_o * cos_i > 0.0, cos_o * cos_i < 0.0)
             active = active & (dot_wo_m * cos_o > 0.0)
             p_lobe = dr.select(selected_r, p_r, 1.0 - p_r)
-            bs.pdf = pdf_m * p_lobe * dr.abs(self.half_vector_jacobian(selected_r, dot_wi_m, dot_wo_m, eta_it))
+            bs.pdf = pdf_m * p_lobe * dr.abs(self.half_vector_jacobian(selected_r, dot_wi_m, dot_wo_m, bs.eta))
             active = active & (bs.pdf > 0.0)
             g1_i, g2 = self.masking(si.wi, bs.wo)
             value = dr.select(selected_r, r, t * self.radiance_scale(ctx, eta_ti))
