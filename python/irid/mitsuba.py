@@ -86,7 +86,7 @@ def bsdf(stack, thickness_nm, layer=1, table=None, roughness=0.0):
     (a ``ValueError``) for bad input, as loading the dict would.
     """
     entry = {"type": _PLUGIN, "stack": stack.to_json() if isinstance(stack, Stack) else os.fspath(stack)}
-    entry.update(layer=int(layer), thickness_nm=thickness_nm, roughness=float(roughness))
+    entry.update(layer=layer, thickness_nm=thickness_nm, roughness=roughness)
     if table is not None:
         entry["table"] = os.fspath(table)
     _FilmSetup.from_values(entry)
@@ -139,10 +139,12 @@ class _FilmSetup:
             raise FilmError("stack", "missing: give a stack file path or an irid.Stack's to_json()")
         stack = _load_stack(values["stack"])
         layer = values.get("layer", 1)
-        if isinstance(layer, bool) or not isinstance(layer, (int, float)) or layer != int(layer):
+        if isinstance(layer, bool) or not isinstance(layer, (int, float)) or not float(layer).is_integer():
             raise FilmError("layer", f"must be a whole number, got {layer!r}")
         layer = int(layer)
         count = len(stack.layers)
+        if count == 0:
+            raise FilmError("stack", "has no layers: there is no film for thickness_nm to set")
         if not 1 <= layer <= count:
             raise FilmError("layer", f"must be between 1 and {count} (the stack's layers), got {layer}")
         if "thickness_nm" not in values:
@@ -153,7 +155,7 @@ class _FilmSetup:
             if not 0.0 <= thickness <= MAX_THICKNESS_NM:
                 raise FilmError("thickness_nm", f"must be finite, ≥ 0 and ≤ {MAX_THICKNESS_NM:g}, got {thickness}")
         roughness = values.get("roughness", 0.0)
-        if isinstance(roughness, bool) or not isinstance(roughness, (int, float)) or not 0.0 <= roughness <= 1.0:
+        if isinstance(roughness, bool) or not isinstance(roughness, (int, float)) or not 0.0 <= float(roughness) <= 1.0:
             raise FilmError("roughness", f"must be a number in [0, 1], got {roughness!r}")
         table = None
         if values.get("table") is not None:

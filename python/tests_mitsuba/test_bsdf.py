@@ -195,6 +195,9 @@ BAD = [
     ({"layer": 0}, "irid_film: layer: must be between 1 and 1 (the stack's layers), got 0"),
     ({"thickness_nm": -5.0}, "irid_film: thickness_nm: must be finite, ≥ 0"),
     ({"roughness": 1.5}, "irid_film: roughness: must be a number in [0, 1], got 1.5"),
+    ({"roughness": "rough"}, "irid_film: roughness: must be a number in [0, 1], got 'rough'"),
+    ({"layer": float("nan")}, "irid_film: layer: must be a whole number, got nan"),
+    ({"stack": irid.Stack(substrate=1.5).to_json()}, "irid_film: stack: has no layers"),
     ({"colour": 1.0}, "irid_film: colour: unknown parameter"),
     ({"table": "no/such/table.exr"}, "irid_film: table: "),
 ]
