@@ -79,7 +79,7 @@ def register(symbolic=False):
 
 
 def bsdf(stack, thickness_nm, layer=1, table=None, roughness=0.0):
-    """The scene-dict entry of an ``irid_film``, checked now.
+    """The scene-dict entry of an ``irid_film``, checked when made.
 
     ``stack`` may be an ``irid.Stack`` (written as its JSON) or a stack file
     path; ``thickness_nm`` a number or a texture dict. Raises ``FilmError``
