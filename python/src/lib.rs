@@ -19,6 +19,7 @@ mod budget;
 mod coherent;
 mod lut;
 mod pool;
+mod response;
 mod stack;
 
 use std::io::ErrorKind;

@@ -289,6 +289,22 @@ impl PyStack {
         })
     }
 
+    /// The stack as JSON text (the form a table's header records under
+    /// "stack": every material with its dispersion data), for hosts whose
+    /// scene descriptions hold only text.
+    fn to_json(&self) -> PyResult<String> {
+        serde_json::to_string(&self.stack).map_err(|e| invalid("stack", e.to_string()))
+    }
+
+    /// Reads the JSON of `to_json` (or a table header's "stack") back.
+    #[staticmethod]
+    fn from_json(text: &str) -> PyResult<Self> {
+        let stack: Stack = serde_json::from_str(text)
+            .map_err(|e| invalid("stack", format!("not a stack's JSON ({e})")))?;
+        stack.validate().map_err(py_error)?;
+        Ok(PyStack { stack })
+    }
+
     #[getter]
     fn ambient(&self) -> PyMaterial {
         PyMaterial {
@@ -467,6 +483,38 @@ impl PyStack {
         Ok(result)
     }
 
+    /// Unpolarized (R, T) at arrays of points, each with its own wavelength:
+    /// what a spectral renderer asks per path vertex.
+    ///
+    /// cos_theta: cosine of the incidence angle in the medium the light
+    /// arrives through, in [0, 1]; wavelength_nm: vacuum wavelengths;
+    /// thickness_nm: the thickness of layer `layer` (1-based from the
+    /// ambient side) per point, or None for the stack's own. The arrays
+    /// broadcast together (numpy rules). side: "ambient" (light from the
+    /// ambient) or "substrate" (from a lossless substrate: the reversed
+    /// stack; past its critical angle T is 0). Returns (R, T), float64 of the
+    /// broadcast shape.
+    #[pyo3(signature = (cos_theta, wavelength_nm, thickness_nm=None, layer=None, side="ambient"))]
+    fn response<'py>(
+        &self,
+        py: Python<'py>,
+        cos_theta: &Bound<'py, PyAny>,
+        wavelength_nm: &Bound<'py, PyAny>,
+        thickness_nm: Option<&Bound<'py, PyAny>>,
+        layer: Option<&Bound<'py, PyAny>>,
+        side: &str,
+    ) -> PyResult<Bound<'py, PyTuple>> {
+        crate::response::response(
+            py,
+            &self.stack,
+            thickness_nm,
+            cos_theta,
+            wavelength_nm,
+            layer,
+            side,
+        )
+    }
+
     fn __repr__(&self) -> String {
         let layers: Vec<String> = self
             .stack
@@ -488,11 +536,20 @@ impl PyStack {
 /// without (the library ignores it).
 pub fn layer_number(stack: &Stack, layer: Option<&Bound<'_, PyAny>>) -> PyResult<usize> {
     let n = stack.layers.len();
-    match layer {
-        None => Ok(1),
-        Some(obj) if n == 0 => count(obj, "layer"),
-        Some(obj) => Ok(integer_in(obj, "layer", 1..=n as i128)? as usize),
+    let Some(obj) = layer else { return Ok(1) };
+    if n == 0 {
+        return count(obj, "layer");
     }
+    // Any integer, however large or negative, then the library's words for
+    // one that is not a layer.
+    let layer = integer_in(obj, "layer", i128::MIN..=i128::MAX)?;
+    if !(1..=n as i128).contains(&layer) {
+        return Err(invalid(
+            "layer",
+            format!("must be between 1 and {n} (the stack's layers), got {layer}"),
+        ));
+    }
+    Ok(layer as usize)
 }
 
 /// Thicknesses (nm) swept over one layer (1-based).

@@ -99,6 +99,20 @@ CASES = [
     ("Stack.solve NaN wavelength", lambda f: f.stack.solve([NAN], [0.0]), ValueError),
     ("Stack.solve inf thickness", lambda f: f.stack.solve([500.0], [0.0], thickness_nm=[INF]), ValueError),
     ("Stack.solve wavelengths of objects", lambda f: f.stack.solve(object(), [0.0]), TypeError),
+    # Stack.response
+    ("Stack.response NaN cos", lambda f: f.stack.response(NAN, 500.0), ValueError),
+    ("Stack.response inf wavelength", lambda f: f.stack.response(0.5, INF), ValueError),
+    ("Stack.response negative layer", lambda f: f.stack.response(0.5, 500.0, 10.0, layer=-1), ValueError),
+    ("Stack.response float layer", lambda f: f.stack.response(0.5, 500.0, 10.0, layer=1.0), TypeError),
+    ("Stack.response unknown side", lambda f: f.stack.response(0.5, 500.0, side="below"), ValueError),
+    ("Stack.response side a number", lambda f: f.stack.response(0.5, 500.0, side=1), TypeError),
+    ("Stack.response no broadcast", lambda f: f.stack.response(np.zeros(3), np.full(4, 500.0)), ValueError),
+    ("Stack.response objects", lambda f: f.stack.response(object(), 500.0), TypeError),
+    ("Stack.response too large", lambda f: f.stack.response(np.broadcast_to(0.5, (10**7, 10**7)), 500.0), MemoryError),
+    # Stack.to_json / from_json
+    ("Stack.to_json an argument", lambda f: f.stack.to_json(2), TypeError),
+    ("Stack.from_json malformed", lambda f: irid.Stack.from_json('{"ambient": 1}'), ValueError),
+    ("Stack.from_json a number", lambda f: irid.Stack.from_json(5), TypeError),
     # Stack.color
     ("Stack.color NaN angle", lambda f: f.stack.color([NAN]), ValueError),
     ("Stack.color unknown sampling", lambda f: f.stack.color([0.0], sampling="fine"), ValueError),

@@ -45,10 +45,13 @@ def every_path(tmp_dir):
     r, t = loaded.sample(np.linspace(0, 500, 20_000), np.linspace(0.1, 1.0, 20_000))
     stats = lut.validate(points=2000, seed=3)
     colour = film().color([0.0, 45.0])
+    rng = np.random.default_rng(4)
+    r_points, t_points = film().response(rng.uniform(0, 1, 6000), rng.uniform(380, 780, 6000), rng.uniform(0, 500, 6000))
     small = [
         irid.coherent([1.0, 1.33, 1.5], [np.inf, 300.0, np.inf], [10.0], [550.0])["R_avg"],
         film().solve([550.0], [10.0])["R"],
         np.concatenate(loaded.sample(250.0, 0.5)),
+        np.array(film().response(0.5, 550.0, 120.0)),
     ]
     return {
         "small": np.concatenate([np.ravel(a) for a in small]),
@@ -58,6 +61,7 @@ def every_path(tmp_dir):
         "sample": np.concatenate([r, t]),
         "validate": np.array(stats["max_abs"] + stats["mean_abs"]),
         "color": colour["reflectance_rgb"],
+        "response": np.concatenate([r_points, t_points]),
     }
 
 

@@ -90,6 +90,7 @@ def film():
         ("Material.index", lambda: irid.material("gold").index(np.full(10**7, 500.0))),
         ("bake", lambda: irid.bake(film(), resolution=(1024, 1024), validation_points=0)),
         ("Lut.sample", lambda: SMALL_LUT.sample(np.zeros(10**7), 1.0)),
+        ("Stack.response", lambda: film().response(np.zeros((10**3, 1)), np.full(10**4, 500.0))),
     ],
 )
 def test_each_entry_point_honours_irid_memory_limit(limit, name, call):
