@@ -12,6 +12,7 @@ use irid::optics::spec::{IndexSpec, MediumSpec};
 use irid::optics::{
     library, solve, solve_amplitudes, Layer, Material, Stack, StackGrid, MAX_THICKNESS_NM,
 };
+use irid::rough::{check_roughness, rough_colors, RoughColor};
 
 use crate::arrays::{array, real_list, reals};
 use crate::{invalid, py_error};
@@ -421,45 +422,63 @@ impl PyStack {
     /// Returns a dict: angle_deg (A,), reflectance_rgb, transmittance_rgb
     /// (linear sRGB, (A, 3)), reflectance_xyz, transmittance_xyz (CIE XYZ,
     /// Y = 1 for a perfect reflector, (A, 3)).
-    #[pyo3(signature = (angles_deg, sampling="exact", white="d65"))]
+    ///
+    /// roughness (a number in [0, 1], as `irid color --roughness`): the
+    /// reflectance pre-integrated over a GGX lobe of that roughness, F_eff
+    /// (docs/rough.md), per view angle instead. Returns a dict: angle_deg,
+    /// reflectance_rgb, reflectance_xyz (as above) and lobe_albedo (A,), the
+    /// white lobe's directional albedo; no transmittance. Roughness 0 gives
+    /// the smooth reflectance exactly.
+    #[pyo3(signature = (angles_deg, sampling="exact", white="d65", roughness=None))]
     fn color<'py>(
         &self,
         py: Python<'py>,
         angles_deg: &Bound<'py, PyAny>,
         sampling: &str,
         white: &str,
+        roughness: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<Bound<'py, PyDict>> {
         let angles = real_list(angles_deg, "angles_deg")?;
         let sampling: Sampling = sampling.parse().map_err(py_error)?;
         let white: White = white.parse().map_err(py_error)?;
-        let colours = py
-            .allow_threads(|| {
-                let integrator = SpectralIntegrator::with_white(sampling, white);
-                stack_colors(&self.stack, &integrator, &angles)
-            })
-            .map_err(py_error)?;
+        let integrator = SpectralIntegrator::with_white(sampling, white);
         let result = PyDict::new(py);
         result.set_item("angle_deg", array(py, angles.clone(), &[angles.len()])?)?;
+        let shape = [angles.len(), 3];
+        if let Some(roughness) = roughness {
+            let roughness = roughness_value(roughness)?;
+            let colours = py
+                .allow_threads(|| rough_colors(&self.stack, &integrator, &angles, roughness))
+                .map_err(py_error)?;
+            let triples = |f: fn(&RoughColor) -> [f64; 3]| -> Vec<f64> {
+                colours.iter().flat_map(f).collect()
+            };
+            result.set_item(
+                "reflectance_rgb",
+                array(py, triples(|c| c.reflectance_rgb), &shape)?,
+            )?;
+            result.set_item(
+                "reflectance_xyz",
+                array(py, triples(|c| c.reflectance_xyz), &shape)?,
+            )?;
+            let albedo = colours.iter().map(|c| c.lobe_albedo).collect();
+            result.set_item("lobe_albedo", array(py, albedo, &[angles.len()])?)?;
+            return Ok(result);
+        }
+        let colours = py
+            .allow_threads(|| stack_colors(&self.stack, &integrator, &angles))
+            .map_err(py_error)?;
         let triples = |f: fn(&irid::color::FilmColor) -> [f64; 3]| -> Vec<f64> {
             colours.iter().flat_map(f).collect()
         };
-        let shape = [colours.len(), 3];
-        result.set_item(
-            "reflectance_rgb",
-            array(py, triples(|c| c.reflectance_rgb), &shape)?,
-        )?;
-        result.set_item(
-            "transmittance_rgb",
-            array(py, triples(|c| c.transmittance_rgb), &shape)?,
-        )?;
-        result.set_item(
-            "reflectance_xyz",
-            array(py, triples(|c| c.reflectance_xyz), &shape)?,
-        )?;
-        result.set_item(
-            "transmittance_xyz",
-            array(py, triples(|c| c.transmittance_xyz), &shape)?,
-        )?;
+        for (key, f) in [
+            ("reflectance_rgb", (|c| c.reflectance_rgb) as fn(&_) -> _),
+            ("transmittance_rgb", |c| c.transmittance_rgb),
+            ("reflectance_xyz", |c| c.reflectance_xyz),
+            ("transmittance_xyz", |c| c.transmittance_xyz),
+        ] {
+            result.set_item(key, array(py, triples(f), &shape)?)?;
+        }
         Ok(result)
     }
 
@@ -509,6 +528,24 @@ impl PyStack {
             self.stack.substrate.name
         )
     }
+}
+
+/// A roughness argument: a real number (not a bool) in [0, 1]; ValueError
+/// otherwise, in the library's `roughness: ...` form.
+fn roughness_value(obj: &Bound<'_, PyAny>) -> PyResult<f64> {
+    let value = if obj.is_instance_of::<pyo3::types::PyBool>() {
+        None
+    } else {
+        obj.extract::<f64>().ok()
+    };
+    let Some(r) = value else {
+        return Err(invalid(
+            "roughness",
+            format!("must be a number in [0, 1], got {}", obj.repr()?),
+        ));
+    };
+    check_roughness("roughness", r).map_err(py_error)?;
+    Ok(r)
 }
 
 /// `layer` must name one of the stack's layers (1-based).
