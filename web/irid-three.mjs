@@ -178,50 +178,58 @@ export async function loadIridFilm(url, { loader, decode } = {}) {
 // ---------------------------------------------------------------------------
 // The material
 
-/** The struct types the sampler declares: name → field names. */
+const DECLARATION = /(\w+)\s+(\w+)\s*(?:\[\s*(\d+)\s*\])?\s*;/g;
+
+/** The declarations `type name[count];` in `text` as [{type, name, count}] (count null for no array). */
+function declarations(text) {
+  return [...text.matchAll(DECLARATION)].map(([, type, name, count]) => ({ type, name, count: count ? Number(count) : null }));
+}
+
+/** The struct types the sampler declares: name → their fields. */
 function structs(code) {
-  const out = new Map();
-  for (const m of code.matchAll(/struct\s+(\w+)\s*\{([^}]*)\}/g)) {
-    out.set(m[1], [...m[2].matchAll(/\w+\s+(\w+)\s*;/g)].map((f) => f[1]));
-  }
-  return out;
+  return new Map([...code.matchAll(/struct\s+(\w+)\s*\{([^}]*)\}/g)].map((m) => [m[1], declarations(m[2])]));
 }
 
 /**
- * The sampler with its uniform block replaced by plain uniforms, and their
- * values from film.json: a struct member by field name from `params`, a
- * vec4 array from `uniform_f32`.
+ * The value three.js uploads for a uniform of `type` (an array of `count`
+ * when count is not null) named `name`, from film.json: a float by name
+ * from `params`, an array of vec4 from `uniform_f32` (the packed uniform
+ * array as film.json gives it), a struct field by field.
+ */
+function uniformValue(film, types, { type, name, count }) {
+  if (types.has(type) && count === null) {
+    return Object.fromEntries(types.get(type).map((field) => [field.name, uniformValue(film, types, field)]));
+  }
+  if (type === 'float' && count === null) {
+    const v = film.params?.[name];
+    if (typeof v !== 'number') throw fail('film.json', `params has no number "${name}", which the sampler reads`);
+    return v;
+  }
+  if (type === 'vec4' && count !== null) {
+    const packed = film.uniform_f32;
+    if (!Array.isArray(packed) || packed.length !== 4 * count) {
+      throw fail('film.json', `uniform_f32 must hold ${4 * count} numbers for the sampler's vec4 ${name}[${count}]`);
+    }
+    return Array.from({ length: count }, (_, i) => new THREE.Vector4().fromArray(packed, 4 * i));
+  }
+  throw fail('irid_film_es.glsl', `the uniform block holds ${type} ${name}${count === null ? '' : `[${count}]`}, which this module cannot fill`);
+}
+
+/**
+ * The sampler with its uniform block replaced by plain uniforms (three.js's
+ * built-in materials take no uniform blocks), and their values from
+ * film.json.
  */
 function unblock(sampler, film) {
   const block = sampler.match(BLOCK);
   if (!block) throw fail('irid_film_es.glsl', 'no std140 uniform block found');
   const types = structs(sampler);
-  const uniforms = {};
-  const declarations = [];
-  for (const m of block[2].matchAll(/(\w+)\s+(\w+)\s*(\[\s*(\d+)\s*\])?\s*;/g)) {
-    const [, type, name, array, count] = m;
-    declarations.push(`uniform ${type} ${name}${array ?? ''};`);
-    if (types.has(type) && !array) {
-      const value = {};
-      for (const field of types.get(type)) {
-        const v = film.params?.[field];
-        if (typeof v !== 'number') throw fail('film.json', `params has no number "${field}", which the sampler reads`);
-        value[field] = v;
-      }
-      uniforms[name] = { value };
-    } else if (type === 'vec4' && array) {
-      const packed = film.uniform_f32;
-      if (!Array.isArray(packed) || packed.length !== 4 * Number(count)) {
-        throw fail('film.json', `uniform_f32 must hold ${4 * Number(count)} numbers for ${name}[${count}]`);
-      }
-      uniforms[name] = { value: Array.from({ length: Number(count) }, (_, i) => new THREE.Vector4().fromArray(packed, 4 * i)) };
-    } else {
-      throw fail('irid_film_es.glsl', `uniform block member ${type} ${name} is not one this module fills`);
-    }
-  }
+  const members = declarations(block[2]);
+  const uniforms = Object.fromEntries(members.map((m) => [m.name, { value: uniformValue(film, types, m) }]));
+  const plain = members.map(({ type, name, count }) => `uniform ${type} ${name}${count === null ? '' : `[${count}]`};`);
   const code = sampler
     .replace(/^\s*precision\s+[^\n]*;\s*$/gm, '') // three.js declares precision itself
-    .replace(BLOCK, declarations.join('\n'));
+    .replace(BLOCK, plain.join('\n'));
   return { code, uniforms };
 }
 
