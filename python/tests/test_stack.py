@@ -168,7 +168,13 @@ def test_roughness_zero_is_the_smooth_reflectance():
     np.testing.assert_array_equal(zero["lobe_albedo"], 1.0)
 
 
-@pytest.mark.parametrize("bad", [float("nan"), -0.1, 1.5, float("inf"), "0.5", True, [0.5]])
+@pytest.mark.parametrize("bad", [float("nan"), -0.1, 1.5, float("inf"), -float("inf"), 1 + 1e-12])
 def test_bad_roughness_is_a_value_error(bad):
-    with pytest.raises(ValueError, match=r"^roughness: must be"):
+    with pytest.raises(ValueError, match=r"^roughness: must be in \[0, 1\], got [^\n]*$"):
+        irid.Stack(layers=[(1.33, 400.0)]).color([0.0], roughness=bad)
+
+
+@pytest.mark.parametrize("bad", ["0.5", True, [0.5], object()])
+def test_roughness_of_another_type_is_a_type_error(bad):
+    with pytest.raises(TypeError, match=r"^roughness: expected a number"):
         irid.Stack(layers=[(1.33, 400.0)]).color([0.0], roughness=bad)
