@@ -1,12 +1,13 @@
 """Shared set-up of the irid_film tests: Mitsuba variants, scenes, colour
 differences (CIEDE2000 by colour-science, an implementation independent of
-irid's)."""
+irid's). A module of its own name, not conftest.py, so that the tests can
+import it by name even when pytest collects python/tests (which has its own
+conftest) in the same run; conftest.py holds the fixtures."""
 
 import warnings
 from pathlib import Path
 
 import numpy as np
-import pytest
 
 with warnings.catch_warnings():
     warnings.simplefilter("ignore")
@@ -39,15 +40,6 @@ def use(variant, symbolic=False):
         dr.set_flag(dr.JitFlag.SymbolicLoops, True)
         dr.set_flag(dr.JitFlag.SymbolicCalls, True)
     irid.mitsuba.register(symbolic=symbolic)
-
-
-@pytest.fixture
-def jit():
-    use(JIT)
-    yield
-    mi.set_variant(JIT)
-    dr.set_flag(dr.JitFlag.SymbolicLoops, True)
-    dr.set_flag(dr.JitFlag.SymbolicCalls, True)
 
 
 def orthographic_sphere(bsdf, size, max_depth=2):

@@ -4,7 +4,7 @@ furnace, the table path against the solver path."""
 import numpy as np
 import pytest
 
-from conftest import COATED_GLASS, FILM_ON_GOLD, JIT, SOAP, delta_e, irid, mi, orthographic_sphere, rgb_to_xyz, use
+from mitsuba_setup import COATED_GLASS, FILM_ON_GOLD, JIT, SOAP, delta_e, irid, mi, orthographic_sphere, rgb_to_xyz, use
 
 SIZE = 16
 SUBPIXELS = 8
