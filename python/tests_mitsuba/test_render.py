@@ -15,7 +15,7 @@ def expected_sphere_xyz(stack, size=SIZE, sub=SUBPIXELS, roughness=None):
     which pixels lie wholly within r < 0.9 of the sphere. With a roughness,
     the colour at each angle is the rough film's directional albedo:
     ``Stack.color(roughness=)``'s F_eff times its lobe_albedo (a lobe of
-    colour F_eff has the film's albedo exactly, src/rough/mod.rs).
+    colour F_eff has the film's albedo exactly, docs/rough.md).
 
     The angle at every point of the image is known in closed form: an
     orthographic ray through (x, y) of [-1, 1]² meets the unit sphere where
