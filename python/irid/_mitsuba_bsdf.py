@@ -190,12 +190,6 @@ def _make_bsdf(symbolic):
             # masking uses the same α, so the lobe is one GGX throughout.
             self.alpha = max(setup.alpha, MIN_GGX_ALPHA) if setup.alpha > 0.0 else 0.0
             self.rough = setup.alpha > 0.0
-            if self.rough and self.transmissive and abs(self.eta - 1.0) < 1e-6:
-                raise FilmError(
-                    "roughness",
-                    "a rough film with the same index on both sides refracts nothing (its transmission is "
-                    "straight through, not a microfacet lobe); give roughness 0",
-                )
             if setup.table is None and dr.is_jit_v(mi.Float) and symbolic:
                 raise FilmError(
                     "table",

@@ -8,7 +8,7 @@ time."""
 import numpy as np
 import pytest
 
-from conftest import COATED_GLASS, FILM_ON_GOLD, colour, delta_e, dr, irid, mi
+from conftest import COATED_GLASS, FILM_ON_GOLD, SOAP, colour, delta_e, dr, irid, mi
 from test_render import glass_table  # noqa: F401 (a fixture)
 
 #: Mitsuba's spectral range at 1 nm, as irid integrates colour (docs/color.md).
@@ -175,3 +175,17 @@ def test_bad_roughness_is_one_line_at_load_time(jit, roughness):
     with pytest.raises(irid.mitsuba.FilmError) as caught:
         irid.mitsuba.bsdf(FILM_ON_GOLD, thickness_nm=300.0, roughness=roughness)
     assert str(caught.value) == message
+
+
+def test_a_rough_free_standing_film_is_refused(jit):
+    """A lossless film with the ambient's index behind it transmits straight
+    through, which no microfacet lobe describes: refused when the dict is
+    made and when it is loaded, smooth films of it accepted."""
+    message = "irid_film: roughness: a rough film with the same index on both sides refracts nothing"
+    with pytest.raises(irid.mitsuba.FilmError, match="^" + message):
+        irid.mitsuba.bsdf(SOAP, thickness_nm=300.0, roughness=0.3)
+    entry = {"type": "irid_film", "stack": SOAP.to_json(), "thickness_nm": 300.0, "roughness": 0.3}
+    with pytest.raises(RuntimeError) as caught:
+        mi.load_dict(entry)
+    assert message in str(caught.value).strip().splitlines()[-1], str(caught.value)
+    assert "IridFilm[" in str(mi.load_dict(dict(entry, roughness=0.0)))
