@@ -75,6 +75,9 @@ def test_the_colour_integration_is_irids():
         np.testing.assert_allclose(r @ XYZ_WEIGHTS, stack.color([40.0])["reflectance_xyz"][0], atol=2e-7)
 
 
+#: Cases a render of a sphere does not reach (test_render.py renders the film
+#: on gold at roughness 0.3 and 0.6, views up to 64°): near-smooth, grazing,
+#: roughness 1, a transmissive film, and (below) a table.
 #: (name, stack, roughness, view angle, reflection only), the stacks at
 #: their own thickness (300 and 250 nm). The film on gold reflects only; on
 #: the coated glass a sample picks refraction with probability mean T /
@@ -83,8 +86,6 @@ def test_the_colour_integration_is_irids():
 #: is held by the chi² test in test_bsdf.py).
 ALBEDO_CASES = [
     ("film-on-gold", FILM_ON_GOLD, 0.05, 0.0, False),
-    ("film-on-gold", FILM_ON_GOLD, 0.3, 45.0, False),
-    ("film-on-gold", FILM_ON_GOLD, 0.6, 0.0, False),
     ("film-on-gold", FILM_ON_GOLD, 0.6, 75.0, False),
     ("film-on-gold", FILM_ON_GOLD, 1.0, 60.0, False),
     ("coated-glass", COATED_GLASS, 0.3, 0.0, True),
