@@ -96,10 +96,7 @@ fn every_shipped_stack_meets_its_recorded_bound() {
 fn dense_side_film() -> Stack {
     Stack {
         ambient: Material::constant(1.5, 0.0),
-        layers: vec![Layer {
-            material: Material::constant(1.38, 0.0),
-            thickness_nm: 100.0,
-        }],
+        layers: vec![Layer::new(Material::constant(1.38, 0.0), 100.0)],
         substrate: Material::constant(1.0, 0.0),
     }
 }

@@ -184,10 +184,7 @@ fn layer(obj: &Bound<'_, PyAny>, field: &str) -> PyResult<Layer> {
             .and_then(|t| t.extract::<f64>().ok())
             .unwrap_or(f64::NAN);
         let material = medium(obj, field, None)?;
-        return Ok(Layer {
-            material,
-            thickness_nm,
-        });
+        return Ok(Layer::new(material, thickness_nm));
     }
     let pair = obj
         .downcast::<PyTuple>()
@@ -211,10 +208,7 @@ fn layer(obj: &Bound<'_, PyAny>, field: &str) -> PyResult<Layer> {
         )
     })?;
     let material = medium(&pair.get_item(0)?, field, Some(thickness_nm))?;
-    Ok(Layer {
-        material,
-        thickness_nm,
-    })
+    Ok(Layer::new(material, thickness_nm))
 }
 
 /// A planar multilayer: a lossless ambient, layers from the top (ambient

@@ -1,5 +1,6 @@
 //! Optics: materials, stacks and the transfer-matrix solver.
 
+pub mod incoherent;
 pub mod lanes;
 pub mod library;
 #[rustfmt::skip]
@@ -10,6 +11,7 @@ pub mod spec;
 pub mod stack;
 pub mod twoport;
 
+pub use incoherent::{solve_incoherent, solve_mixed, Coherence, Diverged};
 pub use material::{Dispersion, IndexTable, Material};
 pub use solver::{
     normal_index, solve, solve_amplitudes, solve_amplitudes_beta, solve_batch, Amplitudes, Response,

@@ -28,10 +28,7 @@ pub(super) const PHASE_RESYNC: usize = 64;
 pub(crate) fn with_varying_layer(stack: &Stack, layer: usize) -> (Stack, usize) {
     let mut stack = stack.clone();
     if stack.layers.is_empty() {
-        stack.layers.push(Layer {
-            material: stack.ambient.clone(),
-            thickness_nm: 0.0,
-        });
+        stack.layers.push(Layer::new(stack.ambient.clone(), 0.0));
         return (stack, 1);
     }
     (stack, layer)
