@@ -491,3 +491,53 @@ fn a_lasing_point_of_a_grid_is_named() {
         .diverged(0, &[100.0, 7.5e4], 1.0)
         .is_none());
 }
+
+#[test]
+fn the_bakers_split_agrees_with_the_solver() {
+    // The split around a coherent layer (its group's two-port and the
+    // incoherent sums around it), at thicknesses of that layer, against
+    // the point solver: random mixed stacks, absorbing and dense-ambient
+    // ones (layers beyond their critical angle, opaque layers below), and
+    // a weakly amplifying incoherent layer.
+    use irid::optics::solve_mixed;
+    use irid::optics::twoport::{Scratch, VaryingLayer};
+    let mut rng = Pcg64::seed_from_u64(4242);
+    let mut scratch = Scratch::default();
+    let mut checked = 0;
+    for case in 0..400 {
+        let (mut idx, d, coh) = random_mixed(&mut rng, false);
+        if case % 4 == 0 {
+            idx[0] = c(1.5, 0.0);
+        }
+        if case % 7 == 0 {
+            if let Some(&m) = coh.incoherent_layers().first() {
+                idx[m] = c(1.52, -2e-6);
+            }
+        }
+        let Some(layer) = (1..=d.len()).find(|&l| coh.is_layer_coherent(l)) else {
+            continue;
+        };
+        for &wl in &[400.0, 633.0] {
+            for &cos in &[1.0, 0.7, 0.3, 0.05] {
+                let v = VaryingLayer::new_mixed(&idx, &d, &coh, layer, wl, cos, &mut scratch);
+                for &t in &[0.0, 37.0, 250.0, 1234.0] {
+                    let mut dd = d.clone();
+                    dd[layer - 1] = t;
+                    let want = solve_mixed(&idx, &dd, &coh, wl, cos);
+                    if v.is_degenerate() || !want.is_finite() {
+                        continue;
+                    }
+                    let got = v.response(v.phase(t));
+                    assert_responses(
+                        &got,
+                        &want,
+                        1e-11,
+                        &format!("{idx:?} {dd:?} {coh:?} layer {layer} at {wl} nm, cos {cos}"),
+                    );
+                    checked += 1;
+                }
+            }
+        }
+    }
+    assert!(checked > 5000, "{checked}");
+}

@@ -10,6 +10,7 @@
 
 mod arrays;
 mod coherent;
+mod incoherent;
 mod lut;
 mod stack;
 
@@ -38,6 +39,7 @@ pub(crate) fn invalid(what: impl Into<String>, why: impl Into<String>) -> PyErr 
 fn _irid(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     m.add_function(wrap_pyfunction!(coherent::coherent, m)?)?;
+    m.add_function(wrap_pyfunction!(incoherent::incoherent, m)?)?;
     m.add_function(wrap_pyfunction!(stack::material, m)?)?;
     m.add_function(wrap_pyfunction!(stack::materials, m)?)?;
     m.add_function(wrap_pyfunction!(lut::bake, m)?)?;

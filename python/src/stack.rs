@@ -10,7 +10,8 @@ use rayon::prelude::*;
 use irid::color::{stack_colors, Sampling, SpectralIntegrator, White};
 use irid::optics::spec::{IndexSpec, MediumSpec};
 use irid::optics::{
-    library, solve, solve_amplitudes, Layer, Material, Stack, StackGrid, MAX_THICKNESS_NM,
+    library, solve, solve_amplitudes, solve_incoherent, Diverged, Layer, Material, Stack,
+    StackGrid, MAX_THICKNESS_NM,
 };
 
 use crate::arrays::{array, real_list, reals};
@@ -175,7 +176,9 @@ fn index_spec(n: f64, k: f64) -> MediumSpec {
     }
 }
 
-/// One layer: `(form, thickness_nm)` or a dict carrying its `thickness_nm`.
+/// One layer: `(form, thickness_nm)`, `(form, thickness_nm, coherent)`, or
+/// a dict of stack-file keys carrying its `thickness_nm` (and optionally
+/// `coherent`).
 fn layer(obj: &Bound<'_, PyAny>, field: &str) -> PyResult<Layer> {
     if obj.is_instance_of::<PyDict>() {
         let thickness_nm = obj
@@ -184,39 +187,69 @@ fn layer(obj: &Bound<'_, PyAny>, field: &str) -> PyResult<Layer> {
             .and_then(|t| t.extract::<f64>().ok())
             .unwrap_or(f64::NAN);
         let material = medium(obj, field, None)?;
-        return Ok(Layer::new(material, thickness_nm));
+        // The stack-file parse behind `medium` has checked it is a bool.
+        let coherent = obj
+            .get_item("coherent")
+            .ok()
+            .and_then(|c| c.extract::<bool>().ok())
+            .unwrap_or(true);
+        return Ok(Layer {
+            coherent,
+            ..Layer::new(material, thickness_nm)
+        });
     }
-    let pair = obj
+    let tuple = obj
         .downcast::<PyTuple>()
         .map(|t| t.as_any().clone())
         .or_else(|_| obj.downcast::<PyList>().map(|l| l.as_any().clone()))
         .ok()
-        .filter(|p| p.len().ok() == Some(2));
-    let Some(pair) = pair else {
+        .filter(|p| matches!(p.len().ok(), Some(2 | 3)));
+    let Some(tuple) = tuple else {
         return Err(invalid(
             field,
             format!(
-                "expected (material, thickness_nm) or a dict with thickness_nm, got {}",
+                "expected (material, thickness_nm), (material, thickness_nm, coherent) or a dict \
+                 with thickness_nm, got {}",
                 obj.repr()?
             ),
         ));
     };
-    let thickness_nm: f64 = pair.get_item(1)?.extract().map_err(|_| {
+    let thickness_nm: f64 = tuple.get_item(1)?.extract().map_err(|_| {
         invalid(
             format!("{field}.thickness_nm"),
             "must be a number (nm)".to_string(),
         )
     })?;
-    let material = medium(&pair.get_item(0)?, field, Some(thickness_nm))?;
-    Ok(Layer::new(material, thickness_nm))
+    let coherent = match tuple.len()? {
+        3 => {
+            let flag = tuple.get_item(2)?;
+            if !flag.is_instance_of::<pyo3::types::PyBool>() {
+                return Err(invalid(
+                    format!("{field}.coherent"),
+                    format!(
+                        "must be True or False (False: an incoherent, thick layer), got {}",
+                        flag.repr()?
+                    ),
+                ));
+            }
+            flag.extract()?
+        }
+        _ => true,
+    };
+    let material = medium(&tuple.get_item(0)?, field, Some(thickness_nm))?;
+    Ok(Layer {
+        coherent,
+        ..Layer::new(material, thickness_nm)
+    })
 }
 
 /// A planar multilayer: a lossless ambient, layers from the top (ambient
 /// side) down, and a semi-infinite substrate.
 ///
 /// Stack(ambient=1.0, layers=[(material, thickness_nm), ...], substrate=1.0)
-/// takes every medium form irid.Material takes; Stack.load(path) reads a
-/// stack file (TOML).
+/// takes every medium form irid.Material takes; a layer given as
+/// (material, thickness_nm, False) is incoherent (thick: its inner
+/// reflections add in power). Stack.load(path) reads a stack file (TOML).
 #[pyclass(name = "Stack", module = "irid", frozen)]
 #[derive(Clone)]
 pub struct PyStack {
@@ -302,8 +335,17 @@ impl PyStack {
             .collect()
     }
 
+    /// Per layer, top down: False for an incoherent layer.
+    #[getter]
+    fn coherent(&self) -> Vec<bool> {
+        self.stack.layers.iter().map(|l| l.coherent).collect()
+    }
+
     /// R, T and the complex amplitudes at every wavelength (nm) and angle of
     /// incidence (degrees in [0, 90)), for unpolarized light from the ambient.
+    /// A stack with incoherent layers has no amplitudes (their phase is
+    /// averaged out): its dict holds R and T only, and a point where an
+    /// incoherent layer lases raises ValueError naming it.
     ///
     /// Returns a dict of arrays of shape (wavelengths, angles), or
     /// (thicknesses, wavelengths, angles) when `thickness_nm` lists
@@ -347,6 +389,7 @@ impl PyStack {
         let cos_theta0: Vec<f64> = angles.iter().map(|a| a.to_radians().cos()).collect();
         let per_thickness = wavelengths.len() * angles.len();
         let runs = thicknesses.clone().unwrap_or_else(|| vec![f64::NAN]);
+        let coherence = self.stack.coherence();
         let points = py.allow_threads(|| {
             let mut points = vec![Point::default(); runs.len() * per_thickness];
             points
@@ -364,6 +407,13 @@ impl PyStack {
                     let n = grid.indices_at(i);
                     let wl = wavelengths[i];
                     for (p, &c) in out.iter_mut().zip(&cos_theta0) {
+                        if !coherence.is_coherent() {
+                            match solve_incoherent(n, &d, &coherence, wl, c) {
+                                Ok(r) => p.power = [r.rs, r.rp, r.ts, r.tp, r.r(), r.t()],
+                                Err(lasing) => p.lasing = Some((lasing, wl, c)),
+                            }
+                            continue;
+                        }
                         let r = solve(n, &d, wl, c);
                         let a = solve_amplitudes(n, &d, wl, c);
                         p.power = [r.rs, r.rp, r.ts, r.tp, r.r(), r.t()];
@@ -372,6 +422,9 @@ impl PyStack {
                 });
             points
         });
+        if let Some((lasing, wl, c)) = points.iter().find_map(|p| p.lasing) {
+            return Err(py_error(lasing.error(wl, c)));
+        }
         let shape: Vec<usize> = match &thicknesses {
             Some(t) => vec![t.len(), wavelengths.len(), angles.len()],
             None => vec![wavelengths.len(), angles.len()],
@@ -380,6 +433,9 @@ impl PyStack {
         for (k, key) in ["Rs", "Rp", "Ts", "Tp", "R", "T"].into_iter().enumerate() {
             let column = points.iter().map(|p| p.power[k]).collect();
             result.set_item(key, array(py, column, &shape)?)?;
+        }
+        if !coherence.is_coherent() {
+            return Ok(result);
         }
         for (k, key) in ["rs", "rp", "ts", "tp"].into_iter().enumerate() {
             let column: Vec<C64> = points.iter().map(|p| p.amplitudes[k]).collect();
@@ -446,7 +502,10 @@ impl PyStack {
             .stack
             .layers
             .iter()
-            .map(|l| format!("({:?}, {})", l.material.name, l.thickness_nm))
+            .map(|l| {
+                let incoherent = if l.coherent { "" } else { ", False" };
+                format!("({:?}, {}{incoherent})", l.material.name, l.thickness_nm)
+            })
             .collect();
         format!(
             "irid.Stack(ambient={:?}, layers=[{}], substrate={:?})",
@@ -473,4 +532,6 @@ pub fn check_layer(stack: &Stack, layer: usize) -> PyResult<()> {
 struct Point {
     power: [f64; 6],
     amplitudes: [C64; 4],
+    /// Where an incoherent layer lases: which, and the wavelength and cos θ.
+    lasing: Option<(Diverged, f64, f64)>,
 }

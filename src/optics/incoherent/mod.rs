@@ -57,12 +57,15 @@
 //! A zero-thickness incoherent layer still adds its two interfaces' powers
 //! (P = 1), as in `inc_tmm`: unlike a coherent layer it does not vanish.
 
+mod split;
+
 use std::f64::consts::TAU;
 
 use num_complex::Complex64 as C64;
 
 use super::solver::{grazing, recurse_media, sin_sq, solve, sqrt_upper, Amplitudes, Response};
 use crate::error::Error;
+pub(crate) use split::{split, Env, Parts};
 
 /// Which layers of a stack are incoherent: what the mixed solvers take
 /// beside the indices and thicknesses. The default is every layer coherent.
@@ -133,9 +136,9 @@ pub struct Diverged {
 }
 
 impl Diverged {
-    /// The one-line error for this point (`wavelength_nm`, `cos_theta0`),
-    /// naming the layer.
-    pub fn error(&self, wavelength_nm: f64, cos_theta0: f64) -> Error {
+    /// What is wrong at this point (`wavelength_nm`, `cos_theta0`), for a
+    /// message that names the layer in its caller's terms.
+    pub fn reason(&self, wavelength_nm: f64, cos_theta0: f64) -> String {
         let angle = cos_theta0.clamp(-1.0, 1.0).acos().to_degrees();
         let gain = if self.round_trip.is_finite() {
             format!(
@@ -145,13 +148,19 @@ impl Diverged {
         } else {
             "it amplifies beyond any finite power".to_string()
         };
+        format!(
+            "this incoherent layer lases at {wavelength_nm} nm, {angle:.4}°: {gain} \
+             (gain in it or in the layers around it), so its multiple reflections \
+             have no finite sum"
+        )
+    }
+
+    /// The one-line error for this point, naming the layer as a stack file
+    /// does (`layers[K]`).
+    pub fn error(&self, wavelength_nm: f64, cos_theta0: f64) -> Error {
         Error::invalid(
             format!("layers[{}]", self.layer),
-            format!(
-                "this incoherent layer lases at {wavelength_nm} nm, {angle:.4}°: {gain} \
-                 (gain in it or in the layers around it), so its multiple reflections \
-                 have no finite sum"
-            ),
+            self.reason(wavelength_nm, cos_theta0),
         )
     }
 }
@@ -213,13 +222,226 @@ pub(super) fn through_layer(
     ))
 }
 
+/// A run of a stack's media read top down or bottom up, for the recursions
+/// that climb sub-stacks in either direction without copying them. Media
+/// are numbered from the view's top, 0 to [`View::len`] − 1.
+#[derive(Clone, Copy)]
+pub(super) struct View<'a> {
+    indices: &'a [C64],
+    /// The finite media's thicknesses: medium j's at j − 1 (original order).
+    thicknesses_nm: &'a [f64],
+    /// The position of the view's medium 0 in the whole stack.
+    first: usize,
+    reversed: bool,
+}
+
+impl<'a> View<'a> {
+    /// A whole stack top down: `indices` N + 2, `thicknesses_nm` N.
+    pub(super) fn stack(indices: &'a [C64], thicknesses_nm: &'a [f64]) -> View<'a> {
+        View {
+            indices,
+            thicknesses_nm,
+            first: 0,
+            reversed: false,
+        }
+    }
+
+    /// The stack's media `from..=to` (positions in the whole stack), read
+    /// top down, or bottom up (the view's medium 0 is then `to`).
+    pub(super) fn run(self, from: usize, to: usize, reversed: bool) -> View<'a> {
+        debug_assert!(!self.reversed && self.first == 0 && from < to);
+        View {
+            indices: &self.indices[from..=to],
+            thicknesses_nm: &self.thicknesses_nm[from..to - 1],
+            first: from,
+            reversed,
+        }
+    }
+
+    #[inline(always)]
+    pub(super) fn len(&self) -> usize {
+        self.indices.len()
+    }
+
+    /// The view's medium `j` is the stack's medium at this position.
+    #[inline(always)]
+    pub(super) fn position(&self, j: usize) -> usize {
+        self.first + if self.reversed { self.len() - 1 - j } else { j }
+    }
+
+    #[inline(always)]
+    pub(super) fn index(&self, j: usize) -> C64 {
+        self.indices[if self.reversed { self.len() - 1 - j } else { j }]
+    }
+
+    /// The thickness of the view's medium `j`, a finite layer (0 < j < len − 1).
+    #[inline(always)]
+    pub(super) fn thickness(&self, j: usize) -> f64 {
+        self.thicknesses_nm[if self.reversed {
+            self.len() - 2 - j
+        } else {
+            j - 1
+        }]
+    }
+
+    /// The amplitudes of the view's media `top..=bottom` (view numbering) as
+    /// one coherent group: `top_medium` (n, n², q) of its top medium, and the
+    /// q of its bottom one.
+    #[inline(always)]
+    pub(super) fn group(
+        &self,
+        top: usize,
+        bottom: usize,
+        light: &Light,
+        top_medium: [C64; 3],
+        q_bottom: C64,
+    ) -> Amplitudes {
+        recurse_media(
+            bottom - top + 1,
+            |j| self.index(top + j),
+            |j| self.thickness(top + j + 1),
+            light.wavelength_nm,
+            light.beta_sq,
+            top_medium,
+            q_bottom,
+        )
+    }
+}
+
+/// The incident light: what every medium's q is computed from.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Light {
+    pub(super) wavelength_nm: f64,
+    /// 2π/λ.
+    pub(super) k0: f64,
+    /// The ambient's (real) index.
+    pub(super) n0: f64,
+    /// q0 = n0 cos θ0.
+    pub(super) q0: f64,
+    /// β² = n0² sin² θ0.
+    pub(super) beta_sq: f64,
+}
+
+impl Light {
+    /// Light of `wavelength_nm` from an ambient of index `n0` at cos θ0
+    /// (in (0, 1]).
+    pub(super) fn new(wavelength_nm: f64, n0: f64, cos_theta0: f64) -> Light {
+        Light {
+            wavelength_nm,
+            k0: TAU / wavelength_nm,
+            n0,
+            q0: n0 * cos_theta0,
+            beta_sq: n0 * n0 * sin_sq(cos_theta0),
+        }
+    }
+
+    /// n² − β² of a medium ([`normal_index_sq`]).
+    #[inline]
+    pub(super) fn normal_index_sq(&self, n: C64) -> C64 {
+        normal_index_sq(n, self.n0, self.q0)
+    }
+}
+
+/// What the incoherent recursion leaves at the top of a view.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Climbed {
+    /// Per polarization (s, p): ρ, the power reflectance seen from the
+    /// view's top medium, and τ, the product of the |t|² and P down to its
+    /// bottom medium.
+    pub(super) sums: [(f64, f64); 2],
+    /// An opaque layer (see the module's text) cut the view: nothing below
+    /// it counts, and no power reaches the bottom (τ means nothing).
+    pub(super) opaque: bool,
+    /// The incoherent layer with the largest P crossed (its position, P),
+    /// to name when the sums overflow.
+    pub(super) strongest: (usize, f64),
+}
+
+/// The incoherent recursion (see the module's text) up a view: its bottom
+/// medium a half-space of normal index `q_bottom`, its top medium given as
+/// (n, n², q), and the view's media at `incoherent` (view numbering,
+/// ascending, each strictly between top and bottom) incoherent layers.
+pub(super) fn climb(
+    view: View<'_>,
+    incoherent: impl DoubleEndedIterator<Item = usize>,
+    light: &Light,
+    top_medium: [C64; 3],
+    q_bottom: C64,
+) -> Result<Climbed, Diverged> {
+    let last = view.len() - 1;
+    // The incoherent medium at the bottom of the group being added: its
+    // view number and (n, q).
+    let (mut below, mut n_below, mut q_below) = (last, view.index(last), q_bottom);
+    let mut state: Option<[(f64, f64); 2]> = None;
+    // Below an opaque incoherent layer nothing matters: the recursion
+    // starts again from it as from a half-space, and T = 0.
+    let mut opaque = false;
+    let mut strongest = (0, 0.0);
+    for m in incoherent.rev().chain(std::iter::once(0)) {
+        let (n, q) = if m == 0 {
+            (top_medium[0], top_medium[2])
+        } else {
+            let n = view.index(m);
+            let z = light.normal_index_sq(n);
+            match carrying_index(n, z) {
+                Some(q) => (n, q),
+                None => {
+                    (state, opaque) = (None, true);
+                    (below, n_below, q_below) = (m, n, sqrt_upper(z));
+                    continue;
+                }
+            }
+        };
+        let top = if m == 0 { top_medium } else { [n, n * n, q] };
+        let down = view.group(m, below, light, top, q_below);
+        state = Some(match state {
+            None => [
+                (down.rs.norm_sqr(), down.ts.norm_sqr()),
+                (down.rp.norm_sqr(), down.tp.norm_sqr()),
+            ],
+            Some([s, p]) => {
+                let reversed = View {
+                    reversed: !view.reversed,
+                    ..view
+                };
+                let (rm, rb) = (last - below, last - m);
+                let up = reversed.group(rm, rb, light, [n_below, n_below * n_below, q_below], q);
+                let pass = one_pass(light.k0, q_below, view.thickness(below));
+                let layer = view.position(below);
+                if pass > strongest.1 || pass.is_nan() {
+                    strongest = (layer, pass);
+                }
+                let Amplitudes { rs, rp, ts, tp } = down;
+                [
+                    through_layer(s, (rs, ts), (up.rs, up.ts), pass, layer)?,
+                    through_layer(p, (rp, tp), (up.rp, up.tp), pass, layer)?,
+                ]
+            }
+        });
+        (below, n_below, q_below) = (m, n, q);
+    }
+    Ok(Climbed {
+        sums: state.expect("the view's top closes the recursion"),
+        opaque,
+        strongest,
+    })
+}
+
+/// The Poynting factors that turn τ into T for s and p: Re(q_sub)/q0 and
+/// Re(n_sub conj(cos θ_sub))/q0, as [`solve`] computes them.
+#[inline]
+pub(super) fn flux_factors(n_sub: C64, q_sub: C64, q0: f64) -> [f64; 2] {
+    let p_flux = (q_sub.conj() * n_sub * n_sub).re / n_sub.norm_sqr();
+    [q_sub.re / q0, p_flux / q0]
+}
+
 /// R and T of a stack whose layers are coherent or incoherent as
 /// `coherence` says: [`solve`]'s arguments and conventions (indices of the
 /// ambient, the N layers and the substrate; N thicknesses), and its answer
 /// when every layer is coherent. Nothing is allocated.
 ///
 /// # Errors
-/// [`Diverged`] where an incoherent gain layer lases (see the module's text).
+/// [`Diverged`] where an incoherent layer lases (see the module's text).
 pub fn solve_incoherent(
     indices: &[C64],
     thicknesses_nm: &[f64],
@@ -234,102 +456,35 @@ pub fn solve_incoherent(
     if cos_theta0 <= 0.0 {
         return Ok(grazing(indices));
     }
-    let cos_theta0 = cos_theta0.min(1.0);
-    let n0 = indices[0].re;
-    let beta_sq = n0 * n0 * sin_sq(cos_theta0);
-    let k0 = TAU / wavelength_nm;
-    let last = indices.len() - 1;
-    let n_sub = indices[last];
-    let q0 = n0 * cos_theta0;
-    let q_sub = sqrt_upper(normal_index_sq(n_sub, n0, q0));
-
-    // The incoherent medium at the bottom of the group being added: its
-    // position, index and q. The recursion climbs from the substrate.
-    let (mut below, mut n_below, mut q_below) = (last, n_sub, q_sub);
-    let mut state: Option<[(f64, f64); 2]> = None;
-    // Below an opaque (evanescent) incoherent layer nothing matters: the
-    // recursion starts again from it as from a substrate, and T = 0.
-    let mut opaque = false;
-    let mut strongest = (0, 0.0);
-    for &m in coherence.incoherent.iter().rev().chain(std::iter::once(&0)) {
-        let (n, q) = if m == 0 {
-            (C64::new(n0, 0.0), C64::new(q0, 0.0))
-        } else {
-            let n = indices[m];
-            let z = normal_index_sq(n, n0, q0);
-            match carrying_index(n, z) {
-                Some(q) => (n, q),
-                None => {
-                    (state, opaque) = (None, true);
-                    (below, n_below, q_below) = (m, n, sqrt_upper(z));
-                    continue;
-                }
-            }
-        };
-        let media = below - m + 1;
-        let down = recurse_media(
-            media,
-            |j| indices[m + j],
-            |j| thicknesses_nm[m + j],
-            wavelength_nm,
-            beta_sq,
-            [n, n * n, q],
-            q_below,
-        );
-        state = Some(match state {
-            None => [
-                (down.rs.norm_sqr(), down.ts.norm_sqr()),
-                (down.rp.norm_sqr(), down.tp.norm_sqr()),
-            ],
-            Some([s, p]) => {
-                let up = recurse_media(
-                    media,
-                    |j| indices[below - j],
-                    |j| thicknesses_nm[below - j - 2],
-                    wavelength_nm,
-                    beta_sq,
-                    [n_below, n_below * n_below, q_below],
-                    q,
-                );
-                let pass = one_pass(k0, q_below, thicknesses_nm[below - 1]);
-                if pass > strongest.1 || pass.is_nan() {
-                    strongest = (below, pass);
-                }
-                let Amplitudes { rs, rp, ts, tp } = down;
-                [
-                    through_layer(s, (rs, ts), (up.rs, up.ts), pass, below)?,
-                    through_layer(p, (rp, tp), (up.rp, up.tp), pass, below)?,
-                ]
-            }
-        });
-        (below, n_below, q_below) = (m, n, q);
-    }
-    let [(rs, ts), (rp, tp)] = state.expect("the ambient closes the recursion");
-    let p_flux = (q_sub.conj() * n_sub * n_sub).re / n_sub.norm_sqr();
-    let response = if opaque {
-        Response {
-            rs,
-            rp,
-            ts: 0.0,
-            tp: 0.0,
-        }
+    let light = Light::new(wavelength_nm, indices[0].re, cos_theta0.min(1.0));
+    let n_sub = indices[indices.len() - 1];
+    let q_sub = sqrt_upper(light.normal_index_sq(n_sub));
+    let n0 = C64::new(light.n0, 0.0);
+    let climbed = climb(
+        View::stack(indices, thicknesses_nm),
+        coherence.incoherent.iter().copied(),
+        &light,
+        [n0, n0 * n0, C64::new(light.q0, 0.0)],
+        q_sub,
+    )?;
+    let [(rs, ts), (rp, tp)] = climbed.sums;
+    let [flux_s, flux_p] = if climbed.opaque {
+        [0.0, 0.0]
     } else {
-        Response {
-            rs,
-            rp,
-            ts: ts * q_sub.re / q0,
-            tp: tp * p_flux / q0,
-        }
+        flux_factors(n_sub, q_sub, light.q0)
     };
-    if [rs, rp, response.ts, response.tp]
-        .iter()
-        .all(|x| x.is_finite())
-    {
+    let response = Response {
+        rs,
+        rp,
+        ts: ts * flux_s,
+        tp: tp * flux_p,
+    };
+    if response.is_finite() {
         Ok(response)
     } else {
         // Finite round trips whose gain still overflows the sum.
         Err(Diverged {
-            layer: strongest.0,
+            layer: climbed.strongest.0,
             round_trip: f64::INFINITY,
         })
     }
