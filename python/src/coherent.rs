@@ -11,7 +11,9 @@ use irid::optics::{
 };
 
 use crate::arrays::{array, real_list, values};
+use crate::budget::Footprint;
 use crate::invalid;
+use crate::pool::compute;
 
 /// Checks everything the solver relies on, naming the entry at fault in
 /// tmm-faster's terms (`n[i, j]`: wavelength i, medium j; `d[j]`).
@@ -60,13 +62,7 @@ fn check(
     if let Some(a) = angles_deg.iter().find(|a| !(0.0..=90.0).contains(*a)) {
         return Err(invalid("angles", format!("{a} is outside [0, 90] degrees")));
     }
-    let (lo, hi) = WAVELENGTH_RANGE_NM;
-    if let Some(w) = wavelengths_nm.iter().find(|w| !(lo..=hi).contains(*w)) {
-        return Err(invalid(
-            "wavelengths",
-            format!("{w} nm is outside {lo:e}–{hi:e} nm"),
-        ));
-    }
+    check_wavelengths(wavelengths_nm, "wavelengths")?;
     for (i, row) in indices.chunks_exact(media).enumerate() {
         for (j, z) in row.iter().enumerate() {
             Material::constant(z.re, z.im)
@@ -95,6 +91,15 @@ fn check(
     Ok(())
 }
 
+/// Every wavelength (nm) lies in the library's range (NaN does not).
+pub fn check_wavelengths(wavelengths_nm: &[f64], what: &str) -> PyResult<()> {
+    let (lo, hi) = WAVELENGTH_RANGE_NM;
+    match wavelengths_nm.iter().find(|w| !(lo..=hi).contains(*w)) {
+        Some(w) => Err(invalid(what, format!("{w} nm is outside {lo:e}–{hi:e} nm"))),
+        None => Ok(()),
+    }
+}
+
 /// cos θ of an angle in degrees, exactly 0 at 90° (grazing incidence, where
 /// no power enters the stack) rather than cos(π/2) ≈ 6e-17.
 fn cos_deg(angle_deg: f64) -> f64 {
@@ -108,20 +113,22 @@ fn cos_deg(angle_deg: f64) -> f64 {
 /// The six results of [`solve_grid`], in the order of their keys.
 const KEYS: [&str; 6] = ["R_s", "R_p", "T_s", "T_p", "R_avg", "T_avg"];
 
-/// Solves every (wavelength, angle) pair on rayon's threads into one buffer
-/// laid out [angle][key][wavelength] (keys as [`KEYS`]), so that each key is
-/// a strided (wavelengths, angles) view of it and nothing is transposed.
+/// Solves every (wavelength, angle) pair into one buffer laid out
+/// [angle][key][wavelength] (keys as [`KEYS`]), so that each key is a
+/// strided (wavelengths, angles) view of it and nothing is transposed.
 /// Each task solves one angle over a run of wavelengths through
-/// `StackGrid::solve_spectrum` (eight or four wavelengths per vector; a run whose
-/// indices do not change with wavelength takes the non-dispersive kernel).
-/// The wavelengths are cut into runs only when there are too few angles to
-/// keep every thread busy.
+/// `StackGrid::solve_spectrum` (eight or four wavelengths per vector; a run
+/// whose indices do not change with wavelength takes the non-dispersive
+/// kernel). With `parallel`, the tasks run on the current thread pool, and
+/// the wavelengths are cut into runs when there are too few angles to keep
+/// every thread busy; without, on the calling thread, one run per angle.
 pub fn solve_grid(
     indices: &[C64],
     thicknesses_nm: &[f64],
     coherence: &Coherence,
     wavelengths_nm: &[f64],
     cos_theta0: &[f64],
+    parallel: bool,
 ) -> Vec<f64> {
     let media = thicknesses_nm.len() + 2;
     let (n_w, n_a) = (wavelengths_nm.len(), cos_theta0.len());
@@ -129,8 +136,12 @@ pub fn solve_grid(
     if out.is_empty() {
         return out;
     }
-    let tasks_wanted = 4 * rayon::current_num_threads();
-    let runs = tasks_wanted.div_ceil(n_a).clamp(1, n_w.div_ceil(MIN_RUN));
+    let runs = if parallel {
+        let tasks_wanted = 4 * rayon::current_num_threads();
+        tasks_wanted.div_ceil(n_a).clamp(1, n_w.div_ceil(MIN_RUN))
+    } else {
+        1
+    };
     let run_len = n_w.div_ceil(runs);
     let grids: Vec<StackGrid> = (0..n_w)
         .step_by(run_len)
@@ -156,9 +167,9 @@ pub fn solve_grid(
             tasks.push((cos, grid, slices));
         }
     }
-    tasks.into_par_iter().for_each_init(
-        || Vec::with_capacity(run_len),
-        |spectrum, (cos, grid, [rs, rp, ts, tp, r, t])| {
+    let solve_task =
+        |spectrum: &mut Vec<Response>,
+         (cos, grid, [rs, rp, ts, tp, r, t]): (f64, &StackGrid, [&mut [f64]; 6])| {
             spectrum.clear();
             spectrum.resize(grid.wavelengths_nm().len(), Response::default());
             grid.solve_spectrum(thicknesses_nm, cos, spectrum);
@@ -170,9 +181,35 @@ pub fn solve_grid(
                 r[w] = x.r();
                 t[w] = x.t();
             }
-        },
-    );
+        };
+    if parallel {
+        tasks
+            .into_par_iter()
+            .for_each_init(|| Vec::with_capacity(run_len), solve_task);
+    } else {
+        let mut spectrum = Vec::with_capacity(run_len);
+        for task in tasks {
+            solve_task(&mut spectrum, task);
+        }
+    }
     out
+}
+
+/// Fewest points of a `coherent` call that go to the thread pool: below,
+/// the solve (about 10 ns a point) takes less than the handoff.
+const PARALLEL_MIN_POINTS: usize = 4096;
+
+/// What `coherent` allocates beyond its converted arguments: the indices
+/// (a 1-D n repeated per wavelength, each run's copy, the grid's lane
+/// layout of n and n², 64 bytes per wavelength and medium in all), each
+/// wavelength's k0 and copy, and per angle cos θ and its tasks; the result
+/// (six f64 per point).
+fn grid_footprint(wavelengths: usize, angles: usize, media: usize) -> Footprint {
+    Footprint::new()
+        .items(&[wavelengths, media], 64)
+        .items(&[wavelengths], 16)
+        .items(&[angles], 8 + 256)
+        .items(&[angles, KEYS.len(), wavelengths], 8)
 }
 
 /// Fewest wavelengths in a run of [`solve_grid`]: enough groups of four to
@@ -201,8 +238,7 @@ pub fn coherent<'py>(
     angles: &Bound<'py, PyAny>,
     wavelengths: &Bound<'py, PyAny>,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let grid = Grid::new(n, d, angles, wavelengths)?;
-    grid.solve(py, &Coherence::coherent())
+    Grid::new(n, d, angles, wavelengths)?.solve(py, &Coherence::coherent())
 }
 
 /// A wavelength × angle grid of one stack as tmm-faster's functions take
@@ -216,7 +252,8 @@ pub struct Grid {
 }
 
 impl Grid {
-    /// `n`, `d`, `angles` and `wavelengths` as [`coherent`] takes them.
+    /// `n`, `d`, `angles` and `wavelengths` as [`coherent`] takes them,
+    /// checked against the memory budget before anything is allocated.
     pub fn new(
         n: &Bound<'_, PyAny>,
         d: &Bound<'_, PyAny>,
@@ -228,12 +265,7 @@ impl Grid {
         let d = real_list(d, "d")?;
         let (mut indices, shape) = values::<C64>(n, "complex128", "n")?;
         let media = match shape.as_slice() {
-            [m] => {
-                // One set of media for every wavelength.
-                let row = indices.clone();
-                indices = row.repeat(wavelengths_nm.len());
-                *m
-            }
+            [m] => *m,
             [w, m] if *w == wavelengths_nm.len() => *m,
             _ => {
                 return Err(invalid(
@@ -246,6 +278,15 @@ impl Grid {
                 ))
             }
         };
+        grid_footprint(wavelengths_nm.len(), angles_deg.len(), media).check(&format!(
+            "{} wavelengths × {} angles × {media} media",
+            wavelengths_nm.len(),
+            angles_deg.len()
+        ))?;
+        if shape.len() == 1 {
+            // One set of media for every wavelength.
+            indices = indices.repeat(wavelengths_nm.len());
+        }
         check(&indices, media, &d, &angles_deg, &wavelengths_nm)?;
         Ok(Grid {
             indices,
@@ -268,15 +309,17 @@ impl Grid {
         let (n_w, n_a) = (self.wavelengths_nm.len(), self.angles_deg.len());
         let thicknesses_nm = &self.d[1..self.media - 1];
         let cos_theta0: Vec<f64> = self.angles_deg.iter().map(|&a| cos_deg(a)).collect();
-        let values = py.allow_threads(|| {
+        let parallel = n_w * n_a >= PARALLEL_MIN_POINTS;
+        let values = compute(py, parallel, || {
             solve_grid(
                 &self.indices,
                 thicknesses_nm,
                 coherence,
                 &self.wavelengths_nm,
                 &cos_theta0,
+                parallel,
             )
-        });
+        })?;
         if let Some(k) = values.iter().position(|v| !v.is_finite()) {
             let (a, w) = (k / (KEYS.len() * n_w), k % n_w);
             let row = &self.indices[w * self.media..(w + 1) * self.media];

@@ -1,12 +1,12 @@
 //! `irid.incoherent`: the drop-in for tmm-faster's `calc_incoherent`.
 
 use pyo3::prelude::*;
-use pyo3::types::PyDict;
+use pyo3::types::{PyDict, PyString};
 
 use irid::optics::Coherence;
 
 use crate::coherent::Grid;
-use crate::invalid;
+use crate::{invalid, wrong_type};
 
 /// The coherence list `c`, one 'c' (coherent) or 'i' (incoherent) per
 /// medium of `media`, the ambient and substrate 'i' (they are incoherent
@@ -14,14 +14,19 @@ use crate::invalid;
 fn coherence(c: &Bound<'_, PyAny>, media: usize) -> PyResult<Coherence> {
     let items = c
         .try_iter()
-        .map_err(|_| invalid("c", "must be a sequence of 'c' and 'i', one per medium"))?;
+        .map_err(|_| wrong_type("c", "must be a sequence of 'c' and 'i', one per medium"))?;
     let mut flags = Vec::with_capacity(media);
     for (j, item) in items.enumerate() {
         let item = item?;
-        let letter: Option<String> = item.extract().ok();
-        let coherent = match letter.as_deref() {
-            Some("c") => true,
-            Some("i") => false,
+        let Ok(letter) = item.downcast::<PyString>() else {
+            return Err(wrong_type(
+                format!("c[{j}]"),
+                format!("must be the string 'c' or 'i', got {}", item.repr()?),
+            ));
+        };
+        flags.push(match letter.to_str()? {
+            "c" => true,
+            "i" => false,
             _ => {
                 return Err(invalid(
                     format!("c[{j}]"),
@@ -31,16 +36,20 @@ fn coherence(c: &Bound<'_, PyAny>, media: usize) -> PyResult<Coherence> {
                     ),
                 ))
             }
-        };
-        flags.push(coherent);
+        });
+        if flags.len() > media {
+            break;
+        }
     }
     if flags.len() != media {
+        let count = c
+            .len()
+            .map_or_else(|_| flags.len().to_string(), |l| l.to_string());
         return Err(invalid(
             "c",
             format!(
-                "has {} entries but n has {media} media per wavelength (one letter per medium, \
-                 the ambient and substrate included)",
-                flags.len()
+                "has {count} entries but n has {media} media per wavelength (one letter per \
+                 medium, the ambient and substrate included)"
             ),
         ));
     }

@@ -251,10 +251,8 @@ def test_a_lasing_layer_is_a_value_error():
         (["i", "c", "i", "i", "i"], "c: has 5 entries"),
         (["i", "x", "c", "i"], "c[1]: must be 'c' (coherent) or 'i' (incoherent), got 'x'"),
         (["i", "C", "c", "i"], "c[1]: must be 'c'"),
-        (["i", 1, "c", "i"], "c[1]: must be 'c'"),
         (["c", "i", "c", "i"], "c[0]: the ambient is an incoherent half-space: must be 'i'"),
         (["i", "i", "c", "c"], "c[3]: the substrate is an incoherent half-space: must be 'i'"),
-        (5, "c: must be a sequence"),
     ],
 )
 def test_bad_coherence_lists(c, needle):
@@ -265,18 +263,18 @@ def test_bad_coherence_lists(c, needle):
 
 
 @pytest.mark.parametrize(
-    "kwargs, needle",
+    "kwargs, error, needle",
     [
-        ({"layers": [(1.5, 1e6, "no")]}, "layers[1].coherent: must be True or False"),
-        ({"layers": [{"n": 1.5, "thickness_nm": 1e6, "coherent": "no"}]}, "layers[1]"),
-        ({"ambient": {"n": 1.0, "coherent": False}}, "ambient.coherent: not allowed"),
-        ({"substrate": {"n": 1.5, "coherent": True}}, "substrate.coherent: not allowed"),
+        ({"layers": [(1.5, 1e6, "no")]}, TypeError, "layers[1].coherent: must be True or False"),
+        ({"layers": [{"n": 1.5, "thickness_nm": 1e6, "coherent": "no"}]}, ValueError, "layers[1]"),
+        ({"ambient": {"n": 1.0, "coherent": False}}, ValueError, "ambient.coherent: not allowed"),
+        ({"substrate": {"n": 1.5, "coherent": True}}, ValueError, "substrate.coherent: not allowed"),
     ],
 )
-def test_bad_coherence_flags_on_stacks(kwargs, needle):
-    with pytest.raises(ValueError) as e:
+def test_bad_coherence_flags_on_stacks(kwargs, error, needle):
+    with pytest.raises(error) as e:
         irid.Stack(**kwargs)
-    assert needle in str(e.value)
+    assert needle in str(e.value) and "\n" not in str(e.value)
 
 
 def example_calls():
