@@ -11,8 +11,8 @@ use rayon::prelude::*;
 use irid::color::{stack_colors, FilmColor, Sampling, SpectralIntegrator, White};
 use irid::optics::spec::{IndexSpec, MediumSpec};
 use irid::optics::{
-    library, solve, solve_amplitudes, solve_incoherent, Diverged, Layer, Material, Response, Stack,
-    StackGrid, MAX_THICKNESS_NM,
+    library, solve, solve_amplitudes, solve_mixed, Layer, Material, Response, Stack, StackGrid,
+    MAX_THICKNESS_NM,
 };
 
 use crate::arrays::{array, count, integer_in, real, real_list, reals};
@@ -440,8 +440,8 @@ impl PyStack {
         let points = compute(py, parallel, || {
             solve_points(&grid, &cos_theta0, sweep.as_ref(), parallel)
         })?;
-        if let Some((lasing, wl, c)) = points.iter().find_map(|p| p.lasing) {
-            return Err(py_error(lasing.error(wl, c)));
+        if let Some(k) = points.iter().position(|p| !p.power[0].is_finite()) {
+            lasing_at(&grid, &cos_theta0, sweep.as_ref(), k)?;
         }
         let result = PyDict::new(py);
         for (k, key) in ["Rs", "Rp", "Ts", "Tp", "R", "T"].into_iter().enumerate() {
@@ -627,10 +627,9 @@ fn solve_points(
         let coherence = grid.coherence();
         for (p, &c) in out.iter_mut().zip(cos_theta0) {
             if !coherence.is_coherent() {
-                match solve_incoherent(n, &d, coherence, wavelengths[i], c) {
-                    Ok(r) => p.power = [r.rs, r.rp, r.ts, r.tp, r.r(), r.t()],
-                    Err(lasing) => p.lasing = Some((lasing, wavelengths[i], c)),
-                }
+                // +∞ where a layer lases: `lasing_at` names it afterwards.
+                let r = solve_mixed(n, &d, coherence, wavelengths[i], c);
+                p.power = [r.rs, r.rp, r.ts, r.tp, r.r(), r.t()];
                 continue;
             }
             let r = solve(n, &d, wavelengths[i], c);
@@ -651,10 +650,31 @@ fn solve_points(
     points
 }
 
+/// The error for point `k` of [`solve_points`]' output, where an incoherent
+/// layer lases (Ok if it does not).
+fn lasing_at(
+    grid: &StackGrid,
+    cos_theta0: &[f64],
+    sweep: Option<&Sweep>,
+    k: usize,
+) -> PyResult<()> {
+    let (angles, wavelengths) = (cos_theta0.len(), grid.wavelengths_nm().len());
+    let (row, a) = (k / angles, k % angles);
+    let (run, i) = (row / wavelengths, row % wavelengths);
+    let mut d = grid.thicknesses_nm().to_vec();
+    if let Some(s) = sweep {
+        d[s.layer - 1] = s.thicknesses_nm[run];
+    }
+    match grid.diverged(i, &d, cos_theta0[a]) {
+        Some(lasing) => Err(py_error(
+            lasing.error(grid.wavelengths_nm()[i], cos_theta0[a]),
+        )),
+        None => Ok(()),
+    }
+}
+
 #[derive(Clone, Copy, Default)]
 struct Point {
     power: [f64; 6],
     amplitudes: [C64; 4],
-    /// Where an incoherent layer lases: which, and the wavelength and cos θ.
-    lasing: Option<(Diverged, f64, f64)>,
 }
