@@ -14,6 +14,7 @@ use irid::optics::{
     library, solve, solve_amplitudes, solve_mixed, Layer, Material, Response, Stack, StackGrid,
     MAX_THICKNESS_NM,
 };
+use irid::rough::{check_roughness, rough_colors, RoughColor};
 
 use crate::arrays::{array, count, integer_in, real, real_list, reals};
 use crate::budget::Footprint;
@@ -469,18 +470,29 @@ impl PyStack {
     /// Returns a dict: angle_deg (A,), reflectance_rgb, transmittance_rgb
     /// (linear sRGB, (A, 3)), reflectance_xyz, transmittance_xyz (CIE XYZ,
     /// Y = 1 for a perfect reflector, (A, 3)).
-    #[pyo3(signature = (angles_deg, sampling="exact", white="d65"))]
+    ///
+    /// roughness (a number in [0, 1], as `irid color --roughness`): the
+    /// reflectance pre-integrated over a GGX lobe of that roughness, F_eff
+    /// (docs/rough.md), per view angle instead. Returns a dict: angle_deg,
+    /// reflectance_rgb, reflectance_xyz (as above) and lobe_albedo (A,), the
+    /// white lobe's directional albedo; no transmittance. Roughness 0 gives
+    /// the smooth reflectance exactly.
+    #[pyo3(signature = (angles_deg, sampling="exact", white="d65", roughness=None))]
     fn color<'py>(
         &self,
         py: Python<'py>,
         angles_deg: &Bound<'py, PyAny>,
         sampling: &str,
         white: &str,
+        roughness: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<Bound<'py, PyDict>> {
         let angles = real_list(angles_deg, "angles_deg")?;
         let sampling: Sampling = sampling.parse().map_err(py_error)?;
         let white: White = white.parse().map_err(py_error)?;
         let integrator = SpectralIntegrator::with_white(sampling, white);
+        if let Some(roughness) = roughness {
+            return self.rough_color(py, &integrator, angles, roughness);
+        }
         let samples = integrator.wavelengths_nm().len();
         // The responses at every (wavelength, angle), the grid's indices,
         // and per angle its colour and the four (angles, 3) results.
@@ -571,6 +583,48 @@ impl PyStack {
             layers.join(", "),
             self.stack.substrate.name
         )
+    }
+}
+
+impl PyStack {
+    /// `Stack.color(..., roughness=R)`: F_eff per angle (docs/rough.md).
+    fn rough_color<'py>(
+        &self,
+        py: Python<'py>,
+        integrator: &SpectralIntegrator,
+        angles: Vec<f64>,
+        roughness: &Bound<'py, PyAny>,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        let roughness = real(roughness, "roughness")?;
+        check_roughness("roughness", roughness).map_err(py_error)?;
+        // The library checks its own sweep and kernels; here the colours
+        // and the three results.
+        Footprint::new()
+            .items(
+                &[angles.len()],
+                std::mem::size_of::<RoughColor>() as u64 + 7 * 8,
+            )
+            .check(&format!("{} angles", angles.len()))?;
+        let colours = compute(py, true, || {
+            rough_colors(&self.stack, integrator, &angles, roughness)
+        })?
+        .map_err(py_error)?;
+        let result = PyDict::new(py);
+        result.set_item("angle_deg", array(py, angles.clone(), &[angles.len()])?)?;
+        let triples =
+            |f: fn(&RoughColor) -> [f64; 3]| -> Vec<f64> { colours.iter().flat_map(f).collect() };
+        let shape = [colours.len(), 3];
+        result.set_item(
+            "reflectance_rgb",
+            array(py, triples(|c| c.reflectance_rgb), &shape)?,
+        )?;
+        result.set_item(
+            "reflectance_xyz",
+            array(py, triples(|c| c.reflectance_xyz), &shape)?,
+        )?;
+        let albedo = colours.iter().map(|c| c.lobe_albedo).collect();
+        result.set_item("lobe_albedo", array(py, albedo, &[angles.len()])?)?;
+        Ok(result)
     }
 }
 
