@@ -86,31 +86,18 @@ def tmm_faster_grid(n_matrix, thicknesses_nm, angles_deg, wavelengths_nm):
     return res["R_avg"].T, res["T_avg"].T
 
 
-def tmm_faster_incoherent_grid(n_matrix, thicknesses_nm, coherent, angles_deg, wavelengths_nm):
+def letters(coherent):
+    """calc_incoherent's c from irid's per-layer flags."""
+    return ["i", *("c" if flag else "i" for flag in coherent), "i"]
+
+
+def tmm_faster_incoherent_grid(n_matrix, thicknesses_nm, c, angles_deg, wavelengths_nm):
     """tmm-faster's calc_incoherent, R and T as [angle][wavelength]."""
     import tmm_faster
 
     d = [np.inf, *thicknesses_nm, np.inf]
-    c = ["i", *("c" if flag else "i" for flag in coherent), "i"]
     res = tmm_faster.calc_incoherent(n_matrix, d, c, angles_deg, wavelengths_nm)
     return res["R_avg"].T, res["T_avg"].T
-
-
-def byrnes_incoherent_grid(n_matrix, thicknesses_nm, coherent, angles_deg, wavelengths_nm):
-    """Byrnes' inc_tmm point by point, s and p averaged, as [angle][wavelength]."""
-    import tmm
-
-    d = [math.inf, *thicknesses_nm, math.inf]
-    c = ["i", *("c" if flag else "i" for flag in coherent), "i"]
-    r = np.empty((len(angles_deg), len(wavelengths_nm)))
-    t = np.empty_like(r)
-    for wi, w in enumerate(wavelengths_nm):
-        n_list = list(n_matrix[wi])
-        for ai, a in enumerate(angles_deg):
-            sp = [tmm.inc_tmm(pol, n_list, d, c, math.radians(a), w) for pol in "sp"]
-            r[ai, wi] = 0.5 * (sp[0]["R"] + sp[1]["R"])
-            t[ai, wi] = 0.5 * (sp[0]["T"] + sp[1]["T"])
-    return r, t
 
 
 def colour_grid(n_matrix, thicknesses_nm, angles_deg, wavelengths_nm):
@@ -119,9 +106,10 @@ def colour_grid(n_matrix, thicknesses_nm, angles_deg, wavelengths_nm):
     return r.T, t.T
 
 
-def byrnes_grid(n_matrix, thicknesses_nm, angles_deg, wavelengths_nm):
-    """Byrnes' tmm's R, T as [angle][wavelength], irid's layout."""
-    r, t = peer_calls.byrnes_grid(n_matrix, thicknesses_nm, angles_deg, wavelengths_nm)
+def byrnes_grid(n_matrix, thicknesses_nm, angles_deg, wavelengths_nm, coherence=None):
+    """Byrnes' tmm's R, T as [angle][wavelength], irid's layout (inc_tmm
+    with `coherence`, the letters of calc_incoherent's c)."""
+    r, t = peer_calls.byrnes_grid(n_matrix, thicknesses_nm, angles_deg, wavelengths_nm, coherence)
     return r.T, t.T
 
 
@@ -285,15 +273,15 @@ def incoherent_rows(args, failures, findings):
         n = indices(doc)
         w = np.array(doc["wavelengths_nm"])
         a = np.array(doc["angles_deg"])
-        d, coherent = doc["layer_thicknesses_nm"], doc["coherent"]
+        d, c = doc["layer_thicknesses_nm"], letters(doc["coherent"])
         # inc_tmm's Snell angles are taken at exactly 90 degrees too; keep
         # the comparison off grazing, as for the coherent peers.
         grazing = (a >= 90.0)[:, None]
-        secs, (pr, pt) = best_of(args.repeat, lambda: tmm_faster_incoherent_grid(n, d, coherent, a, w))
+        secs, (pr, pt) = best_of(args.repeat, lambda: tmm_faster_incoherent_grid(n, d, c, a, w))
         row = {"stack": stack, "points": r.size, "irid": doc["seconds"], "tmm-faster": secs,
                "tmm-faster cmp": compare(r, t, pr, pt, grazing)}
         step = args.byrnes_step
-        secs, (pr, pt) = best_of(1, lambda: byrnes_incoherent_grid(n[::step], d, coherent, a, w[::step]))
+        secs, (pr, pt) = best_of(1, lambda: byrnes_grid(n[::step], d, a, w[::step], c))
         row["tmm"] = secs * r.size / pr.size
         row["tmm cmp"] = compare(r[:, ::step], t[:, ::step], pr, pt, grazing)
         if not agrees(row["tmm cmp"]):

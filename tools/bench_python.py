@@ -70,21 +70,6 @@ def coherence(irid, file):
     return ["i", *("c" if flag else "i" for flag in stack.coherent), "i"]
 
 
-def byrnes_incoherent(n, d, c, angles, wavelengths):
-    """Byrnes' inc_tmm point by point, R and T averaged, [wavelength][angle]."""
-    import numpy as np
-    import tmm
-
-    r = np.empty((len(wavelengths), len(angles)))
-    t = np.empty_like(r)
-    for wi, w in enumerate(wavelengths):
-        for ai, a in enumerate(angles):
-            sp = [tmm.inc_tmm(pol, list(n[wi]), d, c, math.radians(a), w) for pol in "sp"]
-            r[wi, ai] = 0.5 * (sp[0]["R"] + sp[1]["R"])
-            t[wi, ai] = 0.5 * (sp[0]["T"] + sp[1]["T"])
-    return r, t
-
-
 def incoherent_rows(irid, args, wavelengths, angles, step, failures, findings):
     """irid.incoherent against calc_incoherent (timed) and inc_tmm (on every
     step-th wavelength, scaled per point) on INCOHERENT_STACKS."""
@@ -98,7 +83,7 @@ def incoherent_rows(irid, args, wavelengths, angles, step, failures, findings):
         mine_s, mine = best_of(args.repeat, lambda: irid.incoherent(n, d, c, angles, wavelengths))
         tf_s, tf = best_of(args.repeat, lambda: tmm_faster.calc_incoherent(n, d, c, angles, wavelengths))
         sub = slice(None, None, step)
-        by_s, (br, bt) = best_of(1, lambda: byrnes_incoherent(n[sub], d, c, angles, wavelengths[sub]))
+        by_s, (br, bt) = best_of(1, lambda: peer_calls.byrnes_grid(n[sub], d[1:-1], angles, wavelengths[sub], c))
         by_s *= mine["R_avg"].size / br.size
         diff = max(np.abs(mine["R_avg"][sub] - br).max(), np.abs(mine["T_avg"][sub] - bt).max())
         if not diff <= TOLERANCE:
