@@ -511,28 +511,17 @@ impl PyStack {
             stack_colors(&self.stack, &integrator, &angles)
         })?
         .map_err(py_error)?;
-        let result = PyDict::new(py);
-        result.set_item("angle_deg", array(py, angles.clone(), &[angles.len()])?)?;
-        let triples =
-            |f: fn(&FilmColor) -> [f64; 3]| -> Vec<f64> { colours.iter().flat_map(f).collect() };
-        let shape = [colours.len(), 3];
-        result.set_item(
-            "reflectance_rgb",
-            array(py, triples(|c| c.reflectance_rgb), &shape)?,
-        )?;
-        result.set_item(
-            "transmittance_rgb",
-            array(py, triples(|c| c.transmittance_rgb), &shape)?,
-        )?;
-        result.set_item(
-            "reflectance_xyz",
-            array(py, triples(|c| c.reflectance_xyz), &shape)?,
-        )?;
-        result.set_item(
-            "transmittance_xyz",
-            array(py, triples(|c| c.transmittance_xyz), &shape)?,
-        )?;
-        Ok(result)
+        colour_dict(
+            py,
+            angles,
+            &colours,
+            &[
+                ("reflectance_rgb", |c| c.reflectance_rgb),
+                ("transmittance_rgb", |c| c.transmittance_rgb),
+                ("reflectance_xyz", |c| c.reflectance_xyz),
+                ("transmittance_xyz", |c| c.transmittance_xyz),
+            ],
+        )
     }
 
     /// Unpolarized (R, T) at arrays of points, each with its own wavelength:
@@ -609,23 +598,40 @@ impl PyStack {
             rough_colors(&self.stack, integrator, &angles, roughness)
         })?
         .map_err(py_error)?;
-        let result = PyDict::new(py);
-        result.set_item("angle_deg", array(py, angles.clone(), &[angles.len()])?)?;
-        let triples =
-            |f: fn(&RoughColor) -> [f64; 3]| -> Vec<f64> { colours.iter().flat_map(f).collect() };
-        let shape = [colours.len(), 3];
-        result.set_item(
-            "reflectance_rgb",
-            array(py, triples(|c| c.reflectance_rgb), &shape)?,
-        )?;
-        result.set_item(
-            "reflectance_xyz",
-            array(py, triples(|c| c.reflectance_xyz), &shape)?,
-        )?;
         let albedo = colours.iter().map(|c| c.lobe_albedo).collect();
-        result.set_item("lobe_albedo", array(py, albedo, &[angles.len()])?)?;
+        let result = colour_dict(
+            py,
+            angles,
+            &colours,
+            &[
+                ("reflectance_rgb", |c| c.reflectance_rgb),
+                ("reflectance_xyz", |c| c.reflectance_xyz),
+            ],
+        )?;
+        let n = colours.len();
+        result.set_item("lobe_albedo", array(py, albedo, &[n])?)?;
         Ok(result)
     }
+}
+
+/// A named colour of one angle's result, as `Stack.color` returns it.
+type ColourKey<C> = (&'static str, fn(&C) -> [f64; 3]);
+
+/// `Stack.color`'s dict: angle_deg (A,) and each named colour (A, 3).
+fn colour_dict<'py, C>(
+    py: Python<'py>,
+    angles: Vec<f64>,
+    colours: &[C],
+    keys: &[ColourKey<C>],
+) -> PyResult<Bound<'py, PyDict>> {
+    let result = PyDict::new(py);
+    let n = angles.len();
+    result.set_item("angle_deg", array(py, angles, &[n])?)?;
+    for (key, f) in keys {
+        let values: Vec<f64> = colours.iter().flat_map(f).collect();
+        result.set_item(*key, array(py, values, &[colours.len(), 3])?)?;
+    }
+    Ok(result)
 }
 
 /// The `layer` argument (1 when not given): for a stack with layers, one

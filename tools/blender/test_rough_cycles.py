@@ -58,40 +58,40 @@ MAX_BOUND = 0.15
 NOISE_BOUND = 1e-3  # standard error of F_eff per channel
 
 
-def principled_rough_film(roughness):
-    """Cycles' thin film on glass, specular only (base colour black), GGX."""
-    material = bpy.data.materials.new(f"Principled film r {roughness:g}")
+def bsdf_material(name, node_type, inputs):
+    """A material of one GGX BSDF node with these input values."""
+    material = bpy.data.materials.new(name)
     if material.node_tree is None:
         material.use_nodes = True
     tree = material.node_tree
     tree.nodes.clear()
-    bsdf = tree.nodes.new("ShaderNodeBsdfPrincipled")
-    bsdf.distribution = "GGX"
-    bsdf.inputs["Base Color"].default_value = (0.0, 0.0, 0.0, 1.0)
-    bsdf.inputs["Metallic"].default_value = 0.0
-    bsdf.inputs["Roughness"].default_value = roughness
-    bsdf.inputs["IOR"].default_value = SUBSTRATE_IOR
-    bsdf.inputs["Thin Film Thickness"].default_value = FILM_NM
-    bsdf.inputs["Thin Film IOR"].default_value = FILM_IOR
+    bsdf = tree.nodes.new(node_type)
+    bsdf.distribution = "GGX"  # single scattering, not Multiscatter GGX
+    for key, value in inputs.items():
+        bsdf.inputs[key].default_value = value
     out = tree.nodes.new("ShaderNodeOutputMaterial")
     tree.links.new(bsdf.outputs[0], out.inputs["Surface"])
     return material
+
+
+def principled_rough_film(roughness):
+    """Cycles' thin film on glass, specular only (base colour black)."""
+    return bsdf_material(f"Principled film r {roughness:g}", "ShaderNodeBsdfPrincipled", {
+        "Base Color": (0.0, 0.0, 0.0, 1.0),
+        "Metallic": 0.0,
+        "Roughness": roughness,
+        "IOR": SUBSTRATE_IOR,
+        "Thin Film Thickness": FILM_NM,
+        "Thin Film IOR": FILM_IOR,
+    })
 
 
 def white_glossy(roughness):
-    """A white single-scattering GGX lobe: its render is the lobe's albedo."""
-    material = bpy.data.materials.new(f"Glossy r {roughness:g}")
-    if material.node_tree is None:
-        material.use_nodes = True
-    tree = material.node_tree
-    tree.nodes.clear()
-    bsdf = tree.nodes.new("ShaderNodeBsdfGlossy")
-    bsdf.distribution = "GGX"
-    bsdf.inputs["Color"].default_value = (1.0, 1.0, 1.0, 1.0)
-    bsdf.inputs["Roughness"].default_value = roughness
-    out = tree.nodes.new("ShaderNodeOutputMaterial")
-    tree.links.new(bsdf.outputs[0], out.inputs["Surface"])
-    return material
+    """A white GGX lobe: its render is the lobe's directional albedo."""
+    return bsdf_material(f"Glossy r {roughness:g}", "ShaderNodeBsdfGlossy", {
+        "Color": (1.0, 1.0, 1.0, 1.0),
+        "Roughness": roughness,
+    })
 
 
 def ratio_and_noise(film, white):
