@@ -15,7 +15,9 @@ use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg64;
 
 use irid::optics::lanes::{best_copy, solve_points_on, Path};
-use irid::optics::{solve, LayerThickness, PointSolver, Response, Stack, MAX_THICKNESS_NM};
+use irid::optics::{
+    solve, solve_incoherent, LayerThickness, PointSolver, Response, Stack, MAX_THICKNESS_NM,
+};
 
 const TOLERANCE: f64 = 1e-12;
 
@@ -445,4 +447,51 @@ fn bad_points_are_refused_by_name() {
     );
     // Nothing to do is no error.
     stack.solve_points(None, &[], &[], &mut []).unwrap();
+}
+
+/// A stack with an incoherent layer (the coated sheet of `luts/`) at random
+/// points, its front film's thickness per point: each point equals
+/// `solve_incoherent` at the stack's indices exactly (the same function on
+/// the same inputs), and a gain layer that lases at a point is refused,
+/// naming that layer.
+#[test]
+fn stacks_with_incoherent_layers() {
+    let mut rng = Pcg64::seed_from_u64(45);
+    let sheet = luts("coated-sheet.toml");
+    let points = 700;
+    let wl: Vec<f64> = (0..points)
+        .map(|_| rng.random_range(380.0..780.0))
+        .collect();
+    let cos: Vec<f64> = (0..points).map(|_| rng.random_range(0.0..=1.0)).collect();
+    let front: Vec<f64> = (0..points).map(|_| rng.random_range(0.0..500.0)).collect();
+    let varying = Some(LayerThickness {
+        layer: 0,
+        thickness_nm: &front,
+    });
+    let mut out = vec![Response::default(); points];
+    sheet.solve_points(varying, &wl, &cos, &mut out).unwrap();
+    let coherence = sheet.coherence();
+    let mut n = Vec::new();
+    for i in 0..points {
+        let mut d = sheet.thicknesses_nm();
+        d[0] = front[i];
+        sheet.indices_at(wl[i], &mut n).unwrap();
+        let want = solve_incoherent(&n, &d, &coherence, wl[i], cos[i]).unwrap();
+        assert!(
+            same_bits(&out[i], &want),
+            "point {i}: {:?} against {want:?}",
+            out[i]
+        );
+    }
+    // 1 mm of a gain medium in air: its round trip exceeds 1.
+    let lasing = from_toml(
+        "ambient = { n = 1.0 }\nsubstrate = { n = 1.0 }\n\
+         [[layers]]\nn = [1.5, -0.01]\nthickness_nm = 1e6\ncoherent = false\n",
+    );
+    let mut one = vec![Response::default(); 1];
+    let err = lasing
+        .solve_points(None, &[550.0], &[1.0], &mut one)
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("layers[1]"), "{err}");
 }

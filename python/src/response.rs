@@ -68,7 +68,8 @@ fn oriented(stack: &Stack, layer: usize, side: Side) -> PyResult<(Stack, usize)>
 /// Each task solves its points into a buffer of its own of at most
 /// [`POINTS_PER_TASK`] responses (64 KB), so what grows with the call is
 /// only R and T. Fails on a point whose wavelength a material does not
-/// cover (the caller has checked the angles and thicknesses).
+/// cover or where an incoherent layer lases (the caller has checked
+/// the angles and thicknesses).
 fn solve_points(
     solver: &PointSolver<'_>,
     varying: Option<LayerThickness<'_>>,

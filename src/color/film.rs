@@ -27,7 +27,8 @@ pub struct FilmColor {
 }
 
 /// Colours of `stack` at each incidence angle (degrees, in [0, 90)), with
-/// unpolarized light from the ambient side.
+/// unpolarized light from the ambient side. Fails, naming the layer, where
+/// an incoherent layer lases.
 pub fn stack_colors(
     stack: &Stack,
     integrator: &SpectralIntegrator,
@@ -45,6 +46,7 @@ pub fn stack_colors(
     // Wavelength-major: the response at wavelength i, angle j is [i × angles + j].
     let mut responses = vec![Response::default(); samples * angles_deg.len()];
     grid.solve(&cos_theta0, &mut responses);
+    grid.check_solved(&cos_theta0, &responses)?;
     let (mut r, mut t) = (vec![0.0; samples], vec![0.0; samples]);
     Ok(angles_deg
         .iter()

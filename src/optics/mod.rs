@@ -1,5 +1,6 @@
 //! Optics: materials, stacks and the transfer-matrix solver.
 
+pub mod incoherent;
 pub mod lanes;
 pub mod library;
 #[rustfmt::skip]
@@ -11,6 +12,7 @@ pub mod spec;
 pub mod stack;
 pub mod twoport;
 
+pub use incoherent::{solve_incoherent, solve_mixed, Coherence, Diverged};
 pub use material::{Dispersion, IndexTable, Material};
 pub use points::{LayerThickness, PointSolver};
 pub use solver::{

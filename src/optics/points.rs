@@ -5,7 +5,8 @@
 //! wavelength and the points go to the lane kernel several at a time
 //! ([`lanes::solve_points_on`]), agreeing with [`solve`](super::solve) at
 //! the stack's own indices ([`Stack::indices_at`]) point by point to 10⁻¹²
-//! (`tests/points.rs`).
+//! (`tests/points.rs`). A stack with incoherent layers is solved point by
+//! point by [`solve_incoherent`] instead.
 //!
 //! With the kernel vectorized, evaluating the materials is most of the
 //! work: a tabulated material's row is found by binary search in
@@ -16,6 +17,7 @@
 
 use num_complex::Complex64 as C64;
 
+use super::incoherent::{solve_incoherent, Coherence};
 use super::lanes::{self, Path};
 use super::material::{Dispersion, IndexTable, Material, MAX_INDEX, MIN_INDEX};
 use super::solver::Response;
@@ -46,6 +48,10 @@ pub struct PointSolver<'a> {
     stack: &'a Stack,
     /// Ambient, layers, substrate.
     media: Vec<Medium<'a>>,
+    /// The layers' coherence when one of them is incoherent (such points
+    /// are solved one by one by [`solve_incoherent`]); None when all are
+    /// coherent.
+    coherence: Option<Coherence>,
 }
 
 /// How one medium's index is found at a wavelength.
@@ -91,7 +97,12 @@ impl<'a> PointSolver<'a> {
                 _ => Medium::Formula(m),
             })
             .collect();
-        Ok(PointSolver { stack, media })
+        let coherence = (!stack.is_coherent()).then(|| stack.coherence());
+        Ok(PointSolver {
+            stack,
+            media,
+            coherence,
+        })
     }
 
     /// R and T at each point i: wavelength `wavelengths_nm[i]`, incidence
@@ -140,15 +151,20 @@ impl<'a> PointSolver<'a> {
             let end = (start + BLOCK).min(points);
             let wavelengths = &wavelengths_nm[start..end];
             block.fill(self, varying, start, wavelengths)?;
-            lanes::solve_points_on(
-                path,
-                layers,
-                &block.indices,
-                &block.thicknesses_nm[..(end - start) * layers],
-                wavelengths,
-                &cos_theta0[start..end],
-                &mut out[start..end],
-            );
+            let cos_theta0 = &cos_theta0[start..end];
+            let out = &mut out[start..end];
+            match &self.coherence {
+                None => lanes::solve_points_on(
+                    path,
+                    layers,
+                    &block.indices,
+                    &block.thicknesses_nm[..(end - start) * layers],
+                    wavelengths,
+                    cos_theta0,
+                    out,
+                ),
+                Some(coherence) => block.solve_mixed(coherence, wavelengths, cos_theta0, out)?,
+            }
         }
         Ok(())
     }
@@ -339,6 +355,32 @@ impl Block {
             for (row, &t) in self.thicknesses_nm.chunks_exact_mut(layers).zip(given) {
                 row[v.layer] = t;
             }
+        }
+        Ok(())
+    }
+
+    /// The points of this block of a stack with incoherent layers, one by
+    /// one; fails on the first point where an incoherent layer lases,
+    /// naming the layer.
+    fn solve_mixed(
+        &self,
+        coherence: &Coherence,
+        wavelengths_nm: &[f64],
+        cos_theta0: &[f64],
+        out: &mut [Response],
+    ) -> Result<()> {
+        let media = self.indices.len() / wavelengths_nm.len().max(1);
+        let layers = media - 2;
+        for (i, response) in out.iter_mut().enumerate() {
+            let (wl, cos) = (wavelengths_nm[i], cos_theta0[i]);
+            *response = solve_incoherent(
+                &self.indices[i * media..(i + 1) * media],
+                &self.thicknesses_nm[i * layers..(i + 1) * layers],
+                coherence,
+                wl,
+                cos,
+            )
+            .map_err(|lasing| lasing.error(wl, cos))?;
         }
         Ok(())
     }

@@ -31,7 +31,6 @@ fn solve_lanes<'a, V: Lanes>(
     cos_theta0: [f64; MAX_LANES],
 ) -> Power<V> {
     let last = thicknesses.layers() + 1;
-    let zero = V::splat(0.0);
     let one = V::splat(1.0);
     // Lanes whose answer the scalar solver gives instead: grazing here,
     // near-critical layers below.
@@ -43,9 +42,56 @@ fn solve_lanes<'a, V: Lanes>(
     let shared_q = shared_normal_indices(media, repeats, beta_sq);
 
     let (n_sub, nsq_sub) = media.medium(last);
+    let q_sub = normal_index(repeats.slot(last), &shared_q, nsq_sub, beta_sq);
+    let top = [Cv::real(n0), Cv::real(n0.mul(n0)), Cv::real(n0.mul(cos))];
+    let (power, near_critical) = recurse_lanes(
+        media,
+        (repeats, &shared_q),
+        last,
+        |j| thicknesses.layer(j),
+        (k0, beta_sq),
+        top,
+        [n_sub, nsq_sub, q_sub],
+    );
+
+    for (l, s) in scalar.iter_mut().enumerate() {
+        *s |= near_critical & (1 << l) != 0;
+    }
+    let out = to_power(&power, n0.mul(cos), n_sub, q_sub);
+    if !scalar[..V::WIDTH].contains(&true) {
+        return out;
+    }
+    let mut res = out.responses();
+    for l in 0..V::WIDTH {
+        if scalar[l] {
+            let (indices, wavelength_nm) = lane_point(l);
+            res[l] = solve(indices, thicknesses.lane(l), wavelength_nm, cos_theta0[l]);
+        }
+    }
+    Power::from_responses(&res)
+}
+
+/// The scalar solver's recursion (`recurse_media`) in lanes, over the media
+/// of `media` from `last` (the bottom half-space, given as (n, n², q) in
+/// `bottom`) up to medium 0 (given as `top`): Γ and t of both polarizations,
+/// and the lanes (bits) where a medium between them is near its critical
+/// angle, which the scalar solver must take over. `shared` holds the q of
+/// media that share one index (see [`Repeats`]), `thickness(j)` the
+/// thickness of medium j + 1 in every lane, and `light` (k0, β²).
+#[inline(always)]
+pub(super) fn recurse_lanes<V: Lanes>(
+    media: &impl MediaLanes<V>,
+    (repeats, shared_q): (&Repeats, &[Cv<V>; SHARED_SLOTS]),
+    last: usize,
+    thickness: impl Fn(usize) -> V,
+    (k0, beta_sq): (V, V),
+    top: [Cv<V>; 3],
+    [n_sub, nsq_sub, q_sub]: [Cv<V>; 3],
+) -> (Amplitudes<V>, u32) {
+    let zero = V::splat(0.0);
+    let one = V::splat(1.0);
     let mut n_below = n_sub;
     let mut nsq_below = nsq_sub;
-    let q_sub = normal_index(repeats.slot(last), &shared_q, nsq_sub, beta_sq);
     let mut q_below = q_sub;
     let (mut gamma_s, mut gamma_p) = (Cv::real(zero), Cv::real(zero));
     let (mut ts, mut tp) = (Cv::real(one), Cv::real(one));
@@ -53,17 +99,17 @@ fn solve_lanes<'a, V: Lanes>(
 
     for j in (0..last).rev() {
         let (n_above, nsq_above, q_above) = if j == 0 {
-            (Cv::real(n0), Cv::real(n0.mul(n0)), Cv::real(n0.mul(cos)))
+            (top[0], top[1], top[2])
         } else {
             let (n, nsq) = media.medium(j);
             (
                 n,
                 nsq,
-                normal_index(repeats.slot(j), &shared_q, nsq, beta_sq),
+                normal_index(repeats.slot(j), shared_q, nsq, beta_sq),
             )
         };
         if j + 1 < last {
-            let k0_d = k0.mul(thicknesses.layer(j));
+            let k0_d = k0.mul(thickness(j));
             let one_way = one_way(q_below.scale(k0_d));
             let round_trip = one_way.mul(one_way);
             gamma_s = gamma_s.mul(round_trip);
@@ -99,37 +145,22 @@ fn solve_lanes<'a, V: Lanes>(
         nsq_below = nsq_above;
         q_below = q_above;
     }
-
-    for (l, s) in scalar.iter_mut().enumerate() {
-        *s |= near_critical & (1 << l) != 0;
-    }
-    let power = Amplitudes {
+    let amplitudes = Amplitudes {
         gamma_s,
         gamma_p,
         ts,
         tp,
     };
-    let out = to_power(&power, n0.mul(cos), n_sub, q_sub);
-    if !scalar[..V::WIDTH].contains(&true) {
-        return out;
-    }
-    let mut res = out.responses();
-    for l in 0..V::WIDTH {
-        if scalar[l] {
-            let (indices, wavelength_nm) = lane_point(l);
-            res[l] = solve(indices, thicknesses.lane(l), wavelength_nm, cos_theta0[l]);
-        }
-    }
-    Power::from_responses(&res)
+    (amplitudes, near_critical)
 }
 
 /// The recursion's result in four lanes: Γ at the top and the transmitted
 /// amplitude t, for s and p.
-struct Amplitudes<V> {
-    gamma_s: Cv<V>,
-    gamma_p: Cv<V>,
-    ts: Cv<V>,
-    tp: Cv<V>,
+pub(super) struct Amplitudes<V> {
+    pub(super) gamma_s: Cv<V>,
+    pub(super) gamma_p: Cv<V>,
+    pub(super) ts: Cv<V>,
+    pub(super) tp: Cv<V>,
 }
 
 /// Power, as the scalar solver's `to_power`: R = |Γ|², T from the Poynting
@@ -185,12 +216,12 @@ fn normal_index<V: Lanes>(
 /// computes it) in every lane. A trait rather than a closure: a closure is
 /// compiled without the kernel copy's target features, and the intrinsics
 /// in it would not be inlined.
-trait MediaLanes<V: Lanes> {
+pub(super) trait MediaLanes<V: Lanes> {
     fn medium(&self, j: usize) -> (Cv<V>, Cv<V>);
 }
 
 /// Each lane's indices from its own slice, gathered lane by lane.
-struct Gathered<'a>([&'a [C64]; MAX_LANES]);
+pub(super) struct Gathered<'a>(pub(super) [&'a [C64]; MAX_LANES]);
 
 impl<V: Lanes> MediaLanes<V> for Gathered<'_> {
     #[inline(always)]
@@ -205,9 +236,9 @@ impl<V: Lanes> MediaLanes<V> for Gathered<'_> {
 }
 
 /// The lanes from `start` on of a [`Spectrum`]'s rows, one load each.
-struct Laid<'a> {
-    spectrum: &'a Spectrum,
-    start: usize,
+pub(super) struct Laid<'a> {
+    pub(super) spectrum: &'a Spectrum,
+    pub(super) start: usize,
 }
 
 impl<V: Lanes> MediaLanes<V> for Laid<'_> {
