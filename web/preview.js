@@ -10,12 +10,9 @@
 (function (ns) {
   'use strict';
 
-  // Parameters every export has (docs/gpu.md); the sampler's block may
-  // hold more, each filled from film.json's params by name.
-  const PARAM_NAMES = [
-    'thickness_min_nm', 'thickness_max_nm', 'cos_min', 'cos_max',
-    'cos_crit', 'y_crit', 'size_u', 'size_v',
-  ];
+  // The film.json version this page reads (docs/gpu.md): the atlas of
+  // charts, one per side of the film, and its uniform array.
+  const FILM_VERSION = 2;
   const ENVIRONMENTS = { sky: 0, studio: 1, white: 2 };
   const CHART_QUANTITY = { 'chart-r': 0, 'chart-t': 1 };
 
@@ -91,7 +88,9 @@
     const fail = (why) => { throw new Error(`${where}film.json: ${why}`); };
     if (!film || typeof film !== 'object') fail('not an object');
     if (film.format !== 'irid-film') fail(`format is ${JSON.stringify(film.format)}, not "irid-film"`);
-    if (film.version !== 1) fail(`version ${JSON.stringify(film.version)} is not 1 (written by another irid?)`);
+    if (film.version !== FILM_VERSION) {
+      fail(`version ${JSON.stringify(film.version)}: this page reads version ${FILM_VERSION}; export the film again with the irid that wrote this page`);
+    }
     const tex = film.texture;
     if (!tex || !Number.isInteger(tex.width) || !Number.isInteger(tex.height) || tex.width < 1 || tex.height < 1) {
       fail('texture.width and texture.height must be positive integers');
@@ -106,9 +105,17 @@
       || d.cos_theta[0] < 0 || d.cos_theta[1] > 1) {
       fail('domain ranges are empty or out of order');
     }
-    if (!film.params || typeof film.params !== 'object' || !Object.values(film.params).every(isNumber)
-      || !PARAM_NAMES.every((n) => n in film.params)) {
-      fail(`params must be numbers, among them ${PARAM_NAMES.join(', ')}`);
+    const u = film.uniform_f32;
+    if (!Array.isArray(u) || u.length === 0 || u.length % 4 !== 0 || !u.every(isNumber)) {
+      fail('uniform_f32 must be an array of numbers, whole vec4s');
+    }
+    if (!Array.isArray(film.charts) || film.charts.length === 0
+      || !film.charts.every((c) => c && c.params && Object.values(c.params).every(isNumber))) {
+      fail('charts must list the atlas\'s charts, each with numeric params');
+    }
+    const chart = (side) => side && Number.isInteger(side.chart) && side.chart >= 0 && side.chart < film.charts.length;
+    if (!film.sides || !chart(film.sides.front) || !(film.sides.back === null || chart(film.sides.back))) {
+      fail('sides.front must name a chart, sides.back a chart or null');
     }
     if (typeof film.white !== 'string') fail('white must be a string');
   }
@@ -289,7 +296,7 @@ void main() {
   }
 ${baseline
     ? '  // The frame-time baseline: the same shading with constant R and T.\n  vec3 r = vec3(0.04) * (1.0 + 1e-9 * t); vec3 tr = vec3(0.96);'
-    : '  IridFilm film = irid_film(t, cos_theta);\n  vec3 r = film.reflectance; vec3 tr = film.transmittance;'}
+    : '  IridFilm film = irid_film(t, cos_theta, 0);\n  vec3 r = film.reflectance; vec3 tr = film.transmittance;'}
   vec3 c = r * irid_environment(reflect(-v, n));
   // A film that transmits is drawn as a thin shell: what lies behind it,
   // straight through, weighted by T.
@@ -311,7 +318,7 @@ void main() {
   vec2 p = gl_FragCoord.xy / u_resolution;
   float t = mix(u_chart_thickness_nm.x, u_chart_thickness_nm.y, p.x);
   float theta = mix(u_chart_angle_rad.x, u_chart_angle_rad.y, p.y);
-  IridFilm film = irid_film(t, cos(theta));
+  IridFilm film = irid_film(t, cos(theta), 0);
   vec3 c = u_quantity == 0 ? film.reflectance : film.transmittance;
   o_color = vec4(irid_encode_srgb(c), 1.0);
 }`;
@@ -349,49 +356,23 @@ void main() {
     return text.replace(/^\s*#version[^\n]*\n/m, '').replace(/^\s*precision\s+[^\n]*;\s*$/gm, '');
   }
 
-  // The export's parameters: the uniform block the sampler declares (at
-  // binding 0 here), or plain uniforms. Texture units 0 and 1 hold R and T.
+  // The export's uniform array (film.json's uniform_f32, as it is) into the
+  // sampler's uniform block, at binding 0 here. Texture units 0 and 1 hold
+  // R and T.
   function bindFilm(gl, program, exp, what) {
     gl.useProgram(program);
-    const values = exp.film.params;
-    // The block's name is the generator's choice: find it by its members.
-    let blockIndex = gl.INVALID_INDEX;
-    const blocks = gl.getProgramParameter(program, gl.ACTIVE_UNIFORM_BLOCKS);
-    for (let b = 0; b < blocks; b++) {
-      const members = gl.getActiveUniformBlockParameter(program, b, gl.UNIFORM_BLOCK_ACTIVE_UNIFORM_INDICES);
-      if (Array.from(members).some((i) => PARAM_NAMES.includes(gl.getActiveUniform(program, i).name.split('.').pop()))) {
-        blockIndex = b;
-      }
+    const values = new Float32Array(exp.film.uniform_f32);
+    const blockIndex = gl.getUniformBlockIndex(program, 'IridParamsBlock');
+    if (blockIndex === gl.INVALID_INDEX) throw new Error(`${what}: declares no uniform block IridParamsBlock`);
+    const size = gl.getActiveUniformBlockParameter(program, blockIndex, gl.UNIFORM_BLOCK_DATA_SIZE);
+    if (size !== values.byteLength) {
+      throw new Error(`${what}: its uniform block takes ${size} bytes, film.json's uniform_f32 holds ${values.byteLength}`);
     }
-    if (blockIndex !== gl.INVALID_INDEX) {
-      const size = gl.getActiveUniformBlockParameter(program, blockIndex, gl.UNIFORM_BLOCK_DATA_SIZE);
-      const data = new ArrayBuffer(size);
-      const view = new DataView(data);
-      const indices = gl.getActiveUniformBlockParameter(program, blockIndex, gl.UNIFORM_BLOCK_ACTIVE_UNIFORM_INDICES);
-      const offsets = gl.getActiveUniforms(program, indices, gl.UNIFORM_OFFSET);
-      indices.forEach((index, i) => {
-        const name = gl.getActiveUniform(program, index).name.split('.').pop();
-        if (!(name in values)) throw new Error(`${what}: film.json's params lack ${name}, which the sampler reads`);
-        view.setFloat32(offsets[i], values[name], true);
-      });
-      const buffer = gl.createBuffer();
-      gl.bindBuffer(gl.UNIFORM_BUFFER, buffer);
-      gl.bufferData(gl.UNIFORM_BUFFER, data, gl.STATIC_DRAW);
-      gl.uniformBlockBinding(program, blockIndex, 0);
-      program.iridParams = buffer;
-    } else {
-      let bound = 0;
-      for (const name of Object.keys(values)) {
-        const location = [`irid_params.${name}`, `irid_${name}`, name]
-          .map((n) => program.uniform(n)).find((l) => l !== null);
-        if (location) {
-          gl.uniform1f(location, values[name]);
-          bound++;
-        }
-      }
-      if (bound === 0) throw new Error(`${what}: declares neither a uniform block nor uniforms for ${PARAM_NAMES.join(', ')}`);
-      program.iridParams = null;
-    }
+    const buffer = gl.createBuffer();
+    gl.bindBuffer(gl.UNIFORM_BUFFER, buffer);
+    gl.bufferData(gl.UNIFORM_BUFFER, values, gl.STATIC_DRAW);
+    gl.uniformBlockBinding(program, blockIndex, 0);
+    program.iridParams = buffer;
     const r = program.uniform('irid_reflectance');
     const t = program.uniform('irid_transmittance');
     if (r === null && t === null) throw new Error(`${what}: declares no sampler irid_reflectance or irid_transmittance`);
@@ -555,6 +536,7 @@ void main() {
   function describe(exp) {
     const f = exp.film;
     const deg = (c) => (Math.acos(Math.min(1, Math.max(-1, c))) * 180) / Math.PI;
+    const front = f.charts[f.sides.front.chart].params;
     const rows = [
       ['export', exp.label],
       ['white', f.white],
@@ -563,13 +545,13 @@ void main() {
       ['angle', `${deg(f.domain.cos_theta[1]).toFixed(1)}° – ${deg(f.domain.cos_theta[0]).toFixed(1)}°`],
       // cos_crit < 0: angle nodes uniform in cos θ; = cos_min: crowded
       // towards grazing; inside the domain: a dense side's critical angle.
-      ['angle nodes', f.params.cos_crit < 0 ? 'uniform in cos θ'
-        : f.params.cos_crit <= f.domain.cos_theta[0] ? 'crowded towards grazing'
-          : `on the critical angle ${deg(f.params.cos_crit).toFixed(2)}°`],
+      ['angle nodes', front.cos_crit < 0 ? 'uniform in cos θ'
+        : front.cos_crit <= f.domain.cos_theta[0] ? 'crowded towards grazing'
+          : `on the critical angle ${deg(front.cos_crit).toFixed(2)}°`],
       ['texture', `${f.texture.width} × ${f.texture.height}, ${exp.reflectance.kind}`],
       ['opaque', f.opaque ? 'yes (T drawn black)' : 'no'],
     ];
-    const e = f.error || {};
+    const e = (f.error && f.error.front) || {};
     rows.push(['max ΔE00 R / T', formatList(e.max_delta_e00, 3)]);
     rows.push(['mean ΔE00 R / T', formatList(e.mean_delta_e00, 4)]);
     rows.push(['max |error| R', formatList(Array.isArray(e.max_abs) ? e.max_abs.slice(0, 3) : null, 5)]);

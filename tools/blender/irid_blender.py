@@ -44,7 +44,7 @@ bl_info = {
 }
 
 FILM_FORMAT = "irid-film"
-FILM_VERSION = 1
+FILM_VERSION = 2
 # Wavelength at which a transmitting film's refraction index is taken: the
 # one irid grades the substrate's critical angle at (docs/lut-format.md).
 IOR_WAVELENGTH_NM = 550.0
@@ -55,52 +55,39 @@ class ExportError(ValueError):
     """An export directory that cannot be turned into a material."""
 
 
-class Export:
-    """A checked export directory: the texture files and the mapping parameters."""
+class Chart:
+    """One chart of the export's atlas (docs/gpu.md): the domain and warps of
+    its axes and the rectangle of texels its nodes fill."""
 
-    def __init__(self, directory):
-        self.directory = os.path.abspath(os.fspath(directory))
-        film_path = os.path.join(self.directory, "film.json")
-        if not os.path.isdir(self.directory):
-            raise ExportError(f"irid export {self.directory}: not a directory")
-        if not os.path.isfile(film_path):
-            raise ExportError(f"irid export {self.directory}: film.json is missing")
-        try:
-            with open(film_path, encoding="utf-8") as f:
-                film = json.load(f)
-        except (OSError, UnicodeDecodeError, json.JSONDecodeError) as e:
-            raise ExportError(f"irid export {film_path}: not readable JSON ({e})") from None
-        self.film = film
-        where = film_path
-        if not isinstance(film, dict):
-            raise ExportError(f"irid export {where}: expected a JSON object")
-        if film.get("format") != FILM_FORMAT or film.get("version") != FILM_VERSION:
-            raise ExportError(
-                f"irid export {where}: format {film.get('format')!r} version "
-                f"{film.get('version')!r}, expected {FILM_FORMAT!r} version {FILM_VERSION}"
-            )
-        params = _object(film, "params", where)
-        number = lambda key: _number(params, key, f"{where}: params")  # noqa: E731
+    def __init__(self, chart, where, atlas_size):
+        params = _object(chart, "params", where)
+        number = lambda key: _number(params, key, f"{where}.params")  # noqa: E731
         self.thickness_min_nm = number("thickness_min_nm")
         self.thickness_max_nm = number("thickness_max_nm")
         self.cos_min = number("cos_min")
         self.cos_max = number("cos_max")
         self.cos_crit = number("cos_crit")
         self.y_crit = number("y_crit")
-        self.size_u = number("size_u")
-        self.size_v = number("size_v")
         self.thickness_power = number("thickness_power")
+        self.rect = [number(key) for key in ("x0", "y0", "width", "height")]
         if self.thickness_power not in (1.0, 2.0):
             raise ExportError(
-                f"irid export {where}: params.thickness_power = {self.thickness_power}, "
+                f"irid export {where}.params.thickness_power = {self.thickness_power}, "
                 "expected 1 or 2"
             )
-        for key in ("size_u", "size_v"):
-            value = getattr(self, key)
-            if value < 1 or value != int(value):
-                raise ExportError(f"irid export {where}: params.{key} = {value} is not a size")
-        self.size_u = int(self.size_u)
-        self.size_v = int(self.size_v)
+        x0, y0, w, h = self.rect
+        if (
+            any(v != int(v) for v in self.rect)
+            or min(x0, y0) < 0
+            or min(w, h) < 1
+            or x0 + w > atlas_size[0]
+            or y0 + h > atlas_size[1]
+        ):
+            raise ExportError(
+                f"irid export {where}: rectangle {self.rect} does not lie in the "
+                f"{atlas_size[0]}×{atlas_size[1]} texture"
+            )
+        self.rect = [int(v) for v in self.rect]
         if not 0.0 <= self.thickness_min_nm <= self.thickness_max_nm:
             raise ExportError(
                 f"irid export {where}: thickness range [{self.thickness_min_nm}, "
@@ -119,17 +106,60 @@ class Export:
                     f"irid export {where}: angle warp centre cos {self.cos_crit} (y {self.y_crit}) "
                     f"is not inside the cos θ range [{self.cos_min}, {self.cos_max})"
                 )
+
+
+class Export:
+    """A checked export directory: the texture files, the atlas's charts and
+    which side reads which."""
+
+    def __init__(self, directory):
+        self.directory = os.path.abspath(os.fspath(directory))
+        film_path = os.path.join(self.directory, "film.json")
+        if not os.path.isdir(self.directory):
+            raise ExportError(f"irid export {self.directory}: not a directory")
+        if not os.path.isfile(film_path):
+            raise ExportError(f"irid export {self.directory}: film.json is missing")
+        try:
+            with open(film_path, encoding="utf-8") as f:
+                film = json.load(f)
+        except (OSError, UnicodeDecodeError, json.JSONDecodeError) as e:
+            raise ExportError(f"irid export {film_path}: not readable JSON ({e})") from None
+        self.film = film
+        where = film_path
+        if not isinstance(film, dict):
+            raise ExportError(f"irid export {where}: expected a JSON object")
+        if film.get("format") != FILM_FORMAT:
+            raise ExportError(
+                f"irid export {where}: format {film.get('format')!r}, expected {FILM_FORMAT!r}"
+            )
+        if film.get("version") != FILM_VERSION:
+            raise ExportError(
+                f"irid export {where}: film.json version {film.get('version')!r}; this module "
+                f"reads version {FILM_VERSION}: export the film again with the irid it came with"
+            )
+        texture = _object(film, "texture", where)
+        self.size = (texture.get("width"), texture.get("height"))
+        if not all(isinstance(v, int) and not isinstance(v, bool) and v >= 1 for v in self.size):
+            raise ExportError(f"irid export {where}: texture.width and height must be sizes")
+        charts = film.get("charts")
+        if not isinstance(charts, list) or not charts:
+            raise ExportError(f"irid export {where}: 'charts' is missing or empty")
+        self.charts = [
+            Chart(c if isinstance(c, dict) else {}, f"{where}: charts[{k}]", self.size)
+            for k, c in enumerate(charts)
+        ]
+        sides = _object(film, "sides", where)
+        self.front = self.charts[self._chart_of(sides, "front", where)]
+        self.back = None
+        if sides.get("back") is not None:
+            self.back = self.charts[self._chart_of(sides, "back", where)]
+        self.thickness_min_nm = self.front.thickness_min_nm
+        self.thickness_max_nm = self.front.thickness_max_nm
         opaque = film.get("opaque")
         if not isinstance(opaque, bool):
             raise ExportError(f"irid export {where}: 'opaque' must be true or false")
         self.opaque = opaque
-        texture = _object(film, "texture", where)
         files = _object(texture, "files", f"{where}: texture")
-        if (texture.get("width"), texture.get("height")) != (self.size_u, self.size_v):
-            raise ExportError(
-                f"irid export {where}: texture is {texture.get('width')}×{texture.get('height')}, "
-                f"params say {self.size_u}×{self.size_v}"
-            )
         self.paths = {}
         for table in TABLES:
             name = files.get(table)
@@ -142,6 +172,13 @@ class Export:
         self.white = film.get("white")
         self.stack = film.get("stack")
         self.label = os.path.basename(self.directory.rstrip(os.sep)) or "film"
+
+    def _chart_of(self, sides, side, where):
+        entry = sides.get(side)
+        chart = entry.get("chart") if isinstance(entry, dict) else None
+        if not isinstance(chart, int) or isinstance(chart, bool) or not 0 <= chart < len(self.charts):
+            raise ExportError(f"irid export {where}: sides.{side}.chart is not one of the charts")
+        return chart
 
     def thickness_fraction(self, thickness_nm):
         """The 0-1 thickness socket value of a thickness in nm (the export's range)."""
@@ -367,10 +404,10 @@ def _load_image(export, table, name):
         size = tuple(image.size)
         if size == (0, 0):
             raise ExportError(f"irid export {path}: Blender cannot read it (damaged or not an image)")
-        if size != (export.size_u, export.size_v):
+        if size != export.size:
             raise ExportError(
                 f"irid export {path}: image is {size[0]}×{size[1]}, film.json says "
-                f"{export.size_u}×{export.size_v}"
+                f"{export.size[0]}×{export.size[1]}"
             )
     except BaseException:
         _remove(image)
@@ -421,56 +458,15 @@ def _build_group(group, export, images, ior):
     inputs = build.node("NodeGroupInput", 0, 0)
     outputs = build.node("NodeGroupOutput", 9, 0)
 
-    # u: thickness fraction x in [0, 1], square-rooted when the thickness nodes
-    # crowd towards the minimum (thickness_power 2), to texel centres:
-    # u = (x (N_u - 1) + 0.5) / N_u.
-    nu = export.size_u
     x = build.math("MULTIPLY", 1, 0, inputs.outputs["Thickness"], 1.0, label="x = clamp(thickness)")
     x.node.use_clamp = True
-    if export.thickness_power == 2.0:
-        x = build.math("SQRT", 1.5, 0, x, label="x = sqrt(x)")
-    u = build.math("MULTIPLY_ADD", 2, 0, x, (nu - 1) / nu, 0.5 / nu, label="u")
-
     # cos θ: the incoming direction against the shading normal, either side.
     geometry = build.node("ShaderNodeNewGeometry", 0, 2)
     dot = build.node("ShaderNodeVectorMath", 1, 2, label="cos θ", operation="DOT_PRODUCT")
     build.link(geometry.outputs["Incoming"], dot.inputs[0])
     build.link(geometry.outputs["Normal"], dot.inputs[1])
     cos = build.math("ABSOLUTE", 2, 2, dot.outputs["Value"])
-    clamp = build.node("ShaderNodeClamp", 3, 2, label="clamp to the table")
-    build.link(cos, clamp.inputs["Value"])
-    clamp.inputs["Min"].default_value = export.cos_min
-    clamp.inputs["Max"].default_value = export.cos_max
-    c = clamp.outputs["Result"]
-
-    # y: the export's angle warp, linear in cos θ or square-root on each side
-    # of cos_crit (a branch-free form: one of the two roots is zero; with
-    # cos_crit = cos_min there is no side below).
-    if export.cos_max == export.cos_min:
-        y = build.math("MULTIPLY", 4, 2, c, 0.0, label="y = 0 (one angle)")
-    elif export.cos_crit < 0.0:
-        span = export.cos_max - export.cos_min
-        y = build.math("MULTIPLY_ADD", 4, 2, c, 1.0 / span, -export.cos_min / span, label="y")
-    else:
-        cc, yc = export.cos_crit, export.y_crit
-        above = build.math(
-            "MULTIPLY_ADD", 4, 2, c, 1.0 / (export.cos_max - cc), -cc / (export.cos_max - cc)
-        )
-        above = build.math("SQRT", 5, 2, build.math("MAXIMUM", 4.5, 2, above, 0.0))
-        y = build.math("MULTIPLY_ADD", 5.5, 2, above, 1.0 - yc, yc, label="y")
-        if cc > export.cos_min:
-            below = build.math(
-                "MULTIPLY_ADD", 4, 3, c, -1.0 / (cc - export.cos_min), cc / (cc - export.cos_min)
-            )
-            below = build.math("SQRT", 5, 3, build.math("MAXIMUM", 4.5, 3, below, 0.0))
-            y = build.math("MULTIPLY_ADD", 6, 2, below, -yc, y, label="y")
-    # v in the file's row order is (y (N_v - 1) + 0.5) / N_v; Blender puts the
-    # file's first row at v = 1, so the texture is read at 1 - v.
-    nv = export.size_v
-    v = build.math("MULTIPLY_ADD", 6.5, 1, y, -(nv - 1) / nv, 1.0 - 0.5 / nv, label="v (Blender)")
-    uv = build.node("ShaderNodeCombineXYZ", 7, 0, label="uv")
-    build.link(u, uv.inputs["X"])
-    build.link(v, uv.inputs["Y"])
+    uv = _chart_uv(build, export.front, export.size, x, cos, 0)
 
     colours = {}
     for row, table in enumerate(TABLES):
@@ -484,7 +480,7 @@ def _build_group(group, export, images, ior):
             projection="FLAT",
         )
         tex.image = images[table]
-        build.link(uv.outputs["Vector"], tex.inputs["Vector"])
+        build.link(uv, tex.inputs["Vector"])
         colours[table] = tex.outputs["Color"]
         build.link(tex.outputs["Color"], outputs.inputs[table.capitalize()])
 
@@ -504,6 +500,57 @@ def _build_group(group, export, images, ior):
     build.link(glossy.outputs["BSDF"], add.inputs[0])
     build.link(refraction.outputs["BSDF"], add.inputs[1])
     build.link(add.outputs["Shader"], outputs.inputs["BSDF"])
+
+
+def _chart_uv(build, chart, atlas_size, x, cos, row):
+    """The image coordinates of (thickness fraction x, cos θ) in one chart of
+    the atlas: the export's mapping (docs/gpu.md) in math nodes, with the
+    chart's numbers written into them. Returns the vector socket."""
+    width, height = atlas_size
+    x0, y0, w, h = chart.rect
+    # u: thickness fraction, square-rooted when the chart's thickness nodes
+    # crowd towards the minimum (thickness power 2), onto the chart's texel
+    # centres: u = (x0 + 0.5 + x (w - 1)) / W.
+    if chart.thickness_power == 2.0:
+        x = build.math("SQRT", 1.5, row, x, label="x = sqrt(x)")
+    u = build.math("MULTIPLY_ADD", 2, row, x, (w - 1) / width, (x0 + 0.5) / width, label="u")
+    clamp = build.node("ShaderNodeClamp", 3, row + 2, label="clamp to the chart")
+    build.link(cos, clamp.inputs["Value"])
+    clamp.inputs["Min"].default_value = chart.cos_min
+    clamp.inputs["Max"].default_value = chart.cos_max
+    c = clamp.outputs["Result"]
+
+    # y: the chart's angle warp, linear in cos θ or square-root on each side
+    # of cos_crit (a branch-free form: one of the two roots is zero; with
+    # cos_crit = cos_min there is no side below).
+    if chart.cos_max == chart.cos_min:
+        y = build.math("MULTIPLY", 4, row + 2, c, 0.0, label="y = 0 (one angle)")
+    elif chart.cos_crit < 0.0:
+        span = chart.cos_max - chart.cos_min
+        y = build.math("MULTIPLY_ADD", 4, row + 2, c, 1.0 / span, -chart.cos_min / span, label="y")
+    else:
+        cc, yc = chart.cos_crit, chart.y_crit
+        above = build.math(
+            "MULTIPLY_ADD", 4, row + 2, c, 1.0 / (chart.cos_max - cc), -cc / (chart.cos_max - cc)
+        )
+        above = build.math("SQRT", 5, row + 2, build.math("MAXIMUM", 4.5, row + 2, above, 0.0))
+        y = build.math("MULTIPLY_ADD", 5.5, row + 2, above, 1.0 - yc, yc, label="y")
+        if cc > chart.cos_min:
+            below = build.math(
+                "MULTIPLY_ADD", 4, row + 3, c, -1.0 / (cc - chart.cos_min), cc / (cc - chart.cos_min)
+            )
+            below = build.math("SQRT", 5, row + 3, build.math("MAXIMUM", 4.5, row + 3, below, 0.0))
+            y = build.math("MULTIPLY_ADD", 6, row + 2, below, -yc, y, label="y")
+    # v in the file's row order is (y0 + 0.5 + y (h - 1)) / H; Blender puts
+    # the file's first row at v = 1, so the texture is read at 1 - v.
+    v = build.math(
+        "MULTIPLY_ADD", 6.5, row + 1, y, -(h - 1) / height, 1.0 - (y0 + 0.5) / height,
+        label="v (Blender)",
+    )
+    uv = build.node("ShaderNodeCombineXYZ", 7, row, label="uv")
+    build.link(u, uv.inputs["X"])
+    build.link(v, uv.inputs["Y"])
+    return uv.outputs["Vector"]
 
 
 # Add-on: File > Import > irid film (film.json).

@@ -215,12 +215,12 @@ def test_bad_input(results, workdir):
     cases["a missing transmittance.exr"] = (missing, "transmittance.exr is missing")
     damaged = workdir / "bad-json"
     write_synthetic_export(damaged, 3, 3, (0.1, 1.0), -1.0, 0.0, True)
-    (damaged / "film.json").write_text('{"format": "irid-film", "version": 1, "params": {')
+    (damaged / "film.json").write_text('{"format": "irid-film", "version": 2, "params": {')
     cases["a truncated film.json"] = (damaged, "not readable JSON")
     wrong = workdir / "bad-params"
     write_synthetic_export(wrong, 3, 3, (0.1, 1.0), -1.0, 0.0, True)
     film = json.loads((wrong / "film.json").read_text())
-    film["params"]["cos_max"] = "one"
+    film["charts"][0]["params"]["cos_max"] = "one"
     (wrong / "film.json").write_text(json.dumps(film))
     cases["a non-numeric parameter"] = (wrong, "params.cos_max")
     broken = workdir / "bad-exr"

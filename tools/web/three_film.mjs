@@ -36,7 +36,7 @@ export function addIridFilm(THREE, material, { film, sampler, reflectance, trans
   const uniforms = {
     irid_reflectance: { value: filmTexture(THREE, reflectance) },
     irid_transmittance: { value: filmTexture(THREE, transmittance) },
-    irid_params: { value: { ...film.params } }, // a struct uniform: an object by field name
+    irid_params: { value: { v: film.uniform_f32 } }, // a struct uniform: its vec4 array, flat
     irid_thickness_nm: { value: (tMin + tMax) / 2 },
   };
   material.onBeforeCompile = (shader) => {
@@ -50,7 +50,7 @@ export function addIridFilm(THREE, material, { film, sampler, reflectance, trans
 	{
 		// normal and vViewPosition are in view space: their dot is cos θ.
 		float irid_cos = saturate(dot(normal, normalize(vViewPosition)));
-		IridFilm irid = irid_film(irid_thickness_nm, irid_cos);
+		IridFilm irid = irid_film(irid_thickness_nm, irid_cos, 0); // light from the ambient
 		reflectedLight.directSpecular *= irid.reflectance;
 		reflectedLight.indirectSpecular *= irid.reflectance;
 	}`);
