@@ -9,6 +9,8 @@
   built-in library; ``.index(wavelengths_nm)``.
 - ``bake(stack, ...) -> Lut``: a lookup table over a layer's thickness and
   the angle, saved as OpenEXR; ``Lut.sample`` interpolates it as a renderer does.
+- ``irid.mitsuba`` (imported on its own, needs the ``mitsuba`` package): the
+  ``irid_film`` BSDF for Mitsuba 3's spectral variants.
 
 Computation runs on rayon threads with the GIL released
 (``RAYON_NUM_THREADS`` sets their number). Bad input raises ``ValueError``,

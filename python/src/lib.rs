@@ -11,6 +11,7 @@
 mod arrays;
 mod coherent;
 mod lut;
+mod response;
 mod stack;
 
 use pyo3::exceptions::{PyFileNotFoundError, PyOSError, PyPermissionError, PyValueError};

@@ -277,6 +277,22 @@ impl PyStack {
         })
     }
 
+    /// The stack as JSON text (the form a table's header records under
+    /// "stack": every material with its dispersion data), for hosts whose
+    /// scene descriptions hold only text.
+    fn to_json(&self) -> PyResult<String> {
+        serde_json::to_string(&self.stack).map_err(|e| invalid("stack", e.to_string()))
+    }
+
+    /// Reads the JSON of `to_json` (or a table header's "stack") back.
+    #[staticmethod]
+    fn from_json(text: &str) -> PyResult<Self> {
+        let stack: Stack = serde_json::from_str(text)
+            .map_err(|e| invalid("stack", format!("not a stack's JSON ({e})")))?;
+        stack.validate().map_err(py_error)?;
+        Ok(PyStack { stack })
+    }
+
     #[getter]
     fn ambient(&self) -> PyMaterial {
         PyMaterial {
@@ -445,6 +461,38 @@ impl PyStack {
             array(py, triples(|c| c.transmittance_xyz), &shape)?,
         )?;
         Ok(result)
+    }
+
+    /// Unpolarized (R, T) at arrays of points, each with its own wavelength:
+    /// what a spectral renderer asks per path vertex.
+    ///
+    /// cos_theta: cosine of the incidence angle in the medium the light
+    /// arrives through, in [0, 1]; wavelength_nm: vacuum wavelengths;
+    /// thickness_nm: the thickness of layer `layer` (1-based from the
+    /// ambient side) per point, or None for the stack's own. The arrays
+    /// broadcast together (numpy rules). side: "ambient" (light from the
+    /// ambient) or "substrate" (from a lossless substrate: the reversed
+    /// stack; past its critical angle T is 0). Returns (R, T), float64 of the
+    /// broadcast shape.
+    #[pyo3(signature = (cos_theta, wavelength_nm, thickness_nm=None, layer=1, side="ambient"))]
+    fn response<'py>(
+        &self,
+        py: Python<'py>,
+        cos_theta: &Bound<'py, PyAny>,
+        wavelength_nm: &Bound<'py, PyAny>,
+        thickness_nm: Option<&Bound<'py, PyAny>>,
+        layer: usize,
+        side: &str,
+    ) -> PyResult<Bound<'py, PyTuple>> {
+        crate::response::response(
+            py,
+            &self.stack,
+            thickness_nm,
+            cos_theta,
+            wavelength_nm,
+            layer,
+            side,
+        )
     }
 
     fn __repr__(&self) -> String {

@@ -26,7 +26,7 @@ pub use atlas::{
     side_index, Atlas, Chart, Texture, CHART_PARAM_NAMES, CHART_VEC4, GUTTER, MAX_CHARTS, MAX_SIZE,
     UNIFORM_VEC4,
 };
-pub use files::{film_json, write_dir, FILM_FORMAT, FILM_VERSION};
+pub use files::{declare_dir, fill_dir, film_json, write_dir, FILM_FORMAT, FILM_VERSION};
 pub use mapping::{AngleWarp, Mapping};
 pub use measure::{measurement_points, ExportError, DEFAULT_POINTS, POINTS_SEED};
 pub use search::{F16_MAX, LASING_BOUND};

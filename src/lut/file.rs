@@ -41,6 +41,12 @@ impl Lut {
     /// directory, then renamed over `path`, so an interrupted write never
     /// leaves a partial table behind.
     pub fn write(&self, path: &Path) -> Result<()> {
+        crate::atomic::write_with(path, |tmp| self.write_to(tmp, path))
+    }
+
+    /// Writes the table's file at `tmp` (an output's temporary, see
+    /// [`crate::atomic::OutputSet`]); errors name `path`, the output.
+    pub fn write_to(&self, tmp: &Path, path: &Path) -> Result<()> {
         let header = self.header();
         let channels = channel_names(header.kind);
         let width = header.axes[0].nodes.len();
@@ -76,12 +82,9 @@ impl Lut {
             AnyChannels::sort(list),
         );
         let image = Image::from_layer(layer);
-
-        crate::atomic::write_with(path, |tmp| {
-            image.write().to_file(tmp).map_err(|e| match e {
-                exr::error::Error::Io(io) => Error::io(path, io),
-                other => Error::malformed(path, format!("cannot write OpenEXR: {other}")),
-            })
+        image.write().to_file(tmp).map_err(|e| match e {
+            exr::error::Error::Io(io) => Error::io(path, io),
+            other => Error::malformed(path, format!("cannot write OpenEXR: {other}")),
         })
     }
 
