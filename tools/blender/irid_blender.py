@@ -1,20 +1,24 @@
 """irid thin films in Blender: a Cycles/EEVEE material built from an `irid export`.
 
-`irid export` writes a directory with reflectance.exr, transmittance.exr and
-film.json: the film's exact reflected and transmitted colour over a grid of
-(thickness, cos θ), and the closed-form mapping from (thickness, cos θ) to
-texture coordinates (docs/gpu.md). This module turns such a directory into a
-shader node group that evaluates the same mapping with math nodes, samples
-both tables bilinearly, and shades with a GGX Glossy BSDF coloured by the
-film's reflectance (no Fresnel of its own: the table already holds it) plus,
-when the film transmits into a lossless substrate, a Refraction BSDF coloured
-by its transmittance (into a metal the transmitted power is absorbed).
+`irid export --white e` writes a directory with reflectance.exr,
+transmittance.exr and film.json: an atlas of the film's exact reflected and
+transmitted colour over grids of (thickness, cos θ), one chart for light
+arriving from the ambient and one for light arriving from a lossless
+substrate, and the closed-form mapping from (thickness, cos θ) to texture
+coordinates (docs/gpu.md). This module turns such a directory into a shader
+node group that evaluates the same mapping with math nodes (on a back face,
+the substrate side's chart), samples both tables bilinearly, and shades with
+a GGX Glossy BSDF coloured by the film's reflectance (no Fresnel of its own:
+the table already holds it) plus, when light leaves through the substrate, a
+Refraction BSDF coloured by its transmittance (into a metal the transmitted
+power is absorbed). add_film_layer puts the film over a Principled BSDF.
 
 Use it as a module from Blender's Python:
 
+    import bpy
     import irid_blender
     mat = irid_blender.make_material("/path/to/export", thickness_nm=350.0)
-    obj.data.materials.append(mat)
+    bpy.context.object.data.materials.append(mat)
 
 or install this file as an add-on (Preferences > Add-ons > Install from Disk):
 File > Import > irid film (film.json) builds the material and assigns it to
@@ -49,6 +53,9 @@ FILM_VERSION = 2
 # one irid grades the substrate's critical angle at (docs/lut-format.md).
 IOR_WAVELENGTH_NM = 550.0
 TABLES = ("reflectance", "transmittance")
+# The white Blender Cycles renders in: a flat spectrum is (1, 1, 1)
+# (docs/color.md); `irid export --white e` makes that export.
+BLENDER_WHITE = "e"
 
 
 class ExportError(ValueError):
@@ -170,6 +177,11 @@ class Export:
                 raise ExportError(f"irid export {self.directory}: {name} is missing")
             self.paths[table] = path
         self.white = film.get("white")
+        if self.white != BLENDER_WHITE:
+            raise ExportError(
+                f"irid export {where}: made for white {self.white!r}, but Blender's colours "
+                f"are white E (a flat spectrum is 1, 1, 1): export it again with `--white e`"
+            )
         self.stack = film.get("stack")
         self.label = os.path.basename(self.directory.rstrip(os.sep)) or "film"
 
@@ -195,18 +207,11 @@ class Export:
         return min(1.0, max(0.0, (t - self.thickness_min_nm) / span))
 
     def transmits(self):
-        """Whether light leaves through the substrate: the film transmits (film.json
-        "opaque" is false) into a lossless substrate. Into a metal the transmitted
-        power is absorbed, so no refraction lobe is drawn."""
-        if self.opaque:
-            return False
-        try:
-            return not _absorbs(self.stack["substrate"])
-        except (KeyError, TypeError, ValueError) as e:
-            raise ExportError(
-                f"irid export {self.directory}: the stack in film.json does not describe "
-                f"the substrate ({e})"
-            ) from None
+        """Whether light leaves through the substrate: film.json's "opaque" is
+        false (a lossless substrate that the film lets light into). Into an
+        absorbing substrate (a metal) the transmitted power is absorbed, so no
+        refraction lobe is drawn."""
+        return not self.opaque
 
     def relative_ior(self):
         """Substrate over ambient refractive index at IOR_WAVELENGTH_NM, from the stack."""
@@ -258,18 +263,6 @@ def _index_at(material, wavelength_nm):
     return float(n)
 
 
-def _absorbs(material):
-    """Whether a serialized irid material has k != 0 anywhere."""
-    dispersion = material["dispersion"]
-    if "constant" in dispersion:
-        return dispersion["constant"]["k"] != 0
-    if "table" in dispersion:
-        return any(k != 0 for k in dispersion["table"]["k"])
-    if "cauchy" in dispersion or "sellmeier" in dispersion:
-        return False
-    raise ValueError(f"unknown dispersion {sorted(dispersion)}")
-
-
 def _interp(x, xs, ys):
     if not xs or len(xs) != len(ys) or not xs[0] <= x <= xs[-1]:
         raise ValueError(f"{x} nm is outside the material's table")
@@ -313,7 +306,10 @@ class _Builder:
 
 def make_node_group(export_dir, name=None, ior=None):
     """A shader node group for an export: inputs Thickness (0-1 over the export's
-    thickness range) and Roughness; outputs BSDF, Reflectance and Transmittance.
+    thickness range), Thickness nm, Roughness and Normal; outputs BSDF,
+    Reflection, Reflectance and Transmittance (docs/blender.md). A back face
+    is shaded with the export's back side (light arriving from the
+    substrate), when it has one.
 
     Raises ExportError for a bad export directory; nothing stays in the .blend
     when building fails."""
@@ -342,19 +338,21 @@ def make_node_group(export_dir, name=None, ior=None):
 def make_material(export_dir, thickness_nm=None, name=None, roughness=0.0, ior=None):
     """A material shading with the film of an `irid export` directory.
 
-    thickness_nm: the film's thickness, a constant inside the export's range;
-    None leaves the group's Thickness socket (0-1 over the range, like glTF's
-    iridescenceThicknessTexture) for an attribute or texture to drive
-    (default 0.5). roughness: GGX roughness of both lobes. ior: relative
+    thickness_nm: the film's thickness, a constant inside the export's range,
+    set on the group's Thickness nm input; None leaves the 0-1 Thickness input
+    (over the range, like glTF's iridescenceThicknessTexture) for an attribute
+    or texture to drive (default 0.5). roughness: GGX roughness of both lobes. ior: relative
     index of refraction when the film transmits into a lossless substrate
     (default: substrate over ambient at 550 nm, from the stack in film.json);
     over an absorbing substrate (a metal) the material has no refraction lobe.
 
-    Raises ExportError (a ValueError) with one message for a missing file or
-    a damaged film.json, ValueError for a thickness outside the export's
-    range; nothing half-built stays in the .blend."""
+    Raises ExportError (a ValueError) with one message for a missing file, a
+    damaged film.json or an export for another white than Blender's (`--white
+    e`), ValueError for a thickness outside the export's range; nothing
+    half-built stays in the .blend."""
     export = Export(export_dir)
-    fraction = None if thickness_nm is None else export.thickness_fraction(thickness_nm)
+    if thickness_nm is not None:
+        export.thickness_fraction(thickness_nm)  # refuses one outside the range
     roughness = float(roughness)
     if not 0.0 <= roughness <= 1.0:
         raise ValueError(f"roughness {roughness} is outside [0, 1]")
@@ -373,8 +371,8 @@ def make_material(export_dir, thickness_nm=None, name=None, roughness=0.0, ior=N
         film.width = 220
         out = build.node("ShaderNodeOutputMaterial", 2, 0)
         build.link(film.outputs["BSDF"], out.inputs["Surface"])
-        if fraction is not None:
-            film.inputs["Thickness"].default_value = fraction
+        if thickness_nm is not None:
+            film.inputs["Thickness nm"].default_value = float(thickness_nm)
         film.inputs["Roughness"].default_value = roughness
         material["irid_export"] = export.directory
         if thickness_nm is not None:
@@ -440,39 +438,40 @@ def _remove(block):
 
 
 def _build_group(group, export, images, ior):
-    iface = group.interface
-    sock = iface.new_socket("Thickness", in_out="INPUT", socket_type="NodeSocketFloat")
-    sock.subtype = "FACTOR"
-    sock.min_value, sock.max_value, sock.default_value = 0.0, 1.0, 0.5
-    sock.description = (
-        f"Film thickness: 0 = {export.thickness_min_nm:g} nm, 1 = {export.thickness_max_nm:g} nm"
-    )
-    sock = iface.new_socket("Roughness", in_out="INPUT", socket_type="NodeSocketFloat")
-    sock.subtype = "FACTOR"
-    sock.min_value, sock.max_value, sock.default_value = 0.0, 1.0, 0.0
-    iface.new_socket("BSDF", in_out="OUTPUT", socket_type="NodeSocketShader")
-    for table in ("Reflectance", "Transmittance"):
-        iface.new_socket(table, in_out="OUTPUT", socket_type="NodeSocketColor")
-
+    _group_interface(group.interface, export)
     build = _Builder(group)
     inputs = build.node("NodeGroupInput", 0, 0)
-    outputs = build.node("NodeGroupOutput", 9, 0)
-
-    x = build.math("MULTIPLY", 1, 0, inputs.outputs["Thickness"], 1.0, label="x = clamp(thickness)")
-    x.node.use_clamp = True
-    # cos θ: the incoming direction against the shading normal, either side.
-    geometry = build.node("ShaderNodeNewGeometry", 0, 2)
-    dot = build.node("ShaderNodeVectorMath", 1, 2, label="cos θ", operation="DOT_PRODUCT")
+    outputs = build.node("NodeGroupOutput", 10, 0)
+    geometry = build.node("ShaderNodeNewGeometry", 0, 4)
+    x = _thickness_fraction(build, export, inputs)
+    normal = _shading_normal(build, inputs, geometry)
+    # cos θ: the incoming direction against the shading normal, on the side
+    # the light arrives from.
+    dot = build.node("ShaderNodeVectorMath", 2, 4, label="cos θ", operation="DOT_PRODUCT")
     build.link(geometry.outputs["Incoming"], dot.inputs[0])
-    build.link(geometry.outputs["Normal"], dot.inputs[1])
-    cos = build.math("ABSOLUTE", 2, 2, dot.outputs["Value"])
+    build.link(normal, dot.inputs[1])
+    cos = build.math("ABSOLUTE", 2.5, 4, dot.outputs["Value"])
     uv = _chart_uv(build, export.front, export.size, x, cos, 0)
+    if export.back is not None and export.back is not export.front:
+        # A back face is seen from the substrate: the back side's chart.
+        # uv = front + backfacing · (back − front): one lookup per image.
+        back = _chart_uv(build, export.back, export.size, x, cos, 6)
+        step = build.node("ShaderNodeVectorMath", 7.5, 3, label="back − front", operation="SUBTRACT")
+        build.link(back, step.inputs[0])
+        build.link(uv, step.inputs[1])
+        scale = build.node("ShaderNodeVectorMath", 8, 3, label="× backfacing", operation="SCALE")
+        build.link(step.outputs["Vector"], scale.inputs[0])
+        build.link(geometry.outputs["Backfacing"], scale.inputs["Scale"])
+        pick = build.node("ShaderNodeVectorMath", 8.5, 3, label="uv of the side", operation="ADD")
+        build.link(uv, pick.inputs[0])
+        build.link(scale.outputs["Vector"], pick.inputs[1])
+        uv = pick.outputs["Vector"]
 
     colours = {}
     for row, table in enumerate(TABLES):
         tex = build.node(
             "ShaderNodeTexImage",
-            7.5,
+            9,
             1 + 2 * row,
             label=table,
             interpolation="Linear",
@@ -484,22 +483,96 @@ def _build_group(group, export, images, ior):
         colours[table] = tex.outputs["Color"]
         build.link(tex.outputs["Color"], outputs.inputs[table.capitalize()])
 
-    glossy = build.node("ShaderNodeBsdfGlossy", 8.5, -1, label="film reflection", distribution="GGX")
+    glossy = build.node("ShaderNodeBsdfGlossy", 9.5, -1, label="film reflection", distribution="GGX")
     build.link(colours["reflectance"], glossy.inputs["Color"])
     build.link(inputs.outputs["Roughness"], glossy.inputs["Roughness"])
+    build.link(normal, glossy.inputs["Normal"])
+    build.link(glossy.outputs["BSDF"], outputs.inputs["Reflection"])
     if ior is None:
         build.link(glossy.outputs["BSDF"], outputs.inputs["BSDF"])
         return
+    # Cycles' Refraction BSDF takes 1 / IOR on a back face: from the
+    # substrate the light refracts into the ambient, and past the critical
+    # angle it does not (where the back side's transmittance is 0).
     refraction = build.node(
-        "ShaderNodeBsdfRefraction", 8.5, 1, label="film transmission", distribution="GGX"
+        "ShaderNodeBsdfRefraction", 9.5, 1, label="film transmission", distribution="GGX"
     )
     refraction.inputs["IOR"].default_value = float(ior)
     build.link(colours["transmittance"], refraction.inputs["Color"])
     build.link(inputs.outputs["Roughness"], refraction.inputs["Roughness"])
-    add = build.node("ShaderNodeAddShader", 9, -1)
+    build.link(normal, refraction.inputs["Normal"])
+    add = build.node("ShaderNodeAddShader", 10, -1)
     build.link(glossy.outputs["BSDF"], add.inputs[0])
     build.link(refraction.outputs["BSDF"], add.inputs[1])
     build.link(add.outputs["Shader"], outputs.inputs["BSDF"])
+
+
+def _group_interface(iface, export):
+    """The node group's sockets (docs/blender.md lists them)."""
+    sock = iface.new_socket("Thickness", in_out="INPUT", socket_type="NodeSocketFloat")
+    sock.subtype = "FACTOR"
+    sock.min_value, sock.max_value, sock.default_value = 0.0, 1.0, 0.5
+    sock.description = (
+        f"Film thickness: 0 = {export.thickness_min_nm:g} nm, 1 = {export.thickness_max_nm:g} nm "
+        "(used while Thickness nm is below 0)"
+    )
+    sock = iface.new_socket("Thickness nm", in_out="INPUT", socket_type="NodeSocketFloat")
+    sock.min_value, sock.max_value, sock.default_value = -1.0, 1.0e6, -1.0
+    sock.description = (
+        f"Film thickness in nm, clamped to {export.thickness_min_nm:g}-"
+        f"{export.thickness_max_nm:g} nm; below 0 (the default), the 0-1 Thickness input is used"
+    )
+    sock = iface.new_socket("Roughness", in_out="INPUT", socket_type="NodeSocketFloat")
+    sock.subtype = "FACTOR"
+    sock.min_value, sock.max_value, sock.default_value = 0.0, 1.0, 0.0
+    sock = iface.new_socket("Normal", in_out="INPUT", socket_type="NodeSocketVector")
+    sock.hide_value = True
+    sock.description = (
+        "Shading normal of the film's angle and of both lobes (a normal map, a "
+        "Principled coat's normal); unlinked, the surface's own"
+    )
+    iface.new_socket("BSDF", in_out="OUTPUT", socket_type="NodeSocketShader")
+    sock = iface.new_socket("Reflection", in_out="OUTPUT", socket_type="NodeSocketShader")
+    sock.description = "The reflection lobe alone, for layering over another shader"
+    for table in ("Reflectance", "Transmittance"):
+        iface.new_socket(table, in_out="OUTPUT", socket_type="NodeSocketColor")
+
+
+def _thickness_fraction(build, export, inputs):
+    """The thickness as a fraction of the export's range, clamped: from
+    Thickness nm when it is 0 or more, else the 0-1 Thickness input."""
+    span = export.thickness_max_nm - export.thickness_min_nm
+    scale = 1.0 / span if span > 0.0 else 0.0
+    nm = inputs.outputs["Thickness nm"]
+    from_nm = build.math("MULTIPLY_ADD", 0.5, -1, nm, scale, -export.thickness_min_nm * scale)
+    use_nm = build.math("GREATER_THAN", 0.5, -2, nm, -0.5, label="Thickness nm given")
+    towards = build.math("SUBTRACT", 1, -1, from_nm, inputs.outputs["Thickness"])
+    x = build.math(
+        "MULTIPLY_ADD", 1.5, -1, use_nm, towards, inputs.outputs["Thickness"], label="x = clamp(thickness)"
+    )
+    x.node.use_clamp = True
+    return x
+
+
+def _shading_normal(build, inputs, geometry):
+    """The Normal input, normalized, when it is linked (not zero); else the
+    surface's shading normal."""
+    given = inputs.outputs["Normal"]
+    length = build.node("ShaderNodeVectorMath", 0.5, 6, operation="LENGTH")
+    build.link(given, length.inputs[0])
+    linked = build.math("GREATER_THAN", 1, 6, length.outputs["Value"], 1e-6, label="Normal linked")
+    unit = build.node("ShaderNodeVectorMath", 0.5, 7, operation="NORMALIZE")
+    build.link(given, unit.inputs[0])
+    step = build.node("ShaderNodeVectorMath", 1, 7, operation="SUBTRACT")
+    build.link(unit.outputs["Vector"], step.inputs[0])
+    build.link(geometry.outputs["Normal"], step.inputs[1])
+    scale = build.node("ShaderNodeVectorMath", 1.5, 7, operation="SCALE")
+    build.link(step.outputs["Vector"], scale.inputs[0])
+    build.link(linked, scale.inputs["Scale"])
+    normal = build.node("ShaderNodeVectorMath", 2, 6, label="shading normal", operation="ADD")
+    build.link(geometry.outputs["Normal"], normal.inputs[0])
+    build.link(scale.outputs["Vector"], normal.inputs[1])
+    return normal.outputs["Vector"]
 
 
 def _chart_uv(build, chart, atlas_size, x, cos, row):
@@ -553,6 +626,73 @@ def _chart_uv(build, chart, atlas_size, x, cos, row):
     return uv.outputs["Vector"]
 
 
+def add_film_layer(material, export_dir, thickness_nm=None, coat=False, name=None):
+    """Puts an export's film on top of a material whose surface is a Principled
+    BSDF: the film's reflection lobe is added to the Principled BSDF, whose
+    Base Color is multiplied by the film's transmittance (the light the film
+    lets through to the base, once, at the viewing angle). Returns the film's
+    group node.
+
+    coat=False, the film over the base: the export's substrate is the base's
+    own top medium (paint, plastic: e.g. n = 1.5), so the film's reflectance
+    already holds that surface's reflection and the Principled's Specular IOR
+    Level is set to 0; the film takes the Principled's Normal and Roughness.
+    coat=True, the film as the coat: the base keeps its own specular layer
+    (the film lies on a clear coat over it), the Principled's Coat Weight is
+    set to 0 (the film replaces the coat) and the film takes its Coat Normal
+    and Coat Roughness.
+
+    Raises ValueError when the material's output is not fed by a Principled
+    BSDF, ExportError for a bad export; the material is unchanged then."""
+    tree = material.node_tree
+    outputs = [n for n in tree.nodes if n.bl_idname == "ShaderNodeOutputMaterial"] if tree else []
+    out = next((n for n in outputs if n.is_active_output), outputs[0] if outputs else None)
+    links = out.inputs["Surface"].links if out is not None else ()
+    base = links[0].from_node if links else None
+    if base is None or base.bl_idname != "ShaderNodeBsdfPrincipled":
+        raise ValueError(f"material {material.name}: its surface is not a Principled BSDF")
+    export = Export(export_dir)
+    if thickness_nm is not None:
+        export.thickness_fraction(thickness_nm)  # refuses one outside the range
+    group = make_node_group(export, name=name or f"{material.name} film")
+    build = _Builder(tree)
+    x, y = base.location
+    film = tree.nodes.new("ShaderNodeGroup")
+    film.node_tree = group
+    film.label = "irid film"
+    film.location = (x - 500.0, y + 300.0)
+    if thickness_nm is not None:
+        film.inputs["Thickness nm"].default_value = float(thickness_nm)
+    normal, roughness = ("Coat Normal", "Coat Roughness") if coat else ("Normal", "Roughness")
+    if base.inputs[normal].links:
+        build.link(base.inputs[normal].links[0].from_socket, film.inputs["Normal"])
+    if base.inputs[roughness].links:
+        build.link(base.inputs[roughness].links[0].from_socket, film.inputs["Roughness"])
+    else:
+        film.inputs["Roughness"].default_value = base.inputs[roughness].default_value
+    through = tree.nodes.new("ShaderNodeVectorMath")
+    through.operation = "MULTIPLY"
+    through.label = "base colour × film transmittance"
+    through.location = (x - 250.0, y + 100.0)
+    colour = base.inputs["Base Color"]
+    if colour.links:
+        build.link(colour.links[0].from_socket, through.inputs[0])
+    else:
+        through.inputs[0].default_value = tuple(colour.default_value)[:3]
+    build.link(film.outputs["Transmittance"], through.inputs[1])
+    build.link(through.outputs["Vector"], colour)
+    off = base.inputs["Coat Weight" if coat else "Specular IOR Level"]
+    for link in list(off.links):
+        tree.links.remove(link)
+    off.default_value = 0.0
+    add = tree.nodes.new("ShaderNodeAddShader")
+    add.location = (x + 300.0, y)
+    build.link(film.outputs["Reflection"], add.inputs[0])
+    build.link(base.outputs["BSDF"], add.inputs[1])
+    build.link(add.outputs["Shader"], out.inputs["Surface"])
+    return film
+
+
 # Add-on: File > Import > irid film (film.json).
 
 
@@ -574,6 +714,10 @@ class IRID_OT_import_film(bpy.types.Operator):
     roughness: bpy.props.FloatProperty(name="Roughness", default=0.0, min=0.0, max=1.0)
 
     def execute(self, context):
+        meshes = [obj for obj in context.selected_objects if obj.type == "MESH"]
+        if not meshes:
+            self.report({"ERROR"}, "No mesh is selected: select the meshes to put the film on")
+            return {"CANCELLED"}
         try:
             material = make_material(
                 os.path.dirname(self.filepath),
@@ -583,11 +727,18 @@ class IRID_OT_import_film(bpy.types.Operator):
         except ValueError as e:
             self.report({"ERROR"}, str(e))
             return {"CANCELLED"}
-        for obj in context.selected_objects:
-            if obj.type == "MESH":
-                obj.data.materials.clear()
+        # The film takes the active material slot; the mesh's other slots
+        # (and the faces assigned to them) stay as they were.
+        for obj in meshes:
+            if obj.material_slots:
+                obj.active_material = material
+            else:
                 obj.data.materials.append(material)
-        self.report({"INFO"}, f"Built material {material.name}")
+        self.report(
+            {"INFO"},
+            f"Built material {material.name}, in the active slot of {len(meshes)} mesh"
+            f"{'' if len(meshes) == 1 else 'es'}",
+        )
         return {"FINISHED"}
 
     def invoke(self, context, event):
