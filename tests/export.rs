@@ -309,6 +309,8 @@ fn an_absorbing_substrate_is_opaque() {
         assert_eq!(back.is_null(), opaque, "{stack}");
         let t = film["error"]["front"]["max_abs"][3].as_f64().unwrap();
         assert!(t.is_finite(), "{stack}");
+        let ratio = &film["refraction"]["substrate_over_ambient"];
+        assert_eq!(ratio.as_f64(), (!opaque).then_some(1.5), "{stack}");
         if !opaque {
             assert_eq!(back["chart"], 1);
             assert_eq!(back["stack"], "reversed");

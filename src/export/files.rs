@@ -185,6 +185,21 @@ fn sides_json(export: &Export) -> serde_json::Value {
     json!({ "front": entry(Side::Front), "back": entry(Side::Back) })
 }
 
+/// film.json's `refraction`: the substrate's index over the ambient's at
+/// 550 nm (real parts), for hosts that bend transmitted rays; null when no
+/// light leaves through the substrate.
+fn refraction_json(export: &Export) -> serde_json::Value {
+    const NM: f64 = 550.0;
+    let stack = &export.spec.stack;
+    match (stack.ambient.index_at(NM), stack.substrate.index_at(NM)) {
+        (Ok(n0), Ok(ns)) if !export.opaque => json!({
+            "wavelength_nm": NM,
+            "substrate_over_ambient": ns.re / n0.re,
+        }),
+        _ => serde_json::Value::Null,
+    }
+}
+
 /// film.json's `error`: each side's measured error, its target, the 8-bit
 /// filter bound and the PNGs' error.
 fn errors_json(export: &Export) -> serde_json::Value {
@@ -249,6 +264,7 @@ pub fn film_json(export: &Export) -> serde_json::Value {
         "layer": if spec.stack.layers.is_empty() { 0 } else { spec.layer },
         "sampling": spec.sampling.to_string(),
         "opaque": export.opaque,
+        "refraction": refraction_json(export),
         "error": errors_json(export),
         "shaders": SHADERS.iter().map(|(name, _)| *name).collect::<Vec<_>>(),
         "tool": concat!("irid ", env!("CARGO_PKG_VERSION")),
