@@ -142,6 +142,8 @@ class Lut:
         cos_theta: ArrayLike,
         wavelength_nm: Optional[ArrayLike] = None,
     ) -> Tuple[npt.NDArray[np.float32], npt.NDArray[np.float32]]:
-        """(R, T) at broadcast points: rgb tables give (..., 3) linear sRGB."""
+        """(R, T) at broadcast points: rgb tables give (..., 3) linear sRGB.
+        Coordinates beyond an axis (±inf included) take its end's value;
+        NaN raises ValueError."""
     def validate(self, points: int = 20000, seed: int = 1) -> Dict[str, Any]:
         """The table against the solver at random points, as ``irid validate --json``."""

@@ -36,7 +36,10 @@ impl Replace {
     pub(super) fn check(&self, target: &Target) -> Result<()> {
         match std::fs::symlink_metadata(&target.path) {
             Err(_) => Ok(()),
-            Ok(m) if !m.is_dir() => Err(target.refused("exists and is not a folder")),
+            Ok(m) if !m.is_dir() => {
+                Err(target
+                    .refused_by_system(ErrorKind::NotADirectory, "exists and is not a folder"))
+            }
             Ok(_) if (self.allowed)(&target.path) => Ok(()),
             Ok(_) => Err(target.refused(self.otherwise)),
         }
@@ -60,6 +63,14 @@ pub(super) struct Target {
 impl Target {
     pub(super) fn refused(&self, why: impl Into<String>) -> Error {
         Error::invalid(self.given.display().to_string(), why)
+    }
+
+    /// Refused for what the file system holds (a folder missing, a file
+    /// where a folder goes, no permission, a name too long): an I/O error
+    /// of `kind`, which Python raises as the OSError it names. The message
+    /// is the same `path: why` line.
+    pub(super) fn refused_by_system(&self, kind: ErrorKind, why: impl Into<String>) -> Error {
+        Error::io(&self.given, std::io::Error::new(kind, why.into()))
     }
 }
 
@@ -91,7 +102,11 @@ pub(super) fn new_folder(path: &Path) -> Result<NewFolder> {
     fits_name_max(&target, parent.2)?;
     let missing = match std::fs::metadata(path) {
         Ok(m) if m.is_dir() => false,
-        Ok(_) => return Err(target.refused("exists and is not a folder")),
+        Ok(_) => {
+            return Err(
+                target.refused_by_system(ErrorKind::NotADirectory, "exists and is not a folder")
+            )
+        }
         Err(e) if e.kind() == ErrorKind::NotFound => {
             writable(&target)?;
             true
@@ -135,7 +150,10 @@ pub(super) fn output(given: &Path, is_file: bool, new_folders: &[NewFolder]) -> 
     writable(&target)?;
     let existing = match std::fs::symlink_metadata(&target.path) {
         Ok(m) if is_file && m.is_dir() => {
-            return Err(target.refused("is a folder; an output file needs a file name"))
+            return Err(target.refused_by_system(
+                ErrorKind::IsADirectory,
+                "is a folder; an output file needs a file name",
+            ))
         }
         Ok(m) => Some(identity(&m)),
         Err(e) if e.kind() == ErrorKind::NotFound => None,
@@ -217,9 +235,10 @@ fn split(given: &Path, path: &Path) -> Result<Target> {
 
 fn fits_path_max(target: &Target, bytes: usize) -> Result<()> {
     if bytes > PATH_MAX {
-        return Err(target.refused(format!(
-            "the path is {bytes} bytes, longer than the {PATH_MAX} the system allows"
-        )));
+        return Err(target.refused_by_system(
+            ErrorKind::InvalidFilename,
+            format!("the path is {bytes} bytes, longer than the {PATH_MAX} the system allows"),
+        ));
     }
     Ok(())
 }
@@ -227,9 +246,12 @@ fn fits_path_max(target: &Target, bytes: usize) -> Result<()> {
 fn fits_name_max(target: &Target, name_max: usize) -> Result<()> {
     let bytes = target.name.len();
     if bytes > name_max {
-        return Err(target.refused(format!(
-            "its name is {bytes} bytes, longer than the {name_max} its folder's file system allows"
-        )));
+        return Err(target.refused_by_system(
+            ErrorKind::InvalidFilename,
+            format!(
+                "its name is {bytes} bytes, longer than the {name_max} its folder's file system allows"
+            ),
+        ));
     }
     Ok(())
 }
@@ -243,11 +265,17 @@ fn existing_folder(target: &Target) -> Result<(u64, u64, usize)> {
             let (dev, ino) = identity(&m);
             Ok((dev, ino, name_max(dir)))
         }
-        Ok(_) => Err(target.refused(format!("{} is not a folder", dir.display()))),
-        Err(e) if e.kind() == ErrorKind::NotFound => {
-            Err(target.refused(format!("its folder {} does not exist", dir.display())))
+        Ok(_) => Err(target.refused_by_system(
+            ErrorKind::NotADirectory,
+            format!("{} is not a folder", dir.display()),
+        )),
+        Err(e) if e.kind() == ErrorKind::NotFound => Err(target.refused_by_system(
+            ErrorKind::NotFound,
+            format!("its folder {} does not exist", dir.display()),
+        )),
+        Err(e) => {
+            Err(target.refused_by_system(e.kind(), format!("its folder {}: {e}", dir.display())))
         }
-        Err(e) => Err(target.refused(format!("its folder {}: {e}", dir.display()))),
     }
 }
 
@@ -265,11 +293,11 @@ fn writable(target: &Target) -> Result<()> {
         )
     };
     if rc != 0 {
-        return Err(target.refused(format!(
-            "cannot write in its folder {}: {}",
-            target.dir.display(),
-            std::io::Error::last_os_error()
-        )));
+        let e = std::io::Error::last_os_error();
+        return Err(target.refused_by_system(
+            e.kind(),
+            format!("cannot write in its folder {}: {e}", target.dir.display()),
+        ));
     }
     Ok(())
 }

@@ -23,8 +23,8 @@ mod measure;
 mod search;
 
 pub use atlas::{
-    side_index, Atlas, Chart, Texture, CHART_PARAM_NAMES, CHART_VEC4, GUTTER, MAX_CHARTS, MAX_SIZE,
-    UNIFORM_VEC4,
+    side_index, Atlas, Chart, RowCheck, Texture, CHART_PARAM_NAMES, CHART_VEC4, GUTTER, MAX_CHARTS,
+    MAX_SIZE, UNIFORM_VEC4,
 };
 pub use files::{declare_dir, fill_dir, film_json, write_dir, FILM_FORMAT, FILM_VERSION};
 pub use mapping::{AngleWarp, Mapping};

@@ -99,8 +99,14 @@ impl Lut {
         if let Err(e) = std::fs::metadata(path) {
             return Err(Error::io(path, e));
         }
-        let meta = MetaData::read_from_file(path, false)
-            .map_err(|e| bad(format!("not a readable OpenEXR file: {e}")))?;
+        let meta = MetaData::read_from_file(path, false).map_err(|e| match e {
+            // The system refusing the file (a folder, no permission) is an
+            // I/O error; a file that ends too soon is malformed.
+            exr::error::Error::Io(io) if io.kind() != std::io::ErrorKind::UnexpectedEof => {
+                Error::io(path, io)
+            }
+            e => bad(format!("not a readable OpenEXR file: {e}")),
+        })?;
         let exr_header = meta
             .headers
             .first()

@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
-# CI: the browser preview (web/) in headless Chromium. Installs what is
-# missing (Debian's chromium, node and npm; playwright-core and three from
-# tools/web/package-lock.json), builds irid, exports five stacks, writes a
-# preview of them with `irid preview`, and runs tools/web/test_web.mjs.
+# CI: the browser preview (web/) and the three.js module (web/irid-three.mjs)
+# in headless Chromium. Installs what is missing (Debian's chromium, node and
+# npm; playwright-core and three from tools/web/package-lock.json), builds
+# irid, exports five stacks, writes a preview of them with `irid preview`,
+# and runs tools/web/test_web.mjs and tools/web/test_three.mjs.
 # Exits non-zero on any failure.
 set -euo pipefail
 cd "$(dirname "$0")/../.."
@@ -39,4 +40,4 @@ trap 'rm -rf "$work"' EXIT
 
 IRID_PREVIEW="$work/preview" IRID_BIN="$irid" \
     IRID_STACKS="soap-film=luts/soap-film.toml,two-layer=luts/two-layer.toml,dense-side=tools/web/dense-side.toml,film-on-glass=tests/blender/film-on-glass.toml,film-on-copper=tests/blender/film-on-copper.toml" \
-    node --test tools/web/test_web.mjs
+    node --test tools/web/test_web.mjs tools/web/test_three.mjs
