@@ -216,9 +216,9 @@ def _cube_mesh():
     return mesh
 
 
-def emission_black():
-    """A black emitter: the furnace's mask."""
-    material = bpy.data.materials.new("mask")
+def emission_black(name="mask"):
+    """A black emitter: the furnace's mask, the picture's labels."""
+    material = bpy.data.materials.new(name)
     if material.node_tree is None:
         material.use_nodes = True
     tree = material.node_tree
@@ -438,15 +438,7 @@ def render_picture(irid, case, stack, workdir, png_path):
     bsdf = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeBsdfPrincipled")
     tree.links.new(to_nm.outputs[0], bsdf.inputs["Thin Film Thickness"])
 
-    label_material = bpy.data.materials.new("label")
-    if label_material.node_tree is None:
-        label_material.use_nodes = True
-    tree = label_material.node_tree
-    tree.nodes.clear()
-    emission = tree.nodes.new("ShaderNodeEmission")
-    emission.inputs["Color"].default_value = (0.0, 0.0, 0.0, 1.0)
-    out = tree.nodes.new("ShaderNodeOutputMaterial")
-    tree.links.new(emission.outputs[0], out.inputs["Surface"])
+    label_material = emission_black("label")
 
     for x, material, label in (
         (-1.15, irid_material, "irid export"),
