@@ -5,12 +5,14 @@ pub mod library;
 #[rustfmt::skip]
 mod library_data;
 pub mod material;
+pub mod points;
 pub mod solver;
 pub mod spec;
 pub mod stack;
 pub mod twoport;
 
 pub use material::{Dispersion, IndexTable, Material};
+pub use points::{LayerThickness, PointSolver};
 pub use solver::{
     normal_index, solve, solve_amplitudes, solve_amplitudes_beta, solve_batch, Amplitudes, Response,
 };

@@ -1,8 +1,9 @@
 //! The general kernel: the scalar solver's recursion on one (wavelength,
-//! angle) pair per lane, for any stack, and its two loops: over arbitrary
-//! pairs ([`batch_body`]) and over a [`Spectrum`]'s wavelengths at one angle
-//! ([`spectrum_body`], which takes the non-dispersive kernel of
-//! [`constant`] when it can).
+//! angle) pair per lane, for any stack, and its three loops: over a
+//! (wavelength, angle) grid ([`batch_body`]), over arbitrary points, each
+//! with its own wavelength, angle and thicknesses ([`points_body`]), and
+//! over a [`Spectrum`]'s wavelengths at one angle ([`spectrum_body`], which
+//! takes the non-dispersive kernel of [`constant`] when it can).
 
 use num_complex::Complex64 as C64;
 
@@ -26,10 +27,10 @@ fn solve_lanes<'a, V: Lanes>(
     repeats: &Repeats,
     k0: V,
     lane_point: impl Fn(usize) -> (&'a [C64], f64),
-    thicknesses_nm: &[f64],
+    thicknesses: &impl ThicknessLanes<V>,
     cos_theta0: [f64; MAX_LANES],
 ) -> Power<V> {
-    let last = thicknesses_nm.len() + 1;
+    let last = thicknesses.layers() + 1;
     let zero = V::splat(0.0);
     let one = V::splat(1.0);
     // Lanes whose answer the scalar solver gives instead: grazing here,
@@ -62,7 +63,7 @@ fn solve_lanes<'a, V: Lanes>(
             )
         };
         if j + 1 < last {
-            let k0_d = k0.mul(V::splat(thicknesses_nm[j]));
+            let k0_d = k0.mul(thicknesses.layer(j));
             let one_way = one_way(q_below.scale(k0_d));
             let round_trip = one_way.mul(one_way);
             gamma_s = gamma_s.mul(round_trip);
@@ -116,7 +117,7 @@ fn solve_lanes<'a, V: Lanes>(
     for l in 0..V::WIDTH {
         if scalar[l] {
             let (indices, wavelength_nm) = lane_point(l);
-            res[l] = solve(indices, thicknesses_nm, wavelength_nm, cos_theta0[l]);
+            res[l] = solve(indices, thicknesses.lane(l), wavelength_nm, cos_theta0[l]);
         }
     }
     Power::from_responses(&res)
@@ -226,6 +227,59 @@ impl<V: Lanes> MediaLanes<V> for Laid<'_> {
     }
 }
 
+/// Where the general kernel reads the layers' thicknesses: the same in
+/// every lane, or each lane its own. A trait for the reason [`MediaLanes`]
+/// is one.
+trait ThicknessLanes<V: Lanes> {
+    /// How many layers (N).
+    fn layers(&self) -> usize;
+    /// Layer j's thickness (0-based from the top) in every lane.
+    fn layer(&self, j: usize) -> V;
+    /// Lane l's N thicknesses, for the lanes the scalar solver takes over.
+    fn lane(&self, l: usize) -> &[f64];
+}
+
+/// One set of thicknesses for every lane.
+struct Shared<'a>(&'a [f64]);
+
+impl<V: Lanes> ThicknessLanes<V> for Shared<'_> {
+    #[inline(always)]
+    fn layers(&self) -> usize {
+        self.0.len()
+    }
+    #[inline(always)]
+    fn layer(&self, j: usize) -> V {
+        V::splat(self.0[j])
+    }
+    #[inline(always)]
+    fn lane(&self, _l: usize) -> &[f64] {
+        self.0
+    }
+}
+
+/// Each lane's thicknesses from its own slice of `layers` values.
+struct PerLane<'a> {
+    layers: usize,
+    lanes: [&'a [f64]; MAX_LANES],
+}
+
+impl<V: Lanes> ThicknessLanes<V> for PerLane<'_> {
+    #[inline(always)]
+    fn layers(&self) -> usize {
+        self.layers
+    }
+    #[inline(always)]
+    fn layer(&self, j: usize) -> V {
+        V::from_array(std::array::from_fn(|l| {
+            self.lanes[l].get(j).copied().unwrap_or_default()
+        }))
+    }
+    #[inline(always)]
+    fn lane(&self, l: usize) -> &[f64] {
+        self.lanes[l]
+    }
+}
+
 /// The kernel's loop over [`Lanes::WIDTH`] output points at a time. Point
 /// `i` of `out` is wavelength `i / cos_theta0.len()` at angle
 /// `i % cos_theta0.len()`; a last partial group repeats its final point in
@@ -255,7 +309,53 @@ pub(super) fn batch_body<V: Lanes>(
         let k0 = V::splat(std::f64::consts::TAU).div(V::from_array(wl));
         let gathered = Gathered(idx);
         let point = |l: usize| (idx[l], wl[l]);
-        let res = solve_lanes::<V>(&gathered, &Repeats::NONE, k0, point, thicknesses_nm, cos);
+        let res = solve_lanes::<V>(
+            &gathered,
+            &Repeats::NONE,
+            k0,
+            point,
+            &Shared(thicknesses_nm),
+            cos,
+        );
+        Store(&mut *out).take(start, &res);
+    }
+}
+
+/// The kernel's loop over arbitrary points, [`Lanes::WIDTH`] at a time:
+/// point i has its own N + 2 indices (`indices[i(N+2)..]`), N thicknesses
+/// (`thicknesses_nm[iN..]`), wavelength and cos θ0, so no two lanes need
+/// share anything. A last partial group repeats its final point in the
+/// unused lanes.
+#[inline(always)]
+pub(super) fn points_body<V: Lanes>(
+    layers: usize,
+    indices: &[C64],
+    thicknesses_nm: &[f64],
+    wavelengths_nm: &[f64],
+    cos_theta0: &[f64],
+    out: &mut [Response],
+) {
+    let media = layers + 2;
+    let total = out.len();
+    for start in (0..total).step_by(V::WIDTH) {
+        let mut idx: [&[C64]; MAX_LANES] = [&[]; MAX_LANES];
+        let mut thick: [&[f64]; MAX_LANES] = [&[]; MAX_LANES];
+        let mut wl = [0.0; MAX_LANES];
+        let mut cos = [0.0; MAX_LANES];
+        for l in 0..V::WIDTH {
+            let i = (start + l).min(total - 1);
+            idx[l] = &indices[i * media..(i + 1) * media];
+            thick[l] = &thicknesses_nm[i * layers..(i + 1) * layers];
+            wl[l] = wavelengths_nm[i];
+            cos[l] = cos_theta0[i];
+        }
+        let k0 = V::splat(std::f64::consts::TAU).div(V::from_array(wl));
+        let point = |l: usize| (idx[l], wl[l]);
+        let thicknesses = PerLane {
+            layers,
+            lanes: thick,
+        };
+        let res = solve_lanes::<V>(&Gathered(idx), &Repeats::NONE, k0, point, &thicknesses, cos);
         Store(&mut *out).take(start, &res);
     }
 }
@@ -340,7 +440,7 @@ pub(super) fn spectrum_body<V: Lanes>(
             spectrum.repeats(),
             V::load(&spectrum.k0()[start..]),
             point,
-            thicknesses_nm,
+            &Shared(thicknesses_nm),
             [cos_theta0; MAX_LANES],
         );
         sink.take(start, &res);

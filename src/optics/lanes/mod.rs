@@ -50,7 +50,7 @@ mod x86;
 
 pub use arith::MAX_LANES;
 use arith::{Lanes, Portable};
-use general::{batch_body, spectrum_body};
+use general::{batch_body, points_body, spectrum_body};
 use sink::{Integrate, Store};
 pub use sink::{SpectralWeights, WeightedPower};
 pub use spectrum::Spectrum;
@@ -211,6 +211,19 @@ kernel_copies! {
 }
 
 kernel_copies! {
+    fn points_copies<V>(
+        layers: usize,
+        indices: &[C64],
+        thicknesses_nm: &[f64],
+        wavelengths_nm: &[f64],
+        cos_theta0: &[f64],
+        out: &mut [Response],
+    ) -> () {
+        points_body::<V>(layers, indices, thicknesses_nm, wavelengths_nm, cos_theta0, out)
+    }
+}
+
+kernel_copies! {
     fn one_way_copies<V>(phases: &[C64; MAX_LANES]) -> [C64; MAX_LANES] {
         let mut out = [C64::new(0.0, 0.0); MAX_LANES];
         for start in (0..MAX_LANES).step_by(V::WIDTH) {
@@ -314,6 +327,51 @@ pub fn solve_batch_on(
     }
     batch_copies(
         path,
+        indices,
+        thicknesses_nm,
+        wavelengths_nm,
+        cos_theta0,
+        out,
+    )
+}
+
+/// R and T at arbitrary points of one stack of `layers` layers, on a chosen
+/// copy of the kernel: point i has its own indices (`indices[i(N+2)..
+/// (i+1)(N+2)]`: ambient, layers, substrate), thicknesses
+/// (`thicknesses_nm[iN..(i+1)N]`), wavelength and cos θ0, and its result
+/// goes to `out[i]`. The preconditions are [`solve`](super::solver::solve)'s
+/// for every point; nothing is allocated.
+///
+/// # Panics
+/// If the lengths disagree.
+pub fn solve_points_on(
+    path: Path,
+    layers: usize,
+    indices: &[C64],
+    thicknesses_nm: &[f64],
+    wavelengths_nm: &[f64],
+    cos_theta0: &[f64],
+    out: &mut [Response],
+) {
+    let points = out.len();
+    assert_eq!(
+        indices.len(),
+        (layers + 2) * points,
+        "indices: N + 2 per point"
+    );
+    assert_eq!(
+        thicknesses_nm.len(),
+        layers * points,
+        "thicknesses: N per point"
+    );
+    assert_eq!(wavelengths_nm.len(), points, "wavelengths: one per point");
+    assert_eq!(cos_theta0.len(), points, "cos θ0: one per point");
+    if points == 0 {
+        return;
+    }
+    points_copies(
+        path,
+        layers,
         indices,
         thicknesses_nm,
         wavelengths_nm,
