@@ -324,19 +324,10 @@ pub(super) fn batch_body<V: Lanes>(
     out: &mut [Response],
 ) {
     let media = thicknesses_nm.len() + 2;
-    let n_angles = cos_theta0.len();
     let total = out.len();
     for start in (0..total).step_by(V::WIDTH) {
-        let mut idx: [&[C64]; MAX_LANES] = [&[]; MAX_LANES];
-        let mut wl = [0.0; MAX_LANES];
-        let mut cos = [0.0; MAX_LANES];
-        for l in 0..V::WIDTH {
-            let i = (start + l).min(total - 1);
-            let (w, a) = (i / n_angles, i % n_angles);
-            idx[l] = &indices[w * media..(w + 1) * media];
-            wl[l] = wavelengths_nm[w];
-            cos[l] = cos_theta0[a];
-        }
+        let (idx, wl, cos) =
+            grid_lanes::<V>(indices, media, wavelengths_nm, cos_theta0, start, total);
         let k0 = V::splat(std::f64::consts::TAU).div(V::from_array(wl));
         let gathered = Gathered(idx);
         let point = |l: usize| (idx[l], wl[l]);
@@ -350,6 +341,34 @@ pub(super) fn batch_body<V: Lanes>(
         );
         Store(&mut *out).take(start, &res);
     }
+}
+
+/// Lanes `start..start + WIDTH` of a wavelength-major (wavelength, angle)
+/// grid (point `i` is wavelength `i / cos_theta0.len()` at angle
+/// `i % cos_theta0.len()`, each wavelength's `media` indices in a row of
+/// `indices`): each lane's indices, wavelength and cos θ0. A last partial
+/// group repeats the grid's final point in the unused lanes.
+#[inline(always)]
+pub(super) fn grid_lanes<'a, V: Lanes>(
+    indices: &'a [C64],
+    media: usize,
+    wavelengths_nm: &[f64],
+    cos_theta0: &[f64],
+    start: usize,
+    total: usize,
+) -> ([&'a [C64]; MAX_LANES], [f64; MAX_LANES], [f64; MAX_LANES]) {
+    let n_angles = cos_theta0.len();
+    let mut idx: [&[C64]; MAX_LANES] = [&[]; MAX_LANES];
+    let mut wl = [0.0; MAX_LANES];
+    let mut cos = [0.0; MAX_LANES];
+    for l in 0..V::WIDTH {
+        let i = (start + l).min(total - 1);
+        let (w, a) = (i / n_angles, i % n_angles);
+        idx[l] = &indices[w * media..(w + 1) * media];
+        wl[l] = wavelengths_nm[w];
+        cos[l] = cos_theta0[a];
+    }
+    (idx, wl, cos)
 }
 
 /// The kernel's loop over arbitrary points, [`Lanes::WIDTH`] at a time:

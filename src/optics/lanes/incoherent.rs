@@ -15,7 +15,7 @@
 use num_complex::Complex64 as C64;
 
 use super::arith::{exp_any, sqrt_upper, Cv, Lanes, MAX_LANES};
-use super::general::{recurse_lanes, Amplitudes, Gathered, Laid, MediaLanes};
+use super::general::{grid_lanes, recurse_lanes, Amplitudes, Gathered, Laid, MediaLanes};
 use super::sink::{Power, Sink, Store};
 use super::spectrum::{Repeats, Spectrum, SHARED_SLOTS};
 use crate::optics::incoherent::{solve_mixed, Coherence};
@@ -289,19 +289,10 @@ pub(super) fn batch_body<V: Lanes>(
     out: &mut [Response],
 ) {
     let media = thicknesses_nm.len() + 2;
-    let n_angles = cos_theta0.len();
     let total = out.len();
     for start in (0..total).step_by(V::WIDTH) {
-        let mut idx: [&[C64]; MAX_LANES] = [&[]; MAX_LANES];
-        let mut wl = [0.0; MAX_LANES];
-        let mut cos = [0.0; MAX_LANES];
-        for l in 0..V::WIDTH {
-            let i = (start + l).min(total - 1);
-            let (w, a) = (i / n_angles, i % n_angles);
-            idx[l] = &indices[w * media..(w + 1) * media];
-            wl[l] = wavelengths_nm[w];
-            cos[l] = cos_theta0[a];
-        }
+        let (idx, wl, cos) =
+            grid_lanes::<V>(indices, media, wavelengths_nm, cos_theta0, start, total);
         let k0 = V::splat(std::f64::consts::TAU).div(V::from_array(wl));
         let point = |l: usize| (idx[l], wl[l]);
         let res = solve_lanes::<V>(&Gathered(idx), k0, point, thicknesses_nm, coherence, cos);
