@@ -6,6 +6,7 @@
 //! [`render`] (the tracer).
 
 pub mod analytic;
+pub mod atlas;
 pub mod atomic;
 #[cfg(feature = "bench")]
 pub mod bench;

@@ -25,7 +25,7 @@ use grid::{doubled, initial_axes, refine, Grid};
 use header::header;
 use store::{representable, stored};
 pub(crate) use sweep::with_varying_layer;
-use sweep::Prepared;
+pub(crate) use sweep::{Prepared, Row};
 
 /// Bakes a table (no progress output; see [`bake_with_progress`]).
 pub fn bake(spec: &BakeSpec) -> Result<Lut> {

@@ -38,15 +38,15 @@ pub(crate) fn with_varying_layer(stack: &Stack, layer: usize) -> (Stack, usize) 
 }
 
 /// The stack and everything about it that is fixed for the whole bake.
-pub(super) struct Prepared {
+pub(crate) struct Prepared {
     /// The stack actually evaluated: a layerless stack gets a zero-thickness
     /// layer of the ambient medium, which changes nothing optically.
-    pub(super) stack: Stack,
-    pub(super) layer: usize,
-    pub(super) channels: usize,
+    pub(crate) stack: Stack,
+    pub(crate) layer: usize,
+    pub(crate) channels: usize,
     /// rgb kind: the stack at the integration wavelengths and the
     /// linear-sRGB weight of each wavelength (the spectral kind has none).
-    pub(super) stack_grid: StackGrid,
+    pub(crate) stack_grid: StackGrid,
     pub(super) weights: Vec<[f64; 3]>,
     /// The substrate's critical cos θ (where its q has a branch point),
     /// when it is lossless and optically thinner than the ambient.
@@ -70,7 +70,7 @@ impl Prepared {
 
     /// The stack with `layer` varying, for a table of `kind` integrated by
     /// `integrator` (rgb) or over `wavelength_nm` (spectral).
-    pub(super) fn of(
+    pub(crate) fn of(
         stack: &Stack,
         layer: usize,
         kind: Kind,
@@ -96,6 +96,76 @@ impl Prepared {
             weights,
             critical_cos,
         })
+    }
+
+    /// Exact values at atlas rows: each row one cos θ (and, for a spectral
+    /// table, one wavelength of `wavelengths_nm`) with its own thickness
+    /// nodes, spaced as the row's chart places them. The values of each row,
+    /// node by node, `channels` each, one row after another.
+    pub(crate) fn eval_rows(&self, rows: &[Row], wavelengths_nm: &[f64]) -> Result<Vec<f64>> {
+        let ch = self.channels;
+        let spectral_grid;
+        let stack_grid = if wavelengths_nm.is_empty() {
+            &self.stack_grid
+        } else {
+            spectral_grid = StackGrid::new(&self.stack, wavelengths_nm)?;
+            &spectral_grid
+        };
+        let spectral = !wavelengths_nm.is_empty();
+        let longest = rows.iter().map(|r| r.thickness_nm.len()).max().unwrap_or(0);
+        let values: Vec<Vec<f64>> = rows
+            .par_iter()
+            .map_init(
+                || Worker::new(longest, stack_grid.thicknesses_nm()),
+                |wk, row| {
+                    let mut dst = vec![0.0; row.thickness_nm.len() * ch];
+                    if row.thickness_nm.is_empty() {
+                        return dst;
+                    }
+                    let wavelengths = if spectral {
+                        row.wavelength..row.wavelength + 1
+                    } else {
+                        0..stack_grid.wavelengths_nm().len()
+                    };
+                    self.split_row(stack_grid, wavelengths, row.cos, wk);
+                    self.compute_nodes(
+                        spectral,
+                        stack_grid,
+                        row.cos,
+                        row.thickness_nm,
+                        Phases::Exact,
+                        &mut dst,
+                        wk,
+                    );
+                    dst
+                },
+            )
+            .collect();
+        Ok(values.concat())
+    }
+
+    /// The row's split stacks, one per wavelength of `wavelengths`, into
+    /// `wk.splits` (one split serving the whole spectrum where
+    /// [`Self::split_per_angle`] allows).
+    fn split_row(
+        &self,
+        stack_grid: &StackGrid,
+        wavelengths: std::ops::Range<usize>,
+        cos: f64,
+        wk: &mut Worker,
+    ) {
+        wk.splits.clear();
+        let mut first = None;
+        for i in wavelengths {
+            let v = match first {
+                Some(f) if self.split_per_angle => {
+                    VaryingLayer::at_wavelength(&f, stack_grid.wavelengths_nm()[i])
+                }
+                _ => self.split(stack_grid, i, cos, &mut wk.scratch),
+            };
+            first.get_or_insert(v);
+            wk.splits.push((i, v));
+        }
     }
 
     /// Exact values on a grid, layout `[w][c][t][channel]`. Rows (one cos θ
@@ -171,17 +241,7 @@ impl Prepared {
                         Piece::Compute(range) => &chunks[range.clone()],
                     };
                     if wk.splits.is_empty() {
-                        let mut first = None;
-                        for i in wavelengths.clone() {
-                            let v = match first {
-                                Some(f) if self.split_per_angle => {
-                                    VaryingLayer::at_wavelength(&f, stack_grid.wavelengths_nm()[i])
-                                }
-                                _ => self.split(stack_grid, i, cos, &mut wk.scratch),
-                            };
-                            first.get_or_insert(v);
-                            wk.splits.push((i, v));
-                        }
+                        self.split_row(stack_grid, wavelengths.clone(), cos, wk);
                     }
                     self.compute(grid, stack_grid, cos, range, row, wk);
                 }
@@ -212,7 +272,26 @@ impl Prepared {
             - start;
         let nodes = &grid.axes[0].nodes[start..start + m];
         let dst = &mut row[start * ch..(start + m) * ch];
-        if grid.spectral {
+        let phases = Phases::Chunks(chunks);
+        self.compute_nodes(grid.spectral, stack_grid, cos, nodes, phases, dst, wk);
+    }
+
+    /// The values at thickness `nodes` of one row (cos θ `cos`, split
+    /// stacks in `wk.splits`) into `dst`, the phase factors formed as
+    /// `phases` says.
+    #[allow(clippy::too_many_arguments)]
+    fn compute_nodes(
+        &self,
+        spectral: bool,
+        stack_grid: &StackGrid,
+        cos: f64,
+        nodes: &[f64],
+        chunks: Phases,
+        dst: &mut [f64],
+        wk: &mut Worker,
+    ) {
+        let m = nodes.len();
+        if spectral {
             let split = wk.splits[0];
             self.responses(&split, stack_grid, cos, nodes, chunks, wk);
             for (o, (&r, &t)) in dst.chunks_exact_mut(2).zip(wk.r.iter().zip(&wk.t)) {
@@ -258,7 +337,7 @@ impl Prepared {
         stack_grid: &StackGrid,
         cos: f64,
         nodes: &[f64],
-        chunks: &[Chunk],
+        chunks: Phases,
         wk: &mut Worker,
     ) {
         let (m, mp) = (nodes.len(), padded(nodes.len()));
@@ -333,6 +412,16 @@ fn previous_rows<'a>(
         .collect()
 }
 
+/// One row of an atlas chart for [`Prepared::eval_rows`].
+pub(crate) struct Row<'a> {
+    /// cos θ of the row.
+    pub(crate) cos: f64,
+    /// The wavelength node of a spectral table's row (ignored for rgb).
+    pub(crate) wavelength: usize,
+    /// The thickness nodes (nm), in any order.
+    pub(crate) thickness_nm: &'a [f64],
+}
+
 /// The linear-sRGB weight of each integration wavelength, as triples: the
 /// integrator is linear in the spectrum, so the bake accumulates weight × R
 /// per node instead of storing whole spectra.
@@ -374,14 +463,44 @@ fn padded(nodes: usize) -> usize {
     nodes.next_multiple_of(PAD)
 }
 
+/// How a row's phase factors are formed.
+#[derive(Clone, Copy)]
+pub(super) enum Phases<'a> {
+    /// Chunks of evenly spaced nodes, each advanced by a recurrence from an
+    /// exact exponential at its start (see [`phases`]).
+    Chunks(&'a [Chunk]),
+    /// An exact exponential at every node (nodes spaced unevenly, as an
+    /// atlas chart's are).
+    Exact,
+}
+
 /// The phase factors at `nodes` (see [`phases`]) into `wk.phase_re`,
 /// `wk.phase_im`, zero from there up to [`padded`] length.
-fn phase_factors(v: &VaryingLayer, nodes: &[f64], chunks: &[Chunk], wk: &mut Worker) {
+fn phase_factors(v: &VaryingLayer, nodes: &[f64], plan: Phases, wk: &mut Worker) {
     let (m, mp) = (nodes.len(), padded(nodes.len()));
     let (re, im) = (&mut wk.phase_re[..m + PAD], &mut wk.phase_im[..m + PAD]);
-    phases(v, nodes, chunks, re, im);
+    match plan {
+        Phases::Chunks(chunks) => phases(v, nodes, chunks, re, im),
+        Phases::Exact => exact_phases(v, nodes, re, im),
+    }
     re[m..mp].fill(0.0);
     im[m..mp].fill(0.0);
+}
+
+/// The phase factor at every node from the lanes' exponential, eight at a
+/// time.
+fn exact_phases(v: &VaryingLayer, nodes: &[f64], re: &mut [f64], im: &mut [f64]) {
+    for (k, group) in nodes.chunks(MAX_LANES).enumerate() {
+        let mut angles = [C64::new(0.0, 0.0); MAX_LANES];
+        for (a, &d) in angles.iter_mut().zip(group) {
+            *a = v.phase_angle(d);
+        }
+        let exact = one_way_many(Path::Best, &angles);
+        for (l, e) in exact.iter().enumerate().take(group.len()) {
+            re[k * MAX_LANES + l] = e.re;
+            im[k * MAX_LANES + l] = e.im;
+        }
+    }
 }
 
 /// One worker's buffers, allocated once per rayon task.
