@@ -331,6 +331,9 @@ impl Chart {
     /// rectangle in its own coordinates): they are physical all the same.
     pub fn point(&self, x: f64, y: f64) -> (f64, f64) {
         match self.coords {
+            // A band of one optical thickness holds one physical thickness
+            // (a table of a single thickness): p is its thickness.
+            Coords::Band { p, c } if p.hi_nm <= p.lo_nm => (p.lo_nm, c.at(y)),
             Coords::Band { p, c } => {
                 let c = c.at(y);
                 (p.at(x) / self.optical.s(c), c)
@@ -368,6 +371,42 @@ impl Chart {
             }
             Coords::Band { .. } => false,
         }
+    }
+
+    /// Its parameters are finite and within their ranges (side 0 or 1, a
+    /// floor in (0, 1], increasing axes inside their domains).
+    pub fn check(&self) -> Result<(), String> {
+        let o = self.optical;
+        if self.side > 1 {
+            return Err(format!("side {}, expected 0 or 1", self.side));
+        }
+        if !(o.a >= 0.0 && o.a.is_finite() && o.floor > 0.0 && o.floor <= 1.0) {
+            return Err(format!("optical a {} floor {}", o.a, o.floor));
+        }
+        match self.coords {
+            Coords::Band { p, c } => {
+                let p_ok = p.p0_nm >= 0.0
+                    && p.p0_nm.is_finite()
+                    && p.lo_nm >= 0.0
+                    && p.lo_nm <= p.hi_nm
+                    && p.hi_nm.is_finite();
+                let c_ok = c.lo >= 0.0
+                    && c.lo <= c.hi
+                    && c.hi <= 1.0
+                    && c.anchor.is_finite()
+                    && c.offset.is_finite()
+                    && (c.anchor <= c.lo || c.anchor >= c.hi);
+                if !(p_ok && c_ok) {
+                    return Err(format!("band axes {p:?} {c:?}"));
+                }
+            }
+            Coords::Corner { scale_nm, radius } => {
+                if !(scale_nm > 0.0 && scale_nm.is_finite() && radius > 0.0 && radius.is_finite()) {
+                    return Err(format!("corner scale {scale_nm} radius {radius}"));
+                }
+            }
+        }
+        Ok(())
     }
 
     /// The chart's uniform values (see docs/gpu.md): the rectangle, then

@@ -18,6 +18,9 @@ pub struct Film {
     weights: SpectralWeights,
     /// The largest weight one wavelength has in any channel.
     largest_weight: f64,
+    /// The colour of a flat spectrum 1 (what R + T adds up to for a
+    /// lossless stack), when the stack is lossless.
+    lossless_white: Option<[f64; 3]>,
     /// The side's optical thickness factor (see [`Optical`]).
     pub optical: Optical,
 }
@@ -32,12 +35,17 @@ impl Film {
             .iter()
             .flat_map(|w| w.iter())
             .fold(0.0f64, |a, &b| a.max(b.abs()));
+        let lossless =
+            stack.layers.iter().all(|l| l.material.is_lossless()) && stack.substrate.is_lossless();
+        let flat = vec![1.0; integrator.wavelengths_nm().len()];
+        let lossless_white = lossless.then(|| integrator.rgb(&flat));
         let prep = Prepared::of(stack, layer, Kind::Rgb, integrator, (380.0, 780.0))?;
         let optical = optical_of(&prep.stack, prep.layer, 550.0)?;
         Ok(Film {
             prep,
             weights,
             largest_weight,
+            lossless_white,
             optical,
         })
     }
@@ -125,10 +133,10 @@ pub(crate) fn optical_of(stack: &Stack, layer: usize, reference_nm: f64) -> Resu
 }
 
 impl Film {
-    /// The varying layer's sharpest fringe at one wavelength and cos θ: its
-    /// round trip's amplitude and how much R changes across it (see
-    /// [`crate::optics::twoport::VaryingLayer::fringe`]).
-    pub fn fringe(&self, wavelength_nm: f64, c: f64) -> Result<(f64, f64)> {
+    /// The varying layer's sharpest fringe at one wavelength, cos θ and
+    /// thickness: its round trip's amplitude and how much R changes across
+    /// it (see [`crate::optics::twoport::VaryingLayer::fringe`]).
+    pub fn fringe(&self, wavelength_nm: f64, c: f64, thickness_nm: f64) -> Result<(f64, f64)> {
         let stack = &self.prep.stack;
         let mut indices = Vec::new();
         stack.indices_at(wavelength_nm, &mut indices)?;
@@ -140,13 +148,20 @@ impl Film {
             c,
             &mut Default::default(),
         );
-        Ok(split.fringe())
+        Ok(split.fringe(thickness_nm))
     }
 
     /// The largest weight one wavelength has in any colour channel: how much
     /// a change of R at one wavelength can move the colour.
     pub fn largest_weight(&self) -> f64 {
         self.largest_weight
+    }
+
+    /// For a lossless stack (no layer or substrate absorbs or amplifies),
+    /// R + T: the colour of a flat spectrum, the same at every thickness and
+    /// angle.
+    pub fn lossless_white(&self) -> Option<[f64; 3]> {
+        self.lossless_white
     }
 
     /// The wavelengths the colour integrates over.
@@ -216,14 +231,21 @@ mod tests {
     #[test]
     fn fringes_sharpen_at_grazing_and_vanish_behind_total_reflection() {
         let f = film(&soap());
-        let (y_grazing, vis_grazing) = f.fringe(500.0, 1e-3).unwrap();
-        let (y_normal, _) = f.fringe(500.0, 1.0).unwrap();
+        let (y_grazing, vis_grazing) = f.fringe(500.0, 1e-3, 300.0).unwrap();
+        let (y_normal, _) = f.fringe(500.0, 1.0, 300.0).unwrap();
         assert!(y_grazing > 0.99 && y_normal < 0.1, "{y_grazing} {y_normal}");
         assert!(vis_grazing > 0.5);
         let mut glass = soap();
         glass.ambient = Material::constant(1.5, 0.0);
         glass.layers[0].material = Material::constant(2.0, 0.0);
-        let (y, visibility) = film(&glass).fringe(500.0, 0.3).unwrap();
+        let (y, visibility) = film(&glass).fringe(500.0, 0.3, 300.0).unwrap();
         assert!(y > 0.0 && visibility < 1e-9, "{y} {visibility}");
+        // An absorbing layer's round trip fades with its thickness.
+        let mut absorbing = soap();
+        absorbing.layers[0].material = Material::constant(1.5, 0.15);
+        let a = film(&absorbing);
+        let (thin, _) = a.fringe(500.0, 1e-3, 10.0).unwrap();
+        let (thick, _) = a.fringe(500.0, 1e-3, 500.0).unwrap();
+        assert!(thick < 0.1 * thin, "{thin} {thick}");
     }
 }

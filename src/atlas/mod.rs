@@ -66,6 +66,37 @@ impl Atlas {
         v
     }
 
+    /// Checks what a reader indexes by: at most [`MAX_CHARTS`] charts, each
+    /// inside the image with at least one texel, finite parameters within
+    /// their ranges, and a thickness range 0 ≤ min ≤ max.
+    pub fn check(&self) -> Result<(), String> {
+        let (t0, t1) = self.thickness_nm;
+        if !(t0 >= 0.0 && t0 <= t1 && t1.is_finite()) {
+            return Err(format!("atlas thickness range {t0}:{t1}"));
+        }
+        if self.charts.len() > MAX_CHARTS {
+            return Err(format!(
+                "{} charts, at most {MAX_CHARTS}",
+                self.charts.len()
+            ));
+        }
+        for (k, chart) in self.charts.iter().enumerate() {
+            let r = chart.rect;
+            let fits = r.width >= 1
+                && r.height >= 1
+                && r.x.checked_add(r.width).is_some_and(|e| e <= self.width)
+                && r.y.checked_add(r.height).is_some_and(|e| e <= self.height);
+            if !fits {
+                return Err(format!(
+                    "chart {k}'s rectangle {r:?} is outside the {}x{} atlas",
+                    self.width, self.height
+                ));
+            }
+            chart.check().map_err(|why| format!("chart {k}: {why}"))?;
+        }
+        Ok(())
+    }
+
     /// The chart that serves (d, c) on `side` by the rule the shader
     /// applies (in f64): the first corner of the side whose radius holds
     /// it, else the first band of the side whose cos θ range reaches up to

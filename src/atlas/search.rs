@@ -175,6 +175,26 @@ impl Skeleton<'_> {
     }
 }
 
+/// The optical-thickness axis of a band over cos θ [lo, hi]: the domain's
+/// thicknesses at those angles, or for a single thickness that thickness
+/// itself (see [`Chart::point`]).
+fn band_p(skeleton: &Skeleton, p0_nm: f64, lo: f64, hi: f64) -> LogAxis {
+    let (d0, d1) = skeleton.thickness_nm;
+    let optical = skeleton.optical();
+    if d1 <= d0 {
+        return LogAxis {
+            p0_nm: 0.0,
+            lo_nm: d0,
+            hi_nm: d0,
+        };
+    }
+    LogAxis {
+        p0_nm,
+        lo_nm: d0 * optical.s(lo),
+        hi_nm: d1 * optical.s(hi),
+    }
+}
+
 /// The error of an interpolated (R, T) against the exact one, as a
 /// fraction of what each target allows an axis (`shares`: absolute,
 /// ΔE00).
@@ -250,7 +270,7 @@ pub fn build(
     thickness_nm: (f64, f64),
     goal: Goal,
     max_side: usize,
-    (points, seed): (usize, u64),
+    points: &[Vec<[f32; 2]>],
     progress: &dyn Fn(&str),
 ) -> Result<Built> {
     let mut reports = Vec::new();
@@ -302,12 +322,12 @@ pub fn build(
     }
     for round in 0.. {
         let (atlas, image) = assemble(&charts, thickness_nm, max_side)?;
-        let measured = measure(&atlas, &image, sides, &reports, points, seed);
+        let measured = measure(&atlas, &image, sides, &reports, points);
         let missed = measured
             .iter()
             .zip(&skeletons)
             .find(|(m, _)| !meets(&m.resolved, goal));
-        let Some((m, skeleton)) = missed.filter(|_| round < MAX_GROWTH) else {
+        let Some((m, skeleton)) = missed else {
             return Ok(Built {
                 atlas,
                 image,
@@ -315,11 +335,14 @@ pub fn build(
                 measured,
             });
         };
-        // A feature between the midpoints: grow the chart of the worst point.
         let [d, c] = m.resolved.worst_point;
         let k = atlas
             .chart_for(d, c, skeleton.req.side)
             .expect("the side has charts");
+        if round >= MAX_GROWTH {
+            return Err(unreachable_target(skeleton, &charts[k].0, goal));
+        }
+        // A feature between the midpoints: grow the chart of the worst point.
         progress(&format!(
             "random points: {:.2e} at thickness {d:.2} nm, cos θ {c:.4}: growing {}",
             m.resolved.max_all(),
@@ -465,20 +488,29 @@ fn aliasing_floor(req: &SideRequest, thickness_nm: (f64, f64), goal: Goal) -> Re
     // Every wavelength within a few steps, so that a narrow stop band of a
     // mirror is not stepped over.
     let stride = ((4.0 / step).floor() as usize).max(1);
+    // The thicker the layer, the narrower its fringes in wavelength, unless
+    // it absorbs them away: a few thicknesses down from the largest.
+    let thicknesses: Vec<f64> = (0..5)
+        .map(|k| thickness_nm.1 / f64::from(1 << k))
+        .filter(|&d| d >= thickness_nm.0 && d > 0.0)
+        .collect();
     let aliased = |c: f64| -> Result<bool> {
-        let p_max = thickness_nm.1 * film.optical.s(c);
         for &lambda in w.iter().step_by(stride) {
-            let (y, visibility) = film.fringe(lambda, c)?;
-            if p_max <= 0.0 || y.is_nan() || y <= 0.0 || visibility < visible {
-                continue;
-            }
             let n = layer.index_at(lambda)?.re.max(1e-6);
-            // Fringe width in round-trip phase 2(1 − |y|)/√|y|, in
-            // wavelength through dδ/dλ = 4π n p / λ².
-            let width = 2.0 * (1.0 - y.min(1.0)) / y.sqrt() * lambda * lambda
-                / (4.0 * std::f64::consts::PI * n * p_max);
-            if width < ALIASING_STEPS * step {
-                return Ok(true);
+            for &d in &thicknesses {
+                let (y, visibility) = film.fringe(lambda, c, d)?;
+                let p = d * film.optical.s(c);
+                if p <= 0.0 || y.is_nan() || y <= 0.0 || visibility < visible {
+                    continue;
+                }
+                // Fringe width in round-trip phase 2|1 − |y||/√|y| (a gain
+                // layer's round trip can exceed 1), in wavelength through
+                // dδ/dλ = 4π n p / λ².
+                let width = 2.0 * (1.0 - y).abs() / y.sqrt() * lambda * lambda
+                    / (4.0 * std::f64::consts::PI * n * p);
+                if width < ALIASING_STEPS * step {
+                    return Ok(true);
+                }
             }
         }
         Ok(false)
@@ -580,13 +612,8 @@ fn midpoint_pair(at: &dyn Fn(usize) -> [f64; 6], k: usize, n: usize, shares: Pai
 /// Evaluates the probe of one piece and what it asks of its bands.
 fn probe(skeleton: &Skeleton, piece: &Piece, shares: Pair) -> Result<RowNeeds> {
     let optical = skeleton.optical();
-    let (d0, d1) = skeleton.thickness_nm;
     let (probe_p, probe_c) = (
-        LogAxis {
-            p0_nm: PROBE_P0_NM,
-            lo_nm: d0 * optical.s(piece.lo),
-            hi_nm: d1 * optical.s(piece.hi),
-        },
+        band_p(skeleton, PROBE_P0_NM, piece.lo, piece.hi),
         piece.axis(piece.lo, piece.hi, PROBE_OFFSET),
     );
     let chart = Chart {
@@ -767,17 +794,11 @@ fn fill_untargeted(pieces: &[Piece], needs: &mut [Option<RowNeeds>]) {
 
 /// A two-row band for a single cos θ.
 fn flat_band(skeleton: &Skeleton, piece: &Piece) -> Chart {
-    let optical = skeleton.optical();
-    let (d0, d1) = skeleton.thickness_nm;
     Chart {
         side: skeleton.req.side,
-        optical,
+        optical: skeleton.optical(),
         coords: Coords::Band {
-            p: LogAxis {
-                p0_nm: PROBE_P0_NM,
-                lo_nm: d0 * optical.s(piece.lo),
-                hi_nm: d1 * optical.s(piece.hi),
-            },
+            p: band_p(skeleton, PROBE_P0_NM, piece.lo, piece.hi),
             c: CosAxis::uniform(piece.lo, piece.hi),
         },
         rect: Rect {
@@ -799,17 +820,16 @@ fn best_band(
     b: usize,
 ) -> (usize, Chart) {
     let optical = skeleton.optical();
-    let (d0, d1) = skeleton.thickness_nm;
     let (lo, hi) = (needs.c[a], needs.c[b]);
     let mut best: Option<(usize, Chart)> = None;
     for (k, &p0) in P0_CHOICES.iter().enumerate() {
-        let p = LogAxis {
-            p0_nm: p0,
-            lo_nm: d0 * optical.s(lo),
-            hi_nm: d1 * optical.s(hi),
-        };
+        let p = band_p(skeleton, p0, lo, hi);
         let need_u = needs.u[k][a..=b].iter().fold(0.0f64, |m, &x| m.max(x));
-        let nu = nodes_for(p.span() * need_u);
+        let nu = if p.hi_nm > p.lo_nm {
+            nodes_for(p.span() * need_u)
+        } else {
+            1
+        };
         let choices = if piece.warp == PieceWarp::Log {
             OFFSET_CHOICES.len()
         } else {
@@ -1200,27 +1220,21 @@ pub struct SideMeasurement {
     pub aliased: Measurement,
 }
 
-/// Measures `image` read through `atlas` (bilinear, f32, as a GPU) at
-/// `points` random points of each side against the solver.
+/// Measures `image` read through `atlas` (bilinear, f32, as a GPU) at each
+/// side's `points` (thickness nm, cos θ) against the solver.
 pub fn measure(
     atlas: &Atlas,
     image: &Image,
     sides: &[SideRequest],
     reports: &[SideReport],
-    points: usize,
-    seed: u64,
+    points: &[Vec<[f32; 2]>],
 ) -> Vec<SideMeasurement> {
     let uniform = atlas.uniform_f32();
     sides
         .iter()
         .zip(reports)
-        .map(|(req, report)| {
-            let pts = random_points(
-                atlas.thickness_nm,
-                req.cos,
-                points,
-                seed + u64::from(req.side),
-            );
+        .zip(points)
+        .map(|((req, report), pts)| {
             let exact = req.film.points(
                 &pts.iter()
                     .map(|p| (f64::from(p[0]), f64::from(p[1])))
@@ -1245,7 +1259,7 @@ pub fn measure(
             let floor = report.aliased_below as f32;
             SideMeasurement {
                 side: req.side,
-                all: Measurement::of(&pts, &got, &exact),
+                all: Measurement::of(pts, &got, &exact),
                 resolved: split(&|c| c >= floor),
                 aliased: split(&|c| c < floor),
             }

@@ -55,7 +55,9 @@ pub struct ErrorStats {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct RegionStats {
     /// `grazing` (incidence beyond 80°), `critical` (within ±0.02 in cos θ
-    /// of the substrate's critical angle) or `other` (everything else).
+    /// of the substrate's critical angle) or `other` (everything else); for
+    /// an atlas table with an aliased strip also `aliased` (below its edge)
+    /// and `resolved` (the rest, where the table's target applies).
     pub name: String,
     /// The region's bounds in words, with the critical cos θ when there is
     /// one.
@@ -106,13 +108,14 @@ pub fn validate(lut: &Lut, points: usize, seed: u64) -> Result<ErrorStats> {
         (0.0, 0.0)
     };
     let checker = PointChecker::new(lut)?;
-    let mut rng = rand_pcg::Pcg64::seed_from_u64(seed);
-    let mut draw = |(lo, hi): (f64, f64)| (lo + rng.random::<f64>() * (hi - lo)) as f32;
+    let mut draw = drawing(seed);
 
     let n_channels = channel_names(h.kind).len();
+
     let critical = critical_cos(&h.stack, h.kind, w_range)
         .filter(|&cc| cc >= c_range.0 - CRITICAL_BAND && cc <= c_range.1 + CRITICAL_BAND);
-    let mut totals = Totals::new(n_channels, critical);
+    let aliased_below = h.atlas.as_ref().map_or(0.0, |t| t.aliased_below_cos);
+    let mut totals = Totals::new(n_channels, critical, aliased_below);
     // Points are drawn and evaluated a chunk at a time and folded into
     // running figures in draw order: memory stays the same for any count,
     // and the figures do not depend on the number of threads.
@@ -121,7 +124,7 @@ pub fn validate(lut: &Lut, points: usize, seed: u64) -> Result<ErrorStats> {
     while done < points {
         let take = CHUNK.min(points - done);
         chunk.clear();
-        chunk.extend((0..take).map(|_| [draw(t_range), draw(c_range), draw(w_range)]));
+        chunk.extend((0..take).map(|_| draw([t_range, c_range, w_range])));
         done += take;
         let errors: Vec<PointError> = chunk
             .par_iter()
@@ -135,6 +138,14 @@ pub fn validate(lut: &Lut, points: usize, seed: u64) -> Result<ErrorStats> {
         }
     }
     Ok(totals.finish(points, seed, channel_names(h.kind), critical))
+}
+
+/// The validation's random points, one call per point: (thickness, cos θ,
+/// wavelength) uniform over the given ranges, from a PCG64 stream seeded
+/// with `seed`, as f32 (what the sampler receives).
+pub(crate) fn drawing(seed: u64) -> impl FnMut([(f64, f64); 3]) -> [f32; 3] {
+    let mut rng = rand_pcg::Pcg64::seed_from_u64(seed);
+    move |ranges| ranges.map(|(lo, hi)| (lo + rng.random::<f64>() * (hi - lo)) as f32)
 }
 
 /// What every point's comparison needs: the table, the stack's indices at
@@ -290,15 +301,20 @@ struct Totals {
     de_sum: [f64; 2],
     de_count: usize,
     worst: Option<(f64, [f64; 3])>,
-    /// grazing, critical, other: points, largest error, sum of errors.
-    regions: [(usize, f64, f64); 3],
+    /// cos θ below which an atlas table's colour integration is aliased (0:
+    /// nowhere).
+    aliased_below: f64,
+    /// grazing, critical, other, aliased, resolved: points, largest error,
+    /// sum of errors.
+    regions: [(usize, f64, f64); 5],
 }
 
 impl Totals {
-    fn new(channels: usize, critical: Option<f64>) -> Totals {
+    fn new(channels: usize, critical: Option<f64>, aliased_below: f64) -> Totals {
         Totals {
             channels,
             critical,
+            aliased_below,
             max: vec![0.0; channels],
             sum: vec![0.0; channels],
             quantile: (0..channels)
@@ -309,7 +325,7 @@ impl Totals {
             de_sum: [0.0; 2],
             de_count: 0,
             worst: None,
-            regions: [(0, 0.0, 0.0); 3],
+            regions: [(0, 0.0, 0.0); 5],
         }
     }
 
@@ -360,6 +376,9 @@ impl Totals {
         if c >= GRAZING_COS && !near_critical {
             count(2);
         }
+        if self.aliased_below > 0.0 {
+            count(if c < self.aliased_below { 3 } else { 4 });
+        }
     }
 
     fn finish(
@@ -405,6 +424,17 @@ impl Totals {
                 }),
             ),
             ("other", "every remaining point".to_string()),
+            (
+                "aliased",
+                format!(
+                    "cos θ below {:.6}, where the colour integration itself is aliased and the table's target is not sought",
+                    self.aliased_below
+                ),
+            ),
+            (
+                "resolved",
+                format!("cos θ from {:.6} up, where the target applies", self.aliased_below),
+            ),
         ];
         for ((name, description), (count, max, sum)) in descriptions.into_iter().zip(self.regions) {
             if count > 0 {

@@ -149,22 +149,24 @@ impl VaryingLayer {
         C64::new(0.0, self.k0) * self.q
     }
 
-    /// The varying layer's sharpest fringe: the larger over s and p of
-    /// |r'_A r_B|, the round trip's amplitude in the layer (its fringes have
-    /// a width in round-trip phase of about 2 (1 − |r'_A r_B|), narrowing
-    /// without bound where it nears 1: a free-standing film at grazing
-    /// incidence), and how much the unpolarized R changes between that
-    /// polarization's resonance and the phase opposite (0 where the layer's
-    /// phase cannot show in R: total internal reflection in a lossless
-    /// stack).
-    pub fn fringe(&self) -> (f64, f64) {
+    /// The varying layer's sharpest fringe at thickness `thickness_nm`: the
+    /// larger over s and p of |r'_A r_B φ²|, the round trip's amplitude in
+    /// the layer (its fringes have a width in round-trip phase of about
+    /// 2 (1 − |r'_A r_B φ²|), narrowing without bound where it nears 1: a
+    /// free-standing film at grazing incidence), and how much the
+    /// unpolarized R changes between that polarization's resonance and the
+    /// phase opposite, at the layer's absorption over that thickness (0
+    /// where the layer's phase cannot show in R: total internal reflection
+    /// in a lossless stack).
+    pub fn fringe(&self, thickness_nm: f64) -> (f64, f64) {
         let k = usize::from(self.factors.neg_y[1].norm() > self.factors.neg_y[0].norm());
         let y = -self.factors.neg_y[k];
+        let decay = self.phase(thickness_nm).norm();
         // Resonance where y φ² is real and positive: φ² = e^{−i arg y}.
-        let at = |psi: f64| self.response(C64::from_polar(1.0, 0.5 * psi)).r();
+        let at = |psi: f64| self.response(C64::from_polar(decay, 0.5 * psi)).r();
         let resonance = -y.arg();
         let visibility = (at(resonance) - at(resonance + std::f64::consts::PI)).abs();
-        (y.norm(), visibility)
+        (y.norm() * decay * decay, visibility)
     }
 
     /// True when the split is unusable (the layer's q ≈ 0, see the field):
