@@ -25,6 +25,17 @@ pub enum Error {
         why: String,
     },
 
+    /// An allocation sized by input would exceed the memory budget
+    /// ([`crate::limits`]): the request is too large for this machine
+    /// rather than malformed (Python raises `MemoryError` for it).
+    #[error("{what}: {why}")]
+    OverBudget {
+        /// What would allocate: a flag, an argument, a file being loaded.
+        what: String,
+        /// The estimate and the budget, and how to change the budget.
+        why: String,
+    },
+
     /// A file could not be read or written.
     #[error("{path}: {source}")]
     Io {
@@ -67,6 +78,25 @@ impl Error {
         Error::Io {
             path: path.into(),
             source,
+        }
+    }
+
+    /// This error as part of `context` (a field, a file), its message
+    /// prefixed with `context: `. An I/O error and a refused allocation keep
+    /// their kind, so that a file the system cannot read or one too large
+    /// is still told from a malformed one (Python raises OSError and
+    /// MemoryError for them); any other error becomes `other(context,
+    /// message)`.
+    pub fn within(self, context: &str, other: impl FnOnce(&str, String) -> Error) -> Error {
+        match self {
+            Error::Io { path, source } => {
+                Error::io(format!("{context}: {}", path.display()), source)
+            }
+            Error::OverBudget { what, why } => Error::OverBudget {
+                what: format!("{context}: {what}"),
+                why,
+            },
+            e => other(context, e.to_string()),
         }
     }
 }

@@ -45,8 +45,27 @@ pub fn memory_budget() -> Result<u64> {
                 ),
             )
         }),
-        Err(_) => Ok(physical_memory()
+        Err(_) => Ok(physical_memory_once()
             .map_or(FALLBACK_BUDGET, |m| (m as f64 * DEFAULT_MEMORY_SHARE) as u64)),
+    }
+}
+
+/// [`physical_memory`], read on the first call only: the budget is looked
+/// up by every allocation check, thousands of times a second through the
+/// Python package's small calls, and reading the control group's file each
+/// time cost more than the call itself. An atomic rather than a lock, so a
+/// `fork()` at any moment leaves nothing held in the child.
+fn physical_memory_once() -> Option<u64> {
+    const UNKNOWN: u64 = u64::MAX;
+    static PHYSICAL: AtomicU64 = AtomicU64::new(0);
+    match PHYSICAL.load(Ordering::Relaxed) {
+        0 => {
+            let memory = physical_memory();
+            PHYSICAL.store(memory.unwrap_or(UNKNOWN), Ordering::Relaxed);
+            memory
+        }
+        UNKNOWN => None,
+        memory => Some(memory),
     }
 }
 
@@ -126,22 +145,58 @@ pub fn product(counts: &[u64], bytes_each: u64) -> Option<u64> {
         .try_fold(bytes_each, |acc, &c| acc.checked_mul(c))
 }
 
-/// Refuses `what` when its estimated size (None: beyond u64) is above the
-/// budget: "WHAT: needs about 1.1 PB, above the memory limit of 3.9 GB (set
-/// IRID_MEMORY_LIMIT to change it)".
+/// Refuses `what` with [`Error::OverBudget`] when its estimated size (None:
+/// beyond u64) is above the budget: "WHAT: needs about 1.1 PB, above the
+/// memory limit of 3.9 GB (set IRID_MEMORY_LIMIT to change it)". A
+/// malformed [`MEMORY_LIMIT_ENV`] is an [`Error::InvalidInput`].
 pub fn check_allocation(what: &str, estimate: Option<u64>) -> Result<()> {
     let limit = memory_budget()?;
     match estimate {
         Some(bytes) if bytes <= limit => Ok(()),
-        _ => Err(Error::invalid(
-            what,
-            format!(
+        _ => Err(Error::OverBudget {
+            what: what.to_string(),
+            why: format!(
                 "needs about {}, above the memory limit of {} (set {MEMORY_LIMIT_ENV} to change it)",
                 estimate.map_or("more than 18 EB".to_string(), human_bytes),
                 human_bytes(limit)
             ),
-        )),
+        }),
     }
+}
+
+/// The text of the file at `path` (a stack file, a CSV table), refused
+/// with [`Error::OverBudget`] when it is larger than the budget: by the
+/// size the file system gives, then while reading, for files that give
+/// none (a pipe, `/dev/zero`), so that no file can grow the buffer until
+/// the allocator aborts. Bytes that are not UTF-8 are malformed content.
+pub fn read_text(path: &std::path::Path) -> Result<String> {
+    use std::io::Read;
+    let limit = memory_budget()?;
+    let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+    let what = format!("{}: reading the file", path.display());
+    check_allocation(&what, file.metadata().ok().map(|m| m.len()))?;
+    let mut bytes = Vec::new();
+    file.take(limit.saturating_add(1))
+        .read_to_end(&mut bytes)
+        .map_err(|e| Error::io(path, e))?;
+    if bytes.len() as u64 > limit {
+        return Err(Error::OverBudget {
+            what,
+            why: format!(
+                "holds more than the memory limit of {} (set {MEMORY_LIMIT_ENV} to change it)",
+                human_bytes(limit)
+            ),
+        });
+    }
+    String::from_utf8(bytes).map_err(|e| {
+        Error::malformed(
+            path,
+            format!(
+                "not UTF-8 text (byte {} is not)",
+                e.utf8_error().valid_up_to()
+            ),
+        )
+    })
 }
 
 #[cfg(test)]
@@ -166,6 +221,24 @@ mod tests {
         assert_eq!(human_bytes(1_100_000_000_000_000), "1.1 PB");
         assert_eq!(human_bytes(3_900_000_000), "3.9 GB");
         assert_eq!(human_bytes(u64::MAX), "18.4 EB");
+    }
+
+    #[test]
+    fn text_files_are_read_within_the_budget() {
+        let dir = std::env::temp_dir().join(format!("irid-read-text-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let small = dir.join("small.toml");
+        std::fs::write(&small, "ambient = 1\n").unwrap();
+        assert_eq!(read_text(&small).unwrap(), "ambient = 1\n");
+        let binary = dir.join("binary.toml");
+        std::fs::write(&binary, b"ok\xff").unwrap();
+        let e = read_text(&binary).unwrap_err().to_string();
+        assert!(e.ends_with("not UTF-8 text (byte 2 is not)"), "{e}");
+        assert!(matches!(
+            read_text(&dir.join("none")),
+            Err(Error::Io { .. })
+        ));
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 
     #[test]

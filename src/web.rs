@@ -12,6 +12,7 @@ use std::path::{Path, PathBuf};
 
 use serde_json::{json, Map, Value};
 
+use crate::atomic::{OutputSet, Replace};
 use crate::error::{Error, Result};
 
 /// The page's files, as `web/` holds them.
@@ -45,13 +46,27 @@ pub struct Preview {
 }
 
 /// Writes a preview of `exports` (export folders) into `out`. `out` must not
-/// exist, be empty, or be an earlier preview (which is replaced whole). The
-/// preview is assembled beside `out` and moved into place at the end, so a
-/// failure leaves no half-written folder.
+/// exist, be empty, or be an earlier preview (which is replaced whole), and
+/// is checked before the exports are read. The preview is assembled beside
+/// `out` and moved into place at the end (a folder output of
+/// [`crate::atomic::OutputSet`]), so a failure leaves no half-written folder.
 pub fn write_preview(exports: &[PathBuf], out: &Path) -> Result<Preview> {
     if exports.is_empty() {
         return Err(Error::invalid("exports", "give at least one export folder"));
     }
+    let mut set = OutputSet::new();
+    for dir in exports {
+        set.input(dir);
+    }
+    let folder = set.folder(
+        out,
+        Replace {
+            allowed: replaceable,
+            otherwise:
+                "exists and holds files that are not an irid preview; give a new or empty folder",
+        },
+    );
+    let mut prepared = set.prepare()?;
     let mut read = Vec::new();
     for dir in exports {
         let mut export = read_export(dir)?;
@@ -64,57 +79,18 @@ pub fn write_preview(exports: &[PathBuf], out: &Path) -> Result<Preview> {
         }
         read.push(export);
     }
-    check_destination(out)?;
-
-    let parent = match out.parent() {
-        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
-        _ => PathBuf::from("."),
-    };
-    let file_name = out
-        .file_name()
-        .ok_or_else(|| Error::invalid(out.display().to_string(), "names no folder"))?;
-    let staging = parent.join(format!(
-        ".{}.partial-{}",
-        file_name.to_string_lossy(),
-        std::process::id()
-    ));
-    let result = assemble(&read, &staging).and_then(|()| {
-        if out.exists() {
-            fs::remove_dir_all(out).map_err(|e| Error::io(out, e))?;
-        }
-        fs::rename(&staging, out).map_err(|e| Error::io(out, e))
-    });
-    if result.is_err() {
-        let _ = fs::remove_dir_all(&staging);
-    }
-    result?;
+    prepared.write(folder, |staging| assemble(&read, staging))?;
+    prepared.commit()?;
     Ok(Preview {
         index: out.join("index.html"),
         exports: read.into_iter().map(|e| e.name).collect(),
     })
 }
 
-fn check_destination(out: &Path) -> Result<()> {
-    if !out.exists() {
-        return Ok(());
-    }
-    if !out.is_dir() {
-        return Err(Error::invalid(
-            out.display().to_string(),
-            "exists and is not a folder",
-        ));
-    }
-    let empty = fs::read_dir(out)
-        .map_err(|e| Error::io(out, e))?
-        .next()
-        .is_none();
-    if empty || out.join(MARKER).is_file() {
-        return Ok(());
-    }
-    Err(Error::invalid(
-        out.display().to_string(),
-        "exists and holds files that are not an irid preview; give a new or empty folder",
-    ))
+/// Whether an existing folder may be replaced: empty, or a preview.
+fn replaceable(out: &Path) -> bool {
+    let empty = fs::read_dir(out).is_ok_and(|mut d| d.next().is_none());
+    empty || out.join(MARKER).is_file()
 }
 
 fn read_export(dir: &Path) -> Result<Export> {
@@ -183,10 +159,7 @@ fn read_export(dir: &Path) -> Result<Export> {
 }
 
 fn assemble(exports: &[Export], staging: &Path) -> Result<()> {
-    if staging.exists() {
-        fs::remove_dir_all(staging).map_err(|e| Error::io(staging, e))?;
-    }
-    fs::create_dir_all(staging).map_err(|e| Error::io(staging, e))?;
+    fs::create_dir(staging).map_err(|e| Error::io(staging, e))?;
     let write =
         |path: PathBuf, bytes: &[u8]| fs::write(&path, bytes).map_err(|e| Error::io(&path, e));
     for (name, text) in ASSETS {

@@ -275,10 +275,7 @@ fn bad_input_is_one_line_and_leaves_no_directory() {
     let gain = gain.to_str().unwrap();
     std::fs::write(d.join("file"), "x").unwrap();
     let cases: [(&[&str], &[&str]); 7] = [
-        (
-            &["export", soap, "-o", "file"],
-            &["file", "not a directory"],
-        ),
+        (&["export", soap, "-o", "file"], &["file", "not a folder"]),
         (
             &["export", soap, "-o", "o", "--max-error", "1e-5"],
             &["max-error", "f16"],

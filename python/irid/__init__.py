@@ -9,11 +9,16 @@
   built-in library; ``.index(wavelengths_nm)``.
 - ``bake(stack, ...) -> Lut``: a lookup table over a layer's thickness and
   the angle, saved as OpenEXR; ``Lut.sample`` interpolates it as a renderer does.
+- ``irid.mitsuba`` (imported on its own, needs the ``mitsuba`` package): the
+  ``irid_film`` BSDF for Mitsuba 3's spectral variants.
 
-Computation runs on rayon threads with the GIL released
-(``RAYON_NUM_THREADS`` sets their number). Bad input raises ``ValueError``,
-files that cannot be read or written ``OSError``, each with the one-line
-message the ``irid`` command prints.
+Computation runs on the package's thread pool with the GIL released
+(``RAYON_NUM_THREADS`` sets its size); a fork()ed child builds its own.
+Errors carry the one-line message the ``irid`` command prints: ``TypeError``
+for an argument of a type its parameter never takes, ``ValueError`` for a
+value or content irid refuses, ``OSError`` (its subclass) for a file the
+system cannot open, read or write, ``MemoryError`` for a call above the
+memory budget (``IRID_MEMORY_LIMIT``, else half the machine's memory).
 """
 
 from ._irid import (

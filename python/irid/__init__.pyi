@@ -83,6 +83,21 @@ class Stack:
         """Rs, Rp, Ts, Tp, R, T (float64) and rs, rp, ts, tp (complex128), each
         (wavelengths, angles), or (thicknesses, wavelengths, angles) with
         ``thickness_nm`` setting layer ``layer`` (1-based)."""
+    def response(
+        self,
+        cos_theta: ArrayLike,
+        wavelength_nm: ArrayLike,
+        thickness_nm: Optional[ArrayLike] = None,
+        layer: int = 1,
+        side: str = "ambient",
+    ) -> Tuple[npt.NDArray[np.float64], npt.NDArray[np.float64]]:
+        """Unpolarized (R, T) at broadcast points, each its own wavelength;
+        side "ambient" or "substrate" (light from a lossless substrate)."""
+    def to_json(self) -> str:
+        """The stack as JSON (a table header's "stack")."""
+    @staticmethod
+    def from_json(text: str) -> Stack:
+        """A stack from the JSON of ``to_json``."""
     def color(
         self,
         angles_deg: ArrayLike,
@@ -127,6 +142,8 @@ class Lut:
         cos_theta: ArrayLike,
         wavelength_nm: Optional[ArrayLike] = None,
     ) -> Tuple[npt.NDArray[np.float32], npt.NDArray[np.float32]]:
-        """(R, T) at broadcast points: rgb tables give (..., 3) linear sRGB."""
+        """(R, T) at broadcast points: rgb tables give (..., 3) linear sRGB.
+        Coordinates beyond an axis (±inf included) take its end's value;
+        NaN raises ValueError."""
     def validate(self, points: int = 20000, seed: int = 1) -> Dict[str, Any]:
         """The table against the solver at random points, as ``irid validate --json``."""

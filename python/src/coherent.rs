@@ -8,7 +8,9 @@ use rayon::prelude::*;
 use irid::optics::{Material, Response, StackGrid, MAX_THICKNESS_NM, WAVELENGTH_RANGE_NM};
 
 use crate::arrays::{array, real_list, values};
+use crate::budget::Footprint;
 use crate::invalid;
+use crate::pool::compute;
 
 /// Checks everything the solver relies on, naming the entry at fault in
 /// tmm-faster's terms (`n[i, j]`: wavelength i, medium j; `d[j]`).
@@ -57,13 +59,7 @@ fn check(
     if let Some(a) = angles_deg.iter().find(|a| !(0.0..=90.0).contains(*a)) {
         return Err(invalid("angles", format!("{a} is outside [0, 90] degrees")));
     }
-    let (lo, hi) = WAVELENGTH_RANGE_NM;
-    if let Some(w) = wavelengths_nm.iter().find(|w| !(lo..=hi).contains(*w)) {
-        return Err(invalid(
-            "wavelengths",
-            format!("{w} nm is outside {lo:e}–{hi:e} nm"),
-        ));
-    }
+    check_wavelengths(wavelengths_nm, "wavelengths")?;
     for (i, row) in indices.chunks_exact(media).enumerate() {
         for (j, z) in row.iter().enumerate() {
             Material::constant(z.re, z.im)
@@ -92,6 +88,15 @@ fn check(
     Ok(())
 }
 
+/// Every wavelength (nm) lies in the library's range (NaN does not).
+pub fn check_wavelengths(wavelengths_nm: &[f64], what: &str) -> PyResult<()> {
+    let (lo, hi) = WAVELENGTH_RANGE_NM;
+    match wavelengths_nm.iter().find(|w| !(lo..=hi).contains(*w)) {
+        Some(w) => Err(invalid(what, format!("{w} nm is outside {lo:e}–{hi:e} nm"))),
+        None => Ok(()),
+    }
+}
+
 /// cos θ of an angle in degrees, exactly 0 at 90° (grazing incidence, where
 /// no power enters the stack) rather than cos(π/2) ≈ 6e-17.
 fn cos_deg(angle_deg: f64) -> f64 {
@@ -105,19 +110,21 @@ fn cos_deg(angle_deg: f64) -> f64 {
 /// The six results of [`solve_grid`], in the order of their keys.
 const KEYS: [&str; 6] = ["R_s", "R_p", "T_s", "T_p", "R_avg", "T_avg"];
 
-/// Solves every (wavelength, angle) pair on rayon's threads into one buffer
-/// laid out [angle][key][wavelength] (keys as [`KEYS`]), so that each key is
-/// a strided (wavelengths, angles) view of it and nothing is transposed.
+/// Solves every (wavelength, angle) pair into one buffer laid out
+/// [angle][key][wavelength] (keys as [`KEYS`]), so that each key is a
+/// strided (wavelengths, angles) view of it and nothing is transposed.
 /// Each task solves one angle over a run of wavelengths through
-/// `StackGrid::solve_spectrum` (eight or four wavelengths per vector; a run whose
-/// indices do not change with wavelength takes the non-dispersive kernel).
-/// The wavelengths are cut into runs only when there are too few angles to
-/// keep every thread busy.
+/// `StackGrid::solve_spectrum` (eight or four wavelengths per vector; a run
+/// whose indices do not change with wavelength takes the non-dispersive
+/// kernel). With `parallel`, the tasks run on the current thread pool, and
+/// the wavelengths are cut into runs when there are too few angles to keep
+/// every thread busy; without, on the calling thread, one run per angle.
 pub fn solve_grid(
     indices: &[C64],
     thicknesses_nm: &[f64],
     wavelengths_nm: &[f64],
     cos_theta0: &[f64],
+    parallel: bool,
 ) -> Vec<f64> {
     let media = thicknesses_nm.len() + 2;
     let (n_w, n_a) = (wavelengths_nm.len(), cos_theta0.len());
@@ -125,8 +132,12 @@ pub fn solve_grid(
     if out.is_empty() {
         return out;
     }
-    let tasks_wanted = 4 * rayon::current_num_threads();
-    let runs = tasks_wanted.div_ceil(n_a).clamp(1, n_w.div_ceil(MIN_RUN));
+    let runs = if parallel {
+        let tasks_wanted = 4 * rayon::current_num_threads();
+        tasks_wanted.div_ceil(n_a).clamp(1, n_w.div_ceil(MIN_RUN))
+    } else {
+        1
+    };
     let run_len = n_w.div_ceil(runs);
     let grids: Vec<StackGrid> = (0..n_w)
         .step_by(run_len)
@@ -151,9 +162,9 @@ pub fn solve_grid(
             tasks.push((cos, grid, slices));
         }
     }
-    tasks.into_par_iter().for_each_init(
-        || Vec::with_capacity(run_len),
-        |spectrum, (cos, grid, [rs, rp, ts, tp, r, t])| {
+    let solve_task =
+        |spectrum: &mut Vec<Response>,
+         (cos, grid, [rs, rp, ts, tp, r, t]): (f64, &StackGrid, [&mut [f64]; 6])| {
             spectrum.clear();
             spectrum.resize(grid.wavelengths_nm().len(), Response::default());
             grid.solve_spectrum(thicknesses_nm, cos, spectrum);
@@ -165,9 +176,35 @@ pub fn solve_grid(
                 r[w] = x.r();
                 t[w] = x.t();
             }
-        },
-    );
+        };
+    if parallel {
+        tasks
+            .into_par_iter()
+            .for_each_init(|| Vec::with_capacity(run_len), solve_task);
+    } else {
+        let mut spectrum = Vec::with_capacity(run_len);
+        for task in tasks {
+            solve_task(&mut spectrum, task);
+        }
+    }
     out
+}
+
+/// Fewest points of a `coherent` call that go to the thread pool: below,
+/// the solve (about 10 ns a point) takes less than the handoff.
+const PARALLEL_MIN_POINTS: usize = 4096;
+
+/// What `coherent` allocates beyond its converted arguments: the indices
+/// (a 1-D n repeated per wavelength, each run's copy, the grid's lane
+/// layout of n and n², 64 bytes per wavelength and medium in all), each
+/// wavelength's k0 and copy, and per angle cos θ and its tasks; the result
+/// (six f64 per point).
+fn grid_footprint(wavelengths: usize, angles: usize, media: usize) -> Footprint {
+    Footprint::new()
+        .items(&[wavelengths, media], 64)
+        .items(&[wavelengths], 16)
+        .items(&[angles], 8 + 256)
+        .items(&[angles, KEYS.len(), wavelengths], 8)
 }
 
 /// Fewest wavelengths in a run of [`solve_grid`]: enough groups of four to
@@ -201,12 +238,7 @@ pub fn coherent<'py>(
     let d = real_list(d, "d")?;
     let (mut indices, shape) = values::<C64>(n, "complex128", "n")?;
     let media = match shape.as_slice() {
-        [m] => {
-            // One set of media for every wavelength.
-            let row = indices.clone();
-            indices = row.repeat(wavelengths_nm.len());
-            *m
-        }
+        [m] => *m,
         [w, m] if *w == wavelengths_nm.len() => *m,
         _ => {
             return Err(invalid(
@@ -219,11 +251,28 @@ pub fn coherent<'py>(
             ))
         }
     };
+    grid_footprint(wavelengths_nm.len(), angles_deg.len(), media).check(&format!(
+        "{} wavelengths × {} angles × {media} media",
+        wavelengths_nm.len(),
+        angles_deg.len()
+    ))?;
+    if shape.len() == 1 {
+        // One set of media for every wavelength.
+        indices = indices.repeat(wavelengths_nm.len());
+    }
     check(&indices, media, &d, &angles_deg, &wavelengths_nm)?;
     let thicknesses_nm = &d[1..media - 1];
     let cos_theta0: Vec<f64> = angles_deg.iter().map(|&a| cos_deg(a)).collect();
-    let values =
-        py.allow_threads(|| solve_grid(&indices, thicknesses_nm, &wavelengths_nm, &cos_theta0));
+    let parallel = wavelengths_nm.len() * angles_deg.len() >= PARALLEL_MIN_POINTS;
+    let values = compute(py, parallel, || {
+        solve_grid(
+            &indices,
+            thicknesses_nm,
+            &wavelengths_nm,
+            &cos_theta0,
+            parallel,
+        )
+    })?;
     // One (angles, keys, wavelengths) array; each key is its (wavelengths,
     // angles) transposed slice, a view with no copy.
     let all = array(

@@ -3,18 +3,22 @@
 use std::path::{Path, PathBuf};
 
 use num_complex::Complex64 as C64;
+use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
-use pyo3::types::{PyComplex, PyDict, PyList, PyString, PyTuple};
+use pyo3::types::{IntoPyDict, PyComplex, PyDict, PyList, PyString, PyTuple};
 use rayon::prelude::*;
 
-use irid::color::{stack_colors, Sampling, SpectralIntegrator, White};
+use irid::color::{stack_colors, FilmColor, Sampling, SpectralIntegrator, White};
 use irid::optics::spec::{IndexSpec, MediumSpec};
 use irid::optics::{
-    library, solve, solve_amplitudes, Layer, Material, Stack, StackGrid, MAX_THICKNESS_NM,
+    library, solve, solve_amplitudes, Layer, Material, Response, Stack, StackGrid, MAX_THICKNESS_NM,
 };
 
-use crate::arrays::{array, real_list, reals};
-use crate::{invalid, py_error};
+use crate::arrays::{array, count, integer_in, real, real_list, reals};
+use crate::budget::Footprint;
+use crate::coherent::check_wavelengths;
+use crate::pool::compute;
+use crate::{invalid, py_error, wrong_type};
 
 /// A refractive-index model: a constant n + ik, a built-in material, a
 /// Cauchy or Sellmeier formula, or a table.
@@ -75,6 +79,11 @@ impl PyMaterial {
         wavelengths_nm: &Bound<'py, PyAny>,
     ) -> PyResult<Bound<'py, PyAny>> {
         let (wavelengths, shape) = reals(wavelengths_nm, "wavelengths_nm")?;
+        Footprint::new()
+            .items(&[wavelengths.len()], 16)
+            .check(&format!("wavelengths_nm: {} indices", wavelengths.len()))?;
+        // A constant index would be returned at any "wavelength", NaN too.
+        check_wavelengths(&wavelengths, "wavelengths_nm")?;
         let values = wavelengths
             .iter()
             .map(|&w| self.material.index_at(w))
@@ -123,13 +132,22 @@ fn medium(obj: &Bound<'_, PyAny>, field: &str, layer_thickness: Option<f64>) -> 
         return Ok(m.get().material.clone());
     }
     let mut spec = if let Ok(dict) = obj.downcast::<PyDict>() {
-        let json: String = obj
-            .py()
+        let py = obj.py();
+        // allow_nan=False: NaN is refused here, naming the field, rather
+        // than written as JSON that does not parse.
+        let json: String = py
             .import("json")?
             .getattr("dumps")?
-            .call1((dict,))
+            .call((dict,), Some(&[("allow_nan", false)].into_py_dict(py)?))
             .and_then(|j| j.extract())
-            .map_err(|e| invalid(field, format!("not a stack-file medium ({e})")))?;
+            .map_err(|e| {
+                let why = format!("not a stack-file medium ({e})");
+                if e.is_instance_of::<PyTypeError>(py) {
+                    wrong_type(field, why)
+                } else {
+                    invalid(field, why)
+                }
+            })?;
         let spec: MediumSpec =
             serde_json::from_str(&json).map_err(|e| invalid(field, e.to_string()))?;
         if layer_thickness.is_some() && spec.thickness_nm.is_some() {
@@ -147,13 +165,13 @@ fn medium(obj: &Bound<'_, PyAny>, field: &str, layer_thickness: Option<f64>) -> 
     } else if let Ok(z) = obj.downcast::<PyComplex>() {
         index_spec(z.real(), z.imag())
     } else if obj.is_instance_of::<pyo3::types::PyBool>() {
-        return Err(invalid(field, "a bool is not a refractive index"));
+        return Err(wrong_type(field, "a bool is not a refractive index"));
     } else if let Ok(n) = obj.extract::<f64>() {
         index_spec(n, 0.0)
     } else if let Ok((n, k)) = obj.extract::<(f64, f64)>() {
         index_spec(n, k)
     } else {
-        return Err(invalid(
+        return Err(wrong_type(
             field,
             format!(
                 "expected a number n, a pair (n, k), a complex n + kj, a material name, \
@@ -192,24 +210,18 @@ fn layer(obj: &Bound<'_, PyAny>, field: &str) -> PyResult<Layer> {
     let pair = obj
         .downcast::<PyTuple>()
         .map(|t| t.as_any().clone())
-        .or_else(|_| obj.downcast::<PyList>().map(|l| l.as_any().clone()))
-        .ok()
-        .filter(|p| p.len().ok() == Some(2));
-    let Some(pair) = pair else {
-        return Err(invalid(
+        .or_else(|_| obj.downcast::<PyList>().map(|l| l.as_any().clone()));
+    let expected = "expected (material, thickness_nm) or a dict with thickness_nm";
+    let Ok(pair) = pair else {
+        return Err(wrong_type(
             field,
-            format!(
-                "expected (material, thickness_nm) or a dict with thickness_nm, got {}",
-                obj.repr()?
-            ),
+            format!("{expected}, got {}", obj.repr()?),
         ));
     };
-    let thickness_nm: f64 = pair.get_item(1)?.extract().map_err(|_| {
-        invalid(
-            format!("{field}.thickness_nm"),
-            "must be a number (nm)".to_string(),
-        )
-    })?;
+    if pair.len()? != 2 {
+        return Err(invalid(field, format!("{expected}, got {}", obj.repr()?)));
+    }
+    let thickness_nm = real(&pair.get_item(1)?, &format!("{field}.thickness_nm"))?;
     let material = medium(&pair.get_item(0)?, field, Some(thickness_nm))?;
     Ok(Layer {
         material,
@@ -245,7 +257,7 @@ impl PyStack {
         if let Some(layers) = layers {
             for (i, item) in layers
                 .try_iter()
-                .map_err(|_| invalid("layers", "must be a list of (material, thickness_nm)"))?
+                .map_err(|_| wrong_type("layers", "must be a list of (material, thickness_nm)"))?
                 .enumerate()
             {
                 list.push(layer(&item?, &format!("layers[{}]", i + 1))?);
@@ -275,6 +287,22 @@ impl PyStack {
         Ok(PyStack {
             stack: Stack::from_toml_str(text, &base_dir, "stack").map_err(py_error)?,
         })
+    }
+
+    /// The stack as JSON text (the form a table's header records under
+    /// "stack": every material with its dispersion data), for hosts whose
+    /// scene descriptions hold only text.
+    fn to_json(&self) -> PyResult<String> {
+        serde_json::to_string(&self.stack).map_err(|e| invalid("stack", e.to_string()))
+    }
+
+    /// Reads the JSON of `to_json` (or a table header's "stack") back.
+    #[staticmethod]
+    fn from_json(text: &str) -> PyResult<Self> {
+        let stack: Stack = serde_json::from_str(text)
+            .map_err(|e| invalid("stack", format!("not a stack's JSON ({e})")))?;
+        stack.validate().map_err(py_error)?;
+        Ok(PyStack { stack })
     }
 
     #[getter]
@@ -318,14 +346,14 @@ impl PyStack {
     /// rs, rp, ts, tp (complex128; r referred to the top interface, t the
     /// ratio of the forward amplitude at the substrate's interface to the
     /// incident one, in Byrnes' tmm's convention).
-    #[pyo3(signature = (wavelengths_nm, angles_deg, thickness_nm=None, layer=1))]
+    #[pyo3(signature = (wavelengths_nm, angles_deg, thickness_nm=None, layer=None))]
     fn solve<'py>(
         &self,
         py: Python<'py>,
         wavelengths_nm: &Bound<'py, PyAny>,
         angles_deg: &Bound<'py, PyAny>,
         thickness_nm: Option<&Bound<'py, PyAny>>,
-        layer: usize,
+        layer: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<Bound<'py, PyDict>> {
         let wavelengths = real_list(wavelengths_nm, "wavelengths_nm")?;
         let angles = real_list(angles_deg, "angles_deg")?;
@@ -335,53 +363,49 @@ impl PyStack {
                 format!("{a} is outside [0, 90) degrees"),
             ));
         }
-        let thicknesses = match thickness_nm {
+        let layer = layer_number(&self.stack, layer)?;
+        let sweep = match thickness_nm {
             None => None,
+            Some(_) if self.stack.layers.is_empty() => {
+                return Err(invalid("thickness_nm", "the stack has no layer to vary"))
+            }
             Some(t) => {
                 let list = real_list(t, "thickness_nm")?;
-                check_layer(&self.stack, layer)?;
                 if let Some(t) = list.iter().find(|t| !(0.0..=MAX_THICKNESS_NM).contains(*t)) {
                     return Err(invalid(
                         "thickness_nm",
                         format!("must be finite, ≥ 0 and ≤ {MAX_THICKNESS_NM:e}, got {t}"),
                     ));
                 }
-                Some(list)
+                Some(Sweep {
+                    layer,
+                    thicknesses_nm: list,
+                })
             }
         };
-        let grid = StackGrid::new(&self.stack, &wavelengths).map_err(py_error)?;
-        let cos_theta0: Vec<f64> = angles.iter().map(|a| a.to_radians().cos()).collect();
-        let per_thickness = wavelengths.len() * angles.len();
-        let runs = thicknesses.clone().unwrap_or_else(|| vec![f64::NAN]);
-        let points = py.allow_threads(|| {
-            let mut points = vec![Point::default(); runs.len() * per_thickness];
-            points
-                .par_chunks_mut(angles.len().max(1))
-                .enumerate()
-                .for_each(|(row, out)| {
-                    let (run, i) = (
-                        row / wavelengths.len().max(1),
-                        row % wavelengths.len().max(1),
-                    );
-                    let mut d = grid.thicknesses_nm().to_vec();
-                    if thicknesses.is_some() {
-                        d[layer - 1] = runs[run];
-                    }
-                    let n = grid.indices_at(i);
-                    let wl = wavelengths[i];
-                    for (p, &c) in out.iter_mut().zip(&cos_theta0) {
-                        let r = solve(n, &d, wl, c);
-                        let a = solve_amplitudes(n, &d, wl, c);
-                        p.power = [r.rs, r.rp, r.ts, r.tp, r.r(), r.t()];
-                        p.amplitudes = [a.rs, a.rp, a.ts, a.tp];
-                    }
-                });
-            points
-        });
-        let shape: Vec<usize> = match &thicknesses {
-            Some(t) => vec![t.len(), wavelengths.len(), angles.len()],
+        let shape: Vec<usize> = match &sweep {
+            Some(s) => vec![s.thicknesses_nm.len(), wavelengths.len(), angles.len()],
             None => vec![wavelengths.len(), angles.len()],
         };
+        // The points, then their columns as arrays; the grid's indices.
+        Footprint::new()
+            .items(&shape, 2 * std::mem::size_of::<Point>() as u64)
+            .items(&[wavelengths.len(), self.stack.layers.len() + 2], 64)
+            .check(&format!(
+                "{}{} wavelengths × {} angles",
+                sweep.as_ref().map_or(String::new(), |s| format!(
+                    "{} thicknesses × ",
+                    s.thicknesses_nm.len()
+                )),
+                wavelengths.len(),
+                angles.len()
+            ))?;
+        let grid = StackGrid::new(&self.stack, &wavelengths).map_err(py_error)?;
+        let cos_theta0: Vec<f64> = angles.iter().map(|a| a.to_radians().cos()).collect();
+        let parallel = shape.iter().product::<usize>() >= SOLVE_PARALLEL_MIN_POINTS;
+        let points = compute(py, parallel, || {
+            solve_points(&grid, &cos_theta0, sweep.as_ref(), parallel)
+        })?;
         let result = PyDict::new(py);
         for (k, key) in ["Rs", "Rp", "Ts", "Tp", "R", "T"].into_iter().enumerate() {
             let column = points.iter().map(|p| p.power[k]).collect();
@@ -416,17 +440,29 @@ impl PyStack {
         let angles = real_list(angles_deg, "angles_deg")?;
         let sampling: Sampling = sampling.parse().map_err(py_error)?;
         let white: White = white.parse().map_err(py_error)?;
-        let colours = py
-            .allow_threads(|| {
-                let integrator = SpectralIntegrator::with_white(sampling, white);
-                stack_colors(&self.stack, &integrator, &angles)
-            })
-            .map_err(py_error)?;
+        let integrator = SpectralIntegrator::with_white(sampling, white);
+        let samples = integrator.wavelengths_nm().len();
+        // The responses at every (wavelength, angle), the grid's indices,
+        // and per angle its colour and the four (angles, 3) results.
+        Footprint::new()
+            .items(
+                &[samples, angles.len()],
+                std::mem::size_of::<Response>() as u64,
+            )
+            .items(&[samples, self.stack.layers.len() + 2], 64)
+            .items(
+                &[angles.len()],
+                std::mem::size_of::<FilmColor>() as u64 + 4 * 3 * 8,
+            )
+            .check(&format!("{} angles × {samples} wavelengths", angles.len()))?;
+        let colours = compute(py, false, || {
+            stack_colors(&self.stack, &integrator, &angles)
+        })?
+        .map_err(py_error)?;
         let result = PyDict::new(py);
         result.set_item("angle_deg", array(py, angles.clone(), &[angles.len()])?)?;
-        let triples = |f: fn(&irid::color::FilmColor) -> [f64; 3]| -> Vec<f64> {
-            colours.iter().flat_map(f).collect()
-        };
+        let triples =
+            |f: fn(&FilmColor) -> [f64; 3]| -> Vec<f64> { colours.iter().flat_map(f).collect() };
         let shape = [colours.len(), 3];
         result.set_item(
             "reflectance_rgb",
@@ -447,6 +483,38 @@ impl PyStack {
         Ok(result)
     }
 
+    /// Unpolarized (R, T) at arrays of points, each with its own wavelength:
+    /// what a spectral renderer asks per path vertex.
+    ///
+    /// cos_theta: cosine of the incidence angle in the medium the light
+    /// arrives through, in [0, 1]; wavelength_nm: vacuum wavelengths;
+    /// thickness_nm: the thickness of layer `layer` (1-based from the
+    /// ambient side) per point, or None for the stack's own. The arrays
+    /// broadcast together (numpy rules). side: "ambient" (light from the
+    /// ambient) or "substrate" (from a lossless substrate: the reversed
+    /// stack; past its critical angle T is 0). Returns (R, T), float64 of the
+    /// broadcast shape.
+    #[pyo3(signature = (cos_theta, wavelength_nm, thickness_nm=None, layer=None, side="ambient"))]
+    fn response<'py>(
+        &self,
+        py: Python<'py>,
+        cos_theta: &Bound<'py, PyAny>,
+        wavelength_nm: &Bound<'py, PyAny>,
+        thickness_nm: Option<&Bound<'py, PyAny>>,
+        layer: Option<&Bound<'py, PyAny>>,
+        side: &str,
+    ) -> PyResult<Bound<'py, PyTuple>> {
+        crate::response::response(
+            py,
+            &self.stack,
+            thickness_nm,
+            cos_theta,
+            wavelength_nm,
+            layer,
+            side,
+        )
+    }
+
     fn __repr__(&self) -> String {
         let layers: Vec<String> = self
             .stack
@@ -463,16 +531,73 @@ impl PyStack {
     }
 }
 
-/// `layer` must name one of the stack's layers (1-based).
-pub fn check_layer(stack: &Stack, layer: usize) -> PyResult<()> {
+/// The `layer` argument (1 when not given): for a stack with layers, one
+/// of them, counted from 1 at the ambient side; any integer ≥ 0 for a stack
+/// without (the library ignores it).
+pub fn layer_number(stack: &Stack, layer: Option<&Bound<'_, PyAny>>) -> PyResult<usize> {
     let n = stack.layers.len();
-    if !(1..=n).contains(&layer) {
+    let Some(obj) = layer else { return Ok(1) };
+    if n == 0 {
+        return count(obj, "layer");
+    }
+    // Any integer, however large or negative, then the library's words for
+    // one that is not a layer.
+    let layer = integer_in(obj, "layer", i128::MIN..=i128::MAX)?;
+    if !(1..=n as i128).contains(&layer) {
         return Err(invalid(
             "layer",
             format!("must be between 1 and {n} (the stack's layers), got {layer}"),
         ));
     }
-    Ok(())
+    Ok(layer as usize)
+}
+
+/// Thicknesses (nm) swept over one layer (1-based).
+struct Sweep {
+    layer: usize,
+    thicknesses_nm: Vec<f64>,
+}
+
+/// Fewest points of a `Stack.solve` call that go to the thread pool:
+/// below, the solve (about 0.2 µs a point) takes less than the handoff.
+const SOLVE_PARALLEL_MIN_POINTS: usize = 256;
+
+/// R, T and the amplitudes at every (thickness of the sweep, wavelength of
+/// the grid, angle) point, angles fastest: a row of angles per task on the
+/// current thread pool when `parallel`, else on this thread.
+fn solve_points(
+    grid: &StackGrid,
+    cos_theta0: &[f64],
+    sweep: Option<&Sweep>,
+    parallel: bool,
+) -> Vec<Point> {
+    let wavelengths = grid.wavelengths_nm();
+    let runs = sweep.map_or(1, |s| s.thicknesses_nm.len());
+    let mut points = vec![Point::default(); runs * wavelengths.len() * cos_theta0.len()];
+    let fill_row = |(row, out): (usize, &mut [Point])| {
+        let (run, i) = (row / wavelengths.len(), row % wavelengths.len());
+        let mut d = grid.thicknesses_nm().to_vec();
+        if let Some(s) = sweep {
+            d[s.layer - 1] = s.thicknesses_nm[run];
+        }
+        let n = grid.indices_at(i);
+        for (p, &c) in out.iter_mut().zip(cos_theta0) {
+            let r = solve(n, &d, wavelengths[i], c);
+            let a = solve_amplitudes(n, &d, wavelengths[i], c);
+            p.power = [r.rs, r.rp, r.ts, r.tp, r.r(), r.t()];
+            p.amplitudes = [a.rs, a.rp, a.ts, a.tp];
+        }
+    };
+    let row_len = cos_theta0.len().max(1);
+    if parallel {
+        points
+            .par_chunks_mut(row_len)
+            .enumerate()
+            .for_each(fill_row);
+    } else {
+        points.chunks_mut(row_len).enumerate().for_each(fill_row);
+    }
+    points
 }
 
 #[derive(Clone, Copy, Default)]

@@ -1,5 +1,6 @@
-"""Bad input raises ValueError (OSError for files) with the CLI's one-line
-message, never a crash."""
+"""Bad input raises the documented exception with the CLI's one-line message,
+never a crash (test_error_types.py holds the type of every entry point's
+errors)."""
 
 import math
 
@@ -73,24 +74,24 @@ def test_bad_stack_file_raises_the_cli_message(tmp_path, irid_cli, text):
 
 
 @pytest.mark.parametrize(
-    "kwargs, needle",
+    "kwargs, error, needle",
     [
-        ({"ambient": (1.0, 0.2)}, "ambient: must be lossless"),
-        ({"substrate": (1.5, -0.1)}, "substrate: gain"),
-        ({"layers": [("unobtainium", 10)]}, "layers[1].material: unknown material 'unobtainium'"),
-        ({"layers": [(1.5, -3)]}, "layers[1].thickness_nm"),
-        ({"layers": [1.5]}, "layers[1]: expected (material, thickness_nm)"),
-        ({"layers": [{"n": 1.5}]}, "layers[1].thickness_nm: missing"),
-        ({"layers": [({"cauchy": [1.0]}, 10)]}, "layers[1].cauchy"),
-        ({"layers": [({"n": 1.5, "material": "gold"}, 10)]}, "give exactly one of"),
-        ({"layers": [({"colour": "red"}, 10)]}, "unknown field"),
-        ({"substrate": {"table": "/nonexistent/x.csv"}}, "substrate.table"),
-        ({"substrate": True}, "bool"),
-        ({"substrate": object()}, "expected a number"),
+        ({"ambient": (1.0, 0.2)}, ValueError, "ambient: must be lossless"),
+        ({"substrate": (1.5, -0.1)}, ValueError, "substrate: gain"),
+        ({"layers": [("unobtainium", 10)]}, ValueError, "layers[1].material: unknown material 'unobtainium'"),
+        ({"layers": [(1.5, -3)]}, ValueError, "layers[1].thickness_nm"),
+        ({"layers": [1.5]}, TypeError, "layers[1]: expected (material, thickness_nm)"),
+        ({"layers": [{"n": 1.5}]}, ValueError, "layers[1].thickness_nm: missing"),
+        ({"layers": [({"cauchy": [1.0]}, 10)]}, ValueError, "layers[1].cauchy"),
+        ({"layers": [({"n": 1.5, "material": "gold"}, 10)]}, ValueError, "give exactly one of"),
+        ({"layers": [({"colour": "red"}, 10)]}, ValueError, "unknown field"),
+        ({"substrate": {"table": "/nonexistent/x.csv"}}, FileNotFoundError, "substrate.table"),
+        ({"substrate": True}, TypeError, "bool"),
+        ({"substrate": object()}, TypeError, "expected a number"),
     ],
 )
-def test_bad_stack_arguments(kwargs, needle):
-    with pytest.raises(ValueError) as e:
+def test_bad_stack_arguments(kwargs, error, needle):
+    with pytest.raises(error) as e:
         irid.Stack(**kwargs)
     assert needle in str(e.value)
 

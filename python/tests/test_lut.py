@@ -66,6 +66,46 @@ def test_sample_broadcasts(table):
     np.testing.assert_array_equal(r[3, 2], r1)
 
 
+def test_sample_broadcasts_as_numpy_including_strided_views(table):
+    rng = np.random.default_rng(11)
+    t = rng.uniform(0, 1000, (4, 1, 3))
+    c = rng.uniform(0.1, 1.0, (10, 2))[::2, :1]  # a strided (5, 1) view
+    r, tr = table.sample(t, c)
+    assert r.shape == (4, 5, 3, 3)
+    tb, cb = np.broadcast_arrays(t, c)
+    want_r, want_t = table.sample(tb.ravel().copy(), cb.ravel().copy())
+    np.testing.assert_array_equal(r.reshape(-1, 3), want_r)
+    np.testing.assert_array_equal(tr.reshape(-1, 3), want_t)
+    # A transposed (Fortran-ordered) array is read in its logical order.
+    grid = rng.uniform(0, 1000, (3, 6))
+    np.testing.assert_array_equal(table.sample(grid.T, 0.5)[0], table.sample(grid.T.copy(), 0.5)[0])
+    with pytest.raises(ValueError, match=r"do not broadcast together \(shapes \[\[4, 1, 3\], \[2\]\]\)"):
+        table.sample(t, [0.5, 0.6])
+
+
+def test_nan_coordinates_raise_naming_the_argument_and_position(table):
+    t = np.full((2, 3), 100.0)
+    t[1, 2] = np.nan
+    with pytest.raises(ValueError, match=r"^thickness_nm\[1, 2\]: NaN is not a coordinate$"):
+        table.sample(t, 1.0)
+    # After broadcasting: cos θ NaN at [0] is NaN at every thickness of row 0.
+    with pytest.raises(ValueError, match=r"^cos_theta\[0, 0\]: NaN"):
+        table.sample(np.zeros((1, 4)), [[np.nan], [1.0]])
+    with pytest.raises(ValueError, match=r"^cos_theta: NaN"):
+        table.sample(100.0, np.nan)
+
+
+def test_infinite_coordinates_clamp_to_the_axis_ends_as_any_value_beyond_them(table):
+    axes = {a["name"]: a["nodes"] for a in table.header["axes"]}
+    (t0, t1), (c0, c1) = [(axes[k][0], axes[k][-1]) for k in ["thickness_nm", "cos_theta"]]
+    inf = np.inf
+    got = table.sample([inf, -inf, 1e300, 300.0, 300.0, 300.0], [0.5, 0.5, 0.5, inf, -inf, -1e300])
+    want = table.sample([t1, t0, t1, 300.0, 300.0, 300.0], [0.5, 0.5, 0.5, c1, c0, c0])
+    for g, w in zip(got, want):
+        np.testing.assert_array_equal(g, w)
+        assert np.isfinite(g).all()
+
+
 def test_nodes_hold_the_exact_colour(table, soap):
     axes = {a["name"]: a["nodes"] for a in table.header["axes"]}
     for ti in [0, 17, 95]:
@@ -133,3 +173,8 @@ def test_spectral_table(soap):
     # ref: (thickness, wavelength, angle) -> (thickness, angle, wavelength)
     np.testing.assert_allclose(r, ref["R"].transpose(0, 2, 1), atol=1e-6)
     np.testing.assert_allclose(tr, ref["T"].transpose(0, 2, 1), atol=1e-6)
+    # Wavelengths clamp at the axis's ends, ±inf included; NaN raises.
+    for beyond, end in [(np.inf, w[-1]), (-np.inf, w[0]), (1e6, w[-1])]:
+        np.testing.assert_array_equal(lut.sample(300.0, 0.7, beyond), lut.sample(300.0, 0.7, end))
+    with pytest.raises(ValueError, match=r"^wavelength_nm\[1\]: NaN"):
+        lut.sample(300.0, 0.7, [500.0, np.nan])

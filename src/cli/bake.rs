@@ -5,6 +5,7 @@ use std::process::ExitCode;
 use std::time::Instant;
 
 use anyhow::{anyhow, bail, Context, Result};
+use irid::atomic::OutputSet;
 use irid::lut::{
     bake_with_progress, validate, BakeSpec, Kind, Layout, Resolution, VALIDATION_SEED,
 };
@@ -107,6 +108,11 @@ pub fn run(args: Args) -> Result<ExitCode> {
     // Flag errors first; what fails after them comes from the stack (a
     // material undefined at some wavelength), so name its file.
     spec.validate()?;
+    // The table's path is checked before the bake, not after it.
+    let mut outputs = OutputSet::new();
+    outputs.input(&args.film.stack);
+    let table = outputs.file(&args.output);
+    let mut outputs = outputs.prepare()?;
     let bar = super::render::progress_bar("baking {bar:40} {percent:>3}% {elapsed}");
     let started = Instant::now();
     let mut lut = bake_with_progress(&spec, &|f| {
@@ -172,7 +178,8 @@ pub fn run(args: Args) -> Result<ExitCode> {
         );
         super::validate::print_stats(stats);
     }
-    lut.write(&args.output)?;
+    outputs.write(table, |tmp| lut.write_to(tmp, &args.output))?;
+    outputs.commit()?;
     let bytes = std::fs::metadata(&args.output)
         .with_context(|| args.output.display().to_string())?
         .len();

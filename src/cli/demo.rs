@@ -3,10 +3,11 @@
 //! against the direct transfer-matrix reference; then time the paper's
 //! timing scene in LUT and direct mode and without its film.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
-use anyhow::{Context, Result};
+use anyhow::Result;
+use irid::atomic::{Output, OutputSet, Prepared};
 use irid::color::Sampling;
 use irid::render::film::bare_reflectance;
 use irid::render::material::Material;
@@ -16,7 +17,8 @@ use super::render::{timed, with_threads};
 
 #[derive(clap::Args)]
 pub struct Args {
-    /// Where the images go.
+    /// Where the images go; made if missing (its parent must exist). They
+    /// appear there together when the demo has finished.
     #[arg(long, default_value = "out")]
     pub out: PathBuf,
     /// Where baked tables are cached [default: $IRID_CACHE_DIR, else the
@@ -39,12 +41,54 @@ pub fn run(args: Args) -> Result<ExitCode> {
             args.reference_scale
         );
     }
-    std::fs::create_dir_all(&args.out)
-        .with_context(|| format!("cannot create {}", args.out.display()))?;
-    with_threads(args.threads, || run_all(&args))?
+    let mut images = Images::prepare(&args.out)?;
+    let code = with_threads(args.threads, || run_all(&args, &mut images))??;
+    images.set.commit()?;
+    Ok(code)
 }
 
-fn run_all(args: &Args) -> Result<ExitCode> {
+/// Every image the demo writes, checked before the first bake: each
+/// scene's table render and direct reference in `--out` (made if missing).
+/// They appear together when the demo has finished.
+struct Images {
+    set: Prepared,
+    /// Per scene: the table render's and the reference's path and output.
+    scenes: Vec<[(PathBuf, Output); 2]>,
+}
+
+impl Images {
+    fn prepare(out: &Path) -> Result<Images> {
+        let mut set = OutputSet::new();
+        set.new_folder(out);
+        let mut file = |name: String| {
+            let path = out.join(name);
+            let output = set.file(&path);
+            (path, output)
+        };
+        let scenes = builtin_names()
+            .into_iter()
+            .map(|name| {
+                [
+                    file(format!("{name}.png")),
+                    file(format!("{name}.direct.png")),
+                ]
+            })
+            .collect();
+        Ok(Images {
+            set: set.prepare()?,
+            scenes,
+        })
+    }
+
+    /// Writes the `k`-th built-in scene's table render (`which` 0) or
+    /// reference (1).
+    fn write(&mut self, k: usize, which: usize, image: &render::Image) -> Result<()> {
+        let (path, output) = &self.scenes[k][which];
+        Ok(self.set.write(*output, image.png_writer(path))?)
+    }
+}
+
+fn run_all(args: &Args, images: &mut Images) -> Result<ExitCode> {
     let cache = super::render::cache_dir(args.cache.as_deref())?;
     let lut = FilmMode::lut(&cache);
     println!(
@@ -59,8 +103,10 @@ fn run_all(args: &Args) -> Result<ExitCode> {
         "{:<18} {:>9} {:>9} {:>10} {:>9} {:>11} {:>10} {:>9}",
         "scene", "size", "bake s", "render s", "ref size", "direct s", "dE00 mean", "dE00 p99"
     );
-    for name in builtin_names() {
-        render_and_compare(name, args, &lut)?;
+    for (k, name) in builtin_names().into_iter().enumerate() {
+        render_and_compare(name, args, &lut, |which, image| {
+            images.write(k, which, image)
+        })?;
     }
     println!(
         "(bake s is 0 when every table came from the cache in {})",
@@ -70,10 +116,16 @@ fn run_all(args: &Args) -> Result<ExitCode> {
     Ok(ExitCode::SUCCESS)
 }
 
-/// Renders the built-in scene `name` with tables into `args.out`, then at
-/// the reference scale both by direct exact evaluation and with tables, and
-/// prints a table row: times and the colour error between the two.
-fn render_and_compare(name: &str, args: &Args, lut: &FilmMode) -> Result<()> {
+/// Renders the built-in scene `name` with tables, then at the reference
+/// scale both by direct exact evaluation and with tables, and prints a
+/// table row: times and the colour error between the two. `write` gets the
+/// table render as image 0 and the direct reference as image 1.
+fn render_and_compare(
+    name: &str,
+    args: &Args,
+    lut: &FilmMode,
+    mut write: impl FnMut(usize, &render::Image) -> Result<()>,
+) -> Result<()> {
     let exact = FilmMode::Direct {
         sampling: Sampling::Exact,
     };
@@ -82,14 +134,14 @@ fn render_and_compare(name: &str, args: &Args, lut: &FilmMode) -> Result<()> {
     let opts = RenderOptions::new(lut.clone());
     let films = render::prepare_films(&scene, lut)?;
     let (image, render_s) = timed(|| render::render_with(&scene, &films, &opts));
-    image.write_png(&args.out.join(format!("{name}.png")))?;
+    write(0, &image)?;
 
     let mut small = RenderOptions::new(exact.clone());
     small.width = Some(((f64::from(s.width) * args.reference_scale).round() as u32).max(1));
     small.height = Some(((f64::from(s.height) * args.reference_scale).round() as u32).max(1));
     let direct_films = render::prepare_films(&scene, &exact)?;
     let (reference, direct_s) = timed(|| render::render_with(&scene, &direct_films, &small));
-    reference.write_png(&args.out.join(format!("{name}.direct.png")))?;
+    write(1, &reference)?;
     small.film = lut.clone();
     let lut_small = render::render_with(&scene, &films, &small);
     let de = lut_small.delta_e2000(&reference)?;

@@ -6,8 +6,9 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Instant;
 
-use anyhow::{anyhow, Context, Result};
-use irid::export::{export, write_dir, ExportSpec};
+use anyhow::{Context, Result};
+use irid::atomic::OutputSet;
+use irid::export::{declare_dir, export, fill_dir, ExportSpec};
 use irid::optics::Stack;
 
 use super::args::{parse_choice, FilmArgs};
@@ -64,12 +65,11 @@ pub fn run(args: Args) -> Result<ExitCode> {
     spec.points = args.points;
     spec.png = args.png;
     spec.validate()?;
-    if args.output.exists() && !args.output.is_dir() {
-        return Err(anyhow!(
-            "{}: exists and is not a directory",
-            args.output.display()
-        ));
-    }
+    // The folder's path is checked before the export is computed.
+    let mut outputs = OutputSet::new();
+    outputs.input(&args.film.stack);
+    let folder = declare_dir(&mut outputs, &args.output);
+    let mut outputs = outputs.prepare()?;
     let quiet = args.quiet;
     // The sizes tried, as they are measured, when someone watches.
     let watch =
@@ -81,7 +81,8 @@ pub fn run(args: Args) -> Result<ExitCode> {
         }
     })
     .with_context(|| args.film.stack.display().to_string())?;
-    write_dir(&result, &args.output)?;
+    fill_dir(&result, &mut outputs, folder)?;
+    outputs.commit()?;
     if !quiet {
         let e = &result.error;
         let m = &result.mapping;

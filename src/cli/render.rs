@@ -6,6 +6,7 @@ use std::process::ExitCode;
 use std::time::Instant;
 
 use anyhow::{bail, Context, Result};
+use irid::atomic::{Output, OutputSet, Prepared};
 use irid::color::Sampling;
 use irid::render::{self, scene_file, FilmMode, PreparedFilms, RenderOptions, Scene};
 
@@ -109,7 +110,6 @@ pub fn run(args: Args) -> Result<ExitCode> {
     };
     let scene = Scene::load_named(&args.scene)?;
     check_size_flags(&args)?;
-    let output = checked_output(&args, &scene)?;
     let mut opts = RenderOptions::new(mode);
     opts.width = args.width;
     opts.height = args.height;
@@ -117,15 +117,55 @@ pub fn run(args: Args) -> Result<ExitCode> {
     opts.max_depth = args.max_depth;
     opts.seed = args.seed;
     render::check_image_size(&scene, &opts)?;
+    let mut outputs = Outputs::prepare(&args, &scene)?;
 
     let (films, image, render_s) = with_threads(args.threads, || render_with_bar(&scene, &opts))??;
-    image.write_outputs(&output, args.exr.as_deref())?;
+    outputs
+        .set
+        .write(outputs.png, image.png_writer(&outputs.png_path))?;
+    if let (Some(exr), Some(path)) = (outputs.exr, &args.exr) {
+        outputs.set.write(exr, image.exr_writer(path))?;
+    }
+    outputs.set.commit()?;
     print_summary(&scene, &films, &opts, &image, render_s, args.threads);
-    println!("wrote   {}", output.display());
+    println!("wrote   {}", outputs.png_path.display());
     if let Some(exr) = &args.exr {
         println!("wrote   {}", exr.display());
     }
     Ok(ExitCode::SUCCESS)
+}
+
+/// The PNG (`-o`, else out/SCENE.png, making out/) and the EXR if asked,
+/// checked before the render rather than after it.
+struct Outputs {
+    set: Prepared,
+    png_path: PathBuf,
+    png: Output,
+    exr: Option<Output>,
+}
+
+impl Outputs {
+    fn prepare(args: &Args, scene: &Scene) -> Result<Outputs> {
+        let mut set = OutputSet::new();
+        let png_path = match &args.output {
+            Some(p) => p.clone(),
+            None => {
+                set.new_folder("out");
+                PathBuf::from("out").join(format!("{}.png", file_stem(&scene.name)))
+            }
+        };
+        if Path::new(&args.scene).is_file() {
+            set.input(&args.scene);
+        }
+        let png = set.file(&png_path);
+        let exr = args.exr.as_ref().map(|p| set.file(p));
+        Ok(Outputs {
+            set: set.prepare()?,
+            png_path,
+            png,
+            exr,
+        })
+    }
 }
 
 /// `--width`, `--height`, `--spp` and `--max-depth` within what a scene
@@ -150,35 +190,6 @@ fn check_size_flags(args: &Args) -> Result<()> {
         }
     }
     Ok(())
-}
-
-/// The PNG's path (`-o`, else out/SCENE.png, creating out/), refused
-/// before a long render rather than after it when it and `--exr` name one
-/// file or either's directory is missing.
-fn checked_output(args: &Args, scene: &Scene) -> Result<PathBuf> {
-    let output = match &args.output {
-        Some(p) => p.clone(),
-        None => {
-            std::fs::create_dir_all("out").context("cannot create out/")?;
-            PathBuf::from("out").join(format!("{}.png", file_stem(&scene.name)))
-        }
-    };
-    if let Some(exr) = &args.exr {
-        if same_file(&output, exr) {
-            bail!(
-                "-o {} and --exr {}: the PNG and the EXR must be different files",
-                output.display(),
-                exr.display()
-            );
-        }
-    }
-    for path in std::iter::once(&output).chain(args.exr.as_ref()) {
-        let dir = path.parent().filter(|d| !d.as_os_str().is_empty());
-        if dir.is_some_and(|d| !d.is_dir()) {
-            bail!("{}: output directory does not exist", path.display());
-        }
-    }
-    Ok(output)
 }
 
 /// Prepares the films and renders, with a progress bar on a terminal.
@@ -243,20 +254,6 @@ fn print_summary(
         render_s,
         threads.unwrap_or_else(rayon::current_num_threads)
     );
-}
-
-/// Whether two output paths name the same file (the same name in the same
-/// directory, however spelled).
-fn same_file(a: &Path, b: &Path) -> bool {
-    let key = |p: &Path| {
-        let dir = p.parent().filter(|d| !d.as_os_str().is_empty());
-        let dir = dir.unwrap_or(Path::new("."));
-        (
-            dir.canonicalize().unwrap_or(dir.to_path_buf()),
-            p.file_name().map(|n| n.to_os_string()),
-        )
-    };
-    key(a) == key(b)
 }
 
 /// A scene name made safe as a file name.

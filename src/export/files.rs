@@ -1,8 +1,9 @@
 //! The export directory: two RGBA half-float OpenEXR textures, optional
 //! 16-bit PNGs, film.json and the shaders, written into a temporary
-//! directory beside the target and renamed into place.
+//! directory beside the target and renamed into place (a folder output of
+//! [`crate::atomic::OutputSet`]).
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use exr::prelude::{
     AnyChannel, AnyChannels, Encoding, FlatSamples, Image, Layer, LayerAttributes, SmallVec,
@@ -12,6 +13,7 @@ use serde_json::json;
 
 use super::mapping::{Texture, PARAM_NAMES};
 use super::{Export, SHADERS};
+use crate::atomic::{Output, OutputSet, Prepared, Replace};
 use crate::error::{Error, Result};
 
 /// film.json's `format` and `version`.
@@ -184,48 +186,35 @@ pub fn film_json(export: &Export) -> serde_json::Value {
 }
 
 /// Writes the export into `dir`, atomically: every file goes into a
-/// temporary directory beside it, which then takes `dir`'s place. An
-/// existing `dir` is replaced only when it is empty or an earlier export
-/// (it holds a film.json of this format): anything else is refused rather
-/// than deleted.
+/// temporary directory beside it, which then takes `dir`'s place (see
+/// [`crate::atomic`]). An existing `dir` is replaced only when it is empty
+/// or an earlier export (it holds a film.json of this format): anything
+/// else is refused rather than deleted.
 pub fn write_dir(export: &Export, dir: &Path) -> Result<()> {
-    let name = dir
-        .file_name()
-        .ok_or_else(|| Error::invalid(dir.display().to_string(), "not a directory path"))?
-        .to_string_lossy()
-        .into_owned();
-    let parent = match dir.parent() {
-        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
-        _ => PathBuf::from("."),
-    };
-    if dir.exists() && !dir.is_dir() {
-        return Err(Error::invalid(
-            dir.display().to_string(),
-            "exists and is not a directory",
-        ));
-    }
-    if dir.is_dir() && !replaceable(dir) {
-        return Err(Error::invalid(
-            dir.display().to_string(),
-            "exists and is neither empty nor an irid export; choose another -o or remove it",
-        ));
-    }
-    if !parent.is_dir() {
-        return Err(Error::io(
-            dir,
-            std::io::Error::new(
-                std::io::ErrorKind::NotFound,
-                "its parent directory does not exist",
-            ),
-        ));
-    }
-    let tmp = parent.join(format!(".{name}.tmp.{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&tmp);
-    let result = fill(export, &tmp).and_then(|()| replace_dir(&tmp, dir));
-    if result.is_err() {
-        let _ = std::fs::remove_dir_all(&tmp);
-    }
-    result
+    let mut set = OutputSet::new();
+    let output = declare_dir(&mut set, dir);
+    let mut prepared = set.prepare()?;
+    fill_dir(export, &mut prepared, output)?;
+    prepared.commit()
+}
+
+/// Declares `dir` as an export folder of `set`, so that its path is
+/// checked before the export is computed; [`fill_dir`] writes it.
+pub fn declare_dir(set: &mut OutputSet, dir: &Path) -> Output {
+    set.folder(
+        dir,
+        Replace {
+            allowed: replaceable,
+            otherwise:
+                "exists and is neither empty nor an irid export; choose another -o or remove it",
+        },
+    )
+}
+
+/// Writes the export into its folder of a prepared set, to appear when the
+/// set commits.
+pub fn fill_dir(export: &Export, prepared: &mut Prepared, output: Output) -> Result<()> {
+    prepared.write(output, |tmp| fill(export, tmp))
 }
 
 /// Whether an existing directory may be replaced: empty, or an export.
@@ -255,53 +244,4 @@ fn fill(export: &Export, tmp: &Path) -> Result<()> {
         std::fs::write(&path, text).map_err(|e| Error::io(&path, e))?;
     }
     Ok(())
-}
-
-/// Puts the finished `tmp` at `dir`. A new `dir` is a plain rename. An
-/// existing one is swapped with `tmp` in one step where the system can
-/// (Linux renameat2 with RENAME_EXCHANGE), else moved aside first; either
-/// way `dir` is at every moment the old export or the new one, never a mix.
-fn replace_dir(tmp: &Path, dir: &Path) -> Result<()> {
-    if !dir.exists() {
-        return std::fs::rename(tmp, dir).map_err(|e| Error::io(dir, e));
-    }
-    #[cfg(target_os = "linux")]
-    if exchange(tmp, dir) {
-        let _ = std::fs::remove_dir_all(tmp);
-        return Ok(());
-    }
-    let aside = tmp.with_extension("old");
-    let _ = std::fs::remove_dir_all(&aside);
-    std::fs::rename(dir, &aside).map_err(|e| Error::io(dir, e))?;
-    if let Err(e) = std::fs::rename(tmp, dir) {
-        let _ = std::fs::rename(&aside, dir);
-        return Err(Error::io(dir, e));
-    }
-    let _ = std::fs::remove_dir_all(&aside);
-    Ok(())
-}
-
-/// Swaps two paths atomically (renameat2 RENAME_EXCHANGE); false when the
-/// system or file system does not support it.
-#[cfg(target_os = "linux")]
-fn exchange(a: &Path, b: &Path) -> bool {
-    use std::os::unix::ffi::OsStrExt;
-    let (Ok(a), Ok(b)) = (
-        std::ffi::CString::new(a.as_os_str().as_bytes()),
-        std::ffi::CString::new(b.as_os_str().as_bytes()),
-    ) else {
-        return false;
-    };
-    // SAFETY: both arguments are valid NUL-terminated paths that outlive the
-    // call; AT_FDCWD resolves them like open(2) would.
-    let rc = unsafe {
-        libc::renameat2(
-            libc::AT_FDCWD,
-            a.as_ptr(),
-            libc::AT_FDCWD,
-            b.as_ptr(),
-            libc::RENAME_EXCHANGE,
-        )
-    };
-    rc == 0
 }

@@ -13,7 +13,7 @@
 mod files;
 mod mapping;
 
-pub use files::{write_dir, FILM_FORMAT, FILM_VERSION};
+pub use files::{declare_dir, fill_dir, write_dir, FILM_FORMAT, FILM_VERSION};
 pub use mapping::{AngleWarp, Mapping, Texture, PARAM_NAMES};
 
 use rand::{Rng, SeedableRng};

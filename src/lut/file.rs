@@ -42,6 +42,12 @@ impl Lut {
     /// directory, then renamed over `path`, so an interrupted write never
     /// leaves a partial table behind.
     pub fn write(&self, path: &Path) -> Result<()> {
+        crate::atomic::write_with(path, |tmp| self.write_to(tmp, path))
+    }
+
+    /// Writes the table's file at `tmp` (an output's temporary, see
+    /// [`crate::atomic::OutputSet`]); errors name `path`, the output.
+    pub fn write_to(&self, tmp: &Path, path: &Path) -> Result<()> {
         let header = self.header();
         let channels = header.channel_names();
         let width = match &header.atlas {
@@ -80,12 +86,9 @@ impl Lut {
             AnyChannels::sort(list),
         );
         let image = Image::from_layer(layer);
-
-        crate::atomic::write_with(path, |tmp| {
-            image.write().to_file(tmp).map_err(|e| match e {
-                exr::error::Error::Io(io) => Error::io(path, io),
-                other => Error::malformed(path, format!("cannot write OpenEXR: {other}")),
-            })
+        image.write().to_file(tmp).map_err(|e| match e {
+            exr::error::Error::Io(io) => Error::io(path, io),
+            other => Error::malformed(path, format!("cannot write OpenEXR: {other}")),
         })
     }
 
@@ -100,8 +103,14 @@ impl Lut {
         if let Err(e) = std::fs::metadata(path) {
             return Err(Error::io(path, e));
         }
-        let meta = MetaData::read_from_file(path, false)
-            .map_err(|e| bad(format!("not a readable OpenEXR file: {e}")))?;
+        let meta = MetaData::read_from_file(path, false).map_err(|e| match e {
+            // The system refusing the file (a folder, no permission) is an
+            // I/O error; a file that ends too soon is malformed.
+            exr::error::Error::Io(io) if io.kind() != std::io::ErrorKind::UnexpectedEof => {
+                Error::io(path, io)
+            }
+            e => bad(format!("not a readable OpenEXR file: {e}")),
+        })?;
         let exr_header = meta
             .headers
             .first()

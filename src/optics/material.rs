@@ -309,7 +309,7 @@ impl IndexTable {
     /// on different wavelength grids are merged on the union of both grids,
     /// each interpolated linearly, over the range they share.
     pub fn load_csv(path: &Path) -> Result<Self> {
-        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+        let text = crate::limits::read_text(path)?;
         Self::parse_csv(&text, &path.display().to_string())
     }
 

@@ -241,7 +241,7 @@ impl MediumSpec {
         } else if let Some(path) = &self.table {
             let full = base_dir.join(path);
             let table = IndexTable::load_csv(&full)
-                .map_err(|e| Error::invalid(sub("table"), e.to_string()))?;
+                .map_err(|e| e.within(&sub("table"), |what, why| Error::invalid(what, why)))?;
             Material {
                 name: path.display().to_string(),
                 dispersion: Dispersion::Table(table),
@@ -255,7 +255,7 @@ impl MediumSpec {
 impl Stack {
     /// Reads a stack file; table paths inside it are relative to its folder.
     pub fn load(path: &Path) -> Result<Stack> {
-        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+        let text = crate::limits::read_text(path)?;
         let base_dir = path.parent().unwrap_or(Path::new(""));
         Stack::from_toml_str(&text, base_dir, &path.display().to_string())
     }
@@ -265,7 +265,7 @@ impl Stack {
         let spec: StackSpec =
             toml::from_str(text).map_err(|e| crate::error::toml_error(origin, &e, text))?;
         spec.resolve(base_dir)
-            .map_err(|e| Error::malformed(origin, e.to_string()))
+            .map_err(|e| e.within(origin, |origin, why| Error::malformed(origin, why)))
     }
 }
 

@@ -31,7 +31,9 @@ impl Image {
         crate::atomic::write_set(outputs)
     }
 
-    fn png_writer<'a>(&'a self, path: &'a Path) -> impl FnOnce(&Path) -> Result<()> + 'a {
+    /// Writes the PNG at a temporary path (see [`crate::atomic::OutputSet`]);
+    /// errors name `path`, the output.
+    pub fn png_writer<'a>(&'a self, path: &'a Path) -> impl FnOnce(&Path) -> Result<()> + 'a {
         move |tmp| {
             let mut bytes = Vec::with_capacity(self.pixels.len() * 3);
             for p in &self.pixels {
@@ -49,7 +51,8 @@ impl Image {
         }
     }
 
-    fn exr_writer<'a>(&'a self, path: &'a Path) -> impl FnOnce(&Path) -> Result<()> + 'a {
+    /// Writes the EXR at a temporary path; errors name `path`, the output.
+    pub fn exr_writer<'a>(&'a self, path: &'a Path) -> impl FnOnce(&Path) -> Result<()> + 'a {
         move |tmp| {
             let w = self.width as usize;
             exr::prelude::write_rgb_file(tmp, w, self.height as usize, |x, y| {
