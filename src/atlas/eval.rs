@@ -79,8 +79,10 @@ impl Film {
             .collect())
     }
 
-    /// Exact values at scattered (thickness nm, cos θ) points.
-    pub fn points(&self, points: &[(f64, f64)]) -> Vec<[f64; 6]> {
+    /// Exact values at scattered (thickness nm, cos θ) points (with more
+    /// points per nanometre where the film's fringes are narrower than the
+    /// integration's step, as at the nodes of [`Self::rows`]).
+    pub fn points(&self, points: &[(f64, f64)]) -> Result<Vec<[f64; 6]>> {
         let grid = &self.prep.stack_grid;
         let layer = self.prep.layer;
         points
@@ -89,12 +91,24 @@ impl Film {
                 || grid.thicknesses_nm().to_vec(),
                 |thick, &(d, c)| {
                     thick[layer - 1] = d;
-                    let sums = grid.weighted_spectrum(thick, c, &self.weights);
+                    let sums = match &self.prep.refined {
+                        Some(r) => r
+                            .criterion
+                            .weighted_spectrum(grid, &self.weights, thick, c)?,
+                        None => grid.weighted_spectrum(thick, c, &self.weights),
+                    };
                     let (r, t) = (sums.reflectance, sums.transmittance);
-                    [r[0], r[1], r[2], t[0], t[1], t[2]]
+                    Ok([r[0], r[1], r[2], t[0], t[1], t[2]])
                 },
             )
             .collect()
+    }
+
+    /// Where the colour integration of [`Self::rows`] and [`Self::points`]
+    /// takes more points per nanometre (`None` for samplings never
+    /// refined).
+    pub fn refinement(&self) -> Option<&crate::color::refine::Refinement> {
+        self.prep.refined.as_ref().map(|r| &r.criterion)
     }
 
     /// Exact values at every node of `chart` laid out as `width` × `height`
@@ -118,7 +132,7 @@ impl Film {
                     .flat_map(|j| (0..width).map(move |i| (i, j)))
                     .map(|(i, j)| sized.node(i, j))
                     .collect();
-                Ok(self.points(&points))
+                self.points(&points)
             }
         }
     }
@@ -217,7 +231,7 @@ mod tests {
             .iter()
             .flat_map(|(c, t)| t.iter().map(move |&d| (d, *c)))
             .collect();
-        let want = f.points(&points);
+        let want = f.points(&points).unwrap();
         for (g, w) in got.iter().zip(&want) {
             for k in 0..6 {
                 assert!((g[k] - w[k]).abs() < 1e-12, "{g:?} {w:?}");

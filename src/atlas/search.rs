@@ -5,10 +5,12 @@
 //! 1. **Skeleton.** The cos θ range is cut into pieces at a dense-side
 //!    critical angle (a point, or for a dispersive ambient the band of
 //!    angles it moves over); a free-standing film near zero thickness gets
-//!    a polar corner chart; and for a sampled colour integration the angle
-//!    below which the film's fringes are narrower than the sampling step
-//!    (where the integrated colour itself varies by more than any grid
-//!    follows, the *aliased* strip) is found from the layer's cavity.
+//!    a polar corner chart; and the angle below which the film's fringes
+//!    are narrower than the colour integration resolves (where the
+//!    integrated colour itself varies by more than any grid follows, the
+//!    *aliased* strip) is found from the layer's cavity: for the exact
+//!    sampling, where even its finest integration
+//!    ([`crate::color::refine`]) steps over them.
 //! 2. **Probe.** Each piece is evaluated once on a coarse chart and its
 //!    doubled grid. The interpolation error at every midpoint, measured at
 //!    two spacings, gives the local spacing the target needs along u and v
@@ -322,7 +324,7 @@ pub fn build(
     }
     for round in 0.. {
         let (atlas, image) = assemble(&charts, thickness_nm, max_side)?;
-        let measured = measure(&atlas, &image, sides, &reports, points);
+        let measured = measure(&atlas, &image, sides, &reports, points)?;
         let missed = measured
             .iter()
             .zip(&skeletons)
@@ -440,7 +442,7 @@ fn corner_chart(req: &SideRequest, thickness_nm: (f64, f64), goal: Goal) -> Resu
     let points: Vec<(f64, f64)> = std::iter::once((d0, c))
         .chain(ratios.iter().map(|r| (d0 + r * c / optical.s(c), c)))
         .collect();
-    let values = film.points(&points);
+    let values = film.points(&points)?;
     let lum = |v: &[f64; 6]| (v[0] + v[1] + v[2]) / 3.0;
     let (start, end) = (lum(&values[0]), lum(&values[values.len() - 1]));
     let tolerance = goal.max_abs.unwrap_or(1e-3).max(1e-3);
@@ -470,11 +472,14 @@ fn corner_chart(req: &SideRequest, thickness_nm: (f64, f64), goal: Goal) -> Resu
     }))
 }
 
-/// The cos θ below which the film has, at its largest optical thickness
-/// and some wavelength, a fringe narrower than [`ALIASING_STEPS`] of the
-/// colour integration's wavelength steps that changes R by enough to move
-/// the colour by the target through that one wavelength's weight (0 when
-/// nowhere, or the colour is not integrated over many wavelengths).
+/// The cos θ below which the film's colour integration is aliased, at
+/// its largest thickness or a few below (0 when nowhere, or the colour is
+/// not integrated over many wavelengths). The exact sampling integrates
+/// more finely where fringes are narrow, and is aliased only where its
+/// finest integration is ([`crate::color::refine::Refinement::resolves`]);
+/// another sampling is taken as aliased where some wavelength has a fringe
+/// narrower than [`ALIASING_STEPS`] of its steps that changes R by enough
+/// to move the colour by the target through that one wavelength's weight.
 fn aliasing_floor(req: &SideRequest, thickness_nm: (f64, f64), goal: Goal) -> Result<f64> {
     let film = req.film;
     let w = film.wavelengths_nm();
@@ -495,6 +500,11 @@ fn aliasing_floor(req: &SideRequest, thickness_nm: (f64, f64), goal: Goal) -> Re
         .filter(|&d| d >= thickness_nm.0 && d > 0.0)
         .collect();
     let aliased = |c: f64| -> Result<bool> {
+        // The exact colour integrates more finely where fringes are narrow:
+        // it is aliased only where even its finest integration is.
+        if let Some(refinement) = film.refinement() {
+            return Ok(thicknesses.iter().any(|&d| !refinement.resolves(d, c)));
+        }
         for &lambda in w.iter().step_by(stride) {
             let n = layer.index_at(lambda)?.re.max(1e-6);
             for &d in &thicknesses {
@@ -1228,7 +1238,7 @@ pub fn measure(
     sides: &[SideRequest],
     reports: &[SideReport],
     points: &[Vec<[f32; 2]>],
-) -> Vec<SideMeasurement> {
+) -> Result<Vec<SideMeasurement>> {
     let uniform = atlas.uniform_f32();
     sides
         .iter()
@@ -1239,7 +1249,7 @@ pub fn measure(
                 &pts.iter()
                     .map(|p| (f64::from(p[0]), f64::from(p[1])))
                     .collect::<Vec<_>>(),
-            );
+            )?;
             let got: Vec<[f64; 6]> = pts
                 .par_iter()
                 .map(|p| {
@@ -1257,12 +1267,12 @@ pub fn measure(
                 Measurement::of(&p, &pick(&got), &pick(&exact))
             };
             let floor = report.aliased_below as f32;
-            SideMeasurement {
+            Ok(SideMeasurement {
                 side: req.side,
                 all: Measurement::of(pts, &got, &exact),
                 resolved: split(&|c| c >= floor),
                 aliased: split(&|c| c < floor),
-            }
+            })
         })
         .collect()
 }

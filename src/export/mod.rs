@@ -20,6 +20,7 @@ use rand::{Rng, SeedableRng};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
+use crate::color::refine::Refinement;
 use crate::color::{delta_e2000_rgb, Sampling, SpectralIntegrator, White};
 use crate::error::{Error, Result};
 use crate::optics::{Stack, StackGrid};
@@ -209,6 +210,9 @@ struct Film {
     layer: usize,
     grid: StackGrid,
     integrator: SpectralIntegrator,
+    /// More points per nanometre where the film's fringes are narrower
+    /// than the integration's step.
+    refinement: Refinement,
 }
 
 impl Film {
@@ -216,7 +220,9 @@ impl Film {
         let (stack, layer) = crate::lut::with_varying_layer(&spec.stack, spec.layer);
         let integrator = SpectralIntegrator::with_white(spec.sampling, spec.white);
         let grid = StackGrid::new(&stack, integrator.wavelengths_nm())?;
+        let refinement = Refinement::new(&stack, Some(layer), &integrator)?;
         Ok(Film {
+            refinement,
             stack,
             layer,
             grid,
@@ -239,7 +245,7 @@ impl Film {
 
     /// Exact RGB of R and T at each (thickness, cos θ) point: its whole
     /// spectrum through the batched solver, integrated as it is solved.
-    fn exact_at(&self, points: &[[f32; 2]]) -> Vec<[f64; 6]> {
+    fn exact_at(&self, points: &[[f32; 2]]) -> Result<Vec<[f64; 6]>> {
         let weights = self.integrator.rgb_lane_weights();
         points
             .par_iter()
@@ -247,11 +253,14 @@ impl Film {
                 || self.grid.thicknesses_nm().to_vec(),
                 |thick, p| {
                     thick[self.layer - 1] = f64::from(p[0]);
-                    let sums = self
-                        .grid
-                        .weighted_spectrum(thick, f64::from(p[1]), &weights);
+                    let sums = self.refinement.weighted_spectrum(
+                        &self.grid,
+                        &weights,
+                        thick,
+                        f64::from(p[1]),
+                    )?;
                     let (r, t) = (sums.reflectance, sums.transmittance);
-                    [r[0], r[1], r[2], t[0], t[1], t[2]]
+                    Ok([r[0], r[1], r[2], t[0], t[1], t[2]])
                 },
             )
             .collect()
@@ -372,10 +381,10 @@ struct Reference {
 }
 
 impl Reference {
-    fn new(film: &Film, spec: &ExportSpec) -> Reference {
+    fn new(film: &Film, spec: &ExportSpec) -> Result<Reference> {
         let points = measurement_points(spec);
-        let exact = film.exact_at(&points);
-        Reference { points, exact }
+        let exact = film.exact_at(&points)?;
+        Ok(Reference { points, exact })
     }
 
     /// The error of `sample` (what the GPU computes at a point) against the
@@ -454,7 +463,7 @@ pub fn measurement_points(spec: &ExportSpec) -> Vec<[f32; 2]> {
 /// solver: what an export is measured against.
 pub fn exact_at(spec: &ExportSpec, points: &[[f32; 2]]) -> Result<Vec<[f64; 6]>> {
     spec.validate()?;
-    Ok(Film::new(spec)?.exact_at(points))
+    Film::new(spec)?.exact_at(points)
 }
 
 /// Rounds of the size search before it gives up.
@@ -476,7 +485,7 @@ pub fn export(spec: &ExportSpec, progress: &dyn Fn(&str)) -> Result<Export> {
         spec.cos_theta.0 == spec.cos_theta.1,
     );
     let mut mapping = choose_warps(&film, spec, t_flat, c_flat, gain, progress)?;
-    let reference = Reference::new(&film, spec);
+    let reference = Reference::new(&film, spec)?;
     let waves = film.grid.wavelengths_nm().len();
     let target = spec.max_error;
     for _round in 0..MAX_ROUNDS {

@@ -8,6 +8,7 @@ use serde::{Deserialize, Serialize};
 use super::bake::critical_cos;
 use super::sample::{channel_names, Lut};
 use super::Kind;
+use crate::color::refine::Refinement;
 use crate::color::{delta_e2000_rgb, Sampling, SpectralIntegrator};
 use crate::error::{Error, Result};
 use crate::optics::lanes::SpectralWeights;
@@ -159,6 +160,9 @@ struct PointChecker<'a> {
     /// table does not span them (its points then get no colour).
     color_grid: StackGrid,
     color_covered: bool,
+    /// Where the film's fringes are narrower than the integration's step,
+    /// the exact colour takes more points per nanometre.
+    refinement: Refinement,
 }
 
 /// One thread's buffers for [`PointChecker::check`].
@@ -194,8 +198,11 @@ impl<'a> PointChecker<'a> {
         } else {
             SpectralWeights::new([&[], &[], &[]])
         };
+        let layer = (h.layer > 0).then_some(h.layer);
+        let refinement = Refinement::new(&h.stack, layer, &integrator)?;
         Ok(PointChecker {
             lut,
+            refinement,
             weights,
             integrator,
             color_grid,
@@ -220,13 +227,16 @@ impl<'a> PointChecker<'a> {
         cos: f64,
         table_r: &[f64; 3],
         table_t: &[f64; 3],
-    ) -> ([f64; 3], [f64; 3], [f64; 2]) {
-        let sums = self
-            .color_grid
-            .weighted_spectrum(&s.thicknesses_nm, cos, &self.weights);
+    ) -> Result<([f64; 3], [f64; 3], [f64; 2])> {
+        let sums = self.refinement.weighted_spectrum(
+            &self.color_grid,
+            &self.weights,
+            &s.thicknesses_nm,
+            cos,
+        )?;
         let (r, t) = (sums.reflectance, sums.transmittance);
         let de = [delta_e2000_rgb(*table_r, r), delta_e2000_rgb(*table_t, t)];
-        (r, t, de)
+        Ok((r, t, de))
     }
 
     /// The table against the solver at one point (thickness, cos θ,
@@ -243,7 +253,7 @@ impl<'a> PointChecker<'a> {
                 let sample = self.lut.sample_rgb(t, c);
                 let table_r = sample.reflectance.map(f64::from);
                 let table_t = sample.transmittance.map(f64::from);
-                let (r, tr, de) = self.exact_color(s, cos, &table_r, &table_t);
+                let (r, tr, de) = self.exact_color(s, cos, &table_r, &table_t)?;
                 for k in 0..3 {
                     abs[k] = (table_r[k] - r[k]).abs();
                     abs[3 + k] = (table_t[k] - tr[k]).abs();
@@ -256,8 +266,11 @@ impl<'a> PointChecker<'a> {
                 let (r, tr) = self.lut.sample_spectral(t, c, w);
                 abs[0] = (f64::from(r) - resp.r()).abs();
                 abs[1] = (f64::from(tr) - resp.t()).abs();
-                self.color_covered
-                    .then(|| self.spectral_color_error(s, t, c))
+                if self.color_covered {
+                    Some(self.spectral_color_error(s, t, c)?)
+                } else {
+                    None
+                }
             }
         };
         Ok(PointError {
@@ -270,7 +283,7 @@ impl<'a> PointChecker<'a> {
 
     /// CIEDE2000 of a spectral table's colour at (t, c), its spectrum read
     /// at every integration wavelength, against the exact colour.
-    fn spectral_color_error(&self, s: &mut PointScratch, t: f32, c: f32) -> [f64; 2] {
+    fn spectral_color_error(&self, s: &mut PointScratch, t: f32, c: f32) -> Result<[f64; 2]> {
         let wavelengths = self.integrator.wavelengths_nm();
         let mut table_r = vec![0.0; wavelengths.len()];
         let mut table_t = vec![0.0; wavelengths.len()];
@@ -281,7 +294,7 @@ impl<'a> PointChecker<'a> {
         }
         let rgb_r = self.integrator.rgb(&table_r);
         let rgb_t = self.integrator.rgb(&table_t);
-        self.exact_color(s, f64::from(c), &rgb_r, &rgb_t).2
+        Ok(self.exact_color(s, f64::from(c), &rgb_r, &rgb_t)?.2)
     }
 }
 

@@ -169,6 +169,26 @@ impl VaryingLayer {
         (y.norm() * decay * decay, visibility)
     }
 
+    /// The width in wavelength (nm) of a fringe of round-trip amplitude `y`
+    /// (from [`Self::fringe`]) at thickness `thickness_nm`: its width in
+    /// round-trip phase, 2 |1 − y| / √y, over the phase's rate
+    /// |dδ/dλ| = 4π Re(q) d / λ² = k₀² Re(q) d / π (the layer's dispersion
+    /// left out). Infinite for a layer at or beyond its own critical angle.
+    pub fn fringe_width_nm(&self, y: f64, thickness_nm: f64) -> f64 {
+        let rate = self.k0 * self.k0 * self.q.re * thickness_nm / std::f64::consts::PI;
+        if rate <= 0.0 {
+            return f64::INFINITY;
+        }
+        2.0 * (1.0 - y).abs() / y.sqrt() / rate
+    }
+
+    /// How fast the varying layer's waves fade, in nepers per nm of
+    /// thickness one way (k₀ Im q): 0 for a lossless layer below its own
+    /// critical angle, negative for a gain layer.
+    pub fn attenuation_per_nm(&self) -> f64 {
+        self.k0 * self.q.im
+    }
+
     /// True when the split is unusable (the layer's q ≈ 0, see the field):
     /// evaluate such a (wavelength, angle) with [`super::solve`] instead.
     pub fn is_degenerate(&self) -> bool {

@@ -7,7 +7,10 @@ use rayon::prelude::*;
 
 use super::critical_cos;
 use super::grid::{AxisGrid, Grid};
-use crate::color::SpectralIntegrator;
+use std::sync::OnceLock;
+
+use crate::color::refine::{Refinement, MAX_SUB_STEPS};
+use crate::color::{Sampling, SpectralIntegrator};
 use crate::error::Result;
 use crate::lut::sample::channel_names;
 use crate::lut::{BakeSpec, Kind};
@@ -55,6 +58,31 @@ pub(crate) struct Prepared {
     /// but for the layer's own phase (one layer, no dispersion: see
     /// [`VaryingLayer::at_wavelength`]), so a row splits the stack once.
     pub(super) split_per_angle: bool,
+    /// rgb kind with the exact sampling: the colour integrated again, with
+    /// more points per nanometre, at the nodes where the film's fringes
+    /// are narrower than a step.
+    pub(crate) refined: Option<Box<Refined>>,
+}
+
+/// The refinement of a bake's colour integration (see
+/// [`crate::color::refine`]): where it is needed, and the sweep at each
+/// density, made on first use.
+pub(crate) struct Refined {
+    pub(crate) criterion: Refinement,
+    levels: Vec<OnceLock<Prepared>>,
+}
+
+impl Refined {
+    /// The sweep integrating with `m` points per nanometre.
+    fn level(&self, m: usize, base: &Prepared) -> Result<&Prepared> {
+        let slot = &self.levels[m.trailing_zeros() as usize];
+        if let Some(p) = slot.get() {
+            return Ok(p);
+        }
+        let integrator = self.criterion.integrator(m);
+        let prep = Prepared::plain(base.stack.clone(), base.layer, Kind::Rgb, &integrator, None)?;
+        Ok(slot.get_or_init(|| prep))
+    }
 }
 
 impl Prepared {
@@ -78,14 +106,36 @@ impl Prepared {
         wavelength_nm: (f64, f64),
     ) -> Result<Prepared> {
         let (stack, layer) = with_varying_layer(stack, layer);
+        let mut prep = Prepared::plain(stack, layer, kind, &integrator, Some(wavelength_nm))?;
+        if kind == Kind::Rgb && integrator.sampling() == Sampling::Exact {
+            let criterion = Refinement::new(&prep.stack, Some(layer), &integrator)?;
+            prep.refined = Some(Box::new(Refined {
+                criterion,
+                levels: (0..=MAX_SUB_STEPS.trailing_zeros())
+                    .map(|_| OnceLock::new())
+                    .collect(),
+            }));
+        }
+        Ok(prep)
+    }
+
+    /// [`Self::of`] on a stack that has its varying layer, never refined
+    /// (`wavelength_nm`: a spectral table's range, for its critical angle).
+    fn plain(
+        stack: Stack,
+        layer: usize,
+        kind: Kind,
+        integrator: &SpectralIntegrator,
+        wavelength_nm: Option<(f64, f64)>,
+    ) -> Result<Prepared> {
         let (stack_grid, weights) = match kind {
             Kind::Rgb => (
                 StackGrid::new(&stack, integrator.wavelengths_nm())?,
-                rgb_weights(&integrator),
+                rgb_weights(integrator),
             ),
             Kind::Spectral => (StackGrid::new(&stack, &[])?, Vec::new()),
         };
-        let critical_cos = critical_cos(&stack, kind, wavelength_nm);
+        let critical_cos = wavelength_nm.and_then(|w| critical_cos(&stack, kind, w));
         let split_per_angle = stack.layers.len() == 1 && stack_grid.is_non_dispersive();
         Ok(Prepared {
             split_per_angle,
@@ -95,7 +145,50 @@ impl Prepared {
             stack_grid,
             weights,
             critical_cos,
+            refined: None,
         })
+    }
+
+    /// The colour at the thickness `nodes` of one rgb row (cos θ `cos`;
+    /// `dst`: their values, six each) integrated again where the film's
+    /// fringes are narrower than the sampling step, with the points per
+    /// nanometre each node needs.
+    fn refine_row(&self, cos: f64, nodes: &[f64], dst: &mut [f64]) -> Result<()> {
+        let Some(refined) = &self.refined else {
+            return Ok(());
+        };
+        let mut groups: Vec<(usize, Vec<usize>)> = Vec::new();
+        for (j, &d) in nodes.iter().enumerate() {
+            let m = refined.criterion.sub_steps(d, cos);
+            if m <= 1 {
+                continue;
+            }
+            match groups.iter_mut().find(|g| g.0 == m) {
+                Some(g) => g.1.push(j),
+                None => groups.push((m, vec![j])),
+            }
+        }
+        for (m, at) in groups {
+            let level = refined.level(m, self)?;
+            let grid = &level.stack_grid;
+            let thickness: Vec<f64> = at.iter().map(|&j| nodes[j]).collect();
+            let mut wk = Worker::new(thickness.len(), grid.thicknesses_nm());
+            let mut values = vec![0.0; 6 * thickness.len()];
+            level.split_row(grid, 0..grid.wavelengths_nm().len(), cos, &mut wk);
+            level.compute_nodes(
+                false,
+                grid,
+                cos,
+                &thickness,
+                Phases::Exact,
+                &mut values,
+                &mut wk,
+            );
+            for (&j, v) in at.iter().zip(values.chunks_exact(6)) {
+                dst[6 * j..6 * j + 6].copy_from_slice(v);
+            }
+        }
+        Ok(())
     }
 
     /// Exact values at atlas rows: each row one cos θ (and, for a spectral
@@ -117,10 +210,10 @@ impl Prepared {
             .par_iter()
             .map_init(
                 || Worker::new(longest, stack_grid.thicknesses_nm()),
-                |wk, row| {
+                |wk, row| -> Result<Vec<f64>> {
                     let mut dst = vec![0.0; row.thickness_nm.len() * ch];
                     if row.thickness_nm.is_empty() {
-                        return dst;
+                        return Ok(dst);
                     }
                     let wavelengths = if spectral {
                         row.wavelength..row.wavelength + 1
@@ -137,10 +230,13 @@ impl Prepared {
                         &mut dst,
                         wk,
                     );
-                    dst
+                    if !spectral {
+                        self.refine_row(row.cos, row.thickness_nm, &mut dst)?;
+                    }
+                    Ok(dst)
                 },
             )
-            .collect();
+            .collect::<Result<_>>()?;
         Ok(values.concat())
     }
 
@@ -210,9 +306,9 @@ impl Prepared {
             &self.stack_grid
         };
         let n = t_axis.nodes.len();
-        out.par_chunks_mut(row_len).enumerate().for_each_init(
+        out.par_chunks_mut(row_len).enumerate().try_for_each_init(
             || Worker::new(n, stack_grid.thicknesses_nm()),
-            |wk, (row_index, row)| {
+            |wk, (row_index, row)| -> Result<()> {
                 let (w, c) = (row_index / nc, row_index % nc);
                 let cos = c_axis.nodes[c];
                 let wavelengths = if grid.spectral {
@@ -245,9 +341,13 @@ impl Prepared {
                     }
                     self.compute(grid, stack_grid, cos, range, row, wk);
                 }
+                if !grid.spectral {
+                    self.refine_row(cos, &t_axis.nodes, row)?;
+                }
                 tick();
+                Ok(())
             },
-        );
+        )?;
         Ok(out)
     }
 
