@@ -3,7 +3,8 @@
 //!
 //! Modules follow the data flow: [`optics`] (materials, stacks, solver) →
 //! [`color`] (spectra to colour) → [`lut`] (bake, file, sample, validate) →
-//! [`render`] (the tracer).
+//! [`render`] (the tracer); [`rough`] pre-integrates a film's reflectance
+//! over a GGX microfacet lobe.
 
 pub mod analytic;
 pub mod atlas;
@@ -17,6 +18,7 @@ pub mod limits;
 pub mod lut;
 pub mod optics;
 pub mod render;
+pub mod rough;
 mod simd;
 pub mod web;
 

@@ -186,3 +186,29 @@ fn grid_mode_prints_json_and_rejects_bad_input() {
         irid(&bad).assert_one_line_error(&format!("{bad:?}"), &[]);
     }
 }
+
+/// `--rough-nodes`: the rough engine's time over a whole grid, the work a
+/// table with a roughness axis costs.
+#[test]
+fn rough_nodes_time_the_rough_engine() {
+    let doc = grid_json(&["--rough-nodes", "3,4,2"]);
+    assert_eq!(doc["stack"], "soap");
+    assert_eq!(doc["rough_nodes"], serde_json::json!([3, 4, 2]));
+    assert!(doc["seconds"].as_f64().unwrap() > 0.0);
+    // The default quadrature's 128 μ intervals.
+    assert!(doc["mu_nodes"].as_u64().unwrap() > 128);
+    for bad in ["3,4", "3,4,0", "3,4,1.5", "a,b,c", "100000,100000,100000"] {
+        irid(["bench", "--grid", "soap", "--rough-nodes", bad])
+            .assert_one_line_error(bad, &["--rough-nodes"]);
+    }
+    irid([
+        "bench",
+        "--grid",
+        "soap",
+        "--rough-nodes",
+        "3,4,2",
+        "--bake-nodes",
+        "6,4",
+    ])
+    .assert_one_line_error("both", &[]);
+}

@@ -37,6 +37,50 @@ fn exr_layout(path: &Path) -> (Vec<String>, bool, (usize, usize)) {
     (names, half, (layer.size.width(), layer.size.height()))
 }
 
+/// film.json's `texture.row_check` names a texel of the written EXR and its
+/// mirror about the middle row, with their values, and no texel pair
+/// differs more (the check tells a flipped load from a right one).
+fn row_check_matches_the_file(film: &serde_json::Value, dir: &Path, quantity: &str, name: &str) {
+    let check = &film["texture"]["row_check"][quantity];
+    let image = common::read_exr(&dir.join(format!("{quantity}.exr")));
+    let layer = &image.layer_data;
+    let (w, h) = (layer.size.width(), layer.size.height());
+    let plane = |channel: &str| -> Vec<f32> {
+        let c = layer
+            .channel_data
+            .list
+            .iter()
+            .find(|c| c.name.to_string() == channel)
+            .unwrap();
+        c.sample_data.values_as_f32().collect()
+    };
+    let planes = [plane("R"), plane("G"), plane("B")];
+    let rgb = |x: usize, y: usize| [0, 1, 2].map(|k| f64::from(planes[k][y * w + x]));
+    let at = |key: &str| check[key].as_u64().unwrap() as usize;
+    let (x, y) = (at("x"), at("y"));
+    assert!(y < h / 2, "{name} {quantity}: {check}");
+    let listed = |key: &str| -> Vec<f64> {
+        check[key]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|v| v.as_f64().unwrap())
+            .collect()
+    };
+    assert_eq!(listed("value"), rgb(x, y), "{name} {quantity}");
+    assert_eq!(listed("mirrored"), rgb(x, h - 1 - y), "{name} {quantity}");
+    let gap = |a: [f64; 3], b: [f64; 3]| (0..3).fold(0.0f64, |g, k| g.max((a[k] - b[k]).abs()));
+    let listed_gap = gap(rgb(x, y), rgb(x, h - 1 - y));
+    for yy in 0..h / 2 {
+        for xx in 0..w {
+            assert!(
+                gap(rgb(xx, yy), rgb(xx, h - 1 - yy)) <= listed_gap,
+                "{name} {quantity}"
+            );
+        }
+    }
+}
+
 /// Nothing but `keep` in `dir`: no temporary directory left behind.
 fn only(dir: &Path, keep: &[&str]) {
     let mut names: Vec<String> = std::fs::read_dir(dir)
@@ -105,6 +149,9 @@ fn every_example_stack_exports() {
         }
         for (file, text) in SHADERS {
             assert_eq!(std::fs::read_to_string(out.join(file)).unwrap(), text);
+        }
+        for quantity in ["reflectance", "transmittance"] {
+            row_check_matches_the_file(&film, &out, quantity, &name);
         }
         assert_eq!(film["axes"]["thickness_nm"].as_array().unwrap().len(), w);
         assert_eq!(film["axes"]["cos_theta"].as_array().unwrap().len(), h);

@@ -536,7 +536,9 @@ fn an_interrupted_demo_leaves_nothing() {
         assert!(line.starts_with("irid demo"), "{line}");
         assert!(dir.join("new").is_dir());
         if named {
-            assert_eq!(names(&dir.join("new")).len(), 12);
+            // A table-rendered and a directly rendered image per scene.
+            let images = 2 * irid::render::builtin_names().len();
+            assert_eq!(names(&dir.join("new")).len(), images);
         }
         // SAFETY: signals a child process this test started.
         unsafe { libc::kill(child.id() as i32, libc::SIGTERM) };

@@ -62,6 +62,7 @@ fn every_builtin_scene_is_tested() {
         "bubbles-uniform",
         "bubbles-noise",
         "absorbing-sphere",
+        "absorbing-sphere-rough",
         "gain-ring",
         "blue-gem",
         "two-layer-noise",
@@ -82,6 +83,13 @@ fn lut_matches_direct_bubbles_noise() {
 #[test]
 fn lut_matches_direct_absorbing_sphere() {
     lut_matches_direct_exact("absorbing-sphere", 64);
+}
+
+/// The rough variant: the same microfacet normals in both modes (the
+/// renders share their seeds), only the film's values differ.
+#[test]
+fn lut_matches_direct_absorbing_sphere_rough() {
+    lut_matches_direct_exact("absorbing-sphere-rough", 64);
 }
 
 #[test]

@@ -1,11 +1,16 @@
 // A reader for the half-float RGBA OpenEXR files of an irid export:
 // single-part scanline images, uncompressed, RLE, ZIPS or ZIP. The layout
 // follows the OpenEXR file-format document ("The OpenEXR File Layout").
-// A classic script (not a module) so that the page also opens from file://.
+// A classic script (not a module) so that the page also opens from file://;
+// it needs no other script (web/png16.js has its own inflate).
 (function (ns) {
   'use strict';
 
-  const { inflateZlib } = ns;
+  /** Inflates a zlib stream (an EXR ZIP block) through the browser's DecompressionStream. */
+  async function inflateZlib(bytes) {
+    const stream = new Blob([bytes]).stream().pipeThrough(new DecompressionStream('deflate'));
+    return new Uint8Array(await new Response(stream).arrayBuffer());
+  }
 
   const MAGIC = 20000630;
   const COMPRESSION_NAMES = ['none', 'RLE', 'ZIPS', 'ZIP', 'PIZ', 'PXR24', 'B44', 'B44A', 'DWAA', 'DWAB'];

@@ -2,13 +2,14 @@
 // PNGs to 8 bits per channel, which would throw away the precision the
 // export stores, so the file is parsed here: chunks, zlib through the
 // browser's DecompressionStream, then the five scanline filters.
-// A classic script (not a module) so that the page also opens from file://.
+// A classic script (not a module) so that the page also opens from file://;
+// it needs no other script.
 (function (ns) {
   'use strict';
 
   const SIGNATURE = [137, 80, 78, 71, 13, 10, 26, 10];
 
-  /** Inflates a zlib stream (PNG IDAT data, EXR ZIP blocks). */
+  /** Inflates a zlib stream (PNG IDAT data). */
   async function inflateZlib(bytes) {
     const stream = new Blob([bytes]).stream().pipeThrough(new DecompressionStream('deflate'));
     return new Uint8Array(await new Response(stream).arrayBuffer());
@@ -123,6 +124,5 @@
     return { width, height, channels: 4, data: out };
   }
 
-  ns.inflateZlib = inflateZlib;
   ns.decodePng16 = decodePng16;
 })((window.IridWeb = window.IridWeb || {}));

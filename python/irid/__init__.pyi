@@ -103,9 +103,13 @@ class Stack:
         angles_deg: ArrayLike,
         sampling: str = "exact",
         white: str = "d65",
+        roughness: Optional[float] = None,
     ) -> Dict[str, npt.NDArray[np.float64]]:
         """angle_deg, reflectance_rgb, transmittance_rgb (linear sRGB),
-        reflectance_xyz, transmittance_xyz, each (angles, 3) but angle_deg."""
+        reflectance_xyz, transmittance_xyz, each (angles, 3) but angle_deg.
+        With roughness in [0, 1]: angle_deg, reflectance_rgb and
+        reflectance_xyz of F_eff (the reflectance pre-integrated over a GGX
+        lobe, docs/rough.md) and lobe_albedo (angles,)."""
 
 def bake(
     stack: Stack,

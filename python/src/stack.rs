@@ -13,6 +13,7 @@ use irid::optics::spec::{IndexSpec, MediumSpec};
 use irid::optics::{
     library, solve, solve_amplitudes, Layer, Material, Response, Stack, StackGrid, MAX_THICKNESS_NM,
 };
+use irid::rough::{check_roughness, rough_colors, RoughColor};
 
 use crate::arrays::{array, count, integer_in, real, real_list, reals};
 use crate::budget::Footprint;
@@ -429,18 +430,29 @@ impl PyStack {
     /// Returns a dict: angle_deg (A,), reflectance_rgb, transmittance_rgb
     /// (linear sRGB, (A, 3)), reflectance_xyz, transmittance_xyz (CIE XYZ,
     /// Y = 1 for a perfect reflector, (A, 3)).
-    #[pyo3(signature = (angles_deg, sampling="exact", white="d65"))]
+    ///
+    /// roughness (a number in [0, 1], as `irid color --roughness`): the
+    /// reflectance pre-integrated over a GGX lobe of that roughness, F_eff
+    /// (docs/rough.md), per view angle instead. Returns a dict: angle_deg,
+    /// reflectance_rgb, reflectance_xyz (as above) and lobe_albedo (A,), the
+    /// white lobe's directional albedo; no transmittance. Roughness 0 gives
+    /// the smooth reflectance exactly.
+    #[pyo3(signature = (angles_deg, sampling="exact", white="d65", roughness=None))]
     fn color<'py>(
         &self,
         py: Python<'py>,
         angles_deg: &Bound<'py, PyAny>,
         sampling: &str,
         white: &str,
+        roughness: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<Bound<'py, PyDict>> {
         let angles = real_list(angles_deg, "angles_deg")?;
         let sampling: Sampling = sampling.parse().map_err(py_error)?;
         let white: White = white.parse().map_err(py_error)?;
         let integrator = SpectralIntegrator::with_white(sampling, white);
+        if let Some(roughness) = roughness {
+            return self.rough_color(py, &integrator, angles, roughness);
+        }
         let samples = integrator.wavelengths_nm().len();
         // The responses at every (wavelength, angle), the grid's indices,
         // and per angle its colour and the four (angles, 3) results.
@@ -459,28 +471,17 @@ impl PyStack {
             stack_colors(&self.stack, &integrator, &angles)
         })?
         .map_err(py_error)?;
-        let result = PyDict::new(py);
-        result.set_item("angle_deg", array(py, angles.clone(), &[angles.len()])?)?;
-        let triples =
-            |f: fn(&FilmColor) -> [f64; 3]| -> Vec<f64> { colours.iter().flat_map(f).collect() };
-        let shape = [colours.len(), 3];
-        result.set_item(
-            "reflectance_rgb",
-            array(py, triples(|c| c.reflectance_rgb), &shape)?,
-        )?;
-        result.set_item(
-            "transmittance_rgb",
-            array(py, triples(|c| c.transmittance_rgb), &shape)?,
-        )?;
-        result.set_item(
-            "reflectance_xyz",
-            array(py, triples(|c| c.reflectance_xyz), &shape)?,
-        )?;
-        result.set_item(
-            "transmittance_xyz",
-            array(py, triples(|c| c.transmittance_xyz), &shape)?,
-        )?;
-        Ok(result)
+        colour_dict(
+            py,
+            angles,
+            &colours,
+            &[
+                ("reflectance_rgb", |c| c.reflectance_rgb),
+                ("transmittance_rgb", |c| c.transmittance_rgb),
+                ("reflectance_xyz", |c| c.reflectance_xyz),
+                ("transmittance_xyz", |c| c.transmittance_xyz),
+            ],
+        )
     }
 
     /// Unpolarized (R, T) at arrays of points, each with its own wavelength:
@@ -529,6 +530,65 @@ impl PyStack {
             self.stack.substrate.name
         )
     }
+}
+
+impl PyStack {
+    /// `Stack.color(..., roughness=R)`: F_eff per angle (docs/rough.md).
+    fn rough_color<'py>(
+        &self,
+        py: Python<'py>,
+        integrator: &SpectralIntegrator,
+        angles: Vec<f64>,
+        roughness: &Bound<'py, PyAny>,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        let roughness = real(roughness, "roughness")?;
+        check_roughness("roughness", roughness).map_err(py_error)?;
+        // The library checks its own sweep and kernels; here the colours
+        // and the three results.
+        Footprint::new()
+            .items(
+                &[angles.len()],
+                std::mem::size_of::<RoughColor>() as u64 + 7 * 8,
+            )
+            .check(&format!("{} angles", angles.len()))?;
+        let colours = compute(py, true, || {
+            rough_colors(&self.stack, integrator, &angles, roughness)
+        })?
+        .map_err(py_error)?;
+        let albedo = colours.iter().map(|c| c.lobe_albedo).collect();
+        let result = colour_dict(
+            py,
+            angles,
+            &colours,
+            &[
+                ("reflectance_rgb", |c| c.reflectance_rgb),
+                ("reflectance_xyz", |c| c.reflectance_xyz),
+            ],
+        )?;
+        let n = colours.len();
+        result.set_item("lobe_albedo", array(py, albedo, &[n])?)?;
+        Ok(result)
+    }
+}
+
+/// A named colour of one angle's result, as `Stack.color` returns it.
+type ColourKey<C> = (&'static str, fn(&C) -> [f64; 3]);
+
+/// `Stack.color`'s dict: angle_deg (A,) and each named colour (A, 3).
+fn colour_dict<'py, C>(
+    py: Python<'py>,
+    angles: Vec<f64>,
+    colours: &[C],
+    keys: &[ColourKey<C>],
+) -> PyResult<Bound<'py, PyDict>> {
+    let result = PyDict::new(py);
+    let n = angles.len();
+    result.set_item("angle_deg", array(py, angles, &[n])?)?;
+    for (key, f) in keys {
+        let values: Vec<f64> = colours.iter().flat_map(f).collect();
+        result.set_item(*key, array(py, values, &[colours.len(), 3])?)?;
+    }
+    Ok(result)
 }
 
 /// The `layer` argument (1 when not given): for a stack with layers, one

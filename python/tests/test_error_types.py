@@ -118,6 +118,11 @@ CASES = [
     ("Stack.color unknown sampling", lambda f: f.stack.color([0.0], sampling="fine"), ValueError),
     ("Stack.color sampling a number", lambda f: f.stack.color([0.0], sampling=5), TypeError),
     ("Stack.color unknown white", lambda f: f.stack.color([0.0], white="f2"), ValueError),
+    ("Stack.color NaN roughness", lambda f: f.stack.color([0.0], roughness=NAN), ValueError),
+    ("Stack.color roughness above 1", lambda f: f.stack.color([0.0], roughness=1.01), ValueError),
+    ("Stack.color negative roughness", lambda f: f.stack.color([0.0], roughness=-0.1), ValueError),
+    ("Stack.color roughness a string", lambda f: f.stack.color([0.0], roughness="0.5"), TypeError),
+    ("Stack.color roughness a bool", lambda f: f.stack.color([0.0], roughness=True), TypeError),
     # Material / material / index
     ("Material object", lambda f: irid.Material(object()), TypeError),
     ("Material two forms", lambda f: irid.Material(n=1.5, material="gold"), ValueError),

@@ -144,3 +144,37 @@ def test_color_of_a_lossless_film_sums_to_white():
     out = irid.Stack(layers=[(1.33, 400.0)]).color(np.linspace(0, 80, 5))
     np.testing.assert_allclose(out["reflectance_rgb"] + out["transmittance_rgb"], 1.0, atol=1e-9)
     np.testing.assert_allclose(out["reflectance_xyz"][:, 1] + out["transmittance_xyz"][:, 1], 1.0, atol=1e-12)
+
+
+def test_rough_color_matches_the_cli(luts, irid_cli):
+    path = luts / "absorbing-film.toml"
+    angles = [0.0, 30.0, 60.0, 85.0]
+    for roughness in (0.0, 0.25, 1.0):
+        mine = irid.Stack.load(path).color(angles, white="e", roughness=roughness)
+        assert sorted(mine) == ["angle_deg", "lobe_albedo", "reflectance_rgb", "reflectance_xyz"]
+        run = irid_cli("color", path, "--angles", ",".join(map(str, angles)), "--white", "e",
+                       "--roughness", str(roughness), "--json")
+        assert run.returncode == 0, run.stderr
+        for j, c in enumerate(json.loads(run.stdout)):
+            for key in ["reflectance_rgb", "reflectance_xyz"]:
+                np.testing.assert_allclose(mine[key][j], c[key], rtol=0, atol=1e-15)
+            assert mine["lobe_albedo"][j] == c["lobe_albedo"]
+
+
+def test_roughness_zero_is_the_smooth_reflectance():
+    stack = irid.Stack(layers=[(1.33, 400.0)])
+    smooth, zero = stack.color([0, 45, 80]), stack.color([0, 45, 80], roughness=0)
+    np.testing.assert_array_equal(smooth["reflectance_rgb"], zero["reflectance_rgb"])
+    np.testing.assert_array_equal(zero["lobe_albedo"], 1.0)
+
+
+@pytest.mark.parametrize("bad", [float("nan"), -0.1, 1.5, float("inf"), -float("inf"), 1 + 1e-12])
+def test_bad_roughness_is_a_value_error(bad):
+    with pytest.raises(ValueError, match=r"^roughness: must be in \[0, 1\], got [^\n]*$"):
+        irid.Stack(layers=[(1.33, 400.0)]).color([0.0], roughness=bad)
+
+
+@pytest.mark.parametrize("bad", ["0.5", True, [0.5], object()])
+def test_roughness_of_another_type_is_a_type_error(bad):
+    with pytest.raises(TypeError, match=r"^roughness: expected a number"):
+        irid.Stack(layers=[(1.33, 400.0)]).color([0.0], roughness=bad)

@@ -354,6 +354,67 @@ pub fn time_bake(
     Ok((times, grid))
 }
 
+/// Wall time of [`crate::rough::rough_reflectance`] over a grid.
+#[derive(Clone, Copy, Debug)]
+pub struct RoughTimes {
+    /// The fastest run, seconds.
+    pub seconds: f64,
+    /// Nodes: thickness, cos θ, roughness.
+    pub nodes: [usize; 3],
+    /// μ = v·h nodes the film's smooth colour was computed on.
+    pub mu_nodes: usize,
+}
+
+/// Times the rough engine (F_eff, exact 1 nm colour, D65, the default
+/// quadrature) over `nodes` = (thickness, cos θ, roughness) nodes evenly
+/// spaced over the stack's thickness range, cos θ ∈ [0, 1] and roughness
+/// ∈ [0, 1], on `threads` threads; keeps the fastest of `repeat`. This is
+/// the work a table with a roughness axis costs (the smooth sweep on the μ
+/// grid, a kernel per (cos θ, roughness), the weighting).
+pub fn time_rough(
+    bench: &BenchStack,
+    nodes: [usize; 3],
+    threads: usize,
+    repeat: usize,
+) -> Result<RoughTimes> {
+    let even = |lo: f64, hi: f64, n: usize| -> Vec<f64> {
+        (0..n)
+            .map(|i| lo + (hi - lo) * i as f64 / (n.max(2) - 1) as f64)
+            .collect()
+    };
+    let (t0, t1) = bench.thickness_range_nm;
+    let thickness = even(t0, t1, nodes[0]);
+    let cos = even(0.0, 1.0, nodes[1]);
+    let roughness = even(0.0, 1.0, nodes[2]);
+    let integrator = SpectralIntegrator::new(Sampling::Exact);
+    let quadrature = crate::rough::Quadrature::default();
+    let pool = thread_pool(threads)?;
+    let mut seconds = f64::INFINITY;
+    for _ in 0..repeat.max(1) {
+        let start = Instant::now();
+        pool.install(|| {
+            crate::rough::rough_reflectance(
+                &bench.stack,
+                bench.varying_layer + 1,
+                &integrator,
+                &thickness,
+                &cos,
+                &roughness,
+                &quadrature,
+            )
+        })?;
+        seconds = seconds.min(start.elapsed().as_secs_f64());
+    }
+    let mu_nodes = crate::rough::MuGrid::for_stack(&bench.stack, quadrature.mu_intervals)
+        .nodes()
+        .len();
+    Ok(RoughTimes {
+        seconds,
+        nodes,
+        mu_nodes,
+    })
+}
+
 /// Nodes between exact re-evaluations of the phase on a uniform axis.
 const REANCHOR: usize = 64;
 

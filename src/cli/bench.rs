@@ -51,6 +51,12 @@ pub struct Args {
     /// wavelengths (replaces --wavelengths, --angles, --thicknesses).
     #[arg(long, value_name = "T,A")]
     pub bake_nodes: Option<String>,
+    /// With --grid: time the rough engine (F_eff, as `irid color
+    /// --roughness` computes it) over T×A×R nodes (thickness × cos θ ×
+    /// roughness, evenly spaced over the stack's range, [0, 1] and [0, 1])
+    /// and print its wall time as JSON instead of evaluating a grid.
+    #[arg(long, value_name = "T,A,R", conflicts_with = "bake_nodes")]
+    pub rough_nodes: Option<String>,
     /// Write R then T as little-endian f64 arrays, [angle][thickness][wavelength],
     /// to this file instead of printing them in the JSON.
     #[arg(long, value_name = "PATH")]
@@ -197,6 +203,9 @@ fn run_grid(name: &str, args: &Args) -> Result<()> {
     })?;
     let requested = requested_grid(args)?;
     check_count("--repeat", args.repeat, MAX_REPEAT)?;
+    if let Some(spec) = &args.rough_nodes {
+        return run_rough(&bench, spec, args);
+    }
     let (bake, g) = match &args.bake_nodes {
         Some(spec) => {
             let (t, a) = parse_bake_nodes(spec)?;
@@ -259,6 +268,30 @@ fn requested_grid(args: &Args) -> Result<grid::Grid> {
         angles_deg,
         thicknesses_nm,
     })
+}
+
+/// `--rough-nodes`: the rough engine's wall time, as one line of JSON.
+fn run_rough(bench: &stacks::BenchStack, spec: &str, args: &Args) -> Result<()> {
+    let nodes = parse_list("--rough-nodes", spec)?;
+    let [t, a, r] = nodes[..] else {
+        anyhow::bail!("--rough-nodes '{spec}': expected three node counts, T,A,R");
+    };
+    if [t, a, r].iter().any(|n| *n < 1.0 || n.fract() != 0.0) {
+        anyhow::bail!("--rough-nodes '{spec}': need whole numbers ≥ 1");
+    }
+    let nodes = [t as usize, a as usize, r as usize];
+    check_grid("--rough-nodes", &nodes)?;
+    let times = grid::time_rough(bench, nodes, args.threads, args.repeat)?;
+    let doc = serde_json::json!({
+        "stack": bench.name,
+        "rough_nodes": times.nodes,
+        "mu_nodes": times.mu_nodes,
+        "threads": args.threads,
+        "repeat": args.repeat,
+        "seconds": times.seconds,
+    });
+    println!("{doc}");
+    Ok(())
 }
 
 /// `--bake-nodes T,A`: thickness and angle node counts.

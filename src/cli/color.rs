@@ -1,5 +1,6 @@
 //! `irid color`: a stack's reflected and transmitted colour, per angle, in
-//! linear sRGB with the chosen white (D65 by default).
+//! linear sRGB with the chosen white (D65 by default); with `--roughness`,
+//! its reflectance pre-integrated over a GGX lobe (docs/rough.md).
 
 use std::io::{IsTerminal, Write};
 use std::path::PathBuf;
@@ -8,6 +9,7 @@ use std::process::ExitCode;
 use anyhow::{anyhow, Result};
 use irid::color::{linear_to_srgb8, stack_colors, Sampling, SpectralIntegrator, White};
 use irid::optics::Stack;
+use irid::rough::{check_roughness, rough_colors};
 
 use super::args::{check_angles, check_grid, parse_choice, parse_list};
 
@@ -25,8 +27,16 @@ pub struct Args {
     /// spectrum, as Blender Cycles and glTF viewers); see docs/color.md.
     #[arg(long, default_value = "d65")]
     pub white: String,
+    /// GGX roughness in [0, 1] (α = roughness²): print F_eff, the film's
+    /// reflectance pre-integrated over the microfacet lobe, per view angle,
+    /// and the white lobe's albedo, instead of the mirror's R and T (see
+    /// docs/rough.md). 0 gives the mirror's reflectance exactly.
+    #[arg(long)]
+    pub roughness: Option<String>,
     /// One JSON array of {angle_deg, reflectance_rgb, transmittance_rgb,
-    /// reflectance_xyz, transmittance_xyz} (linear sRGB; XYZ with Y = 1 for white).
+    /// reflectance_xyz, transmittance_xyz} (linear sRGB; XYZ with Y = 1 for
+    /// white); with --roughness, of {angle_deg, roughness, reflectance_rgb,
+    /// reflectance_xyz, lobe_albedo}.
     #[arg(long)]
     pub json: bool,
 }
@@ -36,60 +46,145 @@ pub fn run(args: Args) -> Result<ExitCode> {
     let white: White = parse_choice(&args.white)?;
     let angles_deg = parse_list("--angles", &args.angles)?;
     check_angles("--angles", &angles_deg)?;
+    let roughness = args.roughness.as_deref().map(parse_roughness).transpose()?;
     let stack = Stack::load(&args.stack)?;
     let integrator = SpectralIntegrator::with_white(sampling, white);
     check_grid(
         "--angles × --sampling wavelengths",
         &[angles_deg.len(), integrator.wavelengths_nm().len()],
     )?;
-    let colors = stack_colors(&stack, &integrator, &angles_deg)
-        .map_err(|e| anyhow!("{}: {e}", args.stack.display()))?;
-
-    let stdout = std::io::stdout();
-    let mut out = stdout.lock();
-    if args.json {
-        serde_json::to_writer_pretty(&mut out, &colors)?;
-        writeln!(out)?;
-        return Ok(ExitCode::SUCCESS);
+    let printer = Printer::new(&args, sampling, white);
+    match roughness {
+        Some(r) => {
+            let colors = rough_colors(&stack, &integrator, &angles_deg, r)
+                .map_err(|e| anyhow!("{}: {e}", args.stack.display()))?;
+            printer.rough(&colors, r)
+        }
+        None => {
+            let colors = stack_colors(&stack, &integrator, &angles_deg)
+                .map_err(|e| anyhow!("{}: {e}", args.stack.display()))?;
+            printer.smooth(&colors)
+        }
     }
-    // A block of the colour itself when a terminal is there to show it.
-    let swatches = stdout.is_terminal();
-    let swatch = |rgb: [f64; 3]| {
+}
+
+/// `--roughness`: a number in [0, 1].
+fn parse_roughness(text: &str) -> Result<f64> {
+    let r: f64 = text
+        .trim()
+        .parse()
+        .map_err(|_| anyhow!("--roughness '{text}': not a number"))?;
+    check_roughness("--roughness", r)?;
+    Ok(r)
+}
+
+/// Writes colours as JSON or as a table with swatches.
+struct Printer<'a> {
+    args: &'a Args,
+    sampling: Sampling,
+    white: White,
+    /// A block of the colour itself when a terminal is there to show it.
+    swatches: bool,
+}
+
+impl Printer<'_> {
+    fn new(args: &Args, sampling: Sampling, white: White) -> Printer<'_> {
+        Printer {
+            args,
+            sampling,
+            white,
+            swatches: std::io::stdout().is_terminal(),
+        }
+    }
+
+    fn swatch(&self, rgb: [f64; 3]) -> String {
         let [r, g, b] = linear_to_srgb8(rgb);
         let hex = format!("#{r:02x}{g:02x}{b:02x}");
-        if swatches {
+        if self.swatches {
             format!("\x1b[48;2;{r};{g};{b}m    \x1b[0m {hex}")
         } else {
             hex
         }
-    };
-    let triple = |v: [f64; 3]| format!("({:.4}, {:.4}, {:.4})", v[0], v[1], v[2]);
-    writeln!(
-        out,
-        "{}: {}, CIE 1931 2°, sampling {sampling}; linear sRGB with the sRGB-encoded hex",
-        args.stack.display(),
-        match white {
-            White::D65 => "D65",
-            White::E => "white E (flat spectrum = 1)",
-        }
-    )?;
-    // Visible width of a swatch, a space and a padded triple.
-    let width = if swatches { 40 } else { 35 };
-    writeln!(
-        out,
-        "{:>7}  {:<width$}  transmittance",
-        "angle", "reflectance"
-    )?;
-    for c in &colors {
+    }
+
+    /// The first line: stack, white, observer, sampling, and `what`.
+    fn heading(&self, out: &mut impl Write, what: &str) -> Result<()> {
         writeln!(
             out,
-            "{:>6.2}°  {} {:<27}  {} {}",
-            c.angle_deg,
-            swatch(c.reflectance_rgb),
-            triple(c.reflectance_rgb),
-            swatch(c.transmittance_rgb),
-            triple(c.transmittance_rgb),
+            "{}: {}, CIE 1931 2°, sampling {}{what}; linear sRGB with the sRGB-encoded hex",
+            self.args.stack.display(),
+            match self.white {
+                White::D65 => "D65",
+                White::E => "white E (flat spectrum = 1)",
+            },
+            self.sampling,
         )?;
+        Ok(())
     }
-    Ok(ExitCode::SUCCESS)
+
+    fn smooth(&self, colors: &[irid::color::FilmColor]) -> Result<ExitCode> {
+        let mut out = std::io::stdout().lock();
+        if self.args.json {
+            serde_json::to_writer_pretty(&mut out, colors)?;
+            writeln!(out)?;
+            return Ok(ExitCode::SUCCESS);
+        }
+        self.heading(&mut out, "")?;
+        // Visible width of a swatch, a space and a padded triple.
+        let width = if self.swatches { 40 } else { 35 };
+        writeln!(
+            out,
+            "{:>7}  {:<width$}  transmittance",
+            "angle", "reflectance"
+        )?;
+        for c in colors {
+            writeln!(
+                out,
+                "{:>6.2}°  {} {:<27}  {} {}",
+                c.angle_deg,
+                self.swatch(c.reflectance_rgb),
+                triple(c.reflectance_rgb),
+                self.swatch(c.transmittance_rgb),
+                triple(c.transmittance_rgb),
+            )?;
+        }
+        Ok(ExitCode::SUCCESS)
+    }
+
+    fn rough(&self, colors: &[irid::rough::RoughColor], roughness: f64) -> Result<ExitCode> {
+        let mut out = std::io::stdout().lock();
+        if self.args.json {
+            serde_json::to_writer_pretty(&mut out, colors)?;
+            writeln!(out)?;
+            return Ok(ExitCode::SUCCESS);
+        }
+        self.heading(
+            &mut out,
+            &format!(
+                ", GGX roughness {roughness} (α = {:.4}): the reflectance pre-integrated over the lobe",
+                roughness * roughness
+            ),
+        )?;
+        let width = if self.swatches { 40 } else { 35 };
+        writeln!(
+            out,
+            "{:>7}  {:<width$}  lobe albedo",
+            "angle", "reflectance"
+        )?;
+        for c in colors {
+            writeln!(
+                out,
+                "{:>6.2}°  {} {:<27}  {:.4}",
+                c.angle_deg,
+                self.swatch(c.reflectance_rgb),
+                triple(c.reflectance_rgb),
+                c.lobe_albedo,
+            )?;
+        }
+        Ok(ExitCode::SUCCESS)
+    }
+}
+
+fn triple(v: [f64; 3]) -> String {
+    format!("({:.4}, {:.4}, {:.4})", v[0], v[1], v[2])
 }

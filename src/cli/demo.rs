@@ -100,7 +100,7 @@ fn run_all(args: &Args, images: &mut Images) -> Result<ExitCode> {
     );
     println!();
     println!(
-        "{:<18} {:>9} {:>9} {:>10} {:>9} {:>11} {:>10} {:>9}",
+        "{:<22} {:>9} {:>9} {:>10} {:>9} {:>11} {:>10} {:>9}",
         "scene", "size", "bake s", "render s", "ref size", "direct s", "dE00 mean", "dE00 p99"
     );
     for (k, name) in builtin_names().into_iter().enumerate() {
@@ -146,7 +146,7 @@ fn render_and_compare(
     let lut_small = render::render_with(&scene, &films, &small);
     let de = lut_small.delta_e2000(&reference)?;
     println!(
-        "{:<18} {:>9} {:>9.3} {:>10.3} {:>9} {:>11.2} {:>10.3} {:>9.3}",
+        "{:<22} {:>9} {:>9.3} {:>10.3} {:>9} {:>11.2} {:>10.3} {:>9.3}",
         name,
         format!("{}x{}", s.width, s.height),
         films.bake_time.as_secs_f64(),

@@ -15,7 +15,8 @@ use super::args::check_count;
 #[derive(clap::Args)]
 pub struct Args {
     /// A scene file, or a built-in scene: bubbles-uniform, bubbles-noise,
-    /// absorbing-sphere, gain-ring, blue-gem, two-layer-noise.
+    /// absorbing-sphere, absorbing-sphere-rough, gain-ring, blue-gem,
+    /// two-layer-noise.
     pub scene: String,
     /// PNG output (8-bit sRGB) [default: out/SCENE.png].
     #[arg(short = 'o', long = "output")]
@@ -50,7 +51,8 @@ pub struct Args {
     /// Worker threads [default: all cores].
     #[arg(long)]
     pub threads: Option<usize>,
-    /// Seed of the pixel sample positions.
+    /// Seed of the pixel sample positions and of the microfacet normals a
+    /// rough film draws.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
 }

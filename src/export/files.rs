@@ -120,6 +120,20 @@ fn error_json(e: &super::ExportError) -> serde_json::Value {
     })
 }
 
+/// film.json's `row_check` of one texture (see [`Texture::row_check`]):
+/// f16 values, written exactly.
+fn row_check_json(texture: &Texture) -> serde_json::Value {
+    match texture.row_check() {
+        Some(c) => json!({
+            "x": c.x,
+            "y": c.y,
+            "value": c.value.map(f64::from),
+            "mirrored": c.mirrored.map(f64::from),
+        }),
+        None => serde_json::Value::Null,
+    }
+}
+
 /// film.json: everything a third party needs to use the textures.
 pub fn film_json(export: &Export) -> serde_json::Value {
     let m = &export.mapping;
@@ -159,6 +173,10 @@ pub fn film_json(export: &Export) -> serde_json::Value {
             "format": "rgba16f",
             "files": {"reflectance": "reflectance.exr", "transmittance": "transmittance.exr"},
             "png": png,
+            "row_check": {
+                "reflectance": row_check_json(&export.reflectance),
+                "transmittance": row_check_json(&export.transmittance),
+            },
         },
         "domain": {
             "thickness_nm": [m.thickness_min_nm, m.thickness_max_nm],

@@ -282,6 +282,50 @@ impl Texture {
         }
         worst
     }
+
+    /// The texel that differs most (largest RGB difference) from its mirror
+    /// image about the middle row, with y in the first half: a host
+    /// compares what its image loader put at (x, y) with both values to
+    /// tell rows in file order from flipped ones, whatever the loader's
+    /// convention. None for a single row, which has no order to get wrong.
+    pub fn row_check(&self) -> Option<RowCheck> {
+        let (w, h) = (self.width, self.height);
+        let rgb = |x: usize, y: usize| {
+            let t = self.texels[y * w + x];
+            [t[0], t[1], t[2]]
+        };
+        let mut best: Option<(f32, RowCheck)> = None;
+        for y in 0..h / 2 {
+            for x in 0..w {
+                let (value, mirrored) = (rgb(x, y), rgb(x, h - 1 - y));
+                let gap = (0..3).fold(0.0f32, |g, k| g.max((value[k] - mirrored[k]).abs()));
+                if best.as_ref().is_none_or(|(g, _)| gap > *g) {
+                    let check = RowCheck {
+                        x,
+                        y,
+                        value,
+                        mirrored,
+                    };
+                    best = Some((gap, check));
+                }
+            }
+        }
+        best.map(|(_, check)| check)
+    }
+}
+
+/// See [`Texture::row_check`]: the RGB of texel (x, y) and of texel
+/// (x, height − 1 − y), rows counted in file order.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RowCheck {
+    /// Column.
+    pub x: usize,
+    /// Row, in the first half.
+    pub y: usize,
+    /// RGB at (x, y).
+    pub value: [f32; 3],
+    /// RGB at (x, height − 1 − y).
+    pub mirrored: [f32; 3],
 }
 
 /// The filter's weight of the upper texel and the two texel indices along
@@ -300,6 +344,32 @@ fn split(coord: f32, n: usize) -> (f32, (usize, usize)) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    fn texture(width: usize, rows: &[&[f32]]) -> Texture {
+        Texture {
+            width,
+            height: rows.len(),
+            texels: rows
+                .iter()
+                .flat_map(|r| r.iter().map(|&v| [v, v * 0.5, 0.25, 1.0]))
+                .collect(),
+        }
+    }
+
+    #[test]
+    fn row_check_picks_the_texel_most_unlike_its_mirror() {
+        // Rows 0 and 3 differ by 0.6 at column 1; rows 1 and 2 by 0.9 at column 0.
+        let t = texture(2, &[&[0.1, 0.7], &[1.0, 0.4], &[0.1, 0.4], &[0.1, 0.1]]);
+        let c = t.row_check().unwrap();
+        assert_eq!((c.x, c.y), (0, 1));
+        assert_eq!(c.value, [1.0, 0.5, 0.25]);
+        assert_eq!(c.mirrored, [0.1, 0.05, 0.25]);
+        // A symmetric texture: either order is right; the check says so by
+        // two equal values.
+        let c = texture(2, &[&[0.3, 0.2], &[0.3, 0.2]]).row_check().unwrap();
+        assert_eq!(c.value, c.mirrored);
+        assert_eq!(texture(3, &[&[0.1, 0.2, 0.3]]).row_check(), None);
+    }
 
     #[test]
     fn nodes_land_on_texel_centres() {

@@ -14,7 +14,7 @@ mod files;
 mod mapping;
 
 pub use files::{declare_dir, fill_dir, write_dir, FILM_FORMAT, FILM_VERSION};
-pub use mapping::{AngleWarp, Mapping, Texture, PARAM_NAMES};
+pub use mapping::{AngleWarp, Mapping, RowCheck, Texture, PARAM_NAMES};
 
 use rand::{Rng, SeedableRng};
 use rayon::prelude::*;

@@ -6,6 +6,7 @@ use rayon::prelude::*;
 
 use super::camera::Camera;
 use super::film::FilmShading;
+use super::random::{SampleRng, SplitMix};
 use super::tracer::Tracer;
 
 /// A linear-RGB image (exposure applied), rows top to bottom.
@@ -35,8 +36,8 @@ pub struct Sampler {
     /// Samples per pixel: a jittered k×k grid when it is a square k², else
     /// a jittered Latin hypercube; 1 (or 0) takes the pixel centre.
     pub spp: u32,
-    /// Hashed with the pixel and sample index into each sample's jitter, so
-    /// the image depends on it and not on scheduling.
+    /// Hashed with the pixel and sample index into each sample's jitter and
+    /// microfacet normals, so the image depends on it and not on scheduling.
     pub seed: u64,
     /// Factor applied to each pixel's mean radiance.
     pub exposure: f32,
@@ -53,8 +54,8 @@ pub struct Sampler {
 ///
 /// `progress` is called with the fraction of tiles done after each tile,
 /// from whichever thread rendered it.
-pub fn render_tiles<F: FilmShading>(
-    tracer: &Tracer<F>,
+pub fn render_tiles<F: FilmShading, const ROUGH: bool>(
+    tracer: &Tracer<F, ROUGH>,
     camera: &Camera,
     s: &Sampler,
     progress: &(dyn Fn(f64) + Sync),
@@ -64,8 +65,8 @@ pub fn render_tiles<F: FilmShading>(
 }
 
 /// [`render_tiles`], on the calling thread alone or on the current pool.
-fn render_tiles_on<F: FilmShading>(
-    tracer: &Tracer<F>,
+fn render_tiles_on<F: FilmShading, const ROUGH: bool>(
+    tracer: &Tracer<F, ROUGH>,
     camera: &Camera,
     s: &Sampler,
     on_caller: bool,
@@ -111,8 +112,8 @@ fn render_tiles_on<F: FilmShading>(
 /// Stratified samples: a jittered k×k grid when spp is a square, otherwise
 /// a jittered Latin hypercube (each row and each column stratum used once);
 /// one sample per pixel goes through the pixel centre.
-fn render_pixel<F: FilmShading>(
-    tracer: &Tracer<F>,
+fn render_pixel<F: FilmShading, const ROUGH: bool>(
+    tracer: &Tracer<F, ROUGH>,
     camera: &Camera,
     s: &Sampler,
     x: u32,
@@ -123,14 +124,13 @@ fn render_pixel<F: FilmShading>(
     let mut sum = Vec3::ZERO;
     if s.spp <= 1 {
         let ray = camera.ray((x as f32 + 0.5) / w, (y as f32 + 0.5) / h);
+        SampleRng::start(SplitMix::for_sample(s.seed, pixel_index, 0));
         return s.exposure * tracer.trace(&ray, 0);
     }
     let k = (s.spp as f32).sqrt().round() as u32;
     let square = k * k == s.spp;
     for i in 0..s.spp {
-        let mut rng = SplitMix(
-            s.seed ^ pixel_index.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ (u64::from(i) << 40),
-        );
+        let mut rng = SplitMix::for_sample(s.seed, pixel_index, i);
         let (jx, jy) = (rng.next_f32(), rng.next_f32());
         let (sx, sy) = if square {
             (
@@ -146,6 +146,8 @@ fn render_pixel<F: FilmShading>(
             )
         };
         let ray = camera.ray((x as f32 + sx) / w, (y as f32 + sy) / h);
+        // The rest of the sample's numbers go to the surfaces it meets.
+        SampleRng::start(rng);
         sum += tracer.trace(&ray, 0);
     }
     s.exposure * sum / s.spp as f32
@@ -167,25 +169,6 @@ fn permuted(i: u32, n: u32, key: u64) -> u32 {
         if v < u64::from(n) {
             return v as u32;
         }
-    }
-}
-
-/// SplitMix64: a tiny, well-mixed generator; ample for pixel jitter.
-struct SplitMix(u64);
-
-impl SplitMix {
-    #[inline]
-    fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-
-    #[inline]
-    fn next_f32(&mut self) -> f32 {
-        (self.next_u64() >> 40) as f32 * (1.0 / (1u64 << 24) as f32)
     }
 }
 
@@ -243,14 +226,5 @@ mod tests {
             assert_eq!(alone, pooled, "{spp} spp");
             assert!(alone.pixels.iter().any(|p| p[0] > 0.0));
         }
-    }
-
-    #[test]
-    fn jitter_is_uniform_on_the_unit_interval() {
-        let mut r = SplitMix(42);
-        let v: Vec<f32> = (0..10_000).map(|_| r.next_f32()).collect();
-        assert!(v.iter().all(|x| (0.0..1.0).contains(x)));
-        let mean = v.iter().sum::<f32>() / v.len() as f32;
-        assert!((mean - 0.5).abs() < 0.02, "{mean}");
     }
 }

@@ -106,7 +106,11 @@ impl LutFilm {
 }
 
 impl FilmShading for LutFilm {
-    #[inline]
+    /// Always inlined: the tracer calls it from the smooth and the rough
+    /// film paths, and with two callers the compiler stopped inlining the
+    /// lookup into the hit, which cost a smooth LUT render about 4 % more
+    /// instructions (callgrind, two-layer-noise).
+    #[inline(always)]
     fn shade(&self, thickness_nm: f32, cos_theta: f32, side: Side) -> FilmRgb {
         let lut = match side {
             Side::Back => self.back.as_ref().unwrap_or(&self.front),

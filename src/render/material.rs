@@ -60,6 +60,9 @@ pub struct FilmMaterial {
     /// The substrate when light passes into it (a dielectric, or air for a
     /// bubble); `None` for an opaque (metal) substrate.
     pub inside: Option<Interior>,
+    /// GGX α = roughness² of the surface under the film (docs/rough.md);
+    /// 0 for a mirror-smooth film.
+    pub alpha: f32,
 }
 
 /// The medium inside a film-coated object that light can enter.

@@ -19,7 +19,9 @@ pub mod image;
 pub mod lut_film;
 pub mod material;
 pub mod mesh;
+pub mod microfacet;
 pub mod output;
+pub mod random;
 pub mod scene;
 pub mod scene_file;
 pub mod thickness;
@@ -279,7 +281,22 @@ fn render_tiles_with<F: FilmShading>(
     sampler: &image::Sampler,
     progress: &(dyn Fn(f64) + Sync),
 ) -> Image {
-    let tracer = tracer::Tracer {
+    // The rough-film path only where a film is rough: compiled in, it
+    // slows the smooth path a little (see `Tracer`).
+    let rough = scene
+        .materials
+        .iter()
+        .any(|m| matches!(m, Material::Film(f) if f.alpha > 0.0));
+    if rough {
+        let tracer: tracer::Tracer<F, true> = tracer::Tracer {
+            scene,
+            films: shaders,
+            thickness_grids: &films.thickness_grids,
+            max_depth,
+        };
+        return image::render_tiles(&tracer, camera, sampler, progress);
+    }
+    let tracer: tracer::Tracer<F> = tracer::Tracer {
         scene,
         films: shaders,
         thickness_grids: &films.thickness_grids,

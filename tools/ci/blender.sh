@@ -3,7 +3,9 @@
 # libraries Blender's Python module links against, a Python 3.11 virtualenv
 # with bpy 5.0, numpy < 2 and OpenEXR, the irid binary), then runs
 # tools/blender/test_blender.py: Cycles renders of irid exports against
-# `irid color`. Idempotent; exits non-zero on any failure.
+# `irid color`, and tools/blender/test_rough_cycles.py: Cycles' rough thin
+# film against `irid color --roughness`. Idempotent; exits non-zero on any
+# failure.
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 
@@ -41,3 +43,5 @@ fi
 cargo build --release --quiet --bin irid
 "$venv/bin/python" tools/blender/test_blender.py --irid target/release/irid \
     --table "$(mktemp -d)/blender-table.md"
+# Cycles' own rough thin film against `irid color --roughness` (docs/rough.md).
+"$venv/bin/python" tools/blender/test_rough_cycles.py --irid target/release/irid

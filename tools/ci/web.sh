@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
-# CI: the browser preview (web/) in headless Chromium. Installs what is
-# missing (Debian's chromium, node and npm; playwright-core and three from
-# tools/web/package-lock.json), builds irid, exports three stacks, writes a
-# preview of them with `irid preview`, and runs tools/web/test_web.mjs.
+# CI: the browser preview (web/) and the three.js module (web/irid-three.mjs)
+# in headless Chromium. Installs what is missing (Debian's chromium, node and
+# npm; playwright-core and three from tools/web/package-lock.json), builds
+# irid, exports three stacks, writes a preview of them with `irid preview`,
+# and runs tools/web/test_web.mjs and tools/web/test_three.mjs.
 # Exits non-zero on any failure.
 set -euo pipefail
 cd "$(dirname "$0")/../.."
@@ -33,4 +34,4 @@ trap 'rm -rf "$work"' EXIT
 
 IRID_PREVIEW="$work/preview" IRID_BIN="$irid" \
     IRID_STACKS="soap-film=luts/soap-film.toml,two-layer=luts/two-layer.toml,dense-side=tools/web/dense-side.toml" \
-    node --test tools/web/test_web.mjs
+    node --test tools/web/test_web.mjs tools/web/test_three.mjs

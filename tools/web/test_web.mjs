@@ -14,49 +14,22 @@
 
 import { test, before, after } from 'node:test';
 import assert from 'node:assert/strict';
-import { execFileSync } from 'node:child_process';
 import fs from 'node:fs';
-import http from 'node:http';
 import os from 'node:os';
 import path from 'node:path';
-import { fileURLToPath } from 'node:url';
-import { chromium } from 'playwright-core';
 import { srgb8ToLinear, linearSrgbToLab, deltaE00 } from './colour.mjs';
+import { iridColor, launchChromium, serve, stacksFromEnv, stackWithThickness } from './harness.mjs';
 
-const REPO = path.resolve(path.dirname(fileURLToPath(import.meta.url)), '../..');
 const PREVIEW = process.env.IRID_PREVIEW;
-const STACKS = new Map((process.env.IRID_STACKS || '').split(',').filter(Boolean).map((pair) => {
-  const at = pair.indexOf('=');
-  return [pair.slice(0, at), path.resolve(pair.slice(at + 1))];
-}));
-const IRID = process.env.IRID_BIN || path.join(REPO, 'target/release/irid');
-const CHROMIUM = process.env.CHROMIUM || '/usr/bin/chromium';
+const STACKS = stacksFromEnv();
 if (!PREVIEW || STACKS.size === 0) {
   throw new Error('set IRID_PREVIEW (a folder written by `irid preview`) and IRID_STACKS (NAME=STACK.toml,...)');
 }
-
-const MIME = {
-  '.html': 'text/html', '.js': 'text/javascript', '.mjs': 'text/javascript', '.css': 'text/css', '.json': 'application/json',
-  '.png': 'image/png', '.exr': 'image/x-exr', '.glsl': 'text/plain',
-};
 
 let root;
 let server;
 let baseUrl;
 let browser;
-
-function serve(dir) {
-  return http.createServer((req, res) => {
-    const url = new URL(req.url, 'http://127.0.0.1');
-    const file = path.join(dir, decodeURIComponent(url.pathname));
-    if (!file.startsWith(dir + path.sep) || !fs.existsSync(file) || !fs.statSync(file).isFile()) {
-      res.writeHead(404).end('not found');
-      return;
-    }
-    res.writeHead(200, { 'content-type': MIME[path.extname(file)] || 'application/octet-stream' });
-    fs.createReadStream(file).pipe(res);
-  });
-}
 
 /** The first export named in IRID_STACKS, as a folder under `root`. */
 function firstExportDir() {
@@ -69,21 +42,8 @@ function firstExportDir() {
 before(async () => {
   root = fs.mkdtempSync(path.join(os.tmpdir(), 'irid-web-'));
   fs.cpSync(PREVIEW, path.join(root, 'preview'), { recursive: true });
-  // The three.js recipe's page, and three.js from tools/web/node_modules.
-  const here = path.dirname(fileURLToPath(import.meta.url));
-  fs.mkdirSync(path.join(root, 'tools'));
-  for (const f of ['three_film.mjs', 'three_check.html']) fs.copyFileSync(path.join(here, f), path.join(root, 'tools', f));
-  fs.cpSync(path.join(here, 'node_modules/three/build'), path.join(root, 'three'), { recursive: true });
-  server = serve(root);
-  await new Promise((resolve) => server.listen(0, '127.0.0.1', resolve));
-  baseUrl = `http://127.0.0.1:${server.address().port}`;
-  browser = await chromium.launch({
-    executablePath: CHROMIUM,
-    headless: true,
-    // WebGL2 without a GPU: ANGLE on SwiftShader.
-    args: ['--no-sandbox', '--no-first-run', '--disable-background-networking', '--disable-component-update',
-      '--disable-sync', '--disable-quic', '--use-angle=swiftshader', '--enable-unsafe-swiftshader'],
-  });
+  ({ server, baseUrl } = await serve([['/', root]]));
+  browser = await launchChromium();
 });
 
 after(async () => {
@@ -126,19 +86,6 @@ async function pixels(page) {
   return { width, height, data: new Uint8Array(Buffer.from(base64, 'base64')) };
 }
 
-/** The stack file with layer `layer`'s thickness set, in a temporary file. */
-function stackWithThickness(text, layer, thickness, dir) {
-  let seen = 0;
-  const out = text.replace(/^(\s*thickness_nm\s*=\s*)[^#\n]+/gm, (m, lead) => {
-    seen++;
-    return seen === layer ? `${lead}${thickness}` : m;
-  });
-  assert.ok(seen >= layer, `the stack file has no layer ${layer}`);
-  const file = path.join(dir, `stack-${thickness}.toml`);
-  fs.writeFileSync(file, out);
-  return file;
-}
-
 /** The page's chart pixels against `irid color` at the same (thickness, angle). */
 async function compareChart(page, film, quantity, stackFile) {
   await page.selectOption('#mode', quantity === 'reflectance' ? 'chart-r' : 'chart-t');
@@ -168,10 +115,7 @@ async function compareChart(page, film, quantity, stackFile) {
         pys.push(py);
         angles.push(deg);
       }
-      const stack = stackWithThickness(text, film.layer, thickness, tmp);
-      const out = execFileSync(IRID, ['color', stack, '--json', '--angles', angles.map((a) => a.toPrecision(17)).join(',')], { encoding: 'utf8' });
-      const colours = JSON.parse(out);
-      assert.equal(colours.length, angles.length);
+      const colours = iridColor(stackWithThickness(text, film.layer, thickness, tmp), angles);
       colours.forEach((c, k) => {
         const o = (pys[k] * width + px) * 4; // readPixels rows run bottom to top
         const shown = [0, 1, 2].map((ch) => srgb8ToLinear(data[o + ch]));
@@ -334,43 +278,6 @@ test('frame time: the film shader against the same scene with constant R and T',
   // A bound for software rendering, not a goal: a frame within 2 s.
   assert.ok(median(film) < 2000, `${median(film)} ms per frame`);
   await page.close();
-});
-
-test('the three.js recipe (three_film.mjs) shows R at normal incidence', async () => {
-  const dir = firstExportDir();
-  const name = path.basename(dir);
-  const film = readFilm(dir);
-  const page = await browser.newPage();
-  const errors = [];
-  page.on('pageerror', (e) => errors.push(e.message));
-  page.on('console', (m) => { if (m.type() === 'error') errors.push(m.text()); });
-  await page.goto(`${baseUrl}/tools/three_check.html?export=/${dir}/`);
-  await page.waitForFunction(() => document.body.dataset.state, null, { timeout: 60000 });
-  assert.equal(await page.evaluate(() => document.body.dataset.state), 'ready',
-    await page.evaluate(() => document.body.dataset.error));
-  const [t0, t1] = film.domain.thickness_nm;
-  const thicknesses = [0.1, 0.3, 0.5, 0.7, 0.9].map((f) => t0 + f * (t1 - t0));
-  const text = fs.readFileSync(STACKS.get(name), 'utf8');
-  const tmp = fs.mkdtempSync(path.join(os.tmpdir(), 'irid-web-three-'));
-  const differences = [];
-  const shown = [];
-  try {
-    for (const t of thicknesses) {
-      const rgb8 = await page.evaluate((x) => window.threeCheck.centre(x), t);
-      shown.push(rgb8.join(','));
-      const out = execFileSync(IRID, ['color', stackWithThickness(text, film.layer, t, tmp), '--json', '--angles', '0'], { encoding: 'utf8' });
-      const exact = JSON.parse(out)[0].reflectance_rgb.map((v) => Math.min(1, Math.max(0, v)));
-      differences.push(deltaE00(linearSrgbToLab(exact), linearSrgbToLab(rgb8.map(srgb8ToLinear))));
-    }
-  } finally {
-    fs.rmSync(tmp, { recursive: true, force: true });
-  }
-  await page.close();
-  assert.deepEqual(errors, []);
-  assert.equal(new Set(shown).size, thicknesses.length, `the thickness uniform changes nothing: ${shown.join(' ')}`);
-  const mean = differences.reduce((a, b) => a + b, 0) / differences.length;
-  console.log(`three.js recipe, ${name}, R at normal incidence: ΔE00 mean ${mean.toFixed(3)}, max ${Math.max(...differences).toFixed(3)} over ${differences.length} thicknesses`);
-  assert.ok(mean <= 1, `mean ΔE00 ${mean}`);
 });
 
 test('screenshot', async (t) => {

@@ -262,6 +262,7 @@ fn material(
             thickness_nm,
             thickness,
             absorption,
+            roughness,
         } => {
             let stack = film_stack(stack, *layer, name, base, origin)?;
             let field = thickness_field(
@@ -270,7 +271,13 @@ fn material(
                 stack.layers[layer - 1].thickness_nm,
                 origin,
             )?;
-            film(name, stack, *layer, field, *absorption, origin, films)?
+            crate::rough::check_roughness(&what("roughness"), f64::from(*roughness))
+                .map_err(|e| Error::malformed(origin, e.to_string()))?;
+            let mut material = film(name, stack, *layer, field, *absorption, origin, films)?;
+            if let Material::Film(f) = &mut material {
+                f.alpha = roughness * roughness;
+            }
+            material
         }
     })
 }
@@ -421,6 +428,7 @@ fn film(
         thickness: field,
         outside_ior,
         inside,
+        alpha: 0.0,
     }))
 }
 

@@ -18,7 +18,7 @@ use build::build;
 use sections::SceneFile;
 
 /// Built-in scenes: (name, TOML text).
-const BUILTIN: [(&str, &str); 6] = [
+const BUILTIN: [(&str, &str); 7] = [
     (
         "bubbles-uniform",
         include_str!("../../../luts/scenes/bubbles-uniform.toml"),
@@ -30,6 +30,10 @@ const BUILTIN: [(&str, &str); 6] = [
     (
         "absorbing-sphere",
         include_str!("../../../luts/scenes/absorbing-sphere.toml"),
+    ),
+    (
+        "absorbing-sphere-rough",
+        include_str!("../../../luts/scenes/absorbing-sphere-rough.toml"),
     ),
     (
         "gain-ring",

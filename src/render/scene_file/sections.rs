@@ -145,6 +145,9 @@ pub(super) enum MaterialSection {
         thickness: Option<NoiseSection>,
         #[serde(default)]
         absorption: [f32; 3],
+        /// GGX roughness in [0, 1]; 0 is mirror-smooth.
+        #[serde(default)]
+        roughness: f32,
     },
 }
 

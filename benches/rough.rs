@@ -1,0 +1,64 @@
+//! Rough films: the F_eff grid engine (`irid::rough::rough_reflectance`)
+//! on the soap film over 0–1000 nm, and one kernel on its own.
+
+// Not an API: criterion's macros generate undocumented public functions.
+#![allow(missing_docs)]
+
+use criterion::{black_box, criterion_group, criterion_main, Criterion};
+use irid::color::{Sampling, SpectralIntegrator};
+use irid::optics::{Layer, Material, Stack};
+use irid::rough::{rough_reflectance, Kernel, MuGrid, Quadrature};
+
+fn soap() -> Stack {
+    Stack {
+        ambient: Material::constant(1.0, 0.0),
+        layers: vec![Layer {
+            material: Material::constant(1.33, 0.0),
+            thickness_nm: 500.0,
+        }],
+        substrate: Material::constant(1.0, 0.0),
+    }
+}
+
+fn linspace(lo: f64, hi: f64, n: usize) -> Vec<f64> {
+    (0..n)
+        .map(|i| lo + (hi - lo) * i as f64 / (n - 1) as f64)
+        .collect()
+}
+
+fn kernels(c: &mut Criterion) {
+    let q = Quadrature::default();
+    let grid = MuGrid::new(q.mu_intervals, None);
+    let mut g = c.benchmark_group("rough kernel");
+    for (cos, r) in [(0.9, 0.05), (0.7, 0.3), (0.2, 0.8)] {
+        g.bench_function(format!("cos {cos} roughness {r}"), |b| {
+            b.iter(|| Kernel::new(&grid, black_box(cos), black_box(r), &q))
+        });
+    }
+    g.finish();
+}
+
+/// The whole engine on the soap film, 0–1000 nm, exact 1 nm colour: the
+/// smooth sweep on the μ grid plus a kernel per (cos θ, roughness) and
+/// the weighting, on every core.
+fn grids(c: &mut Criterion) {
+    let stack = soap();
+    let integrator = SpectralIntegrator::new(Sampling::Exact);
+    let q = Quadrature::default();
+    let mut g = c.benchmark_group("rough grid soap 0-1000 nm");
+    g.sample_size(10);
+    for (nt, nc, nr) in [(257, 33, 9), (1025, 65, 17)] {
+        let thickness = linspace(0.0, 1000.0, nt);
+        let cos = linspace(0.0, 1.0, nc);
+        let roughness = linspace(0.0, 1.0, nr);
+        g.bench_function(format!("{nt}x{nc}x{nr}"), |b| {
+            b.iter(|| {
+                rough_reflectance(&stack, 1, &integrator, &thickness, &cos, &roughness, &q).unwrap()
+            })
+        });
+    }
+    g.finish();
+}
+
+criterion_group!(benches, kernels, grids);
+criterion_main!(benches);

@@ -1,0 +1,53 @@
+//! Rough films: a thin-film stack under a GGX microfacet surface, and its
+//! reflectance pre-integrated over the lobe (docs/rough.md).
+//!
+//! The definition, used everywhere in irid: GGX (Trowbridge–Reitz) with
+//! α = roughness², the height-correlated Smith masking-shadowing
+//! G2 = 1 / (1 + Λ(v) + Λ(l)), single scattering. The pre-integrated film
+//! reflectance at view angle θ_v is
+//!
+//! ```text
+//! F_eff(d, θ_v, r) = ∫ D G2 F(v·h) / (4 |n·v|) dl  ÷  ∫ D G2 / (4 |n·v|) dl
+//! ```
+//!
+//! with F the film's unpolarized reflectance at incidence cos = v·h,
+//! integrated to colour as every other irid colour. A lobe of colour F_eff
+//! has the film's directional albedo exactly.
+//!
+//! F depends on the light direction only through μ = v·h, so F_eff is a
+//! one-dimensional weighting of the smooth film colour,
+//! F_eff = ∫ F(μ) K(μ; θ_v, α) dμ ÷ ∫ K dμ. A [`Kernel`] holds that weighting
+//! for one (θ_v, roughness) as weights on the nodes of a [`MuGrid`] (the
+//! film's colour is interpolated between them), computed once by
+//! deterministic quadrature ([`Quadrature`]); colour integration is linear,
+//! so the same weights apply to RGB colours. [`rough_reflectance`] fills F_eff
+//! over a whole thickness × cos θ × roughness grid: the film's smooth colour
+//! on the μ nodes from the baker's split-stack sweep, times a kernel per
+//! (cos θ, roughness). [`rough_colors`] is `irid color --roughness`.
+
+mod engine;
+pub mod ggx;
+mod kernel;
+mod mu_grid;
+mod quadrature;
+#[cfg(test)]
+mod tests;
+
+pub use engine::{rough_colors, rough_reflectance, RoughColor, RoughTable};
+pub use kernel::Kernel;
+pub use mu_grid::MuGrid;
+pub use quadrature::Quadrature;
+
+use crate::error::{Error, Result};
+
+/// Checks a roughness: finite and in [0, 1] (`what` names it in the error).
+pub fn check_roughness(what: &str, roughness: f64) -> Result<()> {
+    if (0.0..=1.0).contains(&roughness) {
+        Ok(())
+    } else {
+        Err(Error::invalid(
+            what,
+            format!("must be in [0, 1], got {roughness}"),
+        ))
+    }
+}

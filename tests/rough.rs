@@ -1,0 +1,208 @@
+//! Rough films: the tracer's GGX lobe against the definition it samples,
+//! scene files' roughness, and `irid color --roughness`.
+
+// Not an API: a test crate has no public API to document.
+#![allow(missing_docs)]
+
+mod common;
+
+use std::path::Path;
+
+use irid::color::{Sampling, SpectralIntegrator};
+use irid::render::{self, FilmMode, RenderOptions, Scene};
+use irid::rough::{rough_reflectance, Quadrature};
+
+/// A film on silver under a uniform white sky, seen by a one-pixel camera
+/// whose rays all meet it at `angle_deg`.
+fn furnace(angle_deg: f32, roughness: f32, spp: u32) -> Scene {
+    let (s, c) = angle_deg.to_radians().sin_cos();
+    let text = format!(
+        r#"
+        [render]
+        width = 1
+        height = 1
+        spp = {spp}
+        max_depth = 0
+        [camera]
+        position = [{x}, {y}, 0.0]
+        look_at = [0.0, 0.0, 0.0]
+        up = [0.0, 0.0, 1.0]
+        fov_deg = 0.01
+        [environment]
+        kind = "sky"
+        zenith = [1.0, 1.0, 1.0]
+        horizon = [1.0, 1.0, 1.0]
+        ground = [1.0, 1.0, 1.0]
+        [materials.coated]
+        kind = "film"
+        stack = {{ ambient = {{ n = 1.0 }}, substrate = {{ material = "silver" }}, layers = [{{ n = [1.5, 0.15], thickness_nm = 300.0 }}] }}
+        roughness = {roughness}
+        [[objects]]
+        shape = "plane"
+        material = "coated"
+        point = [0.0, 0.0, 0.0]
+        normal = [0.0, 1.0, 0.0]
+        "#,
+        x = 10.0 * s,
+        y = 10.0 * c,
+    );
+    Scene::from_toml_str(&text, Path::new("."), "furnace").unwrap()
+}
+
+/// In a white furnace with no bounce after the film, a pixel is the white
+/// lobe's albedo times F_eff: the tracer's visible-normal sampling, its
+/// G2 / G1 weights and the film per microfacet (from the tables, and from
+/// the solver at every hit) reproduce the definition the library
+/// integrates by quadrature, to the Monte Carlo noise of 4096 samples.
+#[test]
+fn the_tracer_samples_the_definition() {
+    let cache = Path::new(env!("CARGO_TARGET_TMPDIR")).join("rough-test-cache");
+    let exact = SpectralIntegrator::new(Sampling::Exact);
+    for (angle, roughness) in [(0.0f32, 0.5f32), (40.0, 0.3), (65.0, 0.6)] {
+        let scene = furnace(angle, roughness, 4096);
+        let want = rough_reflectance(
+            &scene.films[0].stack,
+            1,
+            &exact,
+            &[300.0],
+            &[f64::from(angle).to_radians().cos()],
+            &[f64::from(roughness)],
+            &Quadrature::default(),
+        )
+        .unwrap();
+        let expected = want.reflectance[0].map(|v| v * want.albedo[0]);
+        for mode in [
+            FilmMode::lut(&cache),
+            FilmMode::Direct {
+                sampling: Sampling::Exact,
+            },
+        ] {
+            let image = render::render(&scene, &RenderOptions::new(mode.clone())).unwrap();
+            let got = image.pixels[0];
+            for c in 0..3 {
+                let d = (f64::from(got[c]) - expected[c]).abs();
+                assert!(
+                    d < 5e-3,
+                    "{angle}° r {roughness} {mode:?}: {got:?} vs {expected:?}"
+                );
+            }
+        }
+    }
+}
+
+/// The same seed gives the same rough image and another seed another one
+/// (the lobe is sampled); at roughness 0 (the mirror path) the seed is only
+/// the pixel jitter's, so one sample through the pixel centre ignores it.
+#[test]
+fn rough_renders_are_seeded() {
+    let cache = Path::new(env!("CARGO_TARGET_TMPDIR")).join("rough-test-cache");
+    let scene = furnace(30.0, 0.4, 16);
+    let render_with = |seed: u64| {
+        let mut opts = RenderOptions::new(FilmMode::lut(&cache));
+        opts.seed = seed;
+        render::render(&scene, &opts).unwrap()
+    };
+    assert_eq!(render_with(3), render_with(3));
+    assert_ne!(render_with(3), render_with(4));
+    let mirror = furnace(30.0, 0.0, 1);
+    let a = render::render(&mirror, &RenderOptions::new(FilmMode::lut(&cache))).unwrap();
+    let mut opts = RenderOptions::new(FilmMode::lut(&cache));
+    opts.seed = 4;
+    assert_eq!(a, render::render(&mirror, &opts).unwrap());
+}
+
+#[test]
+fn scene_roughness_is_checked() {
+    for bad in ["-0.1", "1.5", "nan", "inf"] {
+        let text = format!(
+            r#"
+            [camera]
+            position = [0.0, 1.0, 5.0]
+            look_at = [0.0, 0.0, 0.0]
+            fov_deg = 40.0
+            [materials.f]
+            kind = "film"
+            stack = {{ ambient = {{ n = 1.0 }}, substrate = {{ n = 1.5 }}, layers = [{{ n = 1.38, thickness_nm = 300.0 }}] }}
+            roughness = {bad}
+            [[objects]]
+            shape = "sphere"
+            material = "f"
+            center = [0.0, 0.0, 0.0]
+            radius = 1.0
+            "#
+        );
+        let e = Scene::from_toml_str(&text, Path::new("."), "s.toml")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("materials.f.roughness: must be in [0, 1]") && !e.contains('\n'),
+            "{bad}: {e}"
+        );
+    }
+}
+
+#[cfg(feature = "cli")]
+mod cli {
+    use super::common::irid;
+
+    fn json(args: &[&str]) -> Vec<serde_json::Map<String, serde_json::Value>> {
+        let out = irid(args);
+        assert!(out.success(), "{args:?}: {}", out.stderr);
+        serde_json::from_str(&out.stdout).unwrap()
+    }
+
+    fn triple(row: &serde_json::Map<String, serde_json::Value>, key: &str) -> Vec<f64> {
+        row[key]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|v| v.as_f64().unwrap())
+            .collect()
+    }
+
+    /// The agreed keys; roughness 0 prints the smooth reflectance to the
+    /// bit; a rough lobe's colour differs from it and its albedo is below 1.
+    #[test]
+    fn json_keys_and_the_mirror_limit() {
+        let base = [
+            "color",
+            "luts/soap-film.toml",
+            "--angles",
+            "0,40,70",
+            "--json",
+        ];
+        let smooth = json(&base);
+        let zero = json(&[&base[..], &["--roughness", "0"]].concat());
+        let rough = json(&[&base[..], &["--roughness", "0.5"]].concat());
+        for ((s, z), r) in smooth.iter().zip(&zero).zip(&rough) {
+            let mut keys: Vec<&str> = r.keys().map(String::as_str).collect();
+            keys.sort();
+            assert_eq!(
+                keys,
+                [
+                    "angle_deg",
+                    "lobe_albedo",
+                    "reflectance_rgb",
+                    "reflectance_xyz",
+                    "roughness"
+                ]
+            );
+            assert_eq!(triple(s, "reflectance_rgb"), triple(z, "reflectance_rgb"));
+            assert_eq!(z["lobe_albedo"].as_f64(), Some(1.0));
+            let (a, b) = (triple(s, "reflectance_rgb"), triple(r, "reflectance_rgb"));
+            assert!((0..3).any(|c| (a[c] - b[c]).abs() > 1e-3), "{a:?} {b:?}");
+            let albedo = r["lobe_albedo"].as_f64().unwrap();
+            assert!(albedo > 0.5 && albedo < 1.0, "{albedo}");
+        }
+        let text = irid(["color", "luts/soap-film.toml", "--roughness", "0.3"]);
+        assert!(text.success() && text.stdout.contains("lobe albedo"));
+    }
+
+    #[test]
+    fn bad_roughness_is_one_line() {
+        for bad in ["nan", "NaN", "-0.1", "1.0001", "inf", "x", ""] {
+            irid(["color", "luts/soap-film.toml", "--roughness", bad])
+                .assert_one_line_error(bad, &["--roughness"]);
+        }
+    }
+}

@@ -1,0 +1,236 @@
+// web/irid-three.mjs in a real browser (Debian's chromium, headless, through
+// playwright-core): a sphere in a white furnace (three_sphere.html), every
+// pixel held to `irid color` at the angle its ray meets the sphere, under a
+// perspective and an orthographic camera, the export read by three.js's
+// EXRLoader (rows flipped) and by web/exr.js (file order), half and float.
+//
+// Environment: IRID_PREVIEW, IRID_STACKS, IRID_BIN, CHROMIUM as for
+// test_web.mjs (the exports are read from the preview's exports/ folder).
+//
+// Run: node --test tools/web/test_three.mjs
+
+import { test, before, after } from 'node:test';
+import assert from 'node:assert/strict';
+import fs from 'node:fs';
+import os from 'node:os';
+import path from 'node:path';
+import { linearSrgbToLab, deltaE00 } from './colour.mjs';
+import { HERE, REPO, iridColor, launchChromium, serve, stacksFromEnv, stackWithThickness } from './harness.mjs';
+
+const PREVIEW = process.env.IRID_PREVIEW;
+const STACKS = stacksFromEnv();
+if (!PREVIEW || STACKS.size === 0) {
+  throw new Error('set IRID_PREVIEW (a folder written by `irid preview`) and IRID_STACKS (NAME=STACK.toml,...)');
+}
+
+// The cameras of three_sphere.html: a 30° vertical field of view from
+// (0, 0, 4.5), and an orthographic view of [-1.05, 1.05]² from (0, 0, 5),
+// both looking down −z at the unit sphere at the origin.
+const FOV_DEG = 30;
+const EYE_Z = 4.5;
+const ORTHO_HALF = 1.05;
+// Pixels nearer grazing than this are left out: there the tessellated
+// silhouette and the analytic sphere part, and the export's angle domain
+// ends at cos 89°.
+const COS_MIN = 0.05;
+
+let server;
+let baseUrl;
+let browser;
+let page;
+let scratch;
+let size;
+/** Per camera, the rasterized sphere's cos θ at every pixel (RGBA, cos in R). */
+const geometry = {};
+
+before(async () => {
+  ({ server, baseUrl } = await serve([
+    ['/exports/', path.join(PREVIEW, 'exports')],
+    ['/web/', path.join(REPO, 'web')],
+    ['/three/', path.join(HERE, 'node_modules/three')],
+    ['/tools/', HERE],
+  ]));
+  browser = await launchChromium();
+  page = await browser.newPage();
+  page.errors = [];
+  page.on('pageerror', (e) => page.errors.push(e.message));
+  page.on('console', (m) => { if (m.type() === 'error') page.errors.push(m.text()); });
+  await page.goto(`${baseUrl}/tools/three_sphere.html`);
+  await page.waitForFunction(() => document.body.dataset.state === 'ready', null, { timeout: 60000 });
+  scratch = fs.mkdtempSync(path.join(os.tmpdir(), 'irid-three-'));
+  size = await page.evaluate(() => window.threeCheck.size);
+  for (const camera of ['perspective', 'orthographic']) {
+    geometry[camera] = await page.evaluate((c) => window.threeCheck.geometry(c), camera);
+  }
+});
+
+after(async () => {
+  await browser?.close();
+  server?.close();
+  if (scratch) fs.rmSync(scratch, { recursive: true, force: true });
+});
+
+const dot = (a, b) => a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+
+/**
+ * cos θ where the ray through the centre of pixel (px, py) (rows from the
+ * bottom) meets the ideal unit sphere, θ between the sphere's normal there and the direction
+ * back along the ray; null where the ray misses.
+ */
+function pixelCos(camera, px, py, size) {
+  const x = ((px + 0.5) / size) * 2 - 1;
+  const y = ((py + 0.5) / size) * 2 - 1;
+  let origin;
+  let dir;
+  if (camera === 'orthographic') {
+    origin = [x * ORTHO_HALF, y * ORTHO_HALF, 5];
+    dir = [0, 0, -1];
+  } else {
+    const t = Math.tan((FOV_DEG / 2) * (Math.PI / 180));
+    const v = [x * t, y * t, -1];
+    const n = Math.hypot(...v);
+    origin = [0, 0, EYE_Z];
+    dir = v.map((c) => c / n);
+  }
+  const b = dot(origin, dir);
+  const disc = b * b - (dot(origin, origin) - 1);
+  if (disc <= 0) return null;
+  const s = -b - Math.sqrt(disc);
+  const hit = origin.map((o, i) => o + s * dir[i]); // the normal of the unit sphere
+  return -dot(hit, dir);
+}
+
+function readFilm(name) {
+  return JSON.parse(fs.readFileSync(path.join(PREVIEW, 'exports', name, 'film.json'), 'utf8'));
+}
+
+function summary(differences) {
+  const mean = differences.reduce((s, d) => s + d, 0) / differences.length;
+  return { mean, max: Math.max(...differences), points: differences.length };
+}
+
+/** The rendered sphere against `irid color` at each pixel's cos θ (`geometry`): ΔE00 of R. */
+function compareSphere(rgba, geometry, stackFile, film, thickness) {
+  const pixels = [];
+  for (let o = 0; o < rgba.length; o += 4) {
+    if (rgba[o + 3] < 0.5 || geometry[o] < COS_MIN) continue;
+    pixels.push({ o, angle: (Math.acos(Math.min(1, geometry[o])) * 180) / Math.PI });
+  }
+  const angles = [...new Set(pixels.map((p) => p.angle))];
+  const text = fs.readFileSync(stackFile, 'utf8');
+  const colours = iridColor(stackWithThickness(text, film.layer, thickness, scratch), angles);
+  const exact = new Map(angles.map((a, i) => [a, linearSrgbToLab(colours[i].reflectance_rgb)]));
+  return summary(pixels.map(({ o, angle }) => deltaE00(exact.get(angle), linearSrgbToLab([rgba[o], rgba[o + 1], rgba[o + 2]]))));
+}
+
+async function render(camera, thickness) {
+  return page.evaluate(([c, t]) => window.threeCheck.render(c, t), [camera, thickness]);
+}
+
+/** Renders export `name` loaded by `route` under both cameras at two thicknesses; returns the ΔE00 per camera. */
+async function renderAndCompare(name, route) {
+  const film = readFilm(name);
+  assert.equal(film.white, 'd65', `${name}: the reference (irid color) is D65 linear sRGB`);
+  const flipped = await page.evaluate(([url, r]) => window.threeCheck.load(url, r), [`/exports/${name}/`, route]);
+  const [t0, t1] = film.domain.thickness_nm;
+  const results = {};
+  for (const camera of ['perspective', 'orthographic']) {
+    const differences = [];
+    for (const f of [0.3, 0.7]) {
+      const thickness = t0 + f * (t1 - t0);
+      const r = compareSphere(await render(camera, thickness), geometry[camera], STACKS.get(name), film, thickness);
+      differences.push(r);
+    }
+    const points = differences.reduce((s, r) => s + r.points, 0);
+    results[camera] = {
+      mean: differences.reduce((s, r) => s + r.mean * r.points, 0) / points,
+      max: Math.max(...differences.map((r) => r.max)),
+      points,
+    };
+    console.log(`${name}, ${route} (rows ${flipped.reflectance ? 'flipped, put back' : 'in file order'}), ${camera}: `
+      + `ΔE00 mean ${results[camera].mean.toFixed(4)}, max ${results[camera].max.toFixed(4)} over ${points} pixels (2 thicknesses)`);
+  }
+  assert.deepEqual(page.errors, []);
+  return { flipped, results };
+}
+
+// Bounds on the whole sphere. What they hold is the export's own error
+// (film.json states a mean ΔE00 below 0.01 and a max near 0.04) and the
+// GPU's filtering; a flipped angle axis (ΔE00 about 50) or cos θ from the
+// view position under an orthographic camera (about 2 off the centre) are
+// far outside them.
+const MEAN_BOUND = 0.03;
+const MAX_BOUND = 0.2;
+
+test('the rasterized sphere is the unit sphere each camera sees, and a bare white metal reflects 1 on it', async () => {
+  for (const camera of ['perspective', 'orthographic']) {
+    const cos = geometry[camera];
+    const rgba = await render(camera);
+    let inside = 0;
+    let drawn = 0;
+    let worstCos = 0;
+    let worstWhite = 0;
+    for (let py = 0; py < size; py++) {
+      for (let px = 0; px < size; px++) {
+        const ideal = pixelCos(camera, px, py, size);
+        const o = (py * size + px) * 4;
+        if (ideal === null || ideal < COS_MIN) continue;
+        inside++;
+        if (cos[o + 3] < 0.5) continue;
+        drawn++;
+        worstCos = Math.max(worstCos, Math.abs(cos[o] - ideal));
+        for (let k = 0; k < 3; k++) worstWhite = Math.max(worstWhite, Math.abs(rgba[o + k] - 1));
+      }
+    }
+    console.log(`${camera}: ${drawn} of ${inside} pixels of the ideal sphere drawn, cos θ within ${worstCos.toFixed(4)} of it; `
+      + `white metal: largest |RGB − 1| ${worstWhite.toExponential(2)}`);
+    assert.ok(inside > 0.3 * size * size && drawn >= 0.99 * inside, `${camera}: ${drawn} of ${inside}`);
+    // A sub-pixel shift of the rasterized silhouette moves cos θ by up to
+    // about 0.01 near grazing; a wrong camera moves it by far more.
+    assert.ok(worstCos < 0.02, `${camera}: cos θ off by ${worstCos}`);
+    assert.ok(worstWhite < 2e-3, `${camera}: ${worstWhite}`);
+  }
+});
+
+test('three.js EXRLoader puts the file\'s first row last; web/exr.js keeps the file\'s order', async () => {
+  const name = [...STACKS.keys()][0];
+  const film = readFilm(name);
+  for (const quantity of ['reflectance', 'transmittance']) {
+    const url = `/exports/${name}/${film.texture.files[quantity]}`;
+    const { reversed, same } = await page.evaluate((u) => window.threeCheck.decoders(u), url);
+    assert.ok(reversed, `${quantity}: EXRLoader's rows are not web/exr.js's rows reversed`);
+    // film.json's row check tells them apart unless the texture is symmetric.
+    const check = film.texture.row_check[quantity];
+    const symmetric = check.value.every((v, k) => v === check.mirrored[k]);
+    assert.equal(same, symmetric, `${quantity}`);
+  }
+});
+
+for (const route of ['EXRLoader half', 'EXRLoader float', 'exr.js float', 'exr.js half']) {
+  test(`the film on a sphere is irid color at every pixel, both cameras: ${route}`, async () => {
+    const name = [...STACKS.keys()][0];
+    const { flipped, results } = await renderAndCompare(name, route);
+    assert.equal(flipped.reflectance, route.startsWith('EXRLoader'), 'the row check saw the loader\'s order');
+    for (const [camera, r] of Object.entries(results)) {
+      assert.ok(r.mean <= MEAN_BOUND && r.max <= MAX_BOUND, `${camera}: ΔE00 mean ${r.mean}, max ${r.max}`);
+    }
+  });
+}
+
+test('every export of the preview on a sphere (EXRLoader, its default half float), both cameras', async () => {
+  for (const name of [...STACKS.keys()].slice(1)) {
+    const { results } = await renderAndCompare(name, 'EXRLoader half');
+    for (const [camera, r] of Object.entries(results)) {
+      assert.ok(r.mean <= MEAN_BOUND && r.max <= MAX_BOUND, `${name} ${camera}: ΔE00 mean ${r.mean}, max ${r.max}`);
+    }
+  }
+});
+
+test('a texture that is not the export\'s, a film.json without row check or of another version: each refused by name', async () => {
+  const url = `/exports/${[...STACKS.keys()][0]}/`;
+  const refusal = (kind) => page.evaluate(([u, k]) => window.threeCheck.refusal(u, k), [url, kind]);
+  assert.match(await refusal('swapped'), /^transmittance\.exr: texel \(\d+, \d+\) holds .*not this export's texture$/);
+  assert.match(await refusal('size'), /^reflectance\.exr: \d+ × \d+ texels, film\.json says \d+ × \d+$/);
+  assert.match(await refusal('no row check'), /^film\.json: has no texture\.row_check/);
+  assert.match(await refusal('version'), /^film\.json: version 99 is not one this module reads/);
+});

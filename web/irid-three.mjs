@@ -1,0 +1,320 @@
+// An irid export (`irid export`) on a three.js material: the film's
+// reflectance R(thickness, cos θ) weights the material's specular light.
+//
+// An ES module with no build step; it imports 'three' (and, for the default
+// loader, 'three/addons/loaders/EXRLoader.js') through the page's import map,
+// as three.js's own add-ons do. Documented in docs/web.md.
+//
+// The shading code is the export's own GLSL ES sampler (irid_film_es.glsl),
+// pasted in as it is, so a change of the export's mapping reaches this module
+// with the export. What the module adds:
+//   - textures in file order whatever the loader did: film.json records, per
+//     texture, a texel and its mirror image about the middle row
+//     (`texture.row_check`); the loaded data is compared with both, and rows a
+//     loader flipped (three.js's EXRLoader puts the file's first row last) are
+//     put back;
+//   - half or float data, as the loader gives it, uploaded as RGBA16F;
+//   - cos θ from the view direction, (0, 0, 1) in view space under an
+//     orthographic camera, not from the direction to the camera position;
+//   - the sampler's uniform block turned into plain uniforms (three.js's
+//     built-in materials take no uniform blocks), filled from film.json.
+
+import * as THREE from 'three';
+
+/** film.json versions this module knows. */
+export const FILM_VERSIONS = [1];
+
+const BLOCK = /layout\s*\(\s*std140\s*\)\s*uniform\s+(\w+)\s*\{([^}]*)\}\s*;/;
+const SIGNATURE = /IridFilm\s+irid_film\s*\(([^)]*)\)/;
+
+/** An Error naming where it comes from. */
+function fail(where, why) {
+  return new Error(`${where}: ${why}`);
+}
+
+/** Checks film.json's format and version; returns it. */
+export function checkFilm(film, where = 'film.json') {
+  if (!film || film.format !== 'irid-film') throw fail(where, 'not an irid film (no "format": "irid-film")');
+  if (!FILM_VERSIONS.includes(film.version)) {
+    throw fail(where, `version ${film.version} is not one this module reads (${FILM_VERSIONS.join(', ')}); use the irid-three.mjs of the irid that wrote it`);
+  }
+  if (!film.texture?.row_check) {
+    throw fail(where, 'has no texture.row_check, so the row order of a loaded texture cannot be checked; export it again with this irid');
+  }
+  return film;
+}
+
+// ---------------------------------------------------------------------------
+// Textures
+
+/** {width, height, data, half} of a loaded texture: a three.js DataTexture or {width, height, data}. */
+function pixelsOf(loaded, where) {
+  const image = loaded?.isTexture ? loaded.image : loaded;
+  const { width, height, data } = image ?? {};
+  if (!(width > 0 && height > 0) || !data) throw fail(where, 'not a decoded image ({width, height, data})');
+  let half;
+  if (data instanceof Float32Array) half = false;
+  else if (data instanceof Uint16Array) half = true; // half floats, as EXRLoader's HalfFloatType gives them
+  else throw fail(where, `texel data is a ${data.constructor.name}; expected Float32Array (float) or Uint16Array (half float)`);
+  if (loaded?.isTexture) {
+    const declared = loaded.type === THREE.HalfFloatType ? true : loaded.type === THREE.FloatType ? false : null;
+    if (declared !== half) throw fail(where, `texture type ${loaded.type} does not match its ${data.constructor.name} data`);
+    if (loaded.format !== undefined && loaded.format !== THREE.RGBAFormat) {
+      throw fail(where, 'not RGBA (load EXRs with the loader\'s default RGBA output format)');
+    }
+  }
+  if (data.length !== width * height * 4) throw fail(where, `${data.length} values for ${width} × ${height} RGBA texels`);
+  return { width, height, data, half };
+}
+
+function rgbAt({ width, data, half }, x, y) {
+  const o = (y * width + x) * 4;
+  const value = (k) => (half ? THREE.DataUtils.fromHalfFloat(data[o + k]) : data[o + k]);
+  return [value(0), value(1), value(2)];
+}
+
+const distance = (a, b) => Math.max(...a.map((v, k) => Math.abs(v - b[k])));
+
+/**
+ * Whether the loaded rows are in file order (false) or flipped (true), from
+ * film.json's row check: the loaded texel at (x, y) equals the file's
+ * value there, or its mirror's. Throws when it equals neither.
+ */
+export function rowsFlipped(pixels, check, where) {
+  if (check === null) return false; // a single row
+  const { x, y, value, mirrored } = check;
+  const gap = distance(value, mirrored);
+  if (gap === 0) return false; // symmetric: both orders are the same texture
+  const found = rgbAt(pixels, x, y);
+  // The loaded values are the file's f16 values (exact in half and float),
+  // so the nearer candidate is at distance 0; a quarter of the gap leaves
+  // room for a texture re-encoded at another precision.
+  if (distance(found, value) <= gap / 4) return false;
+  if (distance(found, mirrored) <= gap / 4) return true;
+  throw fail(where, `texel (${x}, ${y}) holds ${found.map((v) => v.toPrecision(5)).join(', ')}, but film.json says `
+    + `${value.join(', ')} (rows in file order) or ${mirrored.join(', ')} (flipped): not this export's texture`);
+}
+
+function flipRows({ width, height, data }) {
+  const out = new data.constructor(data.length);
+  const row = width * 4;
+  for (let y = 0; y < height; y++) out.set(data.subarray(y * row, (y + 1) * row), (height - 1 - y) * row);
+  return out;
+}
+
+/**
+ * A loaded texture as the sampler needs it: a DataTexture with rows in file
+ * order (row 0 at v = 0), RGBA16F, linear filtering, clamp to edge, no
+ * mipmaps, no colour conversion. `loaded` is a three.js DataTexture (e.g.
+ * from EXRLoader, half or float) or {width, height, data: Float32Array}
+ * (e.g. IridWeb.decodeExr from web/exr.js). Returns {texture, flipped}.
+ */
+export function filmTexture(film, quantity, loaded, where = film.texture.files?.[quantity] ?? quantity) {
+  const pixels = pixelsOf(loaded, where);
+  if (pixels.width !== film.texture.width || pixels.height !== film.texture.height) {
+    throw fail(where, `${pixels.width} × ${pixels.height} texels, film.json says ${film.texture.width} × ${film.texture.height}`);
+  }
+  const flipped = rowsFlipped(pixels, film.texture.row_check[quantity], where);
+  const data = flipped ? flipRows(pixels) : pixels.data;
+  const type = pixels.half ? THREE.HalfFloatType : THREE.FloatType;
+  const texture = new THREE.DataTexture(data, pixels.width, pixels.height, THREE.RGBAFormat, type);
+  texture.internalFormat = 'RGBA16F'; // filterable in every WebGL2, from half or float data
+  texture.minFilter = THREE.LinearFilter;
+  texture.magFilter = THREE.LinearFilter;
+  texture.wrapS = THREE.ClampToEdgeWrapping;
+  texture.wrapT = THREE.ClampToEdgeWrapping;
+  texture.generateMipmaps = false;
+  texture.flipY = false;
+  texture.colorSpace = THREE.NoColorSpace; // linear data
+  texture.needsUpdate = true;
+  return { texture, flipped };
+}
+
+// ---------------------------------------------------------------------------
+// Loading an export folder
+
+async function fetchOk(url) {
+  const response = await fetch(url);
+  if (!response.ok) throw fail(url, `HTTP ${response.status}`);
+  return response;
+}
+
+/** A three.js EXRLoader (half float, its default), imported on first use. */
+async function defaultLoader() {
+  let module;
+  try {
+    module = await import('three/addons/loaders/EXRLoader.js');
+  } catch (e) {
+    throw new Error(`cannot import three/addons/loaders/EXRLoader.js (map "three/addons/" in the page's import map, or pass a loader or decode): ${e.message}`);
+  }
+  return new module.EXRLoader();
+}
+
+/**
+ * Reads an export folder at `url` (ending in '/'): film.json, the GLSL ES
+ * sampler and both EXR textures, and returns what `addIridFilm` takes.
+ *
+ * options.loader: a three.js loader with loadAsync (default: EXRLoader,
+ *   half float); options.decode: instead, an async function (bytes, name) →
+ *   {width, height, data}, e.g. IridWeb.decodeExr from web/exr.js.
+ */
+export async function loadIridFilm(url, { loader, decode } = {}) {
+  const film = checkFilm(await (await fetchOk(`${url}film.json`)).json(), `${url}film.json`);
+  const sampler = await (await fetchOk(`${url}irid_film_es.glsl`)).text();
+  const files = film.texture.files;
+  if (!files) throw fail(`${url}film.json`, 'lists no EXR textures');
+  const source = decode ? null : loader ?? (await defaultLoader());
+  const load = async (quantity) => {
+    const file = `${url}${files[quantity]}`;
+    const loaded = decode
+      ? await decode(new Uint8Array(await (await fetchOk(file)).arrayBuffer()), file)
+      : await source.loadAsync(file);
+    return filmTexture(film, quantity, loaded, file);
+  };
+  const [reflectance, transmittance] = await Promise.all([load('reflectance'), load('transmittance')]);
+  return { film, sampler, reflectance, transmittance };
+}
+
+// ---------------------------------------------------------------------------
+// The material
+
+const DECLARATION = /(\w+)\s+(\w+)\s*(?:\[\s*(\d+)\s*\])?\s*;/g;
+
+/** The declarations `type name[count];` in `text` as [{type, name, count}] (count null for no array). */
+function declarations(text) {
+  return [...text.matchAll(DECLARATION)].map(([, type, name, count]) => ({ type, name, count: count ? Number(count) : null }));
+}
+
+/** The struct types the sampler declares: name → their fields. */
+function structs(code) {
+  return new Map([...code.matchAll(/struct\s+(\w+)\s*\{([^}]*)\}/g)].map((m) => [m[1], declarations(m[2])]));
+}
+
+/**
+ * The value three.js uploads for a uniform of `type` (an array of `count`
+ * when count is not null) named `name`, from film.json: a float by name
+ * from `params`, an array of vec4 from `uniform_f32` (the packed uniform
+ * array as film.json gives it), a struct field by field.
+ */
+function uniformValue(film, types, { type, name, count }) {
+  if (types.has(type) && count === null) {
+    return Object.fromEntries(types.get(type).map((field) => [field.name, uniformValue(film, types, field)]));
+  }
+  if (type === 'float' && count === null) {
+    const v = film.params?.[name];
+    if (typeof v !== 'number') throw fail('film.json', `params has no number "${name}", which the sampler reads`);
+    return v;
+  }
+  if (type === 'vec4' && count !== null) {
+    const packed = film.uniform_f32;
+    if (!Array.isArray(packed) || packed.length !== 4 * count) {
+      throw fail('film.json', `uniform_f32 must hold ${4 * count} numbers for the sampler's vec4 ${name}[${count}]`);
+    }
+    return Array.from({ length: count }, (_, i) => new THREE.Vector4().fromArray(packed, 4 * i));
+  }
+  throw fail('irid_film_es.glsl', `the uniform block holds ${type} ${name}${count === null ? '' : `[${count}]`}, which this module cannot fill`);
+}
+
+/**
+ * The sampler with its uniform block replaced by plain uniforms (three.js's
+ * built-in materials take no uniform blocks), and their values from
+ * film.json.
+ */
+function unblock(sampler, film) {
+  const block = sampler.match(BLOCK);
+  if (!block) throw fail('irid_film_es.glsl', 'no std140 uniform block found');
+  const types = structs(sampler);
+  const members = declarations(block[2]);
+  const uniforms = Object.fromEntries(members.map((m) => [m.name, { value: uniformValue(film, types, m) }]));
+  const plain = members.map(({ type, name, count }) => `uniform ${type} ${name}${count === null ? '' : `[${count}]`};`);
+  const code = sampler
+    .replace(/^\s*precision\s+[^\n]*;\s*$/gm, '') // three.js declares precision itself
+    .replace(BLOCK, plain.join('\n'));
+  return { code, uniforms };
+}
+
+/** The literal of `value` in GLSL type `type` (a side index: float, int or uint). */
+function literal(type, value) {
+  if (type === 'float') return value.toFixed(1);
+  if (type === 'int') return String(value);
+  if (type === 'uint') return `${value}u`;
+  throw fail('irid_film_es.glsl', `irid_film's side parameter is a ${type}; expected float, int or uint`);
+}
+
+/**
+ * How the material's shader calls irid_film. A sampler that takes the side
+ * of the film (0: light from the ambient, the front; 1: from the substrate)
+ * gets it from the facing of the surface: a front face is seen from the
+ * ambient, a back face (a DoubleSide material seen from inside) from the
+ * substrate; three.js turns the normal towards the eye on both.
+ */
+function filmCall(sampler) {
+  const m = sampler.match(SIGNATURE);
+  if (!m) throw fail('irid_film_es.glsl', 'declares no IridFilm irid_film(...)');
+  const types = m[1].split(',').map((p) => p.trim().split(/\s+/).slice(-2, -1)[0]);
+  if (types.length === 2) return 'irid_film(irid_thickness_nm, irid_cos)';
+  if (types.length === 3) {
+    return `irid_film(irid_thickness_nm, irid_cos, gl_FrontFacing ? ${literal(types[2], 0)} : ${literal(types[2], 1)})`;
+  }
+  throw fail('irid_film_es.glsl', `irid_film takes ${types.length} parameters; this module knows 2 (thickness, cos θ) and 3 (and the side)`);
+}
+
+function hash(text) {
+  let h = 0;
+  for (let i = 0; i < text.length; i++) h = (Math.imul(h, 31) + text.charCodeAt(i)) | 0;
+  return (h >>> 0).toString(16);
+}
+
+function replaceChunk(text, chunk, replacement) {
+  if (!text.includes(chunk)) throw new Error(`three.js shader has no ${chunk}`);
+  return text.replace(chunk, replacement);
+}
+
+/**
+ * Puts a loaded export (from loadIridFilm, or {film, sampler, reflectance,
+ * transmittance} with textures from filmTexture) on a MeshStandardMaterial
+ * or MeshPhysicalMaterial: after the lights are summed, the specular light
+ * (direct and from the environment) is multiplied by the film's R at the
+ * material's thickness and the angle between the shading normal and the
+ * direction to the eye. With a white metal base (color 0xffffff,
+ * metalness 1) three.js's own Fresnel is 1 and what the material reflects is
+ * R alone. Returns the uniforms; `irid_thickness_nm.value` is the thickness
+ * in nm (starts at the middle of the export's range).
+ */
+export function addIridFilm(material, { film, sampler, reflectance, transmittance }) {
+  checkFilm(film);
+  if (material.userData.iridFilm) throw new Error('addIridFilm: this material has a film already; make a new material');
+  const { code, uniforms: params } = unblock(sampler, film);
+  const call = filmCall(sampler);
+  const [tMin, tMax] = film.domain.thickness_nm;
+  const uniforms = {
+    ...params,
+    irid_reflectance: { value: reflectance.texture ?? reflectance },
+    irid_transmittance: { value: transmittance.texture ?? transmittance },
+    irid_thickness_nm: { value: (tMin + tMax) / 2 },
+  };
+  const before = material.onBeforeCompile;
+  material.onBeforeCompile = (shader, renderer) => {
+    before.call(material, shader, renderer);
+    Object.assign(shader.uniforms, uniforms);
+    let fs = replaceChunk(shader.fragmentShader, '#include <common>', `#include <common>\n${code}\nuniform float irid_thickness_nm;`);
+    fs = replaceChunk(fs, '#include <lights_fragment_end>', `#include <lights_fragment_end>
+	{
+		// cos θ between the shading normal and the direction to the eye, in
+		// view space: (0, 0, 1) under an orthographic camera, towards the
+		// camera position under a perspective one.
+		vec3 irid_view = isOrthographic ? vec3( 0.0, 0.0, 1.0 ) : normalize( vViewPosition );
+		float irid_cos = saturate( dot( normal, irid_view ) );
+		IridFilm irid = ${call};
+		reflectedLight.directSpecular *= irid.reflectance;
+		reflectedLight.indirectSpecular *= irid.reflectance;
+	}`);
+    shader.fragmentShader = fs;
+  };
+  const key = material.customProgramCacheKey.bind(material);
+  const own = `irid-film-${hash(code)}`;
+  material.customProgramCacheKey = () => `${key()}|${own}`;
+  material.userData.iridFilm = true;
+  material.needsUpdate = true;
+  return uniforms;
+}
