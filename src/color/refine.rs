@@ -254,7 +254,16 @@ impl Refinement {
         for node in &self.nodes[k..=k + 1] {
             m = m.max(self.points_for(node.lossless_width / thickness_nm));
             for (split, bound) in &node.lossy {
-                if self.points_for(bound / thickness_nm) > m {
+                // The width alone bounds the demand (a fringe too faint to
+                // see asks for nothing): the visibility's two responses are
+                // paid only where the fringe could ask for more than `m`
+                // and more than the one point per step every sum has.
+                let enough = m.max(1.0);
+                if self.points_for(bound / thickness_nm) <= enough {
+                    continue;
+                }
+                let y = split.round_trip(thickness_nm);
+                if self.points_for(split.fringe_width_nm(y, thickness_nm)) > enough {
                     m = m.max(self.demand(split, thickness_nm));
                 }
             }

@@ -159,7 +159,7 @@ impl VaryingLayer {
     /// where the layer's phase cannot show in R: total internal reflection
     /// in a lossless stack).
     pub fn fringe(&self, thickness_nm: f64) -> (f64, f64) {
-        let k = usize::from(self.factors.neg_y[1].norm() > self.factors.neg_y[0].norm());
+        let k = self.sharper();
         let y = -self.factors.neg_y[k];
         let decay = self.phase(thickness_nm).norm();
         // Resonance where y φ² is real and positive: φ² = e^{−i arg y}.
@@ -167,6 +167,19 @@ impl VaryingLayer {
         let resonance = -y.arg();
         let visibility = (at(resonance) - at(resonance + std::f64::consts::PI)).abs();
         (y.norm() * decay * decay, visibility)
+    }
+
+    /// The polarization (0: s, 1: p) whose round trip is the larger.
+    fn sharper(&self) -> usize {
+        usize::from(self.factors.neg_y[1].norm() > self.factors.neg_y[0].norm())
+    }
+
+    /// The first value of [`Self::fringe`] alone (the round trip's
+    /// amplitude at thickness `thickness_nm`), without the visibility's two
+    /// responses.
+    pub fn round_trip(&self, thickness_nm: f64) -> f64 {
+        let decay = self.phase(thickness_nm).norm();
+        self.factors.neg_y[self.sharper()].norm() * decay * decay
     }
 
     /// The width in wavelength (nm) of a fringe of round-trip amplitude `y`
