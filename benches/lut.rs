@@ -14,10 +14,7 @@ use num_complex::Complex64 as C64;
 fn soap() -> Stack {
     Stack {
         ambient: Material::constant(1.0, 0.0),
-        layers: vec![Layer {
-            material: Material::constant(1.33, 0.0),
-            thickness_nm: 500.0,
-        }],
+        layers: vec![Layer::new(Material::constant(1.33, 0.0), 500.0)],
         substrate: Material::constant(1.0, 0.0),
     }
 }

@@ -12,10 +12,7 @@ use irid::rough::{rough_reflectance, Kernel, MuGrid, Quadrature};
 fn soap() -> Stack {
     Stack {
         ambient: Material::constant(1.0, 0.0),
-        layers: vec![Layer {
-            material: Material::constant(1.33, 0.0),
-            thickness_nm: 500.0,
-        }],
+        layers: vec![Layer::new(Material::constant(1.33, 0.0), 500.0)],
         substrate: Material::constant(1.0, 0.0),
     }
 }

@@ -1,29 +1,22 @@
-// irid_film: a thin-film stack's reflectance and transmittance from the two
-// textures `irid export` writes. The source of truth: irid_film.glsl,
-// irid_film_es.glsl and irid_film.hlsl are generated from this file.
-// Interface, bindings and upload: docs/gpu.md.
+// irid_film: a thin-film stack's reflectance and transmittance, seen from
+// either side, from the two atlas textures `irid export` writes. The source
+// of truth: irid_film.glsl, irid_film_es.glsl and irid_film.hlsl are
+// generated from this file. Interface, bindings and upload: docs/gpu.md.
 
 struct IridFilm {
     reflectance: vec3<f32>,
     transmittance: vec3<f32>,
 }
 
-// The values film.json lists under "params". Only f32 fields, so the layout
-// is the same under std140, std430, WGSL and HLSL constant-buffer rules.
+// film.json's "uniform_f32", uploaded as it is: an array of vec4, which
+// std140, std430, WGSL and HLSL all lay out alike.
+//   v[0]: atlas width, height (texels); the chart of the front side, of the back.
+//   chart k, from v[1 + 3k]:
+//     (thickness min nm, thickness max nm, cos min, cos max),
+//     (cos_crit, y_crit, thickness power, 0),
+//     (x0, y0, width, height): its rectangle of texels.
 struct IridParams {
-    thickness_min_nm: f32,
-    thickness_max_nm: f32,
-    cos_min: f32,
-    cos_max: f32,
-    // The cos θ angle nodes crowd towards (a dense-side stack's critical
-    // angle, or cos_min for grazing incidence); < 0: uniform in cos θ.
-    cos_crit: f32,
-    y_crit: f32,
-    size_u: f32,
-    size_v: f32,
-    // 1: thickness nodes uniform; 2: crowding quadratically towards the
-    // minimum thickness.
-    thickness_power: f32,
+    v: array<vec4<f32>, 25>,
 }
 
 @group(0) @binding(0) var irid_reflectance: texture_2d<f32>;
@@ -31,44 +24,63 @@ struct IridParams {
 @group(0) @binding(2) var irid_sampler: sampler;
 @group(0) @binding(3) var<uniform> irid_params: IridParams;
 
-// Where (thickness, cos θ) lies in the textures: node i of an axis of N
-// nodes sits at the texel centre (i + 0.5) / N, so bilinear filtering with
-// clamp-to-edge interpolates between nodes and clamps outside the domain.
-fn irid_film_uv(thickness_nm: f32, cos_theta: f32) -> vec2<f32> {
-    let p = irid_params;
-    let t_span = p.thickness_max_nm - p.thickness_min_nm;
+// The chart a lookup reads, in closed form: today the side's own (side 0,
+// light from the ambient; anything else, light from the substrate).
+fn irid_film_chart(thickness_nm: f32, cos_theta: f32, side: i32) -> i32 {
+    let header = irid_params.v[0];
+    if side == 0 {
+        return i32(header.z);
+    }
+    return i32(header.w);
+}
+
+// Where (thickness, cos θ) lies in a chart, in texture coordinates: node i
+// of an axis of N nodes sits at the centre of the chart's texel i, and the
+// coordinates are clamped to the chart's first and last node, so bilinear
+// filtering interpolates between that chart's nodes only.
+fn irid_film_uv(chart: i32, thickness_nm: f32, cos_theta: f32) -> vec2<f32> {
+    let k = 1 + 3 * chart;
+    let domain = irid_params.v[k];
+    let warp = irid_params.v[k + 1];
+    let rect = irid_params.v[k + 2];
+    let t_span = domain.y - domain.x;
     var x = 0.0;
     if t_span > 0.0 {
-        x = clamp((thickness_nm - p.thickness_min_nm) / t_span, 0.0, 1.0);
+        x = clamp((thickness_nm - domain.x) / t_span, 0.0, 1.0);
     }
-    if p.thickness_power > 1.5 {
+    // Thickness power 2: nodes crowd quadratically towards the minimum.
+    if warp.z > 1.5 {
         x = sqrt(x);
     }
-    let c = clamp(cos_theta, p.cos_min, p.cos_max);
+    let c = clamp(cos_theta, domain.z, domain.w);
+    let cos_crit = warp.x;
+    let y_crit = warp.y;
     var y = 0.0;
-    if p.cos_crit < 0.0 {
-        let c_span = p.cos_max - p.cos_min;
+    if cos_crit < 0.0 {
+        let c_span = domain.w - domain.z;
         if c_span > 0.0 {
-            y = (c - p.cos_min) / c_span;
+            y = (c - domain.z) / c_span;
         }
-    } else if c >= p.cos_crit {
+    } else if c >= cos_crit {
         // Nodes crowd quadratically towards cos_crit: at a critical angle,
         // R's square-root kink becomes a corner on a node; at grazing
         // incidence a thin film's fastest changes get the finest nodes.
-        y = p.y_crit + (1.0 - p.y_crit) * sqrt((c - p.cos_crit) / (p.cos_max - p.cos_crit));
+        y = y_crit + (1.0 - y_crit) * sqrt((c - cos_crit) / (domain.w - cos_crit));
     } else {
-        y = p.y_crit - p.y_crit * sqrt((p.cos_crit - c) / (p.cos_crit - p.cos_min));
+        y = y_crit - y_crit * sqrt((cos_crit - c) / (cos_crit - domain.z));
     }
-    let u = (x * (p.size_u - 1.0) + 0.5) / p.size_u;
-    let v = (y * (p.size_v - 1.0) + 0.5) / p.size_v;
-    return vec2<f32>(u, v);
+    let texel = rect.xy + 0.5 + vec2<f32>(x, y) * (rect.zw - 1.0);
+    return texel / irid_params.v[0].xy;
 }
 
 // Reflectance and transmittance (linear RGB in the export's white) of the
-// film at a thickness of the varying layer (nm) and the cosine of the
-// incidence angle in the ambient medium.
-fn irid_film(thickness_nm: f32, cos_theta: f32) -> IridFilm {
-    let uv = irid_film_uv(thickness_nm, cos_theta);
+// film at a thickness of the varying layer (nm), for light arriving from
+// `side` (0: the ambient, the stack as written; 1: the substrate, the
+// stack reversed) at an incidence angle whose cosine is taken in that
+// medium. One fetch per texture.
+fn irid_film(thickness_nm: f32, cos_theta: f32, side: i32) -> IridFilm {
+    let chart = irid_film_chart(thickness_nm, cos_theta, side);
+    let uv = irid_film_uv(chart, thickness_nm, cos_theta);
     let r = textureSampleLevel(irid_reflectance, irid_sampler, uv, 0.0);
     let t = textureSampleLevel(irid_transmittance, irid_sampler, uv, 0.0);
     return IridFilm(r.rgb, t.rgb);

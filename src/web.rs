@@ -104,6 +104,18 @@ fn read_export(dir: &Path) -> Result<Export> {
             "not an irid export (its \"format\" is not \"irid-film\")",
         ));
     }
+    let version = film.get("version").and_then(Value::as_u64);
+    if version != Some(u64::from(crate::export::FILM_VERSION)) {
+        return Err(Error::malformed(
+            &film_path,
+            format!(
+                "version {}: this irid previews version {} (export the film again with it)",
+                film.get("version")
+                    .map_or("none".to_string(), |v| v.to_string()),
+                crate::export::FILM_VERSION
+            ),
+        ));
+    }
     let texture = film
         .get("texture")
         .ok_or_else(|| Error::malformed(&film_path, "no \"texture\""))?;

@@ -370,3 +370,65 @@ fn half_table_that_overflows_f16_is_refused() {
     assert!(out.success(), "{}", out.stderr);
     assert!(dir.path().join("g.exr").exists());
 }
+
+#[test]
+fn incoherent_layers_are_refused_where_they_cannot_be() {
+    let dir = Scratch::new("bad-input-incoherent");
+    let d = dir.path();
+    dir.write(
+        "sheet.toml",
+        "ambient = { n = 1.0 }\nsubstrate = { n = 1.0 }\n\
+         [[layers]]\nn = 1.52\nthickness_nm = 1e6\ncoherent = false\n\
+         [[layers]]\nn = 1.38\nthickness_nm = 100\n",
+    );
+    dir.write(
+        "lasing.toml",
+        "ambient = { n = 1.0 }\nsubstrate = { n = 1.5 }\n\
+         [[layers]]\nn = 1.38\nthickness_nm = 100\n\
+         [[layers]]\nn = [1.5, -0.01]\nthickness_nm = 1e6\ncoherent = false\n",
+    );
+    dir.write(
+        "flagged.toml",
+        "ambient = { n = 1.0, coherent = false }\nsubstrate = { n = 1.0 }\n",
+    );
+    // The thickness axis on the incoherent layer (layer 1 by default).
+    rejects(
+        d,
+        &["bake", "sheet.toml", "-o", "o.exr"],
+        &["layer", "layer 1 is incoherent", "coherent layers: 2"],
+        &["o.exr"],
+    );
+    rejects(
+        d,
+        &["export", "sheet.toml", "-o", "out", "--layer", "1"],
+        &["layer 1 is incoherent"],
+        &["out"],
+    );
+    for args in [
+        &["eval", "lasing.toml"][..],
+        &["color", "lasing.toml"],
+        &[
+            "bake",
+            "lasing.toml",
+            "-o",
+            "o.exr",
+            "--resolution",
+            "4,4",
+            "--thickness",
+            "0:0",
+        ],
+    ] {
+        rejects(
+            d,
+            args,
+            &["lasing.toml", "layers[2]: this incoherent layer lases at"],
+            &["o.exr"],
+        );
+    }
+    rejects(
+        d,
+        &["eval", "flagged.toml"],
+        &["flagged.toml", "ambient.coherent: not allowed"],
+        &[],
+    );
+}

@@ -416,10 +416,7 @@ fn non_dispersive(n0: f64, layers: &[(C64, f64)], substrate: C64) -> Stack {
         ambient: Material::constant(n0, 0.0),
         layers: layers
             .iter()
-            .map(|&(n, d)| Layer {
-                material: Material::constant(n.re, n.im),
-                thickness_nm: d,
-            })
+            .map(|&(n, d)| Layer::new(Material::constant(n.re, n.im), d))
             .collect(),
         substrate: Material::constant(substrate.re, substrate.im),
     }
@@ -556,10 +553,10 @@ fn weighted_spectrum_is_the_integrated_stored_spectrum() {
     use irid::optics::{Layer, Material};
     let dispersive = Stack {
         ambient: Material::constant(1.0, 0.0),
-        layers: vec![Layer {
-            material: irid::optics::library::builtin("TiO2").unwrap(),
-            thickness_nm: 300.0,
-        }],
+        layers: vec![Layer::new(
+            irid::optics::library::builtin("TiO2").unwrap(),
+            300.0,
+        )],
         substrate: irid::optics::library::builtin("fused-silica").unwrap(),
     };
     let stacks = [

@@ -191,10 +191,7 @@ fn soap_film_colors(
 fn soap_film(thickness_nm: f64) -> Stack {
     Stack {
         ambient: Material::constant(1.0, 0.0),
-        layers: vec![Layer {
-            material: Material::constant(1.33, 0.0),
-            thickness_nm,
-        }],
+        layers: vec![Layer::new(Material::constant(1.33, 0.0), thickness_nm)],
         substrate: Material::constant(1.0, 0.0),
     }
 }

@@ -22,7 +22,7 @@ fn fake_export(dir: &Path, name: &str, exr: bool) {
     let png =
         r#"{"reflectance": "reflectance.png", "transmittance": "transmittance.png", "scale": 1.0}"#;
     let film = format!(
-        r#"{{"format": "irid-film", "version": 1, "texture": {{"width": 2, "height": 2, "files": {files}, "png": {png}}}}}"#
+        r#"{{"format": "irid-film", "version": 2, "texture": {{"width": 2, "height": 2, "files": {files}, "png": {png}}}}}"#
     );
     fs::write(d.join("film.json"), film).unwrap();
     fs::write(
@@ -144,6 +144,17 @@ fn bad_exports_and_destinations_are_one_line_errors() {
     fs::write(d.join("broken/film.json"), "{\"format\": \"irid-lut\"}").unwrap();
     irid_in(d, ["preview", "broken", "-o", "out"])
         .assert_one_line_error("another format", &["broken/film.json", "irid-film"]);
+
+    // An export of another film.json version (the single-chart version 1).
+    fake_export(d, "old", true);
+    let film = fs::read_to_string(d.join("old/film.json")).unwrap();
+    fs::write(
+        d.join("old/film.json"),
+        film.replace("\"version\": 2", "\"version\": 1"),
+    )
+    .unwrap();
+    irid_in(d, ["preview", "old", "-o", "out"])
+        .assert_one_line_error("version 1", &["old/film.json", "version 1", "version 2"]);
 
     fake_export(d, "escape", true);
     let film = fs::read_to_string(d.join("escape/film.json")).unwrap();

@@ -196,6 +196,27 @@ fn errors_name_the_file_and_the_field() {
             "ambient = { n = 1.0, thickness_nm = 3 }\nsubstrate = { n = 1.5 }".into(),
             &["ambient.thickness_nm"],
         ),
+        (
+            "ambient = { n = 1.0, coherent = false }\nsubstrate = { n = 1.5 }".into(),
+            &[
+                "test.toml",
+                "ambient.coherent",
+                "not allowed",
+                "always incoherent",
+            ],
+        ),
+        (
+            "ambient = { n = 1.0 }\nsubstrate = { n = 1.5, coherent = true }".into(),
+            &["test.toml", "substrate.coherent", "not allowed"],
+        ),
+        (
+            layer("n = 1.4\nthickness_nm = 5\ncoherent = \"no\""),
+            &["test.toml", "line 6", "expected a boolean"],
+        ),
+        (
+            layer("n = 1.4\nthickness_nm = 5\ncoherent = 0"),
+            &["test.toml", "line 6", "expected a boolean"],
+        ),
     ];
     for (text, needles) in &cases {
         let err = parse_err(text);
@@ -207,6 +228,27 @@ fn errors_name_the_file_and_the_field() {
             );
         }
     }
+}
+
+#[test]
+fn a_layer_can_be_incoherent() {
+    let stack = parse(
+        "ambient = { n = 1.0 }\nsubstrate = { n = 1.0 }\n\
+         [[layers]]\nn = 2.3\nthickness_nm = 80\n\
+         [[layers]]\nmaterial = \"fused-silica\"\nthickness_nm = 1e6\ncoherent = false\n\
+         [[layers]]\nn = 1.38\nthickness_nm = 100\ncoherent = true\n",
+    )
+    .unwrap();
+    let flags: Vec<bool> = stack.layers.iter().map(|l| l.coherent).collect();
+    assert_eq!(flags, [true, false, true]);
+    assert_eq!(stack.coherence().incoherent_layers(), &[2]);
+    assert_eq!(stack.reversed().coherence().incoherent_layers(), &[2]);
+    // The flag is kept through JSON (a table header), and left out when
+    // true, so a coherent stack serializes as it always has.
+    let json = serde_json::to_string(&stack).unwrap();
+    assert_eq!(json.matches("\"coherent\":false").count(), 1);
+    assert!(!json.contains("\"coherent\":true"));
+    assert_eq!(serde_json::from_str::<Stack>(&json).unwrap(), stack);
 }
 
 #[test]

@@ -41,6 +41,9 @@ from peer_calls import best_of  # noqa: E402
 
 TOLERANCE = 1e-9
 STACKS = ["soap", "absorbing", "gain-on-gold", "two-layer", "mirror-front", "mirror-back"]
+# Stacks with incoherent layers: irid against tmm-faster's calc_incoherent and
+# Byrnes' inc_tmm.
+INCOHERENT_STACKS = ["coated-sheet"]
 # (bench stack, its file, thickness range) for the whole-process default bake.
 PROCESS_BAKES = [("soap", "luts/soap-film.toml", "0:1000")]
 
@@ -83,15 +86,30 @@ def tmm_faster_grid(n_matrix, thicknesses_nm, angles_deg, wavelengths_nm):
     return res["R_avg"].T, res["T_avg"].T
 
 
+def letters(coherent):
+    """calc_incoherent's c from irid's per-layer flags."""
+    return ["i", *("c" if flag else "i" for flag in coherent), "i"]
+
+
+def tmm_faster_incoherent_grid(n_matrix, thicknesses_nm, c, angles_deg, wavelengths_nm):
+    """tmm-faster's calc_incoherent, R and T as [angle][wavelength]."""
+    import tmm_faster
+
+    d = [np.inf, *thicknesses_nm, np.inf]
+    res = tmm_faster.calc_incoherent(n_matrix, d, c, angles_deg, wavelengths_nm)
+    return res["R_avg"].T, res["T_avg"].T
+
+
 def colour_grid(n_matrix, thicknesses_nm, angles_deg, wavelengths_nm):
     """colour-science's R, T as [angle][wavelength], irid's layout."""
     r, t = peer_calls.colour_grid(n_matrix, thicknesses_nm, angles_deg, wavelengths_nm)
     return r.T, t.T
 
 
-def byrnes_grid(n_matrix, thicknesses_nm, angles_deg, wavelengths_nm):
-    """Byrnes' tmm's R, T as [angle][wavelength], irid's layout."""
-    r, t = peer_calls.byrnes_grid(n_matrix, thicknesses_nm, angles_deg, wavelengths_nm)
+def byrnes_grid(n_matrix, thicknesses_nm, angles_deg, wavelengths_nm, coherence=None):
+    """Byrnes' tmm's R, T as [angle][wavelength], irid's layout (inc_tmm
+    with `coherence`, the letters of calc_incoherent's c)."""
+    r, t = peer_calls.byrnes_grid(n_matrix, thicknesses_nm, angles_deg, wavelengths_nm, coherence)
     return r.T, t.T
 
 
@@ -243,6 +261,39 @@ def general_rows(args, failures, findings):
     return rows
 
 
+def incoherent_rows(args, failures, findings):
+    """One wavelength x angle grid per stack with incoherent layers: irid
+    against tmm-faster's calc_incoherent, and Byrnes' inc_tmm (the
+    reference) on every byrnes_step-th wavelength."""
+    rows = []
+    for stack in INCOHERENT_STACKS:
+        doc, r, t = run_irid(stack, args.threads, args.repeat,
+                             "--wavelengths", args.wavelengths, "--angles", args.angles)
+        r, t = r[:, 0, :], t[:, 0, :]
+        n = indices(doc)
+        w = np.array(doc["wavelengths_nm"])
+        a = np.array(doc["angles_deg"])
+        d, c = doc["layer_thicknesses_nm"], letters(doc["coherent"])
+        # inc_tmm's Snell angles are taken at exactly 90 degrees too; keep
+        # the comparison off grazing, as for the coherent peers.
+        grazing = (a >= 90.0)[:, None]
+        secs, (pr, pt) = best_of(args.repeat, lambda: tmm_faster_incoherent_grid(n, d, c, a, w))
+        row = {"stack": stack, "points": r.size, "irid": doc["seconds"], "tmm-faster": secs,
+               "tmm-faster cmp": compare(r, t, pr, pt, grazing)}
+        step = args.byrnes_step
+        secs, (pr, pt) = best_of(1, lambda: byrnes_grid(n[::step], d, a, w[::step], c))
+        row["tmm"] = secs * r.size / pr.size
+        row["tmm cmp"] = compare(r[:, ::step], t[:, ::step], pr, pt, grazing)
+        if not agrees(row["tmm cmp"]):
+            failures.append(finding(stack, "Byrnes' inc_tmm", row["tmm cmp"]))
+        if not agrees(row["tmm-faster cmp"]):
+            findings.append(finding(stack, "tmm-faster's calc_incoherent", row["tmm-faster cmp"]))
+        rows.append(row)
+        print(f"  {stack:13s} irid {row['irid'] * 1e3:8.2f} ms   calc_incoherent x{row['tmm-faster'] / row['irid']:6.1f}"
+              f"   inc_tmm x{row['tmm'] / row['irid']:8.0f}", flush=True)
+    return rows
+
+
 def bake_rows(args, failures, findings):
     """A full table: irid's baker (an rgb table with 1 nm integration, so
     R at every thickness x angle node and every wavelength 360-830 nm) against
@@ -353,7 +404,7 @@ def process_bake_rows(args, failures):
     return rows
 
 
-def write_report(path, args, general, bake, failures, findings, command, process_bake=()):
+def write_report(path, args, general, bake, failures, findings, command, process_bake=(), incoherent=()):
     lines = [
         "# irid against other TMM implementations",
         "",
@@ -390,6 +441,35 @@ def write_report(path, args, general, bake, failures, findings, command, process
         f"Target: ≥ 20x tmm-faster on the same {args.threads} threads. Lowest ratio in this run: "
         f"**{worst:.1f}x** ({'met' if worst >= 20 else 'NOT met'}).",
         "",
+    ]
+    if incoherent:
+        lines += [
+            "## Incoherent layers: wavelength × angle grid",
+            "",
+            f"The same grid on stacks with incoherent (thick) layers, against tmm-faster's `calc_incoherent` "
+            f"and Byrnes' `inc_tmm` (timed on every {args.byrnes_step}th wavelength and scaled per point). "
+            "coated-sheet is `luts/coated-sheet.toml`: a TiO2 film on a 1 mm incoherent fused-silica sheet "
+            "with MgF2 behind, in air.",
+            "",
+            "| stack | points | irid (ms) | calc_incoherent (ms) | ratio | inc_tmm (ms, scaled) | ratio "
+            "| max diff vs inc_tmm | vs calc_incoherent (R, T) |",
+            "|---|---:|---:|---:|---:|---:|---:|---:|---:|",
+        ]
+        for r in incoherent:
+            tc, fc = r["tmm cmp"], r["tmm-faster cmp"]
+            lines.append(
+                f"| {r['stack']} | {r['points']} | {r['irid'] * 1e3:.2f} | {r['tmm-faster'] * 1e3:.2f} | "
+                f"{r['tmm-faster'] / r['irid']:.1f}x | {r['tmm'] * 1e3:.0f} | {r['tmm'] / r['irid']:.0f}x | "
+                f"{max(tc['R'], tc['T']):.1e} | {fc['R']:.1e}, {fc['T']:.1e} |"
+            )
+        worst = min(r["tmm-faster"] / r["irid"] for r in incoherent)
+        lines += [
+            "",
+            f"Target: ≥ 10x calc_incoherent on the same {args.threads} threads. Lowest ratio in this run: "
+            f"**{worst:.1f}x** ({'met' if worst >= 10 else 'NOT met'}).",
+            "",
+        ]
+    lines += [
         "## Baking a full table: thickness × angle × wavelength",
         "",
         f"`irid bench --grid STACK --bake-nodes {args.bake_nodes}`: irid's baker (`lut::bake`) builds an rgb table of "
@@ -491,6 +571,8 @@ def main():
     print("general evaluation:", flush=True)
     findings = []
     general = general_rows(args, failures, findings)
+    print("incoherent layers:", flush=True)
+    incoherent = incoherent_rows(args, failures, findings)
     for probe in (colour_dispersion_probe(), tmm_faster_absorbing_substrate_probe()):
         if probe:
             findings.append(probe)
@@ -500,7 +582,7 @@ def main():
     process_bake = process_bake_rows(args, failures)
     os.makedirs(args.out, exist_ok=True)
     path = os.path.join(args.out, "peers.md")
-    write_report(path, args, general, bake, failures, findings, command, process_bake)
+    write_report(path, args, general, bake, failures, findings, command, process_bake, incoherent)
     print(f"wrote {path}")
     for f in failures:
         print("FAILED:", f)

@@ -1,7 +1,9 @@
 #!/usr/bin/env python3
 """Times irid's Python package (`irid.coherent`) against tmm-faster,
 colour-science and Byrnes' tmm in one process, on the same numpy arrays, and
-writes the figures into peers.md as its own section.
+writes the figures into peers.md as its own section; and `irid.incoherent`
+against tmm-faster's `calc_incoherent` and Byrnes' `inc_tmm` on stacks with
+incoherent (thick) layers.
 
 The stacks are bench_peers.py's six (the example stack files in luts/, the
 mirror also seen from its substrate), at their files' thicknesses; the grid is
@@ -38,6 +40,8 @@ STACKS = [
     ("mirror-front", "mirror-10.toml", False),
     ("mirror-back", "mirror-10.toml", True),
 ]
+# Stacks with incoherent layers (irid.incoherent against calc_incoherent).
+INCOHERENT_STACKS = [("coated-sheet", "coated-sheet.toml")]
 TOLERANCE = 1e-9
 BEGIN, END = "<!-- bench_python.py: begin -->", "<!-- bench_python.py: end -->"
 
@@ -57,6 +61,66 @@ def arrays(irid, file, reversed_, wavelengths):
 
 def byrnes(n, d, angles, wavelengths):
     return peer_calls.byrnes_grid(n, d[1:-1], angles, wavelengths)
+
+
+def coherence(irid, file):
+    """calc_incoherent's c of a stack file: 'i' for the ambient, the
+    substrate and every incoherent layer."""
+    stack = irid.Stack.load(REPO / "luts" / file)
+    return ["i", *("c" if flag else "i" for flag in stack.coherent), "i"]
+
+
+def incoherent_rows(irid, args, wavelengths, angles, step, failures, findings):
+    """irid.incoherent against calc_incoherent (timed) and inc_tmm (on every
+    step-th wavelength, scaled per point) on INCOHERENT_STACKS."""
+    import numpy as np
+    import tmm_faster
+
+    rows = []
+    for name, file in INCOHERENT_STACKS:
+        n, d = arrays(irid, file, False, wavelengths)
+        c = coherence(irid, file)
+        mine_s, mine = best_of(args.repeat, lambda: irid.incoherent(n, d, c, angles, wavelengths))
+        tf_s, tf = best_of(args.repeat, lambda: tmm_faster.calc_incoherent(n, d, c, angles, wavelengths))
+        sub = slice(None, None, step)
+        by_s, (br, bt) = best_of(1, lambda: peer_calls.byrnes_grid(n[sub], d[1:-1], angles, wavelengths[sub], c))
+        by_s *= mine["R_avg"].size / br.size
+        diff = max(np.abs(mine["R_avg"][sub] - br).max(), np.abs(mine["T_avg"][sub] - bt).max())
+        if not diff <= TOLERANCE:
+            failures.append(f"{name}: irid.incoherent differs from Byrnes' inc_tmm by {diff:.2e}")
+        tf_diff = max(np.abs(mine[k] - tf[k]).max() for k in ("R_avg", "T_avg"))
+        if tf_diff > TOLERANCE:
+            findings.append(f"{name}: calc_incoherent differs from irid (and inc_tmm) by up to {tf_diff:.1e}")
+        rows.append((name, mine["R_avg"].size, mine_s, tf_s, by_s, diff, tf_diff))
+        print(f"  {name:13s} irid.incoherent {mine_s * 1e3:7.2f} ms   calc_incoherent x{tf_s / mine_s:5.1f}   "
+              f"inc_tmm x{by_s / mine_s:7.0f}", flush=True)
+    return rows
+
+
+def incoherent_lines(rows, args):
+    worst = min(r[3] / r[2] for r in rows)
+    lines = [
+        "",
+        "`irid.incoherent(n, d, c, angles, wavelengths)` and `tmm_faster.calc_incoherent` with the same "
+        "arguments on the same grid, in the same process; Byrnes' `inc_tmm` on the same sampled wavelengths "
+        "as `tmm` above. coated-sheet is `luts/coated-sheet.toml`: a TiO2 film on a 1 mm incoherent "
+        "fused-silica sheet with MgF2 behind, in air.",
+        "",
+        "| stack | points | irid.incoherent (ms) | calc_incoherent (ms) | ratio | inc_tmm (ms, scaled) | ratio "
+        "| max diff vs inc_tmm | max diff vs calc_incoherent |",
+        "|---|---:|---:|---:|---:|---:|---:|---:|---:|",
+    ]
+    for name, points, mine_s, tf_s, by_s, diff, tf_diff in rows:
+        lines.append(
+            f"| {name} | {points} | {mine_s * 1e3:.2f} | {tf_s * 1e3:.2f} | {tf_s / mine_s:.1f}x | "
+            f"{by_s * 1e3:.0f} | {by_s / mine_s:.0f}x | {diff:.1e} | {tf_diff:.1e} |"
+        )
+    lines += [
+        "",
+        f"Target: ≥ 10x calc_incoherent on the same {args.threads} threads, lowest ratio in this run "
+        f"**{worst:.1f}x** ({'met' if worst >= 10 else 'NOT met'}).",
+    ]
+    return lines
 
 
 def colour_grid(n, d, angles, wavelengths):
@@ -102,6 +166,7 @@ def main():
         rows.append((name, mine["R_avg"].size, mine_s, tf_s, col_s, by_s, diff, tf_diff))
         print(f"  {name:13s} irid {mine_s * 1e3:7.2f} ms   tmm-faster x{tf_s / mine_s:5.1f}   "
               f"colour x{col_s / mine_s:6.1f}   tmm x{by_s / mine_s:7.0f}", flush=True)
+    incoherent = incoherent_rows(irid, args, wavelengths, angles, step, failures, findings)
 
     cpu = "unknown"
     try:
@@ -146,9 +211,12 @@ def main():
         f"Targets: ≥ 10x tmm-faster on the same {args.threads} threads, lowest ratio in this run "
         f"**{worst_tf:.1f}x** ({'met' if worst_tf >= 10 else 'NOT met'}); ≥ 1000x Byrnes' tmm, lowest "
         f"**{worst_tmm:.0f}x** ({'met' if worst_tmm >= 1000 else 'NOT met'}).",
-        "",
     ]
-    lines += [f"- FAILED: {f}" for f in failures] or ["- irid.coherent agrees with Byrnes' tmm to 1e-9 at every point compared."]
+    lines += incoherent_lines(incoherent, args)
+    lines += [""]
+    lines += [f"- FAILED: {f}" for f in failures] or [
+        "- irid.coherent agrees with Byrnes' tmm, and irid.incoherent with Byrnes' inc_tmm, to 1e-9 at every "
+        "point compared."]
     lines += [f"- {f}" for f in findings]
     lines.append(END)
     section = "\n".join(lines) + "\n"

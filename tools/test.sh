@@ -44,6 +44,13 @@ done
 step "tools/bench_peers.py"
 OMP_NUM_THREADS=2 .venv/bin/python tools/bench_peers.py -o "$(mktemp -d)"
 
+# The Python package's extension, compiled once for the scripts that
+# install it (python.sh, mitsuba.sh); each builds its own when run alone.
+step "tools/python_wheel.sh"
+IRID_WHEEL=$(bash tools/python_wheel.sh .venv/bin/python)
+export IRID_WHEEL
+echo "$IRID_WHEEL"
+
 # One script per integration (GPU shaders on lavapipe, the Python package,
 # the browser preview, Blender), each installing what it needs.
 for script in tools/ci/*.sh; do

@@ -22,7 +22,7 @@
 import * as THREE from 'three';
 
 /** film.json versions this module knows. */
-export const FILM_VERSIONS = [1];
+export const FILM_VERSIONS = [1, 2];
 
 const BLOCK = /layout\s*\(\s*std140\s*\)\s*uniform\s+(\w+)\s*\{([^}]*)\}\s*;/;
 const SIGNATURE = /IridFilm\s+irid_film\s*\(([^)]*)\)/;

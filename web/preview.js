@@ -10,14 +10,19 @@
 (function (ns) {
   'use strict';
 
-  // Parameters every export has (docs/gpu.md); the sampler's block may
-  // hold more, each filled from film.json's params by name.
-  const PARAM_NAMES = [
-    'thickness_min_nm', 'thickness_max_nm', 'cos_min', 'cos_max',
-    'cos_crit', 'y_crit', 'size_u', 'size_v',
-  ];
+  // The film.json version this page reads (docs/gpu.md): the atlas of
+  // charts, one per side of the film, and its uniform array.
+  const FILM_VERSION = 2;
   const ENVIRONMENTS = { sky: 0, studio: 1, white: 2 };
-  const CHART_QUANTITY = { 'chart-r': 0, 'chart-t': 1 };
+  // A chart view: the quantity (0 R, 1 T) and the side (0 light from the
+  // ambient, 1 from the substrate).
+  const CHART_VIEW = {
+    'chart-r': [0, 0], 'chart-t': [1, 0], 'chart-r-back': [0, 1], 'chart-t-back': [1, 1],
+  };
+  // The objects: each has its own compiled shader (a software renderer runs
+  // an untaken branch's loop too), and the radius of a sphere about the
+  // origin that holds it (outside it, no back face can be seen).
+  const OBJECTS = { sphere: { kind: 0, radius: 1.0 }, torus: { kind: 1, radius: 1.06 } };
 
   // ---------------------------------------------------------------- sources
 
@@ -91,7 +96,9 @@
     const fail = (why) => { throw new Error(`${where}film.json: ${why}`); };
     if (!film || typeof film !== 'object') fail('not an object');
     if (film.format !== 'irid-film') fail(`format is ${JSON.stringify(film.format)}, not "irid-film"`);
-    if (film.version !== 1) fail(`version ${JSON.stringify(film.version)} is not 1 (written by another irid?)`);
+    if (film.version !== FILM_VERSION) {
+      fail(`version ${JSON.stringify(film.version)}: this page reads version ${FILM_VERSION}; export the film again with the irid that wrote this page`);
+    }
     const tex = film.texture;
     if (!tex || !Number.isInteger(tex.width) || !Number.isInteger(tex.height) || tex.width < 1 || tex.height < 1) {
       fail('texture.width and texture.height must be positive integers');
@@ -106,9 +113,22 @@
       || d.cos_theta[0] < 0 || d.cos_theta[1] > 1) {
       fail('domain ranges are empty or out of order');
     }
-    if (!film.params || typeof film.params !== 'object' || !Object.values(film.params).every(isNumber)
-      || !PARAM_NAMES.every((n) => n in film.params)) {
-      fail(`params must be numbers, among them ${PARAM_NAMES.join(', ')}`);
+    const u = film.uniform_f32;
+    if (!Array.isArray(u) || u.length === 0 || u.length % 4 !== 0 || !u.every(isNumber)) {
+      fail('uniform_f32 must be an array of numbers, whole vec4s');
+    }
+    if (!Array.isArray(film.charts) || film.charts.length === 0
+      || !film.charts.every((c) => c && c.params && Object.values(c.params).every(isNumber))) {
+      fail('charts must list the atlas\'s charts, each with numeric params');
+    }
+    const chart = (side) => side && Number.isInteger(side.chart) && side.chart >= 0 && side.chart < film.charts.length;
+    if (!film.sides || !chart(film.sides.front) || !(film.sides.back === null || chart(film.sides.back))) {
+      fail('sides.front must name a chart, sides.back a chart or null');
+    }
+    if (typeof film.opaque !== 'boolean') fail('opaque must be true or false');
+    if (!film.opaque && !(film.refraction && isNumber(film.refraction.substrate_over_ambient)
+      && film.refraction.substrate_over_ambient > 0)) {
+      fail('refraction.substrate_over_ambient must be a positive number for a film that is not opaque');
     }
     if (typeof film.white !== 'string') fail('white must be a string');
   }
@@ -266,8 +286,34 @@ float irid_perlin(vec3 p) {
 }
 `;
 
-  const OBJECT_FS = (sampler, baseline) => `${HEADER}${baseline ? '' : sampler}
+  // The depth pass: the object's nearest face, no colour.
+  const DEPTH_FS = `#version 300 es
+precision highp float;
+out vec4 o_color;
+void main() { o_color = vec4(0.0); }`;
+
+  // The frame-time baseline's stand-in for the export's sampler: the same
+  // shading with constant R and T, no texture fetch.
+  const BASELINE_SAMPLER = `
+struct IridFilm { vec3 reflectance; vec3 transmittance; };
+IridFilm irid_film(float thickness_nm, float cos_theta, int side) {
+  return IridFilm(vec3(0.04) * (1.0 + 1e-9 * thickness_nm), vec3(0.96));
+}
+`;
+
+  // The object (its mesh's normals point out, into the ambient) is shaded on
+  // the side the eye sees (gl_FrontFacing: 0, light from the ambient; 1,
+  // from the substrate). A film that lets light through has the substrate
+  // inside: the transmitted ray refracts in by the ratio of the indices and
+  // is followed to INNER_HITS inner surface hits (after two, a ray not
+  // totally reflected keeps R1 R2 of the light: 0.2 % through glass at
+  // normal incidence), each shaded from the
+  // substrate side (the export's back side: total internal reflection past
+  // the critical angle), where it refracts out weighted by T and reflects on
+  // weighted by R; what is left after the last hit leaves along its ray.
+  const OBJECT_FS = (sampler, baseline, kind) => `${HEADER}${baseline ? BASELINE_SAMPLER : sampler}
 ${COMMON}${NOISE}
+#define IRID_OBJECT ${kind}
 uniform vec3 u_eye;
 uniform float u_exposure;
 uniform int u_thickness_mode;      // 0 uniform, 1 noise
@@ -275,43 +321,119 @@ uniform float u_thickness_nm;
 uniform vec2 u_thickness_range_nm; // noise: [min, max]
 uniform float u_noise_scale;
 uniform bool u_opaque;
+uniform float u_index_ratio;       // substrate over ambient
 in vec3 v_position;
 in vec3 v_normal;
 out vec4 o_color;
+
+const int INNER_HITS = 2;
+const float TORUS_MAJOR = ${TORUS_MAJOR.toFixed(6)};
+const float TORUS_MINOR = ${TORUS_MINOR.toFixed(6)};
+const float TORUS_TILT = ${TORUS_TILT.toFixed(6)};
+
+float irid_thickness(vec3 p) {
+  if (u_thickness_mode == 0) return u_thickness_nm;
+  float k = clamp(0.5 + 0.75 * irid_perlin(p * u_noise_scale), 0.0, 1.0);
+  return mix(u_thickness_range_nm.x, u_thickness_range_nm.y, k);
+}
+
+// The torus's own frame: the page tilts it about x.
+vec3 irid_untilt(vec3 p) {
+  float c = cos(TORUS_TILT), s = sin(TORUS_TILT);
+  return vec3(p.x, p.y * c + p.z * s, -p.y * s + p.z * c);
+}
+
+// The object as a signed distance, negative inside.
+float irid_sdf(vec3 p) {
+#if IRID_OBJECT == 0
+  return length(p) - 1.0;
+#else
+  vec3 q = irid_untilt(p);
+  return length(vec2(length(q.xz) - TORUS_MAJOR, q.y)) - TORUS_MINOR;
+#endif
+}
+
+vec3 irid_outward(vec3 p) {
+#if IRID_OBJECT == 0
+  return normalize(p);
+#else
+  vec2 e = vec2(1e-4, 0.0);
+  return normalize(vec3(irid_sdf(p + e.xyy) - irid_sdf(p - e.xyy),
+    irid_sdf(p + e.yxy) - irid_sdf(p - e.yxy), irid_sdf(p + e.yyx) - irid_sdf(p - e.yyx)));
+#endif
+}
+
+// Where a ray inside the object leaves it: in closed form for the sphere,
+// by stepping the distance for the torus.
+vec3 irid_exit(vec3 p, vec3 d) {
+#if IRID_OBJECT == 0
+  float b = dot(p, d);
+  return p + d * (-b + sqrt(max(b * b - dot(p, p) + 1.0, 0.0)));
+#else
+  float s = 2e-3;
+  for (int i = 0; i < 64; i++) {
+    float e = irid_sdf(p + s * d);
+    if (e > -1e-4) break;
+    s += max(-e, 1e-4);
+  }
+  return p + s * d;
+#endif
+}
+
+// The light leaving the object's inside along a ray that entered at p with
+// direction d (into the substrate).
+vec3 irid_inside(vec3 p, vec3 d) {
+  vec3 weight = vec3(1.0);
+  vec3 c = vec3(0.0);
+  for (int k = 0; k < INNER_HITS; k++) {
+    p = irid_exit(p, d);
+    vec3 m = irid_outward(p);
+    IridFilm film = irid_film(irid_thickness(p), clamp(dot(d, m), 0.0, 1.0), 1);
+    vec3 out_dir = refract(d, -m, u_index_ratio);
+    if (dot(out_dir, out_dir) > 0.0) c += weight * film.transmittance * irid_environment(out_dir);
+    weight *= film.reflectance;
+    d = reflect(d, m);
+  }
+  return c + weight * irid_environment(d);
+}
+
 void main() {
   vec3 n = normalize(v_normal);
+  int side = gl_FrontFacing ? 0 : 1;
+  if (!gl_FrontFacing) n = -n; // the normal on the eye's side
   vec3 v = normalize(u_eye - v_position);
   float cos_theta = clamp(dot(n, v), 0.0, 1.0);
-  float t = u_thickness_nm;
-  if (u_thickness_mode == 1) {
-    float k = clamp(0.5 + 0.75 * irid_perlin(v_position * u_noise_scale), 0.0, 1.0);
-    t = mix(u_thickness_range_nm.x, u_thickness_range_nm.y, k);
+  IridFilm film = irid_film(irid_thickness(v_position), cos_theta, side);
+  // Seen from outside, the reflection comes from the ambient and what comes
+  // through from the inside; seen from inside (the eye in the substrate),
+  // the other way round, the transmitted ray bent out of the substrate.
+  vec3 mirrored = reflect(-v, n);
+  vec3 c = film.reflectance * (gl_FrontFacing || u_opaque ? irid_environment(mirrored) : irid_inside(v_position, mirrored));
+  if (!u_opaque) {
+    vec3 d = refract(-v, n, gl_FrontFacing ? 1.0 / u_index_ratio : u_index_ratio);
+    if (dot(d, d) > 0.0) {
+      c += film.transmittance * (gl_FrontFacing ? irid_inside(v_position, d) : irid_environment(d));
+    }
   }
-${baseline
-    ? '  // The frame-time baseline: the same shading with constant R and T.\n  vec3 r = vec3(0.04) * (1.0 + 1e-9 * t); vec3 tr = vec3(0.96);'
-    : '  IridFilm film = irid_film(t, cos_theta);\n  vec3 r = film.reflectance; vec3 tr = film.transmittance;'}
-  vec3 c = r * irid_environment(reflect(-v, n));
-  // A film that transmits is drawn as a thin shell: what lies behind it,
-  // straight through, weighted by T.
-  if (!u_opaque) c += tr * irid_environment(-v);
   o_color = vec4(irid_encode_srgb(c * exp2(u_exposure)), 1.0);
 }`;
 
-  // The chart: thickness along x (left to right, domain min to max), angle
-  // along y (bottom to top, acos(cos_max) to acos(cos_min)), each pixel's
-  // centre sampled. Output: the linear colour clamped to [0, 1], sRGB-encoded.
+  // The chart of one side: thickness along x (left to right, domain min to
+  // max), angle along y (bottom to top, acos(cos_max) to acos(cos_min)),
+  // each pixel's centre sampled. Output: the linear colour clamped to [0, 1], sRGB-encoded.
   const CHART_FS = (sampler) => `${HEADER}${sampler}
 ${COMMON}
 uniform vec2 u_resolution;
 uniform vec2 u_chart_thickness_nm;
 uniform vec2 u_chart_angle_rad;
 uniform int u_quantity;
+uniform int u_side;
 out vec4 o_color;
 void main() {
   vec2 p = gl_FragCoord.xy / u_resolution;
   float t = mix(u_chart_thickness_nm.x, u_chart_thickness_nm.y, p.x);
   float theta = mix(u_chart_angle_rad.x, u_chart_angle_rad.y, p.y);
-  IridFilm film = irid_film(t, cos(theta));
+  IridFilm film = irid_film(t, cos(theta), u_side);
   vec3 c = u_quantity == 0 ? film.reflectance : film.transmittance;
   o_color = vec4(irid_encode_srgb(c), 1.0);
 }`;
@@ -349,49 +471,23 @@ void main() {
     return text.replace(/^\s*#version[^\n]*\n/m, '').replace(/^\s*precision\s+[^\n]*;\s*$/gm, '');
   }
 
-  // The export's parameters: the uniform block the sampler declares (at
-  // binding 0 here), or plain uniforms. Texture units 0 and 1 hold R and T.
+  // The export's uniform array (film.json's uniform_f32, as it is) into the
+  // sampler's uniform block, at binding 0 here. Texture units 0 and 1 hold
+  // R and T.
   function bindFilm(gl, program, exp, what) {
     gl.useProgram(program);
-    const values = exp.film.params;
-    // The block's name is the generator's choice: find it by its members.
-    let blockIndex = gl.INVALID_INDEX;
-    const blocks = gl.getProgramParameter(program, gl.ACTIVE_UNIFORM_BLOCKS);
-    for (let b = 0; b < blocks; b++) {
-      const members = gl.getActiveUniformBlockParameter(program, b, gl.UNIFORM_BLOCK_ACTIVE_UNIFORM_INDICES);
-      if (Array.from(members).some((i) => PARAM_NAMES.includes(gl.getActiveUniform(program, i).name.split('.').pop()))) {
-        blockIndex = b;
-      }
+    const values = new Float32Array(exp.film.uniform_f32);
+    const blockIndex = gl.getUniformBlockIndex(program, 'IridParamsBlock');
+    if (blockIndex === gl.INVALID_INDEX) throw new Error(`${what}: declares no uniform block IridParamsBlock`);
+    const size = gl.getActiveUniformBlockParameter(program, blockIndex, gl.UNIFORM_BLOCK_DATA_SIZE);
+    if (size !== values.byteLength) {
+      throw new Error(`${what}: its uniform block takes ${size} bytes, film.json's uniform_f32 holds ${values.byteLength}`);
     }
-    if (blockIndex !== gl.INVALID_INDEX) {
-      const size = gl.getActiveUniformBlockParameter(program, blockIndex, gl.UNIFORM_BLOCK_DATA_SIZE);
-      const data = new ArrayBuffer(size);
-      const view = new DataView(data);
-      const indices = gl.getActiveUniformBlockParameter(program, blockIndex, gl.UNIFORM_BLOCK_ACTIVE_UNIFORM_INDICES);
-      const offsets = gl.getActiveUniforms(program, indices, gl.UNIFORM_OFFSET);
-      indices.forEach((index, i) => {
-        const name = gl.getActiveUniform(program, index).name.split('.').pop();
-        if (!(name in values)) throw new Error(`${what}: film.json's params lack ${name}, which the sampler reads`);
-        view.setFloat32(offsets[i], values[name], true);
-      });
-      const buffer = gl.createBuffer();
-      gl.bindBuffer(gl.UNIFORM_BUFFER, buffer);
-      gl.bufferData(gl.UNIFORM_BUFFER, data, gl.STATIC_DRAW);
-      gl.uniformBlockBinding(program, blockIndex, 0);
-      program.iridParams = buffer;
-    } else {
-      let bound = 0;
-      for (const name of Object.keys(values)) {
-        const location = [`irid_params.${name}`, `irid_${name}`, name]
-          .map((n) => program.uniform(n)).find((l) => l !== null);
-        if (location) {
-          gl.uniform1f(location, values[name]);
-          bound++;
-        }
-      }
-      if (bound === 0) throw new Error(`${what}: declares neither a uniform block nor uniforms for ${PARAM_NAMES.join(', ')}`);
-      program.iridParams = null;
-    }
+    const buffer = gl.createBuffer();
+    gl.bindBuffer(gl.UNIFORM_BUFFER, buffer);
+    gl.bufferData(gl.UNIFORM_BUFFER, values, gl.STATIC_DRAW);
+    gl.uniformBlockBinding(program, blockIndex, 0);
+    program.iridParams = buffer;
     const r = program.uniform('irid_reflectance');
     const t = program.uniform('irid_transmittance');
     if (r === null && t === null) throw new Error(`${what}: declares no sampler irid_reflectance or irid_transmittance`);
@@ -436,6 +532,8 @@ void main() {
   }
 
   const TORUS_TILT = 1.0; // radians
+  const TORUS_MAJOR = 0.72;
+  const TORUS_MINOR = 0.34;
 
   function torusMesh(major, minor, rings, sides) {
     const positions = [];
@@ -555,6 +653,7 @@ void main() {
   function describe(exp) {
     const f = exp.film;
     const deg = (c) => (Math.acos(Math.min(1, Math.max(-1, c))) * 180) / Math.PI;
+    const front = f.charts[f.sides.front.chart].params;
     const rows = [
       ['export', exp.label],
       ['white', f.white],
@@ -563,18 +662,24 @@ void main() {
       ['angle', `${deg(f.domain.cos_theta[1]).toFixed(1)}° – ${deg(f.domain.cos_theta[0]).toFixed(1)}°`],
       // cos_crit < 0: angle nodes uniform in cos θ; = cos_min: crowded
       // towards grazing; inside the domain: a dense side's critical angle.
-      ['angle nodes', f.params.cos_crit < 0 ? 'uniform in cos θ'
-        : f.params.cos_crit <= f.domain.cos_theta[0] ? 'crowded towards grazing'
-          : `on the critical angle ${deg(f.params.cos_crit).toFixed(2)}°`],
+      ['angle nodes', front.cos_crit < 0 ? 'uniform in cos θ'
+        : front.cos_crit <= f.domain.cos_theta[0] ? 'crowded towards grazing'
+          : `on the critical angle ${deg(front.cos_crit).toFixed(2)}°`],
       ['texture', `${f.texture.width} × ${f.texture.height}, ${exp.reflectance.kind}`],
-      ['opaque', f.opaque ? 'yes (T drawn black)' : 'no'],
+      ['sides', f.sides.back === null ? 'front only (no light arrives from the substrate)'
+        : f.sides.back.chart === f.sides.front.chart ? 'front and back, one chart (the stack reads the same)'
+          : 'front and back (reversed stack), a chart each'],
+      ['opaque', f.opaque ? 'yes (no transmission drawn)' : `no (refraction index ratio ${f.refraction.substrate_over_ambient.toFixed(3)})`],
     ];
-    const e = f.error || {};
-    rows.push(['max ΔE00 R / T', formatList(e.max_delta_e00, 3)]);
-    rows.push(['mean ΔE00 R / T', formatList(e.mean_delta_e00, 4)]);
-    rows.push(['max |error| R', formatList(Array.isArray(e.max_abs) ? e.max_abs.slice(0, 3) : null, 5)]);
-    rows.push(['max |error| T', formatList(Array.isArray(e.max_abs) ? e.max_abs.slice(3, 6) : null, 5)]);
-    if (isNumber(e.points)) rows.push(['checked at', `${e.points} points`]);
+    for (const side of ['front', 'back']) {
+      const e = f.error && f.error[side];
+      if (!e) continue;
+      rows.push([`${side}: max ΔE00 R / T`, formatList(e.max_delta_e00, 3)]);
+      rows.push([`${side}: mean ΔE00 R / T`, formatList(e.mean_delta_e00, 4)]);
+      rows.push([`${side}: max |error| R`, formatList(Array.isArray(e.max_abs) ? e.max_abs.slice(0, 3) : null, 5)]);
+      rows.push([`${side}: max |error| T`, formatList(Array.isArray(e.max_abs) ? e.max_abs.slice(3, 6) : null, 5)]);
+      if (isNumber(e.points)) rows.push([`${side}: checked at`, `${e.points} points`]);
+    }
     const info = $('info');
     info.replaceChildren();
     for (const [k, v] of rows) {
@@ -596,9 +701,10 @@ void main() {
       this.distance = 4.2;
       this.frames = 0;
       this.pending = false;
-      this.meshes = { sphere: uploadMesh(gl, sphereMesh(64, 128)), torus: uploadMesh(gl, torusMesh(0.72, 0.34, 128, 64)) };
+      this.meshes = { sphere: uploadMesh(gl, sphereMesh(64, 128)), torus: uploadMesh(gl, torusMesh(TORUS_MAJOR, TORUS_MINOR, 128, 64)) };
       this.empty = gl.createVertexArray();
       this.background = link(gl, FULLSCREEN_VS, BACKGROUND_FS, 'background shader');
+      this.depth = link(gl, OBJECT_VS, DEPTH_FS, 'depth shader');
     }
 
     /** Compiles the export's programs and uploads its textures once. */
@@ -607,10 +713,14 @@ void main() {
       const gl = this.gl;
       const body = samplerBody(exp.sampler);
       const what = `${exp.name}irid_film_es.glsl`;
-      const object = link(gl, OBJECT_VS, OBJECT_FS(body, false), what);
+      const object = {};
+      const baseline = {};
+      for (const [name, { kind }] of Object.entries(OBJECTS)) {
+        object[name] = link(gl, OBJECT_VS, OBJECT_FS(body, false, kind), what);
+        baseline[name] = link(gl, OBJECT_VS, OBJECT_FS(body, true, kind), 'baseline shader');
+        bindFilm(gl, object[name], exp, what);
+      }
       const chart = link(gl, FULLSCREEN_VS, CHART_FS(body), what);
-      const baseline = link(gl, OBJECT_VS, OBJECT_FS(body, true), 'baseline shader');
-      bindFilm(gl, object, exp, what);
       bindFilm(gl, chart, exp, what);
       const { width, height } = exp.film.texture;
       exp.gpu = {
@@ -662,53 +772,85 @@ void main() {
       gl.bindTexture(gl.TEXTURE_2D, exp.gpu.reflectance);
       gl.activeTexture(gl.TEXTURE1);
       gl.bindTexture(gl.TEXTURE_2D, exp.gpu.transmittance);
-      if (c.mode in CHART_QUANTITY) {
-        const program = exp.gpu.chart;
-        const ranges = this.chartRanges(exp);
-        gl.useProgram(program);
-        if (program.iridParams) gl.bindBufferBase(gl.UNIFORM_BUFFER, 0, program.iridParams);
-        gl.disable(gl.DEPTH_TEST);
-        gl.uniform2f(program.uniform('u_resolution'), canvas.width, canvas.height);
-        gl.uniform2f(program.uniform('u_chart_thickness_nm'), ranges.thickness[0], ranges.thickness[1]);
-        gl.uniform2f(program.uniform('u_chart_angle_rad'), ranges.angle[0], ranges.angle[1]);
-        gl.uniform1i(program.uniform('u_quantity'), CHART_QUANTITY[c.mode]);
-        gl.bindVertexArray(this.empty);
-        gl.drawArrays(gl.TRIANGLES, 0, 3);
+      if (c.mode in CHART_VIEW) {
+        this.drawChart(exp, c);
       } else {
-        const cam = this.camera(canvas.width / canvas.height);
-        const env = ENVIRONMENTS[c.environment];
-        const exposure = c.exposure;
-        gl.disable(gl.DEPTH_TEST);
-        gl.useProgram(this.background);
-        gl.uniformMatrix4fv(this.background.uniform('u_inverse_view_proj'), false, cam.inverse);
-        gl.uniform3fv(this.background.uniform('u_eye'), cam.eye);
-        gl.uniform1f(this.background.uniform('u_exposure'), exposure);
-        gl.uniform1i(this.background.uniform('u_environment'), env);
-        gl.bindVertexArray(this.empty);
-        gl.drawArrays(gl.TRIANGLES, 0, 3);
-
-        const program = options.baseline ? exp.gpu.baseline : exp.gpu.object;
-        gl.useProgram(program);
-        if (program.iridParams) gl.bindBufferBase(gl.UNIFORM_BUFFER, 0, program.iridParams);
-        gl.enable(gl.DEPTH_TEST);
-        gl.enable(gl.CULL_FACE);
-        gl.clear(gl.DEPTH_BUFFER_BIT);
-        gl.uniformMatrix4fv(program.uniform('u_view_proj'), false, cam.viewProj);
-        gl.uniform3fv(program.uniform('u_eye'), cam.eye);
-        gl.uniform1f(program.uniform('u_exposure'), exposure);
-        gl.uniform1i(program.uniform('u_environment'), env);
-        gl.uniform1i(program.uniform('u_thickness_mode'), c.thicknessMode === 'noise' ? 1 : 0);
-        gl.uniform1f(program.uniform('u_thickness_nm'), c.thickness);
-        gl.uniform2f(program.uniform('u_thickness_range_nm'), Math.min(c.thicknessMin, c.thicknessMax), Math.max(c.thicknessMin, c.thicknessMax));
-        gl.uniform1f(program.uniform('u_noise_scale'), c.noiseScale);
-        gl.uniform1i(program.uniform('u_opaque'), exp.film.opaque ? 1 : 0);
-        const mesh = this.meshes[c.object];
-        gl.bindVertexArray(mesh.vao);
-        gl.drawElements(gl.TRIANGLES, mesh.count, gl.UNSIGNED_INT, 0);
-        gl.bindVertexArray(null);
+        this.drawObject(exp, c, options);
       }
       this.frames++;
       document.body.dataset.frames = String(this.frames);
+    }
+
+    drawChart(exp, c) {
+      const gl = this.gl;
+      const canvas = gl.canvas;
+      const program = exp.gpu.chart;
+      const ranges = this.chartRanges(exp);
+      gl.useProgram(program);
+      if (program.iridParams) gl.bindBufferBase(gl.UNIFORM_BUFFER, 0, program.iridParams);
+      gl.disable(gl.DEPTH_TEST);
+      gl.uniform2f(program.uniform('u_resolution'), canvas.width, canvas.height);
+      gl.uniform2f(program.uniform('u_chart_thickness_nm'), ranges.thickness[0], ranges.thickness[1]);
+      gl.uniform2f(program.uniform('u_chart_angle_rad'), ranges.angle[0], ranges.angle[1]);
+      gl.uniform1i(program.uniform('u_quantity'), CHART_VIEW[c.mode][0]);
+      gl.uniform1i(program.uniform('u_side'), CHART_VIEW[c.mode][1]);
+      gl.bindVertexArray(this.empty);
+      gl.drawArrays(gl.TRIANGLES, 0, 3);
+    }
+
+    /**
+     * The environment, then the object (unless options.objectHidden, a test's
+     * reference). From inside the object both faces are drawn (a back face
+     * is the film seen from the substrate), after a depth pass so that only
+     * the nearest is shaded; from outside, front faces only.
+     */
+    drawObject(exp, c, options) {
+      const gl = this.gl;
+      const canvas = gl.canvas;
+      const cam = this.camera(canvas.width / canvas.height);
+      const env = ENVIRONMENTS[c.environment];
+      gl.disable(gl.DEPTH_TEST);
+      gl.useProgram(this.background);
+      gl.uniformMatrix4fv(this.background.uniform('u_inverse_view_proj'), false, cam.inverse);
+      gl.uniform3fv(this.background.uniform('u_eye'), cam.eye);
+      gl.uniform1f(this.background.uniform('u_exposure'), c.exposure);
+      gl.uniform1i(this.background.uniform('u_environment'), env);
+      gl.bindVertexArray(this.empty);
+      gl.drawArrays(gl.TRIANGLES, 0, 3);
+      if (options.objectHidden) return;
+
+      const mesh = this.meshes[c.object];
+      gl.enable(gl.DEPTH_TEST);
+      gl.clear(gl.DEPTH_BUFFER_BIT);
+      gl.bindVertexArray(mesh.vao);
+      if (this.distance > OBJECTS[c.object].radius) {
+        gl.enable(gl.CULL_FACE); // outside: no back face can be seen
+      } else {
+        gl.disable(gl.CULL_FACE);
+        gl.useProgram(this.depth);
+        gl.uniformMatrix4fv(this.depth.uniform('u_view_proj'), false, cam.viewProj);
+        gl.colorMask(false, false, false, false);
+        gl.drawElements(gl.TRIANGLES, mesh.count, gl.UNSIGNED_INT, 0);
+        gl.colorMask(true, true, true, true);
+        gl.depthFunc(gl.LEQUAL);
+      }
+
+      const program = (options.baseline ? exp.gpu.baseline : exp.gpu.object)[c.object];
+      gl.useProgram(program);
+      if (program.iridParams) gl.bindBufferBase(gl.UNIFORM_BUFFER, 0, program.iridParams);
+      gl.uniformMatrix4fv(program.uniform('u_view_proj'), false, cam.viewProj);
+      gl.uniform3fv(program.uniform('u_eye'), cam.eye);
+      gl.uniform1f(program.uniform('u_exposure'), c.exposure);
+      gl.uniform1i(program.uniform('u_environment'), env);
+      gl.uniform1i(program.uniform('u_thickness_mode'), c.thicknessMode === 'noise' ? 1 : 0);
+      gl.uniform1f(program.uniform('u_thickness_nm'), c.thickness);
+      gl.uniform2f(program.uniform('u_thickness_range_nm'), Math.min(c.thicknessMin, c.thicknessMax), Math.max(c.thicknessMin, c.thicknessMax));
+      gl.uniform1f(program.uniform('u_noise_scale'), c.noiseScale);
+      gl.uniform1i(program.uniform('u_opaque'), exp.film.opaque ? 1 : 0);
+      gl.uniform1f(program.uniform('u_index_ratio'), exp.film.opaque ? 1 : exp.film.refraction.substrate_over_ambient);
+      gl.drawElements(gl.TRIANGLES, mesh.count, gl.UNSIGNED_INT, 0);
+      gl.bindVertexArray(null);
+      gl.depthFunc(gl.LESS);
     }
 
     request() {
@@ -734,6 +876,12 @@ void main() {
         input.max = String(tMax);
         input.disabled = tMin === tMax;
       }
+      // Without a back side (an opaque film) its charts would show the front's.
+      const back = exp.film.sides.back !== null;
+      for (const option of $('mode').options) {
+        if (option.value.endsWith('-back')) option.disabled = !back;
+      }
+      if (!back && $('mode').value.endsWith('-back')) $('mode').value = 'object';
       $('thickness').value = String((tMin + tMax) / 2);
       $('thickness-min').value = String(tMin + 0.25 * (tMax - tMin));
       $('thickness-max').value = String(tMin + 0.75 * (tMax - tMin));
@@ -758,7 +906,7 @@ void main() {
     $('row-min').hidden = !noise;
     $('row-max').hidden = !noise;
     $('row-scale').hidden = !noise;
-    $('chart-axes').hidden = !($('mode').value in CHART_QUANTITY);
+    $('chart-axes').hidden = !($('mode').value in CHART_VIEW);
   }
 
   function attachOrbit(canvas, preview) {
@@ -779,7 +927,8 @@ void main() {
     canvas.addEventListener('pointercancel', end);
     canvas.addEventListener('wheel', (e) => {
       e.preventDefault();
-      preview.distance = Math.max(2.0, Math.min(12, preview.distance * Math.exp(e.deltaY * 0.001)));
+      // Down to 0.5: inside the sphere, whose inner face is the film seen from the substrate.
+      preview.distance = Math.max(0.5, Math.min(12, preview.distance * Math.exp(e.deltaY * 0.001)));
       preview.request();
     }, { passive: false });
   }
@@ -863,8 +1012,9 @@ void main() {
     window.irid = {
       preview,
       draw(options) { preview.draw(options); },
-      pixels() {
-        preview.draw();
+      // options: draw()'s ({ objectHidden: true }: the environment alone).
+      pixels(options) {
+        preview.draw(options);
         const data = new Uint8Array(canvas.width * canvas.height * 4);
         gl.readPixels(0, 0, canvas.width, canvas.height, gl.RGBA, gl.UNSIGNED_BYTE, data);
         // Rows bottom to top (readPixels order), RGBA8, base64: compact to hand over.

@@ -53,7 +53,7 @@ struct Module {
 fn with_entry(wgsl: &str) -> Result<Module, String> {
     let source = format!(
         "{wgsl}\n@fragment\nfn {ENTRY}(@location(0) at: vec2<f32>) -> @location(0) vec4<f32> {{\n    \
-         let film = irid_film(at.x, at.y);\n    \
+         let film = irid_film(at.x, at.y, select(0, 1, at.x < 0.0));\n    \
          return vec4<f32>(film.reflectance + film.transmittance, 1.0);\n}}\n"
     );
     let module = naga::front::wgsl::parse_str(&source).map_err(|e| e.emit_to_string(&source))?;

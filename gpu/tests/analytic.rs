@@ -17,7 +17,7 @@ pub fn analytic_library() -> String {
     let bb = std::fs::read_to_string(dir.join("shaders/belcour_barla_gltf.wgsl")).unwrap();
     format!(
         "{irid}\n{bb}\n\
-         fn bb_film(thickness_nm: f32, cos_theta: f32) -> IridFilm {{\n\
+         fn bb_film(thickness_nm: f32, cos_theta: f32, side: i32) -> IridFilm {{\n\
              let film = BbFilm(1.0, 1.33, vec3<f32>(0.04));\n\
              return IridFilm(belcour_barla_gltf(film, thickness_nm, cos_theta), vec3<f32>(0.0));\n\
          }}\n"
@@ -52,7 +52,7 @@ fn wgsl_belcour_barla_matches_the_cpu_model() {
             [1000.0 * a, 0.02 + 0.98 * b]
         })
         .collect();
-    let (got, _) = run(&gpu, &program, &bound, &points, 1);
+    let (got, _) = run(&gpu, &program, &bound, &points, 1, 0);
     let film = AnalyticFilm::from_base_f0(1.0, 1.33, [0.04; 3]);
     let mut worst = 0.0f64;
     for (p, g) in points.iter().zip(&got) {

@@ -80,7 +80,7 @@ fn compiles(tool: &str, name: &str, source: &str, args: &[&str]) {
     );
 }
 
-const GLSL_MAIN: &str = "void main() { IridFilm f = irid_film(250.0, 0.5); \
+const GLSL_MAIN: &str = "void main() { IridFilm f = irid_film(250.0, 0.5, 1); \
                          irid_out = vec4(f.reflectance + f.transmittance, 1.0); }\n";
 
 #[test]
@@ -113,7 +113,7 @@ fn hlsl_compiles() {
     let Some(tool) = glslang() else { return };
     let source = format!(
         "{}float4 main(float2 at : TEXCOORD0) : SV_Target0 {{\n    \
-         IridFilm f = irid_film(at.x, at.y);\n    \
+         IridFilm f = irid_film(at.x, at.y, int(at.x < 0.0));\n    \
          return float4(f.reflectance + f.transmittance, 1.0);\n}}\n",
         read("irid_film.hlsl")
     );

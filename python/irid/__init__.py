@@ -2,6 +2,9 @@
 
 - ``coherent(n, d, angles, wavelengths)``: R and T over a wavelength x angle
   grid with the arguments and result of tmm-faster's ``calc_coherent``.
+- ``incoherent(n, d, c, angles, wavelengths)``: the same with thick
+  (incoherent) layers, the arguments and result of tmm-faster's
+  ``calc_incoherent`` (c: 'c' or 'i' per medium).
 - ``Stack``: a multilayer from any stack-file material form (or
   ``Stack.load(path)``); ``solve`` gives R, T and the complex amplitudes,
   ``color`` the reflected and transmitted colour.
@@ -28,6 +31,7 @@ from ._irid import (
     __version__,
     bake,
     coherent,
+    incoherent,
     material,
     materials,
 )
@@ -39,6 +43,7 @@ __all__ = [
     "__version__",
     "bake",
     "coherent",
+    "incoherent",
     "material",
     "materials",
 ]

@@ -14,8 +14,9 @@ PathLike = Union[str, "os.PathLike[str]"]
 #: Any medium form of a stack file: n, (n, k), n + kj, a built-in name, a dict
 #: of stack-file keys (n, material, cauchy, sellmeier, table, name) or a Material.
 MediumForm = Union[float, complex, Tuple[float, float], str, Mapping[str, Any], "Material"]
-#: A layer: (form, thickness_nm), or a dict of stack-file keys with thickness_nm.
-LayerForm = Union[Tuple[MediumForm, float], Mapping[str, Any]]
+#: A layer: (form, thickness_nm), (form, thickness_nm, coherent) (False: an
+#: incoherent, thick layer), or a dict of stack-file keys with thickness_nm.
+LayerForm = Union[Tuple[MediumForm, float], Tuple[MediumForm, float, bool], Mapping[str, Any]]
 
 def coherent(
     n: ArrayLike,
@@ -31,6 +32,22 @@ def coherent(
     d: thicknesses in nm, inf for the ambient and the substrate.
     angles: degrees in [0, 90]; wavelengths: nm.
     Returns R_s, R_p, T_s, T_p, R_avg, T_avg, each (wavelengths, angles).
+    """
+
+def incoherent(
+    n: ArrayLike,
+    d: ArrayLike,
+    c: Sequence[str],
+    angles: ArrayLike,
+    wavelengths: ArrayLike,
+) -> Dict[str, npt.NDArray[np.float64]]:
+    """R and T of a multilayer with coherent and incoherent (thick) layers at
+    every wavelength and angle, with the arguments and result of tmm-faster's
+    ``calc_incoherent`` (Byrnes' ``inc_tmm`` formulation).
+
+    c: one letter per medium, 'c' (coherent) or 'i' (incoherent), the ambient
+    and substrate 'i'. n, d, angles, wavelengths and the result as for
+    ``coherent``. A point where an incoherent layer lases raises ValueError.
     """
 
 def material(name: str) -> Material:
@@ -73,6 +90,9 @@ class Stack:
     def substrate(self) -> Material: ...
     @property
     def layers(self) -> List[Tuple[Material, float]]: ...
+    @property
+    def coherent(self) -> List[bool]:
+        """Per layer, top down: False for an incoherent layer."""
     def solve(
         self,
         wavelengths_nm: ArrayLike,
@@ -82,7 +102,8 @@ class Stack:
     ) -> Dict[str, npt.NDArray[Any]]:
         """Rs, Rp, Ts, Tp, R, T (float64) and rs, rp, ts, tp (complex128), each
         (wavelengths, angles), or (thicknesses, wavelengths, angles) with
-        ``thickness_nm`` setting layer ``layer`` (1-based)."""
+        ``thickness_nm`` setting layer ``layer`` (1-based). A stack with
+        incoherent layers has no amplitudes: R and T only."""
     def response(
         self,
         cos_theta: ArrayLike,

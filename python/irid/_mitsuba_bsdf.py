@@ -9,6 +9,9 @@ import numpy as np
 
 from .mitsuba import MAX_THICKNESS_NM, SPECTRAL_RANGE_NM, FilmError, _FilmSetup, ggx_lambda
 
+#: The smallest α of Mitsuba's MicrofacetDistribution (it clamps below).
+MIN_GGX_ALPHA = 1e-4
+
 _SYMBOLIC = (
     "irid_film: a film without a table was traced in a symbolic Dr.Jit loop or call, where its solver "
     "cannot run (it runs between kernels); it gives zeros there. Render in the thread that called "
@@ -183,14 +186,10 @@ def _make_bsdf(symbolic):
                 raise FilmError("thickness_nm", f"expected a number or a texture, got {type(setup.thickness).__name__}")
             self.transmissive = setup.transmissive
             self.eta = setup.eta
-            self.alpha = setup.alpha
+            # Mitsuba's GGX takes no α below 1e-4 (roughness 0.01); the
+            # masking uses the same α, so the lobe is one GGX throughout.
+            self.alpha = max(setup.alpha, MIN_GGX_ALPHA) if setup.alpha > 0.0 else 0.0
             self.rough = setup.alpha > 0.0
-            if self.rough and self.transmissive and abs(self.eta - 1.0) < 1e-6:
-                raise FilmError(
-                    "roughness",
-                    "a rough film with the same index on both sides refracts nothing (its transmission is "
-                    "straight through, not a microfacet lobe); give roughness 0",
-                )
             if setup.table is None and dr.is_jit_v(mi.Float) and symbolic:
                 raise FilmError(
                     "table",

@@ -119,6 +119,12 @@ class _FilmSetup:
         #: n_substrate / n_ambient at every nm of SPECTRAL_RANGE_NM, for the
         #: angle in the ambient that light from the substrate corresponds to.
         self.eta_per_nm = (indices[-1].real / indices[0].real).astype(np.float32)
+        if roughness > 0.0 and self.transmissive and abs(self.eta - 1.0) < 1e-6:
+            raise FilmError(
+                "roughness",
+                "a rough film with the same index on both sides refracts nothing (its transmission is "
+                "straight through, not a microfacet lobe); give roughness 0",
+            )
         if table is not None:
             _check_table(table, stack, layer, thickness)
             if self.transmissive and not all(np.all(i.imag == 0.0) for i in indices[1:-1]):

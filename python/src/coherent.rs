@@ -5,7 +5,10 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use rayon::prelude::*;
 
-use irid::optics::{Material, Response, StackGrid, MAX_THICKNESS_NM, WAVELENGTH_RANGE_NM};
+use irid::optics::{
+    solve_incoherent, Coherence, Material, Response, StackGrid, MAX_THICKNESS_NM,
+    WAVELENGTH_RANGE_NM,
+};
 
 use crate::arrays::{array, real_list, values};
 use crate::budget::Footprint;
@@ -122,6 +125,7 @@ const KEYS: [&str; 6] = ["R_s", "R_p", "T_s", "T_p", "R_avg", "T_avg"];
 pub fn solve_grid(
     indices: &[C64],
     thicknesses_nm: &[f64],
+    coherence: &Coherence,
     wavelengths_nm: &[f64],
     cos_theta0: &[f64],
     parallel: bool,
@@ -148,6 +152,7 @@ pub fn solve_grid(
                 thicknesses_nm.to_vec(),
                 &wavelengths_nm[start..end],
             )
+            .with_coherence(coherence.clone())
         })
         .collect();
     // One task per (angle, run): the run's slice of each key's row.
@@ -233,60 +238,115 @@ pub fn coherent<'py>(
     angles: &Bound<'py, PyAny>,
     wavelengths: &Bound<'py, PyAny>,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let wavelengths_nm = real_list(wavelengths, "wavelengths")?;
-    let angles_deg = real_list(angles, "angles")?;
-    let d = real_list(d, "d")?;
-    let (mut indices, shape) = values::<C64>(n, "complex128", "n")?;
-    let media = match shape.as_slice() {
-        [m] => *m,
-        [w, m] if *w == wavelengths_nm.len() => *m,
-        _ => {
-            return Err(invalid(
-                "n",
-                format!(
-                    "expected shape (wavelengths, media) = ({}, {}), got {shape:?}",
-                    wavelengths_nm.len(),
-                    d.len()
-                ),
-            ))
+    Grid::new(n, d, angles, wavelengths)?.solve(py, &Coherence::coherent())
+}
+
+/// A wavelength × angle grid of one stack as tmm-faster's functions take
+/// it, converted and checked.
+pub struct Grid {
+    pub indices: Vec<C64>,
+    pub media: usize,
+    d: Vec<f64>,
+    angles_deg: Vec<f64>,
+    wavelengths_nm: Vec<f64>,
+}
+
+impl Grid {
+    /// `n`, `d`, `angles` and `wavelengths` as [`coherent`] takes them,
+    /// checked against the memory budget before anything is allocated.
+    pub fn new(
+        n: &Bound<'_, PyAny>,
+        d: &Bound<'_, PyAny>,
+        angles: &Bound<'_, PyAny>,
+        wavelengths: &Bound<'_, PyAny>,
+    ) -> PyResult<Grid> {
+        let wavelengths_nm = real_list(wavelengths, "wavelengths")?;
+        let angles_deg = real_list(angles, "angles")?;
+        let d = real_list(d, "d")?;
+        let (mut indices, shape) = values::<C64>(n, "complex128", "n")?;
+        let media = match shape.as_slice() {
+            [m] => *m,
+            [w, m] if *w == wavelengths_nm.len() => *m,
+            _ => {
+                return Err(invalid(
+                    "n",
+                    format!(
+                        "expected shape (wavelengths, media) = ({}, {}), got {shape:?}",
+                        wavelengths_nm.len(),
+                        d.len()
+                    ),
+                ))
+            }
+        };
+        grid_footprint(wavelengths_nm.len(), angles_deg.len(), media).check(&format!(
+            "{} wavelengths × {} angles × {media} media",
+            wavelengths_nm.len(),
+            angles_deg.len()
+        ))?;
+        if shape.len() == 1 {
+            // One set of media for every wavelength.
+            indices = indices.repeat(wavelengths_nm.len());
         }
-    };
-    grid_footprint(wavelengths_nm.len(), angles_deg.len(), media).check(&format!(
-        "{} wavelengths × {} angles × {media} media",
-        wavelengths_nm.len(),
-        angles_deg.len()
-    ))?;
-    if shape.len() == 1 {
-        // One set of media for every wavelength.
-        indices = indices.repeat(wavelengths_nm.len());
+        check(&indices, media, &d, &angles_deg, &wavelengths_nm)?;
+        Ok(Grid {
+            indices,
+            media,
+            d,
+            angles_deg,
+            wavelengths_nm,
+        })
     }
-    check(&indices, media, &d, &angles_deg, &wavelengths_nm)?;
-    let thicknesses_nm = &d[1..media - 1];
-    let cos_theta0: Vec<f64> = angles_deg.iter().map(|&a| cos_deg(a)).collect();
-    let parallel = wavelengths_nm.len() * angles_deg.len() >= PARALLEL_MIN_POINTS;
-    let values = compute(py, parallel, || {
-        solve_grid(
-            &indices,
-            thicknesses_nm,
-            &wavelengths_nm,
-            &cos_theta0,
-            parallel,
-        )
-    })?;
-    // One (angles, keys, wavelengths) array; each key is its (wavelengths,
-    // angles) transposed slice, a view with no copy.
-    let all = array(
-        py,
-        values,
-        &[angles_deg.len(), KEYS.len(), wavelengths_nm.len()],
-    )?;
-    let result = PyDict::new(py);
-    for (k, key) in KEYS.into_iter().enumerate() {
-        let view = all
-            .as_any()
-            .get_item((pyo3::types::PySlice::full(py), k))?
-            .getattr("T")?;
-        result.set_item(key, view)?;
+
+    /// R and T at every point as tmm-faster returns them, the layers
+    /// coherent or not as `coherence` says. A point where an incoherent
+    /// layer lases is a `ValueError` naming it (`n[i, j]`: wavelength i,
+    /// medium j).
+    pub fn solve<'py>(
+        &self,
+        py: Python<'py>,
+        coherence: &Coherence,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        let (n_w, n_a) = (self.wavelengths_nm.len(), self.angles_deg.len());
+        let thicknesses_nm = &self.d[1..self.media - 1];
+        let cos_theta0: Vec<f64> = self.angles_deg.iter().map(|&a| cos_deg(a)).collect();
+        let parallel = n_w * n_a >= PARALLEL_MIN_POINTS;
+        let values = compute(py, parallel, || {
+            solve_grid(
+                &self.indices,
+                thicknesses_nm,
+                coherence,
+                &self.wavelengths_nm,
+                &cos_theta0,
+                parallel,
+            )
+        })?;
+        if let Some(k) = values.iter().position(|v| !v.is_finite()) {
+            let (a, w) = (k / (KEYS.len() * n_w), k % n_w);
+            let row = &self.indices[w * self.media..(w + 1) * self.media];
+            if let Err(diverged) = solve_incoherent(
+                row,
+                thicknesses_nm,
+                coherence,
+                self.wavelengths_nm[w],
+                cos_theta0[a],
+            ) {
+                return Err(invalid(
+                    format!("n[{w}, {}]", diverged.layer),
+                    diverged.reason(self.wavelengths_nm[w], cos_theta0[a]),
+                ));
+            }
+        }
+        // One (angles, keys, wavelengths) array; each key is its (wavelengths,
+        // angles) transposed slice, a view with no copy.
+        let all = array(py, values, &[n_a, KEYS.len(), n_w])?;
+        let result = PyDict::new(py);
+        for (k, key) in KEYS.into_iter().enumerate() {
+            let view = all
+                .as_any()
+                .get_item((pyo3::types::PySlice::full(py), k))?
+                .getattr("T")?;
+            result.set_item(key, view)?;
+        }
+        Ok(result)
     }
-    Ok(result)
 }

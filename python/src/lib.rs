@@ -17,6 +17,7 @@
 mod arrays;
 mod budget;
 mod coherent;
+mod incoherent;
 mod lut;
 mod pool;
 mod response;
@@ -73,6 +74,7 @@ pub(crate) fn wrong_type(what: impl AsRef<str>, why: impl AsRef<str>) -> PyErr {
 fn _irid(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     m.add_function(wrap_pyfunction!(coherent::coherent, m)?)?;
+    m.add_function(wrap_pyfunction!(incoherent::incoherent, m)?)?;
     m.add_function(wrap_pyfunction!(stack::material, m)?)?;
     m.add_function(wrap_pyfunction!(stack::materials, m)?)?;
     m.add_function(wrap_pyfunction!(lut::bake, m)?)?;

@@ -1,14 +1,14 @@
 //! `Stack.response`: R and T at arrays of points (thickness, cos θ,
 //! wavelength), each point its own wavelength, from either side of the
 //! stack. This is what a spectral renderer needs per path vertex: Mitsuba's
-//! rays carry their own wavelengths, so no grid is shared between points.
+//! rays carry their own wavelengths, so no grid is shared between points,
+//! and the library's `PointSolver` solves them several to a vector.
 
-use num_complex::Complex64 as C64;
 use pyo3::prelude::*;
 use pyo3::types::PyTuple;
 use rayon::prelude::*;
 
-use irid::optics::{solve, Stack, MAX_THICKNESS_NM};
+use irid::optics::{LayerThickness, PointSolver, Response, Stack};
 
 use crate::arrays::{array, broadcast_reals};
 use crate::pool::compute;
@@ -62,15 +62,17 @@ fn oriented(stack: &Stack, layer: usize, side: Side) -> PyResult<(Stack, usize)>
     }
 }
 
-/// Unpolarized (R, T) at each point, the thickness of layer `layer` set per
-/// point (or the stack's own where `thickness_nm` is None), in tasks on the
-/// current thread pool when `parallel`, else on this thread. Fails on the
-/// first point whose wavelength a material does not cover, or whose
-/// thickness or cos θ is not a number in range.
+/// Unpolarized (R, T) at each point, the thickness of layer `varying` set
+/// per point (or the stack's own where it is None), through `solver` in
+/// tasks on the current thread pool when `parallel`, else on this thread.
+/// Each task solves its points into a buffer of its own of at most
+/// [`POINTS_PER_TASK`] responses (64 KB), so what grows with the call is
+/// only R and T. Fails on a point whose wavelength a material does not
+/// cover or where an incoherent layer lases (the caller has checked
+/// the angles and thicknesses).
 fn solve_points(
-    stack: &Stack,
-    varying: Option<usize>,
-    thickness_nm: Option<&[f64]>,
+    solver: &PointSolver<'_>,
+    varying: Option<LayerThickness<'_>>,
     cos_theta: &[f64],
     wavelength_nm: &[f64],
     parallel: bool,
@@ -79,17 +81,20 @@ fn solve_points(
     let mut reflectance = vec![0.0; points];
     let mut transmittance = vec![0.0; points];
     let solve_task = |(task, (r_out, t_out)): (usize, (&mut [f64], &mut [f64]))| {
-        let mut n: Vec<C64> = Vec::with_capacity(stack.layers.len() + 2);
-        let mut d = stack.thicknesses_nm();
         let start = task * POINTS_PER_TASK;
-        for (k, (r, t)) in r_out.iter_mut().zip(t_out.iter_mut()).enumerate() {
-            let i = start + k;
-            let wl = wavelength_nm[i];
-            stack.indices_at(wl, &mut n)?;
-            if let (Some(layer), Some(thickness)) = (varying, thickness_nm) {
-                d[layer] = thickness[i];
-            }
-            let response = solve(&n, &d, wl, cos_theta[i]);
+        let range = start..start + r_out.len();
+        let varying = varying.map(|v| LayerThickness {
+            layer: v.layer,
+            thickness_nm: &v.thickness_nm[range.clone()],
+        });
+        let mut responses = vec![Response::default(); range.len()];
+        solver.solve(
+            varying,
+            &wavelength_nm[range.clone()],
+            &cos_theta[range],
+            &mut responses,
+        )?;
+        for ((r, t), response) in r_out.iter_mut().zip(t_out.iter_mut()).zip(&responses) {
             *r = response.r();
             *t = response.t();
         }
@@ -109,23 +114,6 @@ fn solve_points(
             .try_for_each(solve_task)?;
     }
     Ok((reflectance, transmittance))
-}
-
-fn check_points(thickness_nm: Option<&[f64]>, cos_theta: &[f64]) -> PyResult<()> {
-    if let Some(c) = cos_theta.iter().find(|c| !(0.0..=1.0).contains(*c)) {
-        return Err(invalid("cos_theta", format!("{c} is outside [0, 1]")));
-    }
-    if let Some(t) = thickness_nm
-        .unwrap_or(&[])
-        .iter()
-        .find(|t| !(0.0..=MAX_THICKNESS_NM).contains(*t))
-    {
-        return Err(invalid(
-            "thickness_nm",
-            format!("must be finite, ≥ 0 and ≤ {MAX_THICKNESS_NM:e}, got {t}"),
-        ));
-    }
-    Ok(())
 }
 
 /// The body of `Stack.response` (see its docstring in stack.rs).
@@ -152,18 +140,17 @@ pub fn response<'py>(
     }
     // R and T (f64 each) per point; the arrays returned are those buffers.
     let (columns, shape) = broadcast_reals(&arrays, "response", 16)?;
-    let thickness = columns.get(2).map(Vec::as_slice);
-    check_points(thickness, &columns[0])?;
+    let varying = varying
+        .zip(columns.get(2))
+        .map(|(layer, t)| LayerThickness {
+            layer,
+            thickness_nm: t,
+        });
+    let solver = PointSolver::new(&seen).map_err(py_error)?;
+    solver.check(varying, &columns[0]).map_err(py_error)?;
     let parallel = columns[0].len() > POINTS_PER_TASK;
     let (r, t) = compute(py, parallel, || {
-        solve_points(
-            &seen,
-            varying,
-            thickness,
-            &columns[0],
-            &columns[1],
-            parallel,
-        )
+        solve_points(&solver, varying, &columns[0], &columns[1], parallel)
     })?
     .map_err(py_error)?;
     PyTuple::new(py, [array(py, r, &shape)?, array(py, t, &shape)?])

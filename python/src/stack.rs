@@ -11,7 +11,8 @@ use rayon::prelude::*;
 use irid::color::{stack_colors, FilmColor, Sampling, SpectralIntegrator, White};
 use irid::optics::spec::{IndexSpec, MediumSpec};
 use irid::optics::{
-    library, solve, solve_amplitudes, Layer, Material, Response, Stack, StackGrid, MAX_THICKNESS_NM,
+    library, solve, solve_amplitudes, solve_mixed, Layer, Material, Response, Stack, StackGrid,
+    MAX_THICKNESS_NM,
 };
 use irid::rough::{check_roughness, rough_colors, RoughColor};
 
@@ -194,7 +195,9 @@ fn index_spec(n: f64, k: f64) -> MediumSpec {
     }
 }
 
-/// One layer: `(form, thickness_nm)` or a dict carrying its `thickness_nm`.
+/// One layer: `(form, thickness_nm)`, `(form, thickness_nm, coherent)`, or
+/// a dict of stack-file keys carrying its `thickness_nm` (and optionally
+/// `coherent`).
 fn layer(obj: &Bound<'_, PyAny>, field: &str) -> PyResult<Layer> {
     if obj.is_instance_of::<PyDict>() {
         let thickness_nm = obj
@@ -203,30 +206,51 @@ fn layer(obj: &Bound<'_, PyAny>, field: &str) -> PyResult<Layer> {
             .and_then(|t| t.extract::<f64>().ok())
             .unwrap_or(f64::NAN);
         let material = medium(obj, field, None)?;
+        // The stack-file parse behind `medium` has checked it is a bool.
+        let coherent = obj
+            .get_item("coherent")
+            .ok()
+            .and_then(|c| c.extract::<bool>().ok())
+            .unwrap_or(true);
         return Ok(Layer {
-            material,
-            thickness_nm,
+            coherent,
+            ..Layer::new(material, thickness_nm)
         });
     }
-    let pair = obj
+    let tuple = obj
         .downcast::<PyTuple>()
         .map(|t| t.as_any().clone())
         .or_else(|_| obj.downcast::<PyList>().map(|l| l.as_any().clone()));
-    let expected = "expected (material, thickness_nm) or a dict with thickness_nm";
-    let Ok(pair) = pair else {
+    let expected = "expected (material, thickness_nm), (material, thickness_nm, coherent) \
+                    or a dict with thickness_nm";
+    let Ok(tuple) = tuple else {
         return Err(wrong_type(
             field,
             format!("{expected}, got {}", obj.repr()?),
         ));
     };
-    if pair.len()? != 2 {
-        return Err(invalid(field, format!("{expected}, got {}", obj.repr()?)));
-    }
-    let thickness_nm = real(&pair.get_item(1)?, &format!("{field}.thickness_nm"))?;
-    let material = medium(&pair.get_item(0)?, field, Some(thickness_nm))?;
+    let coherent = match tuple.len()? {
+        2 => true,
+        3 => {
+            let flag = tuple.get_item(2)?;
+            if !flag.is_instance_of::<pyo3::types::PyBool>() {
+                return Err(wrong_type(
+                    format!("{field}.coherent"),
+                    format!(
+                        "must be True or False (False: an incoherent, thick layer), got {}",
+                        flag.repr()?
+                    ),
+                ));
+            }
+            flag.extract()?
+        }
+        _ => return Err(invalid(field, format!("{expected}, got {}", obj.repr()?))),
+    };
+    let thickness_nm = real(&tuple.get_item(1)?, &format!("{field}.thickness_nm"))?;
+    let material = medium(&tuple.get_item(0)?, field, Some(thickness_nm))?;
     Ok(Layer {
-        material,
-        thickness_nm,
+        coherent,
+        ..Layer::new(material, thickness_nm)
     })
 }
 
@@ -234,8 +258,9 @@ fn layer(obj: &Bound<'_, PyAny>, field: &str) -> PyResult<Layer> {
 /// side) down, and a semi-infinite substrate.
 ///
 /// Stack(ambient=1.0, layers=[(material, thickness_nm), ...], substrate=1.0)
-/// takes every medium form irid.Material takes; Stack.load(path) reads a
-/// stack file (TOML).
+/// takes every medium form irid.Material takes; a layer given as
+/// (material, thickness_nm, False) is incoherent (thick: its inner
+/// reflections add in power). Stack.load(path) reads a stack file (TOML).
 #[pyclass(name = "Stack", module = "irid", frozen)]
 #[derive(Clone)]
 pub struct PyStack {
@@ -337,8 +362,17 @@ impl PyStack {
             .collect()
     }
 
+    /// Per layer, top down: False for an incoherent layer.
+    #[getter]
+    fn coherent(&self) -> Vec<bool> {
+        self.stack.layers.iter().map(|l| l.coherent).collect()
+    }
+
     /// R, T and the complex amplitudes at every wavelength (nm) and angle of
     /// incidence (degrees in [0, 90)), for unpolarized light from the ambient.
+    /// A stack with incoherent layers has no amplitudes (their phase is
+    /// averaged out): its dict holds R and T only, and a point where an
+    /// incoherent layer lases raises ValueError naming it.
     ///
     /// Returns a dict of arrays of shape (wavelengths, angles), or
     /// (thicknesses, wavelengths, angles) when `thickness_nm` lists
@@ -407,10 +441,16 @@ impl PyStack {
         let points = compute(py, parallel, || {
             solve_points(&grid, &cos_theta0, sweep.as_ref(), parallel)
         })?;
+        if let Some(k) = points.iter().position(|p| !p.power[0].is_finite()) {
+            lasing_at(&grid, &cos_theta0, sweep.as_ref(), k)?;
+        }
         let result = PyDict::new(py);
         for (k, key) in ["Rs", "Rp", "Ts", "Tp", "R", "T"].into_iter().enumerate() {
             let column = points.iter().map(|p| p.power[k]).collect();
             result.set_item(key, array(py, column, &shape)?)?;
+        }
+        if !self.stack.is_coherent() {
+            return Ok(result);
         }
         for (k, key) in ["rs", "rp", "ts", "tp"].into_iter().enumerate() {
             let column: Vec<C64> = points.iter().map(|p| p.amplitudes[k]).collect();
@@ -521,7 +561,10 @@ impl PyStack {
             .stack
             .layers
             .iter()
-            .map(|l| format!("({:?}, {})", l.material.name, l.thickness_nm))
+            .map(|l| {
+                let incoherent = if l.coherent { "" } else { ", False" };
+                format!("({:?}, {}{incoherent})", l.material.name, l.thickness_nm)
+            })
             .collect();
         format!(
             "irid.Stack(ambient={:?}, layers=[{}], substrate={:?})",
@@ -641,7 +684,14 @@ fn solve_points(
             d[s.layer - 1] = s.thicknesses_nm[run];
         }
         let n = grid.indices_at(i);
+        let coherence = grid.coherence();
         for (p, &c) in out.iter_mut().zip(cos_theta0) {
+            if !coherence.is_coherent() {
+                // +∞ where a layer lases: `lasing_at` names it afterwards.
+                let r = solve_mixed(n, &d, coherence, wavelengths[i], c);
+                p.power = [r.rs, r.rp, r.ts, r.tp, r.r(), r.t()];
+                continue;
+            }
             let r = solve(n, &d, wavelengths[i], c);
             let a = solve_amplitudes(n, &d, wavelengths[i], c);
             p.power = [r.rs, r.rp, r.ts, r.tp, r.r(), r.t()];
@@ -658,6 +708,29 @@ fn solve_points(
         points.chunks_mut(row_len).enumerate().for_each(fill_row);
     }
     points
+}
+
+/// The error for point `k` of [`solve_points`]' output, where an incoherent
+/// layer lases (Ok if it does not).
+fn lasing_at(
+    grid: &StackGrid,
+    cos_theta0: &[f64],
+    sweep: Option<&Sweep>,
+    k: usize,
+) -> PyResult<()> {
+    let (angles, wavelengths) = (cos_theta0.len(), grid.wavelengths_nm().len());
+    let (row, a) = (k / angles, k % angles);
+    let (run, i) = (row / wavelengths, row % wavelengths);
+    let mut d = grid.thicknesses_nm().to_vec();
+    if let Some(s) = sweep {
+        d[s.layer - 1] = s.thicknesses_nm[run];
+    }
+    match grid.diverged(i, &d, cos_theta0[a]) {
+        Some(lasing) => Err(py_error(
+            lasing.error(grid.wavelengths_nm()[i], cos_theta0[a]),
+        )),
+        None => Ok(()),
+    }
 }
 
 #[derive(Clone, Copy, Default)]

@@ -3,10 +3,13 @@ holding the repository's luts/)."""
 
 import os
 import re
+from pathlib import Path
 
 import pytest
 
-from conftest import REPO
+# Not imported from conftest: that name is ambiguous when pytest collects
+# python/tests_mitsuba in the same run.
+REPO = Path(__file__).resolve().parents[2]
 
 DOC = REPO / "docs" / "python.md"
 

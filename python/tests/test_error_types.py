@@ -48,6 +48,12 @@ def coherent(**kw):
     return irid.coherent(**args)
 
 
+def incoherent(**kw):
+    args = dict(n=[1.0, 1.5, 1.0], d=[INF, 1e6, INF], c="iii", angles=[0.0], wavelengths=[500.0])
+    args.update(kw)
+    return irid.incoherent(**args)
+
+
 def bake(f, **kw):
     return irid.bake(f.stack, **{"resolution": (4, 4), "validation_points": 0, **kw})
 
@@ -63,7 +69,19 @@ CASES = [
     ("coherent NaN thickness", lambda f: coherent(d=[INF, NAN, INF]), ValueError),
     ("coherent d too short", lambda f: coherent(d=[INF, INF]), ValueError),
     ("coherent angles None", lambda f: coherent(angles=None), TypeError),
+    # incoherent
+    ("incoherent c a number", lambda f: incoherent(c=5), TypeError),
+    ("incoherent c of numbers", lambda f: incoherent(c=["i", 1, "i"]), TypeError),
+    ("incoherent c None", lambda f: incoherent(c=None), TypeError),
+    ("incoherent c too short", lambda f: incoherent(c=["i", "i"]), ValueError),
+    ("incoherent c other letters", lambda f: incoherent(c=["i", "x", "i"]), ValueError),
+    ("incoherent coherent ambient", lambda f: incoherent(c=["c", "i", "i"]), ValueError),
+    ("incoherent NaN thickness", lambda f: incoherent(d=[INF, NAN, INF]), ValueError),
+    ("incoherent lasing", lambda f: incoherent(n=[1.0, 1.5 - 0.01j, 1.5], d=[INF, 1e6, INF]), ValueError),
+    ("incoherent too large", lambda f: incoherent(angles=np.zeros(10**6), wavelengths=np.full(10**6, 500.0)), MemoryError),
     # Stack(...)
+    ("Stack coherent flag a string", lambda f: irid.Stack(layers=[(1.5, 1e6, "no")]), TypeError),
+    ("Stack flag on the ambient", lambda f: irid.Stack(ambient={"n": 1.0, "coherent": False}), ValueError),
     ("Stack object medium", lambda f: irid.Stack(substrate=object()), TypeError),
     ("Stack bool medium", lambda f: irid.Stack(substrate=True), TypeError),
     ("Stack layers not a list", lambda f: irid.Stack(layers=5), TypeError),

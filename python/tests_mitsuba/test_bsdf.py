@@ -5,7 +5,7 @@ refused at load_dict time with one line."""
 import numpy as np
 import pytest
 
-from conftest import COATED_GLASS, FILM_ON_GOLD, JIT, SCALAR, LUTS, dr, irid, mi, use
+from mitsuba_setup import COATED_GLASS, FILM_ON_GOLD, JIT, SCALAR, LUTS, dr, irid, mi, use
 
 WAVELENGTHS = [420.0, 515.0, 600.0, 700.0]
 

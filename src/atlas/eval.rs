@@ -193,10 +193,7 @@ mod tests {
     fn soap() -> Stack {
         Stack {
             ambient: Material::constant(1.0, 0.0),
-            layers: vec![Layer {
-                material: Material::constant(1.33, 0.0),
-                thickness_nm: 500.0,
-            }],
+            layers: vec![Layer::new(Material::constant(1.33, 0.0), 500.0)],
             substrate: Material::constant(1.0, 0.0),
         }
     }
@@ -212,10 +209,9 @@ mod tests {
     fn rows_match_points() {
         let mut stack = soap();
         stack.substrate = Material::constant(1.52, 0.0);
-        stack.layers.push(Layer {
-            material: Material::constant(2.1, 0.02),
-            thickness_nm: 80.0,
-        });
+        stack
+            .layers
+            .push(Layer::new(Material::constant(2.1, 0.02), 80.0));
         let f = film(&stack);
         let rows: Vec<(f64, Vec<f64>)> = [0.02, 0.4, 1.0]
             .iter()

@@ -17,7 +17,7 @@ use crate::color::{Sampling, SpectralIntegrator};
 use crate::error::{Error, Result};
 use crate::lut;
 use crate::optics::twoport::{Scratch, VaryingLayer};
-use crate::optics::{Response, Stack, StackGrid};
+use crate::optics::{solve_mixed, Response, Stack, StackGrid};
 use crate::simd::simd_dispatch;
 
 /// The points of a grid evaluation: every combination of angle, thickness
@@ -216,9 +216,10 @@ impl SplitAngle<'_> {
         let n_w = self.sg.wavelengths_nm().len();
         s.splits.clear();
         for (wavelength_nm, n) in self.sg.iter() {
-            s.splits.push(VaryingLayer::new(
+            s.splits.push(VaryingLayer::new_mixed(
                 n,
                 &s.thick,
+                self.sg.coherence(),
                 self.varying_layer + 1,
                 wavelength_nm,
                 self.cos,
@@ -247,6 +248,22 @@ impl SplitAngle<'_> {
                 }
             }
             responses_row(&s.splits, &s.phases, r_row, t_row);
+            self.unsplit(d, s, r_row, t_row);
+        }
+    }
+
+    /// The solver's R and T at thickness `d` where a stack with incoherent
+    /// layers does not split (see [`VaryingLayer::new_mixed`]).
+    fn unsplit(&self, d: f64, s: &mut AngleScratch, r_row: &mut [f64], t_row: &mut [f64]) {
+        if self.sg.coherence().is_coherent() {
+            return;
+        }
+        s.thick[self.varying_layer] = d;
+        for (w, (wavelength_nm, n)) in self.sg.iter().enumerate() {
+            if s.splits[w].is_degenerate() {
+                let resp = solve_mixed(n, &s.thick, self.sg.coherence(), wavelength_nm, self.cos);
+                (r_row[w], t_row[w]) = (resp.r(), resp.t());
+            }
         }
     }
 }
@@ -486,6 +503,21 @@ mod tests {
                     let direct = s.response(wl, angle.to_radians().cos()).unwrap();
                     let i = (a * 1001 + k) * 2 + w;
                     assert!((swept.r[i] - direct.r()).abs() < 1e-11, "{a} {k} {w}");
+                }
+            }
+        }
+        // A film on an incoherent sheet: the sweep splits its group.
+        let sheet = find("coated-sheet").unwrap().unwrap();
+        let swept = evaluate(&sheet.stack, 0, &grid, 2, 1).unwrap();
+        for (a, angle) in grid.angles_deg.iter().enumerate() {
+            for (k, &d) in grid.thicknesses_nm.as_ref().unwrap().iter().enumerate() {
+                for (w, &wl) in grid.wavelengths_nm.iter().enumerate() {
+                    let mut s = sheet.stack.clone();
+                    s.layers[0].thickness_nm = d;
+                    let direct = s.response(wl, angle.to_radians().cos()).unwrap();
+                    let i = (a * 3 + k) * 3 + w;
+                    assert!((swept.r[i] - direct.r()).abs() < 1e-12, "{a} {k} {w}");
+                    assert!((swept.t[i] - direct.t()).abs() < 1e-12, "{a} {k} {w}");
                 }
             }
         }

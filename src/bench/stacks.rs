@@ -121,6 +121,20 @@ const DEFS: [Def; 6] = [
     },
 ];
 
+/// Stacks only the grid workload (`irid bench --grid`, the Python peers)
+/// measures: a sheet thick enough to be incoherent, which the analytic
+/// models and the renders of the full run have no form for.
+const GRID_ONLY: [Def; 1] = [Def {
+    name: "coated-sheet",
+    description:
+        "luts/coated-sheet.toml: TiO2 (0-300 nm) on a 1 mm incoherent silica sheet, MgF2 behind",
+    file: "luts/coated-sheet.toml",
+    toml: include_str!("../../luts/coated-sheet.toml"),
+    reversed: false,
+    varying_layer: 0,
+    thickness_range_nm: (0.0, 300.0),
+}];
+
 impl Def {
     fn build(&self) -> Result<BenchStack> {
         let stack = Stack::from_toml_str(self.toml, Path::new("luts"), self.file)?;
@@ -156,10 +170,17 @@ pub fn names() -> Vec<&'static str> {
     DEFS.iter().map(|d| d.name).collect()
 }
 
-/// The fixed stack called `name` (ASCII case-insensitive), resolved;
-/// `Ok(None)` when no stack has that name.
+/// The short name of every stack the grid workload knows: the fixed ones,
+/// then those it alone measures.
+pub fn grid_names() -> Vec<&'static str> {
+    DEFS.iter().chain(&GRID_ONLY).map(|d| d.name).collect()
+}
+
+/// The stack called `name` (ASCII case-insensitive) among [`grid_names`],
+/// resolved; `Ok(None)` when no stack has that name.
 pub fn find(name: &str) -> Result<Option<BenchStack>> {
     DEFS.iter()
+        .chain(&GRID_ONLY)
         .find(|d| d.name.eq_ignore_ascii_case(name))
         .map(Def::build)
         .transpose()
@@ -180,6 +201,9 @@ mod tests {
                 b.stack.indices_at(w, &mut n).unwrap();
             }
         }
+        let sheet = find("coated-sheet").unwrap().unwrap();
+        assert_eq!(sheet.stack.coherence().incoherent_layers(), &[2]);
+        assert!(!names().contains(&"coated-sheet") && grid_names().contains(&"coated-sheet"));
         let back = find("mirror-back").unwrap().unwrap();
         let front = find("mirror-front").unwrap().unwrap();
         // The same physical layer varies on both sides.

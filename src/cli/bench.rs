@@ -198,7 +198,7 @@ fn run_grid(name: &str, args: &Args) -> Result<()> {
     let bench = stacks::find(name)?.with_context(|| {
         format!(
             "--grid '{name}': unknown stack (known: {})",
-            stacks::names().join(", ")
+            stacks::grid_names().join(", ")
         )
     })?;
     let requested = requested_grid(args)?;
@@ -328,6 +328,9 @@ fn grid_json(
         "stack": bench.name,
         "description": bench.description,
         "layer_thicknesses_nm": bench.stack.thicknesses_nm(),
+        // Per layer: false for an incoherent one (a peer calls its
+        // incoherent solver then).
+        "coherent": bench.stack.layers.iter().map(|l| l.coherent).collect::<Vec<_>>(),
         "varying_layer": bench.varying_layer,
         "wavelengths_nm": g.wavelengths_nm,
         "angles_deg": g.angles_deg,

@@ -71,6 +71,8 @@ pub fn run(args: Args) -> Result<ExitCode> {
         let grid =
             StackGrid::new(&stack, &wavelengths_nm).with_context(|| path.display().to_string())?;
         grid.solve(&cos_theta0, &mut responses);
+        grid.check_solved(&cos_theta0, &responses)
+            .with_context(|| path.display().to_string())?;
         let rows: Vec<Row> = responses
             .iter()
             .enumerate()

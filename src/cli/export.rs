@@ -8,7 +8,7 @@ use std::time::Instant;
 
 use anyhow::{Context, Result};
 use irid::atomic::OutputSet;
-use irid::export::{declare_dir, export, fill_dir, ExportSpec};
+use irid::export::{declare_dir, export, fill_dir, ExportSpec, Side};
 use irid::optics::Stack;
 
 use super::args::{parse_choice, FilmArgs};
@@ -37,6 +37,14 @@ pub struct Args {
     /// computes (bilinear filtering of f16 texels), against the solver.
     #[arg(long, default_value_t = 1e-3)]
     pub max_error: f64,
+    /// The back side's own error target (light arriving from the
+    /// substrate) [default: --max-error].
+    #[arg(long)]
+    pub back_max_error: Option<f64>,
+    /// Export the front side only, even when light can arrive from the
+    /// substrate.
+    #[arg(long)]
+    pub front_only: bool,
     /// Random points at which that error is measured.
     #[arg(long, default_value_t = irid::export::DEFAULT_POINTS)]
     pub points: usize,
@@ -62,6 +70,8 @@ pub fn run(args: Args) -> Result<ExitCode> {
     spec.sampling = parse_choice(&args.sampling)?;
     spec.white = parse_choice(&args.white)?;
     spec.max_error = args.max_error;
+    spec.back_max_error = args.back_max_error;
+    spec.front_only = args.front_only;
     spec.points = args.points;
     spec.png = args.png;
     spec.validate()?;
@@ -84,40 +94,54 @@ pub fn run(args: Args) -> Result<ExitCode> {
     fill_dir(&result, &mut outputs, folder)?;
     outputs.commit()?;
     if !quiet {
-        let e = &result.error;
-        let m = &result.mapping;
+        report(&result, &args, started.elapsed().as_secs_f64());
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+/// What an export printed: the atlas, then each side's chart and error.
+fn report(result: &irid::export::Export, args: &Args, seconds: f64) {
+    let atlas = &result.atlas;
+    println!(
+        "{}: {}×{} texels, {} chart{}, RGBA16F, {} KiB per texture, in {seconds:.1} s{}",
+        args.output.display(),
+        atlas.width,
+        atlas.height,
+        atlas.charts.len(),
+        if atlas.charts.len() == 1 { "" } else { "s" },
+        atlas.width * atlas.height * 8 / 1024,
+        if result.opaque { "; opaque" } else { "" },
+    );
+    for side in &result.sides {
+        let e = &side.error;
+        let m = &atlas.charts[side.chart].mapping;
+        let name = match side.side {
+            Side::Front => "front (light from the ambient)",
+            Side::Back => "back (light from the substrate)",
+        };
         println!(
-            "{}: {}×{} texels (thickness × angle), RGBA16F, {} KiB per texture, in {:.1} s",
-            args.output.display(),
+            "{name}: chart {} of {}×{} texels (thickness × angle); GPU error (bilinear, f16) at {} random points: max {:.2e} (target {:.0e}), p99 {:.2e}, mean {:.2e}; ΔE00 max {:.3} / {:.3}, mean {:.4} / {:.4} (R / T); 8-bit filter weights add at most {:.2e}",
+            side.chart,
             m.size_u,
             m.size_v,
-            m.size_u * m.size_v * 8 / 1024,
-            started.elapsed().as_secs_f64()
-        );
-        println!(
-            "GPU error (bilinear, f16) at {} random points: max {:.2e} (target {:.0e}), p99 {:.2e}, mean {:.2e}; ΔE00 max {:.3} / {:.3}, mean {:.4} / {:.4} (R / T)",
             e.points,
             e.max_all(),
-            spec.max_error,
+            result.spec.target(side.side),
             e.p99_abs.iter().fold(0.0f64, |a, &b| a.max(b)),
             e.mean_abs.iter().sum::<f64>() / 6.0,
             e.max_delta_e00[0],
             e.max_delta_e00[1],
             e.mean_delta_e00[0],
             e.mean_delta_e00[1],
+            side.weights_8bit_extra,
         );
-        println!(
-            "8-bit filter weights (some GPUs) add at most {:.2e}",
-            result.weights_8bit_extra
-        );
-        if let Some((scale, png)) = &result.png {
+        if let (Some(scale), Some(png)) = (result.png_scale, &side.png_error) {
             println!(
-                "PNG (16-bit, scale {scale}): max error {:.2e}, ΔE00 max {:.3} / {:.3}",
+                "{name}: PNG (16-bit, scale {scale}): max error {:.2e}, ΔE00 max {:.3} / {:.3}",
                 png.max_all(),
                 png.max_delta_e00[0],
                 png.max_delta_e00[1]
             );
         }
     }
-    Ok(ExitCode::SUCCESS)
 }

@@ -163,9 +163,10 @@ fn say_stack(out: &mut String, h: &Header) {
         } else {
             ""
         };
+        let incoherent = if l.coherent { "" } else { " (incoherent)" };
         super::say!(
             out,
-            "  layer {:<4} {} {} nm{varying}",
+            "  layer {:<4} {} {} nm{incoherent}{varying}",
             i + 1,
             l.material.name,
             l.thickness_nm

@@ -28,7 +28,8 @@ pub struct FilmColor {
 }
 
 /// Colours of `stack` at each incidence angle (degrees, in [0, 90)), with
-/// unpolarized light from the ambient side.
+/// unpolarized light from the ambient side. Fails, naming the layer, where
+/// an incoherent layer lases.
 pub fn stack_colors(
     stack: &Stack,
     integrator: &SpectralIntegrator,
@@ -46,6 +47,7 @@ pub fn stack_colors(
     // Wavelength-major: the response at wavelength i, angle j is [i × angles + j].
     let mut responses = vec![Response::default(); samples * angles_deg.len()];
     grid.solve(&cos_theta0, &mut responses);
+    grid.check_solved(&cos_theta0, &responses)?;
     // Angles where some layer's fringes are narrower than the sampling
     // step are integrated again with the points per step they need.
     let refinement = Refinement::new(stack, None, integrator)?;
@@ -58,6 +60,7 @@ pub fn stack_colors(
                 let level = refinement.level(m)?;
                 let mut refined = vec![Response::default(); level.grid.wavelengths_nm().len()];
                 level.grid.solve(&cos_theta0[j..=j], &mut refined);
+                level.grid.check_solved(&cos_theta0[j..=j], &refined)?;
                 (powers(&refined, 0, 1), &level.integrator)
             } else {
                 (powers(&responses, j, angles_deg.len()), integrator)

@@ -109,7 +109,11 @@ impl Refinement {
         integrator: &SpectralIntegrator,
     ) -> Result<Refinement> {
         let w = integrator.wavelengths_nm();
-        let step_nm = if integrator.sampling() == Sampling::Exact && w.len() > 1 {
+        // A stack with incoherent (thick) layers is solved point by point,
+        // its coherent parts between them: its fringes are not the splits'
+        // here, and it is integrated as sampled.
+        let refinable = integrator.sampling() == Sampling::Exact && stack.is_coherent();
+        let step_nm = if refinable && w.len() > 1 {
             (w[w.len() - 1] - w[0]) / (w.len() - 1) as f64
         } else {
             0.0

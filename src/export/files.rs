@@ -1,7 +1,7 @@
-//! The export directory: two RGBA half-float OpenEXR textures, optional
-//! 16-bit PNGs, film.json and the shaders, written into a temporary
-//! directory beside the target and renamed into place (a folder output of
-//! [`crate::atomic::OutputSet`]).
+//! The export directory: the atlas's two RGBA half-float OpenEXR textures,
+//! optional 16-bit PNGs, film.json and the shaders, written into a
+//! temporary directory beside the target and renamed into place (a folder
+//! output of [`crate::atomic::OutputSet`]).
 
 use std::path::Path;
 
@@ -11,15 +11,17 @@ use exr::prelude::{
 };
 use serde_json::json;
 
-use super::mapping::{Texture, PARAM_NAMES};
-use super::{Export, SHADERS};
+use super::atlas::{side_index, Texture, CHART_PARAM_NAMES, CHART_VEC4, UNIFORM_VEC4};
+use super::{Export, Side, SHADERS};
 use crate::atomic::{Output, OutputSet, Prepared, Replace};
 use crate::error::{Error, Result};
 
 /// film.json's `format` and `version`.
 pub const FILM_FORMAT: &str = "irid-film";
-/// See [`FILM_FORMAT`].
-pub const FILM_VERSION: u32 = 1;
+/// See [`FILM_FORMAT`]. Version 1 had one chart (the front) and its
+/// parameters as nine named fields; 2 is the atlas of charts with the
+/// uniform array and `irid_film(thickness, cos θ, side)`.
+pub const FILM_VERSION: u32 = 2;
 
 /// The PNGs' scale: texel value = PNG value / 65535 × scale. 1 when every
 /// value lies in [0, 1], else the largest value rounded up to a multiple of
@@ -120,6 +122,109 @@ fn error_json(e: &super::ExportError) -> serde_json::Value {
     })
 }
 
+/// The name of a side in film.json.
+fn side_name(side: Side) -> &'static str {
+    match side {
+        Side::Front => "front",
+        Side::Back => "back",
+    }
+}
+
+/// film.json's `charts`: each chart's sides, rectangle, named parameters
+/// (the values of the uniform array) and the axis value at every node.
+fn charts_json(export: &Export) -> serde_json::Value {
+    let uniform = export.atlas.uniform_f32();
+    let charts: Vec<serde_json::Value> = export
+        .atlas
+        .charts
+        .iter()
+        .enumerate()
+        .map(|(k, chart)| {
+            let at = 4 * (1 + CHART_VEC4 * k);
+            let params: serde_json::Map<String, serde_json::Value> = CHART_PARAM_NAMES
+                .iter()
+                .zip(&uniform[at..at + 4 * CHART_VEC4])
+                .filter(|(name, _)| **name != "reserved")
+                .map(|(name, v)| (name.to_string(), json!(v)))
+                .collect();
+            let m = &chart.mapping;
+            json!({
+                "sides": chart.sides.iter().map(|&s| side_index(s)).collect::<Vec<_>>(),
+                "role": "whole domain",
+                "rect": chart.rect(),
+                "params": params,
+                "axes": {
+                    "thickness_nm": m.thickness_nodes(),
+                    "cos_theta": m.cos_nodes(),
+                },
+            })
+        })
+        .collect();
+    json!(charts)
+}
+
+/// film.json's `sides`: for each side, its number in the shader, the chart
+/// it reads, and the stack as seen from it; `back` is null when light
+/// cannot arrive from the substrate (its lookups then read the front chart).
+fn sides_json(export: &Export) -> serde_json::Value {
+    let spec = &export.spec;
+    let entry = |side: Side| match export.side(side) {
+        None => serde_json::Value::Null,
+        Some(s) => {
+            let seen = spec.seen_from(side);
+            json!({
+                "index": side_index(side),
+                "chart": s.chart,
+                "light_from": if side == Side::Front { "ambient" } else { "substrate" },
+                "stack": if side == Side::Front { "as written" } else { "reversed" },
+                "layer": if seen.stack.layers.is_empty() { 0 } else { seen.layer },
+                "critical_cos": super::critical_cos(&seen.stack),
+            })
+        }
+    };
+    json!({ "front": entry(Side::Front), "back": entry(Side::Back) })
+}
+
+/// film.json's `refraction`: the substrate's index over the ambient's at
+/// 550 nm (real parts), for hosts that bend transmitted rays; null when no
+/// light leaves through the substrate.
+fn refraction_json(export: &Export) -> serde_json::Value {
+    const NM: f64 = 550.0;
+    let stack = &export.spec.stack;
+    match (stack.ambient.index_at(NM), stack.substrate.index_at(NM)) {
+        (Ok(n0), Ok(ns)) if !export.opaque => json!({
+            "wavelength_nm": NM,
+            "substrate_over_ambient": ns.re / n0.re,
+        }),
+        _ => serde_json::Value::Null,
+    }
+}
+
+/// film.json's `error`: each side's measured error, its target, the 8-bit
+/// filter bound and the PNGs' error.
+fn errors_json(export: &Export) -> serde_json::Value {
+    let mut error = json!({
+        "channels": ["R.r", "R.g", "R.b", "T.r", "T.g", "T.b"],
+        "metric": "absolute difference between the bilinear filtering (f32 weights, clamp to edge) of the f16 \
+         texels at the shader's texture coordinates and irid's exact solver on the stack as seen from the \
+         side, at random points uniform over the domain; delta_e00 is CIEDE2000 of the reflected [0] and \
+         transmitted [1] colour",
+        "front": null,
+        "back": null,
+    });
+    for side in &export.sides {
+        let mut e = error_json(&side.error);
+        e["target_max_abs"] = json!(export.spec.target(side.side));
+        e["weights_8bit_extra_max_abs"] = json!(side.weights_8bit_extra);
+        e["png"] = side
+            .png_error
+            .as_ref()
+            .map_or(serde_json::Value::Null, error_json);
+        error[side_name(side.side)] = e;
+    }
+    error
+}
+
 /// film.json's `row_check` of one texture (see [`Texture::row_check`]):
 /// f16 values, written exactly.
 fn row_check_json(texture: &Texture) -> serde_json::Value {
@@ -136,28 +241,9 @@ fn row_check_json(texture: &Texture) -> serde_json::Value {
 
 /// film.json: everything a third party needs to use the textures.
 pub fn film_json(export: &Export) -> serde_json::Value {
-    let m = &export.mapping;
-    let params: serde_json::Map<String, serde_json::Value> = PARAM_NAMES
-        .iter()
-        .zip(m.params_f32())
-        .map(|(name, v)| (name.to_string(), json!(v)))
-        .collect();
     let spec = &export.spec;
-    let mut error = error_json(&export.error);
-    error["target_max_abs"] = json!(spec.max_error);
-    error["channels"] = json!(["R.r", "R.g", "R.b", "T.r", "T.g", "T.b"]);
-    error["metric"] = json!(
-        "absolute difference between the bilinear filtering (f32 weights, clamp to edge) of the f16 \
-         texels at the shader's texture coordinates and irid's exact solver, at random points uniform \
-         over the domain; delta_e00 is CIEDE2000 of the reflected [0] and transmitted [1] colour"
-    );
-    error["weights_8bit_extra_max_abs"] = json!(export.weights_8bit_extra);
-    error["png"] = match &export.png {
-        Some((_, e)) => error_json(e),
-        None => serde_json::Value::Null,
-    };
-    let png = match &export.png {
-        Some((scale, _)) => json!({
+    let png = match export.png_scale {
+        Some(scale) => json!({
             "reflectance": "reflectance.png",
             "transmittance": "transmittance.png",
             "scale": scale,
@@ -168,8 +254,8 @@ pub fn film_json(export: &Export) -> serde_json::Value {
         "format": FILM_FORMAT,
         "version": FILM_VERSION,
         "texture": {
-            "width": m.size_u,
-            "height": m.size_v,
+            "width": export.atlas.width,
+            "height": export.atlas.height,
             "format": "rgba16f",
             "files": {"reflectance": "reflectance.exr", "transmittance": "transmittance.exr"},
             "png": png,
@@ -179,10 +265,13 @@ pub fn film_json(export: &Export) -> serde_json::Value {
             },
         },
         "domain": {
-            "thickness_nm": [m.thickness_min_nm, m.thickness_max_nm],
-            "cos_theta": [m.cos_min, m.cos_max],
+            "thickness_nm": [spec.thickness_nm.0, spec.thickness_nm.1],
+            "cos_theta": [spec.cos_theta.0, spec.cos_theta.1],
         },
-        "params": params,
+        "uniform_f32": export.atlas.uniform_f32(),
+        "uniform_vec4": UNIFORM_VEC4,
+        "charts": charts_json(export),
+        "sides": sides_json(export),
         "white": spec.white.name(),
         "color": {
             "illuminant": spec.white.illuminant(),
@@ -193,11 +282,8 @@ pub fn film_json(export: &Export) -> serde_json::Value {
         "layer": if spec.stack.layers.is_empty() { 0 } else { spec.layer },
         "sampling": spec.sampling.to_string(),
         "opaque": export.opaque,
-        "error": error,
-        "axes": {
-            "thickness_nm": m.thickness_nodes(),
-            "cos_theta": m.cos_nodes(),
-        },
+        "refraction": refraction_json(export),
+        "error": errors_json(export),
         "shaders": SHADERS.iter().map(|(name, _)| *name).collect::<Vec<_>>(),
         "tool": concat!("irid ", env!("CARGO_PKG_VERSION")),
     })
@@ -249,7 +335,7 @@ fn fill(export: &Export, tmp: &Path) -> Result<()> {
     std::fs::create_dir(tmp).map_err(|e| Error::io(tmp, e))?;
     write_exr(&export.reflectance, &tmp.join("reflectance.exr"))?;
     write_exr(&export.transmittance, &tmp.join("transmittance.exr"))?;
-    if let Some((scale, _)) = export.png {
+    if let Some(scale) = export.png_scale {
         write_png(&export.reflectance, scale, &tmp.join("reflectance.png"))?;
         write_png(&export.transmittance, scale, &tmp.join("transmittance.png"))?;
     }

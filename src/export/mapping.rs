@@ -1,11 +1,12 @@
-//! The closed-form map from (thickness, cos θ) to texture coordinates that
-//! `shaders/irid_film.wgsl` computes, its inverse (where the texel centres
-//! sit), and the GPU's bilinear filter emulated in f32.
+//! One chart's axes: the closed-form map from (thickness, cos θ) to the
+//! chart coordinates (x, y) in [0, 1]² that `shaders/irid_film.wgsl`
+//! computes, and its inverse (where the chart's nodes sit). The atlas
+//! (`atlas.rs`) places x, y on the chart's texel centres.
 
 use serde::{Deserialize, Serialize};
 
-/// Everything the shader's `IridParams` holds, in f64 here; the shader gets
-/// each as f32 ([`Mapping::params_f32`]).
+/// A chart's domain, warps and node counts, in f64 here; the shader gets
+/// them as f32 ([`Mapping::params_f32`]).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Mapping {
     /// The thickness range (nm) the u axis spans.
@@ -46,19 +47,6 @@ pub enum AngleWarp {
     /// is not strictly inside the range.
     Critical(f64),
 }
-
-/// The uniform struct's fields as the shader sees them, in declaration order.
-pub const PARAM_NAMES: [&str; 9] = [
-    "thickness_min_nm",
-    "thickness_max_nm",
-    "cos_min",
-    "cos_max",
-    "cos_crit",
-    "y_crit",
-    "size_u",
-    "size_v",
-    "thickness_power",
-];
 
 impl Mapping {
     /// The mapping of a `size_u` × `size_v` texture over a domain. With a
@@ -184,9 +172,10 @@ impl Mapping {
         (0..self.size_v).map(|j| self.cos_at(j)).collect()
     }
 
-    /// The uniform's values as the shader receives them (f32, in
-    /// [`PARAM_NAMES`] order).
-    pub fn params_f32(&self) -> [f32; 9] {
+    /// The chart's first two vec4 in the shader's uniform array, as f32
+    /// (docs/gpu.md): thickness range, cos θ range, then cos_crit, y_crit,
+    /// thickness power and a reserved 0.
+    pub fn params_f32(&self) -> [f32; 8] {
         [
             self.thickness_min_nm as f32,
             self.thickness_max_nm as f32,
@@ -194,185 +183,48 @@ impl Mapping {
             self.cos_max as f32,
             self.cos_crit as f32,
             self.y_crit as f32,
-            self.size_u as f32,
-            self.size_v as f32,
             self.thickness_power as f32,
+            0.0,
         ]
     }
+}
 
-    /// `irid_film_uv` of the shader, operation for operation in f32.
-    pub fn uv(&self, thickness_nm: f32, cos_theta: f32) -> [f32; 2] {
-        let [t0, t1, c0, c1, cc, yc, nu, nv, tp] = self.params_f32();
-        let t_span = t1 - t0;
-        let mut x = if t_span > 0.0 {
-            ((thickness_nm - t0) / t_span).clamp(0.0, 1.0)
+/// The chart coordinates (x, y) in [0, 1]² of (thickness, cos θ) under a
+/// chart's parameters ([`Mapping::params_f32`]): `irid_film_uv` of the
+/// shader up to the chart's rectangle, operation for operation in f32.
+pub fn chart_xy(params: &[f32; 8], thickness_nm: f32, cos_theta: f32) -> [f32; 2] {
+    let [t0, t1, c0, c1, cc, yc, tp, _] = *params;
+    let t_span = t1 - t0;
+    let mut x = if t_span > 0.0 {
+        ((thickness_nm - t0) / t_span).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    if tp > 1.5 {
+        x = x.sqrt();
+    }
+    let c = cos_theta.max(c0).min(c1);
+    let y = if cc < 0.0 {
+        let c_span = c1 - c0;
+        if c_span > 0.0 {
+            (c - c0) / c_span
         } else {
             0.0
-        };
-        if tp > 1.5 {
-            x = x.sqrt();
         }
-        let c = cos_theta.max(c0).min(c1);
-        let y = if cc < 0.0 {
-            let c_span = c1 - c0;
-            if c_span > 0.0 {
-                (c - c0) / c_span
-            } else {
-                0.0
-            }
-        } else if c >= cc {
-            yc + (1.0 - yc) * ((c - cc) / (c1 - cc)).sqrt()
-        } else {
-            yc - yc * ((cc - c) / (cc - c0)).sqrt()
-        };
-        [(x * (nu - 1.0) + 0.5) / nu, (y * (nv - 1.0) + 0.5) / nv]
-    }
-}
-
-/// An RGBA texture, row-major, row 0 at v = 0 (as uploaded from the file).
-#[derive(Clone, Debug, PartialEq)]
-pub struct Texture {
-    /// Texels per row.
-    pub width: usize,
-    /// Rows.
-    pub height: usize,
-    /// RGBA per texel, row-major.
-    pub texels: Vec<[f32; 4]>,
-}
-
-impl Texture {
-    /// Bilinear filtering with clamp-to-edge at normalized coordinates, as
-    /// a GPU computes it with f32 weights (lavapipe; see docs/gpu.md for
-    /// GPUs whose filter weights have 8 fractional bits): texel centres at
-    /// (i + 0.5) / N, weights from the fraction of u·N − 0.5.
-    pub fn sample_bilinear(&self, uv: [f32; 2]) -> [f32; 4] {
-        let (fx, ix) = split(uv[0], self.width);
-        let (fy, iy) = split(uv[1], self.height);
-        let at = |x: usize, y: usize| self.texels[y * self.width + x];
-        let (a, b, c, d) = (
-            at(ix.0, iy.0),
-            at(ix.1, iy.0),
-            at(ix.0, iy.1),
-            at(ix.1, iy.1),
-        );
-        std::array::from_fn(|k| {
-            let top = a[k] + fx * (b[k] - a[k]);
-            let bottom = c[k] + fx * (d[k] - c[k]);
-            top + fy * (bottom - top)
-        })
-    }
-
-    /// The largest difference between neighbouring texels (along either
-    /// axis) in the RGB channels: a filter whose weights are rounded to 1/256
-    /// can be off by up to this / 256.
-    pub fn max_neighbour_step(&self) -> f32 {
-        let mut worst = 0.0f32;
-        for y in 0..self.height {
-            for x in 0..self.width {
-                let here = self.texels[y * self.width + x];
-                for (nx, ny) in [(x + 1, y), (x, y + 1)] {
-                    if nx < self.width && ny < self.height {
-                        let there = self.texels[ny * self.width + nx];
-                        for k in 0..3 {
-                            worst = worst.max((there[k] - here[k]).abs());
-                        }
-                    }
-                }
-            }
-        }
-        worst
-    }
-
-    /// The texel that differs most (largest RGB difference) from its mirror
-    /// image about the middle row, with y in the first half: a host
-    /// compares what its image loader put at (x, y) with both values to
-    /// tell rows in file order from flipped ones, whatever the loader's
-    /// convention. None for a single row, which has no order to get wrong.
-    pub fn row_check(&self) -> Option<RowCheck> {
-        let (w, h) = (self.width, self.height);
-        let rgb = |x: usize, y: usize| {
-            let t = self.texels[y * w + x];
-            [t[0], t[1], t[2]]
-        };
-        let mut best: Option<(f32, RowCheck)> = None;
-        for y in 0..h / 2 {
-            for x in 0..w {
-                let (value, mirrored) = (rgb(x, y), rgb(x, h - 1 - y));
-                let gap = (0..3).fold(0.0f32, |g, k| g.max((value[k] - mirrored[k]).abs()));
-                if best.as_ref().is_none_or(|(g, _)| gap > *g) {
-                    let check = RowCheck {
-                        x,
-                        y,
-                        value,
-                        mirrored,
-                    };
-                    best = Some((gap, check));
-                }
-            }
-        }
-        best.map(|(_, check)| check)
-    }
-}
-
-/// See [`Texture::row_check`]: the RGB of texel (x, y) and of texel
-/// (x, height − 1 − y), rows counted in file order.
-#[derive(Clone, Debug, PartialEq)]
-pub struct RowCheck {
-    /// Column.
-    pub x: usize,
-    /// Row, in the first half.
-    pub y: usize,
-    /// RGB at (x, y).
-    pub value: [f32; 3],
-    /// RGB at (x, height − 1 − y).
-    pub mirrored: [f32; 3],
-}
-
-/// The filter's weight of the upper texel and the two texel indices along
-/// one axis of `n` texels (clamped to the edge).
-#[inline]
-fn split(coord: f32, n: usize) -> (f32, (usize, usize)) {
-    let x = coord * n as f32 - 0.5;
-    let floor = x.floor();
-    let frac = x - floor;
-    let last = n as i64 - 1;
-    let i0 = (floor as i64).clamp(0, last) as usize;
-    let i1 = (floor as i64 + 1).clamp(0, last) as usize;
-    (frac, (i0, i1))
+    } else if c >= cc {
+        yc + (1.0 - yc) * ((c - cc) / (c1 - cc)).sqrt()
+    } else {
+        yc - yc * ((cc - c) / (cc - c0)).sqrt()
+    };
+    [x, y]
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
 
-    fn texture(width: usize, rows: &[&[f32]]) -> Texture {
-        Texture {
-            width,
-            height: rows.len(),
-            texels: rows
-                .iter()
-                .flat_map(|r| r.iter().map(|&v| [v, v * 0.5, 0.25, 1.0]))
-                .collect(),
-        }
-    }
-
     #[test]
-    fn row_check_picks_the_texel_most_unlike_its_mirror() {
-        // Rows 0 and 3 differ by 0.6 at column 1; rows 1 and 2 by 0.9 at column 0.
-        let t = texture(2, &[&[0.1, 0.7], &[1.0, 0.4], &[0.1, 0.4], &[0.1, 0.1]]);
-        let c = t.row_check().unwrap();
-        assert_eq!((c.x, c.y), (0, 1));
-        assert_eq!(c.value, [1.0, 0.5, 0.25]);
-        assert_eq!(c.mirrored, [0.1, 0.05, 0.25]);
-        // A symmetric texture: either order is right; the check says so by
-        // two equal values.
-        let c = texture(2, &[&[0.3, 0.2], &[0.3, 0.2]]).row_check().unwrap();
-        assert_eq!(c.value, c.mirrored);
-        assert_eq!(texture(3, &[&[0.1, 0.2, 0.3]]).row_check(), None);
-    }
-
-    #[test]
-    fn nodes_land_on_texel_centres() {
+    fn nodes_land_on_whole_steps_of_the_chart_coordinates() {
         for (power, angle) in [
             (1.0, AngleWarp::Uniform),
             (2.0, AngleWarp::Critical(0.4)),
@@ -384,13 +236,13 @@ mod tests {
             for i in 0..m.size_u {
                 for j in 0..m.size_v {
                     let (t, c) = (m.thickness_at(i), m.cos_at(j));
-                    let uv = m.uv(t as f32, c as f32);
+                    let xy = chart_xy(&m.params_f32(), t as f32, c as f32);
                     let want = [
-                        (i as f32 + 0.5) / m.size_u as f32,
-                        (j as f32 + 0.5) / m.size_v as f32,
+                        i as f32 / (m.size_u - 1) as f32,
+                        j as f32 / (m.size_v - 1) as f32,
                     ];
-                    assert!((uv[0] - want[0]).abs() < 2e-6, "{critical:?} u {i}");
-                    assert!((uv[1] - want[1]).abs() < 2e-5, "{critical:?} v {j}");
+                    assert!((xy[0] - want[0]).abs() < 2e-6, "{critical:?} x {i}");
+                    assert!((xy[1] - want[1]).abs() < 2e-5, "{critical:?} y {j}");
                 }
             }
         }
@@ -428,28 +280,5 @@ mod tests {
             .all(|(a, b)| (a - b).abs() < 1e-15));
         assert_eq!(g.resized(9, 9).angle_warp(), AngleWarp::Grazing);
         assert_eq!(g.thickness_nodes(), [0.0, 0.0625, 0.25, 0.5625, 1.0]);
-    }
-
-    #[test]
-    fn filter_reproduces_texels_and_interpolates_linearly() {
-        // A texture linear in x and y is reproduced exactly by bilinear
-        // filtering anywhere inside the centres, and clamps outside.
-        let (w, h) = (5, 4);
-        let f = |x: f32, y: f32| 0.25 * x + 0.5 * y;
-        let texels = (0..h)
-            .flat_map(|y| (0..w).map(move |x| [f(x as f32, y as f32), 0.0, 0.0, 1.0]))
-            .collect();
-        let tex = Texture {
-            width: w,
-            height: h,
-            texels,
-        };
-        for (x, y) in [(0.0, 0.0), (1.3, 2.7), (4.0, 3.0), (2.5, 0.5)] {
-            let uv = [(x + 0.5) / w as f32, (y + 0.5) / h as f32];
-            assert!((tex.sample_bilinear(uv)[0] - f(x, y)).abs() < 1e-6);
-        }
-        assert_eq!(tex.sample_bilinear([-1.0, -1.0])[0], f(0.0, 0.0));
-        assert_eq!(tex.sample_bilinear([2.0, 2.0])[0], f(4.0, 3.0));
-        assert_eq!(tex.max_neighbour_step(), 0.5);
     }
 }

@@ -45,6 +45,24 @@ pub fn check_film_domain(
             format!("must be between 1 and {n} (the stack's layers), got {layer}"),
         ));
     }
+    if n > 0 && !stack.layers[layer - 1].coherent {
+        let coherent: Vec<String> = (1..=n)
+            .filter(|&l| stack.layers[l - 1].coherent)
+            .map(|l| l.to_string())
+            .collect();
+        return Err(Error::invalid(
+            "layer",
+            format!(
+                "layer {layer} is incoherent (coherent = false): a table's thickness axis must be \
+                 on a coherent layer ({})",
+                if coherent.is_empty() {
+                    "the stack has none".to_string()
+                } else {
+                    format!("coherent layers: {}", coherent.join(", "))
+                }
+            ),
+        ));
+    }
     let (t0, t1) = thickness_nm;
     if !(t0 >= 0.0 && t0 <= t1 && t1 <= MAX_THICKNESS_NM) {
         return Err(Error::invalid(
@@ -231,11 +249,12 @@ impl BakeSpec {
         }
     }
 
-    /// The layout the table is baked in: a grid for a fixed resolution or
-    /// when `layout` asks for one, else an atlas.
+    /// The layout the table is baked in: a grid for a fixed resolution, a
+    /// spectral table, or when `layout` asks for one, else an atlas.
     pub fn layout(&self) -> Layout {
         match self.resolution {
             Resolution::Nodes { .. } => Layout::Grid,
+            Resolution::MaxError(_) if self.kind == Kind::Spectral => Layout::Grid,
             Resolution::MaxError(_) => self.layout,
         }
     }

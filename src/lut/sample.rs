@@ -298,7 +298,8 @@ fn check_atlas(header: &Header, table: &super::header::TableAtlas) -> Result<(),
     }
 }
 
-/// `layer` is one of the stack's layers, or 0 for a stack without layers.
+/// `layer` is one of the stack's layers, and coherent (the baker refuses a
+/// thickness axis on an incoherent one), or 0 for a stack without layers.
 fn check_layer(header: &Header) -> Result<(), String> {
     let layers = header.stack.layers.len();
     let layer_ok = if layers == 0 {
@@ -315,6 +316,12 @@ fn check_layer(header: &Header) -> Result<(), String> {
             } else {
                 format!("1 to {layers}")
             }
+        ));
+    }
+    if layers > 0 && !header.stack.layers[header.layer - 1].coherent {
+        return Err(format!(
+            "header layer {} is incoherent: a table's thickness axis is on a coherent layer",
+            header.layer
         ));
     }
     Ok(())

@@ -12,7 +12,7 @@ use crate::color::refine::Refinement;
 use crate::color::{delta_e2000_rgb, Sampling, SpectralIntegrator};
 use crate::error::{Error, Result};
 use crate::optics::lanes::SpectralWeights;
-use crate::optics::{solve, StackGrid};
+use crate::optics::{solve_mixed, StackGrid};
 
 /// Error of a table against the solver. Arrays named `*_abs` have one
 /// entry per channel (in `channels` order); `*_de2000` have two entries,
@@ -262,7 +262,13 @@ impl<'a> PointChecker<'a> {
             }
             Kind::Spectral => {
                 h.stack.indices_at(f64::from(w), &mut s.indices)?;
-                let resp = solve(&s.indices, &s.thicknesses_nm, f64::from(w), cos);
+                let resp = solve_mixed(
+                    &s.indices,
+                    &s.thicknesses_nm,
+                    self.color_grid.coherence(),
+                    f64::from(w),
+                    cos,
+                );
                 let (r, tr) = self.lut.sample_spectral(t, c, w);
                 abs[0] = (f64::from(r) - resp.r()).abs();
                 abs[1] = (f64::from(tr) - resp.t()).abs();

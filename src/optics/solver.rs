@@ -40,6 +40,14 @@ impl Response {
     pub fn t(&self) -> f64 {
         0.5 * (self.ts + self.tp)
     }
+
+    /// False where a mixed solver found the sum over an incoherent gain
+    /// layer's round trips divergent (it then gives +∞; see
+    /// [`solve_mixed`](super::incoherent::solve_mixed)).
+    #[inline]
+    pub fn is_finite(&self) -> bool {
+        self.rs.is_finite() && self.rp.is_finite() && self.ts.is_finite() && self.tp.is_finite()
+    }
 }
 
 /// Complex amplitude coefficients of a whole stack, referenced to the top
@@ -66,7 +74,7 @@ pub struct Amplitudes {
 /// imaginary part counts as above, so that a real negative z (an evanescent
 /// wave) always gets +i|z|^½, the decaying branch.
 #[inline]
-fn sqrt_upper(z: C64) -> C64 {
+pub(super) fn sqrt_upper(z: C64) -> C64 {
     let (x, y) = (z.re, z.im);
     let t = (0.5 * (z.norm_sqr().sqrt() + x.abs())).sqrt();
     if t == 0.0 {
@@ -127,7 +135,7 @@ pub fn fresnel(n_i: C64, q_i: C64, n_f: C64, q_f: C64) -> Fresnel {
 /// every interface reflects with r = −1. The one exception is a stack with no
 /// interface at all (every medium equal to the ambient), which transmits.
 #[inline(never)]
-fn grazing(indices: &[C64]) -> Response {
+pub(super) fn grazing(indices: &[C64]) -> Response {
     let n0 = C64::new(indices[0].re, 0.0);
     if indices[1..].iter().all(|&n| n == n0) {
         Response {
@@ -197,7 +205,7 @@ fn to_power(indices: &[C64], cos_theta0: f64, amp: &Amplitudes, q_sub: C64) -> R
 
 /// sin² θ from cos θ without the cancellation of 1 − cos² near normal incidence.
 #[inline]
-fn sin_sq(cos_theta: f64) -> f64 {
+pub(super) fn sin_sq(cos_theta: f64) -> f64 {
     (1.0 - cos_theta) * (1.0 + cos_theta)
 }
 
@@ -287,10 +295,35 @@ pub(super) fn recurse_beta(
     q_sub: C64,
 ) -> Amplitudes {
     debug_assert_eq!(indices.len(), thicknesses_nm.len() + 2);
+    recurse_media(
+        indices.len(),
+        |j| indices[j],
+        |j| thicknesses_nm[j],
+        wavelength_nm,
+        beta_sq,
+        top,
+        q_sub,
+    )
+}
+
+/// [`recurse_beta`] over `media` media read through `index(j)` (medium j
+/// from the top, 0 to `media` − 1) and `thickness(j)` (the thickness of
+/// medium j + 1, a finite layer): the same recursion over a view of a
+/// stack, such as a run of its media read bottom up, without copying it.
+#[inline(always)]
+pub(super) fn recurse_media(
+    media: usize,
+    index: impl Fn(usize) -> C64,
+    thickness: impl Fn(usize) -> f64,
+    wavelength_nm: f64,
+    beta_sq: f64,
+    top: [C64; 3],
+    q_sub: C64,
+) -> Amplitudes {
     let k0 = std::f64::consts::TAU / wavelength_nm;
 
-    let last = indices.len() - 1;
-    let mut n_below = indices[last];
+    let last = media - 1;
+    let mut n_below = index(last);
     let mut nsq_below = n_below * n_below;
     let mut q_below = q_sub;
     let zero = C64::new(0.0, 0.0);
@@ -303,13 +336,13 @@ pub(super) fn recurse_beta(
         let (n_above, nsq_above, q_above) = if j == 0 {
             (top[0], top[1], top[2])
         } else {
-            let n = indices[j];
+            let n = index(j);
             let nsq = n * n;
             (n, nsq, sqrt_upper(nsq - beta_sq))
         };
         if j + 1 < last {
             // The medium below is a finite layer: carry the state up through it.
-            let d = thicknesses_nm[j];
+            let d = thickness(j);
             if let Some(f) = &mut fields {
                 let scale = f.cross_layer(k0 * d, nsq_below, q_below);
                 ts *= scale;

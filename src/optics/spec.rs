@@ -19,7 +19,9 @@
 //! `table = "file.csv"` (refractiveindex.info CSV layout, relative to the
 //! stack file). An optional `name` labels it in messages and headers.
 //! Layers, listed from the top (ambient side) down, also need
-//! `thickness_nm`. Errors name the field: layers are numbered from 1.
+//! `thickness_nm`, and take `coherent = false` for a thick layer whose
+//! inner reflections add in power. Errors name the field: layers are
+//! numbered from 1.
 
 use std::fmt;
 use std::path::{Path, PathBuf};
@@ -78,6 +80,11 @@ pub struct MediumSpec {
     /// for the ambient and substrate (they are semi-infinite).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub thickness_nm: Option<f64>,
+    /// `false` makes a layer incoherent (thick: its inner reflections add
+    /// in power); layers are coherent by default. Refused for the ambient
+    /// and substrate, which are always incoherent half-spaces.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub coherent: Option<bool>,
 }
 
 /// `n = 1.5` or `n = [1.5, 0.1]`.
@@ -123,8 +130,8 @@ impl StackSpec {
                 let material = spec.resolve(&field, base_dir, true)?;
                 let thickness_nm = spec.thickness_nm.unwrap_or(f64::NAN);
                 Ok(Layer {
-                    material,
-                    thickness_nm,
+                    coherent: spec.coherent.unwrap_or(true),
+                    ..Layer::new(material, thickness_nm)
                 })
             })
             .collect::<Result<Vec<_>>>()?;
@@ -145,7 +152,7 @@ impl MediumSpec {
     /// (the ambient and substrate must not).
     pub fn resolve(&self, field: &str, base_dir: &Path, finite: bool) -> Result<Material> {
         self.check_one_form(field)?;
-        self.check_thickness(field, finite)?;
+        self.check_layer_keys(field, finite)?;
         let mut material = self.material_of_form(field, base_dir)?;
         if let Some(name) = &self.name {
             material.name = name.clone();
@@ -181,7 +188,9 @@ impl MediumSpec {
         Ok(())
     }
 
-    fn check_thickness(&self, field: &str, finite: bool) -> Result<()> {
+    /// A layer needs a thickness; the ambient and substrate take neither a
+    /// thickness nor a coherence flag.
+    fn check_layer_keys(&self, field: &str, finite: bool) -> Result<()> {
         match (finite, self.thickness_nm) {
             (true, None) => Err(Error::invalid(
                 format!("{field}.thickness_nm"),
@@ -190,6 +199,11 @@ impl MediumSpec {
             (false, Some(_)) => Err(Error::invalid(
                 format!("{field}.thickness_nm"),
                 "not allowed: the ambient and substrate are semi-infinite",
+            )),
+            _ if !finite && self.coherent.is_some() => Err(Error::invalid(
+                format!("{field}.coherent"),
+                "not allowed: only a layer can be coherent or not (the ambient and substrate \
+                 are semi-infinite and always incoherent)",
             )),
             _ => Ok(()),
         }

@@ -4,9 +4,10 @@
 use num_complex::Complex64 as C64;
 use serde::{Deserialize, Serialize};
 
+use super::incoherent::{solve_incoherent, Coherence, Diverged};
 use super::lanes;
 use super::material::Material;
-use super::solver::{self, Response};
+use super::solver::Response;
 use crate::error::{Error, Result};
 
 /// The thickest layer accepted: a kilometre is no longer a film, and the bound
@@ -35,6 +36,32 @@ pub struct Layer {
     pub material: Material,
     /// Physical thickness in nanometres, 0 to [`MAX_THICKNESS_NM`].
     pub thickness_nm: f64,
+    /// False for a layer thick against the light's coherence length (a
+    /// glass sheet under a coating), whose inner reflections add in power
+    /// ([`incoherent`](super::incoherent)). Left out of the serialized
+    /// stack when true, so that a coherent stack's table headers and cache
+    /// keys do not change.
+    #[serde(default = "coherent_by_default", skip_serializing_if = "is_coherent")]
+    pub coherent: bool,
+}
+
+fn coherent_by_default() -> bool {
+    true
+}
+
+fn is_coherent(coherent: &bool) -> bool {
+    *coherent
+}
+
+impl Layer {
+    /// A coherent layer.
+    pub fn new(material: Material, thickness_nm: f64) -> Layer {
+        Layer {
+            material,
+            thickness_nm,
+            coherent: true,
+        }
+    }
 }
 
 /// A planar multilayer seen from its ambient side: light arrives through the
@@ -112,9 +139,19 @@ impl Stack {
     }
 
     /// The N layer thicknesses in nm, top (ambient side) down: the
-    /// `thicknesses_nm` argument of [`solver::solve`].
+    /// `thicknesses_nm` argument of [`solve`](super::solver::solve).
     pub fn thicknesses_nm(&self) -> Vec<f64> {
         self.layers.iter().map(|l| l.thickness_nm).collect()
+    }
+
+    /// Which layers are incoherent, as the mixed solvers take it.
+    pub fn coherence(&self) -> Coherence {
+        Coherence::from_flags(self.layers.iter().map(|l| l.coherent))
+    }
+
+    /// True when every layer is coherent.
+    pub fn is_coherent(&self) -> bool {
+        self.layers.iter().all(|l| l.coherent)
     }
 
     /// The same stack seen from the substrate side: the substrate becomes
@@ -128,21 +165,24 @@ impl Stack {
     }
 
     /// Convenience: R and T at one wavelength and incidence angle
-    /// (allocates; the hot paths call [`solver::solve`] with reused buffers).
+    /// (allocates; the hot paths call [`solve`](super::solver::solve) with reused buffers).
+    /// Fails, naming the layer, where an incoherent gain layer lases.
     pub fn response(&self, wavelength_nm: f64, cos_theta0: f64) -> Result<Response> {
         let mut n = Vec::with_capacity(self.layers.len() + 2);
         self.indices_at(wavelength_nm, &mut n)?;
-        Ok(solver::solve(
+        solve_incoherent(
             &n,
             &self.thicknesses_nm(),
+            &self.coherence(),
             wavelength_nm,
             cos_theta0,
-        ))
+        )
+        .map_err(|d| d.error(wavelength_nm, cos_theta0))
     }
 }
 
 /// A stack's indices evaluated once over a list of wavelengths, ready for
-/// [`solver::solve_batch`]: the per-stack work (dispersion formulas, table
+/// [`solve_batch`](super::solver::solve_batch): the per-stack work (dispersion formulas, table
 /// look-ups, validation) done once, so that sweeping angles and thicknesses
 /// allocates nothing and evaluates no material.
 #[derive(Clone, Debug, PartialEq)]
@@ -151,6 +191,8 @@ pub struct StackGrid {
     /// Wavelength-major: the N + 2 indices of wavelength i at [i(N+2), (i+1)(N+2)).
     indices: Vec<C64>,
     thicknesses_nm: Vec<f64>,
+    /// Which layers are incoherent.
+    coherence: Coherence,
     /// The same indices laid out for the four-lane solver.
     spectrum: lanes::Spectrum,
 }
@@ -172,6 +214,7 @@ impl StackGrid {
             wavelengths_nm: wavelengths_nm.to_vec(),
             indices,
             thicknesses_nm: stack.thicknesses_nm(),
+            coherence: stack.coherence(),
         })
     }
 
@@ -198,7 +241,30 @@ impl StackGrid {
             wavelengths_nm: wavelengths_nm.to_vec(),
             indices,
             thicknesses_nm,
+            coherence: Coherence::coherent(),
         }
+    }
+
+    /// The same grid with the layers `coherence` names incoherent (every
+    /// layer is coherent in a grid made by [`StackGrid::from_indices`]).
+    ///
+    /// # Panics
+    /// If `coherence` names a layer the grid does not have.
+    pub fn with_coherence(mut self, coherence: Coherence) -> StackGrid {
+        assert!(
+            coherence
+                .incoherent_layers()
+                .iter()
+                .all(|&l| (1..=self.thicknesses_nm.len()).contains(&l)),
+            "coherence: a layer the grid does not have"
+        );
+        self.coherence = coherence;
+        self
+    }
+
+    /// Which layers are incoherent.
+    pub fn coherence(&self) -> &Coherence {
+        &self.coherence
     }
 
     /// True when every medium has the same index at every wavelength.
@@ -263,6 +329,7 @@ impl StackGrid {
             &self.spectrum,
             &self.indices,
             thicknesses_nm,
+            &self.coherence,
             cos_theta0,
             out,
         );
@@ -297,20 +364,64 @@ impl StackGrid {
             &self.spectrum,
             &self.indices,
             thicknesses_nm,
+            &self.coherence,
             cos_theta0,
             weights,
         )
     }
 
     /// R and T at every (wavelength, cos θ0) pair, wavelength-major, into
-    /// `out` (length wavelengths × angles). Allocates nothing.
+    /// `out` (length wavelengths × angles). Allocates nothing. Where an
+    /// incoherent gain layer lases, R and T are +∞
+    /// ([`solve_mixed`](super::incoherent::solve_mixed); find such points
+    /// with [`Self::check_solved`]).
+    ///
+    /// # Panics
+    /// If `out` has the wrong length.
     pub fn solve(&self, cos_theta0: &[f64], out: &mut [Response]) {
-        solver::solve_batch(
+        assert_eq!(
+            out.len(),
+            self.wavelengths_nm.len() * cos_theta0.len(),
+            "out: wavelengths × angles"
+        );
+        lanes::solve_batch_mixed_on(
+            lanes::Path::Best,
             &self.indices,
             &self.thicknesses_nm,
+            &self.coherence,
             &self.wavelengths_nm,
             cos_theta0,
             out,
         );
+    }
+
+    /// The lasing layer at the `i`-th wavelength and `cos_theta0` with
+    /// `thicknesses_nm`, where an incoherent gain layer's round trips have
+    /// no finite sum (a point [`Self::solve`] gives as +∞); `None` elsewhere.
+    /// [`Diverged::error`] turns it into the one-line error.
+    pub fn diverged(&self, i: usize, thicknesses_nm: &[f64], cos_theta0: f64) -> Option<Diverged> {
+        solve_incoherent(
+            self.indices_at(i),
+            thicknesses_nm,
+            &self.coherence,
+            self.wavelengths_nm[i],
+            cos_theta0,
+        )
+        .err()
+    }
+
+    /// Ok unless a point of `out`, as [`Self::solve`] gave it for
+    /// `cos_theta0` with the grid's own thicknesses, is one where an
+    /// incoherent gain layer lases: then the first such point's one-line
+    /// error ([`Diverged::error`]).
+    pub fn check_solved(&self, cos_theta0: &[f64], out: &[Response]) -> Result<()> {
+        let Some(i) = out.iter().position(|r| !r.is_finite()) else {
+            return Ok(());
+        };
+        let (w, a) = (i / cos_theta0.len(), i % cos_theta0.len());
+        match self.diverged(w, &self.thicknesses_nm, cos_theta0[a]) {
+            Some(d) => Err(d.error(self.wavelengths_nm[w], cos_theta0[a])),
+            None => Ok(()),
+        }
     }
 }

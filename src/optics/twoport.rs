@@ -19,7 +19,8 @@
 
 use num_complex::Complex64 as C64;
 
-use super::solver::{normal_index, recurse_beta, Response};
+use super::incoherent::{split, Coherence, Env, Parts};
+use super::solver::{normal_index, recurse_beta, Amplitudes, Response};
 use crate::simd::simd_dispatch;
 
 /// |q|² / |n|² below which the layer counts as at its critical angle. The
@@ -48,8 +49,13 @@ pub struct VaryingLayer {
     /// cos θ0 = 0: no power enters, R = 1 and T = 0 whatever the stack.
     grazing: bool,
     /// The layer's q is (nearly) 0: it sits at its own critical angle, where
-    /// the waves in it have no direction to split the stack by.
+    /// the waves in it have no direction to split the stack by. Also set
+    /// where a stack with incoherent layers does not split (see
+    /// [`VaryingLayer::new_mixed`]).
     degenerate: bool,
+    /// In a stack with incoherent layers, the layer's coherent group and the
+    /// incoherent sums around it; `None` in a coherent stack.
+    around: Option<Surroundings>,
 }
 
 impl VaryingLayer {
@@ -110,24 +116,91 @@ impl VaryingLayer {
 
         let q0 = n0 * cos_theta0;
         let cos_sub = q_sub / n_sub;
-        let r_above = [a.rs, a.rp];
-        // t_A t'_A r_B and r'_A r_B.
-        let x = [a.ts * a_up.ts * b.rs, a.tp * a_up.tp * b.rp];
-        let y = [a_up.rs * b.rs, a_up.rp * b.rp];
-        // t_A t_B, and the Poynting factors turning |t|² into power.
-        let z = [a.ts * b.ts, a.tp * b.tp];
+        // The Poynting factors turning |t|² into power.
         let t_power = [q_sub.re / q0, (n_sub * cos_sub.conj()).re / q0];
         VaryingLayer {
-            factors: Factors {
-                ra: r_above,
-                x_net: [0, 1].map(|k| x[k] - r_above[k] * y[k]),
-                neg_y: y.map(|y| -y),
-                zt: [z[0].norm_sqr() * t_power[0], z[1].norm_sqr() * t_power[1]],
-            },
+            factors: Factors::new(&a, &a_up, &b, t_power),
             k0,
             q: q_layer,
             grazing: cos_theta0 <= 0.0,
             degenerate: q_layer.norm_sqr() < DEGENERATE_Q * n_layer.norm_sqr(),
+            around: None,
+        }
+    }
+
+    /// [`Self::new`] for a stack whose layers are coherent or incoherent as
+    /// `coherence` says; `layer` must be coherent. The split is then of the
+    /// layer's coherent group (between the nearest incoherent media above
+    /// and below it), and the incoherent sums around the group are made once
+    /// here: a node costs two more real divisions per polarization. Where
+    /// the layer cannot matter (an opaque incoherent layer above it) or the
+    /// sums around it diverge, the split is degenerate: evaluate node by node
+    /// with [`super::solve_mixed`].
+    pub fn new_mixed(
+        indices: &[C64],
+        thicknesses_nm: &[f64],
+        coherence: &Coherence,
+        layer: usize,
+        wavelength_nm: f64,
+        cos_theta0: f64,
+        scratch: &mut Scratch,
+    ) -> VaryingLayer {
+        if coherence.is_coherent() {
+            return Self::new(
+                indices,
+                thicknesses_nm,
+                layer,
+                wavelength_nm,
+                cos_theta0,
+                scratch,
+            );
+        }
+        let k0 = std::f64::consts::TAU / wavelength_nm;
+        let parts = (cos_theta0 > 0.0)
+            .then(|| {
+                split(
+                    indices,
+                    thicknesses_nm,
+                    coherence,
+                    layer,
+                    wavelength_nm,
+                    cos_theta0,
+                )
+            })
+            .flatten();
+        let Some(Parts {
+            above,
+            above_up,
+            below,
+            below_up,
+            q_layer,
+            env,
+        }) = parts
+        else {
+            return VaryingLayer {
+                factors: Factors::default(),
+                k0,
+                q: C64::new(0.0, 0.0),
+                grazing: cos_theta0 <= 0.0,
+                degenerate: cos_theta0 > 0.0,
+                around: None,
+            };
+        };
+        let pol = |a: &Amplitudes| [(a.rs, a.ts), (a.rp, a.tp)];
+        let (b, b_up, a_up, a) = (pol(&below), pol(&below_up), pol(&above_up), pol(&above));
+        VaryingLayer {
+            factors: Factors::new(&above, &above_up, &below, [0.0; 2]),
+            k0,
+            q: q_layer,
+            grazing: false,
+            degenerate: q_layer.norm_sqr() < DEGENERATE_Q * indices[layer].norm_sqr(),
+            around: Some(Surroundings {
+                rb: [0, 1].map(|k| b_up[k].0),
+                xb_net: [0, 1].map(|k| (b[k].1 * b_up[k].1 - b[k].0 * b_up[k].0) * a_up[k].0),
+                z_down: [0, 1].map(|k| (a[k].1 * b[k].1).norm_sqr()),
+                z_up: [0, 1].map(|k| (a_up[k].1 * b_up[k].1).norm_sqr()),
+                env,
+            }),
         }
     }
 
@@ -243,7 +316,10 @@ impl VaryingLayer {
                 tp: 0.0,
             };
         }
-        let [rs, rp, ts, tp] = self.factors.polarized(phase.re, phase.im);
+        let [rs, rp, ts, tp] = match &self.around {
+            None => self.factors.polarized(phase.re, phase.im),
+            Some(around) => around.polarized(&self.factors, phase.re, phase.im),
+        };
         Response { rs, rp, ts, tp }
     }
     /// Unpolarized R and T at many phase factors at once, bit for bit what
@@ -273,7 +349,7 @@ impl VaryingLayer {
 
 /// The thickness-independent factors of [`VaryingLayer::response`], as the
 /// batched loops use them, per polarization.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, Default)]
 struct Factors {
     ra: [C64; 2],
     /// t_A t'_A r_B − r_A r'_A r_B: the numerator's φ² coefficient.
@@ -284,7 +360,38 @@ struct Factors {
     zt: [f64; 2],
 }
 
+/// |c + x φ²|² and |1 + neg_y φ²|², φ² = `p_re` + i `p_im`: the squared
+/// moduli of a reflection's numerator and of the shared denominator.
+#[inline(always)]
+fn moduli(p_re: f64, p_im: f64, c: C64, x: C64, neg_y: C64) -> (f64, f64) {
+    let den_re = neg_y.re.mul_add(p_re, (-neg_y.im).mul_add(p_im, 1.0));
+    let den_im = neg_y.re.mul_add(p_im, neg_y.im * p_re);
+    let num_re = x.re.mul_add(p_re, (-x.im).mul_add(p_im, c.re));
+    let num_im = x.re.mul_add(p_im, x.im.mul_add(p_re, c.im));
+    (
+        num_re.mul_add(num_re, num_im * num_im),
+        den_re.mul_add(den_re, den_im * den_im),
+    )
+}
+
 impl Factors {
+    /// The factors of a split into A (`a` from above, `a_up` from below) and
+    /// B (`b`), with the Poynting factors `t_power` of the substrate.
+    fn new(a: &Amplitudes, a_up: &Amplitudes, b: &Amplitudes, t_power: [f64; 2]) -> Factors {
+        let r_above = [a.rs, a.rp];
+        // t_A t'_A r_B and r'_A r_B.
+        let x = [a.ts * a_up.ts * b.rs, a.tp * a_up.tp * b.rp];
+        let y = [a_up.rs * b.rs, a_up.rp * b.rp];
+        // t_A t_B.
+        let z = [a.ts * b.ts, a.tp * b.tp];
+        Factors {
+            ra: r_above,
+            x_net: [0, 1].map(|k| x[k] - r_above[k] * y[k]),
+            neg_y: y.map(|y| -y),
+            zt: [z[0].norm_sqr() * t_power[0], z[1].norm_sqr() * t_power[1]],
+        }
+    }
+
     /// Rs, Rp, Ts, Tp at the phase factor `a + ib`. Products and sums are
     /// fused (`mul_add`, one rounding each), which takes the loop from about
     /// a hundred operations a node to half that; every copy of the batched
@@ -295,19 +402,8 @@ impl Factors {
         // φ² and |φ|²; 2ab is exact doubling of one rounded product.
         let (p_re, p_im) = (a.mul_add(a, -(b * b)), 2.0 * (a * b));
         let phase_sq = a.mul_add(a, b * b);
-        #[inline(always)]
-        fn pol(p_re: f64, p_im: f64, ra: C64, x: C64, neg_y: C64) -> (f64, f64) {
-            let den_re = neg_y.re.mul_add(p_re, (-neg_y.im).mul_add(p_im, 1.0));
-            let den_im = neg_y.re.mul_add(p_im, neg_y.im * p_re);
-            let num_re = x.re.mul_add(p_re, (-x.im).mul_add(p_im, ra.re));
-            let num_im = x.re.mul_add(p_im, x.im.mul_add(p_re, ra.im));
-            (
-                num_re.mul_add(num_re, num_im * num_im),
-                den_re.mul_add(den_re, den_im * den_im),
-            )
-        }
-        let (ns, ds) = pol(p_re, p_im, self.ra[0], self.x_net[0], self.neg_y[0]);
-        let (np, dp) = pol(p_re, p_im, self.ra[1], self.x_net[1], self.neg_y[1]);
+        let (ns, ds) = moduli(p_re, p_im, self.ra[0], self.x_net[0], self.neg_y[0]);
+        let (np, dp) = moduli(p_re, p_im, self.ra[1], self.x_net[1], self.neg_y[1]);
         let (inv_s, inv_p) = (1.0 / ds, 1.0 / dp);
         [
             ns * inv_s,
@@ -322,6 +418,64 @@ impl Factors {
     fn sums(&self, a: f64, b: f64) -> (f64, f64) {
         let [rs, rp, ts, tp] = self.polarized(a, b);
         (rs + rp, ts + tp)
+    }
+}
+
+/// What surrounds the varying layer's coherent group in a stack with
+/// incoherent layers ([`crate::optics::incoherent`]), per polarization: the
+/// group's reflection from below and its transmissions, which share the
+/// denominator D = 1 − r'_A r_B φ² of its reflection from above, and the
+/// incoherent sums above and below the group.
+#[derive(Clone, Copy, Debug)]
+struct Surroundings {
+    /// r'_B: the constant of the group's reflection from below, r'_g =
+    /// (r'_B + x' φ²) / D.
+    rb: [C64; 2],
+    /// x' = (t_B t'_B − r_B r'_B) r'_A.
+    xb_net: [C64; 2],
+    /// |t_A t_B|² and |t'_A t'_B|²: |t_g|² = |t_A t_B|² |φ|² / |D|².
+    z_down: [f64; 2],
+    z_up: [f64; 2],
+    env: Env,
+}
+
+impl Surroundings {
+    /// Rs, Rp, Ts, Tp at the phase factor `a + ib`: the group's four power
+    /// coefficients, closed below and above by the incoherent sums. A sum
+    /// that diverges (a lasing incoherent layer) gives +∞, as
+    /// [`super::solve_mixed`] does.
+    #[inline(always)]
+    fn polarized(&self, f: &Factors, a: f64, b: f64) -> [f64; 4] {
+        let (p_re, p_im) = (a.mul_add(a, -(b * b)), 2.0 * (a * b));
+        let phase_sq = a.mul_add(a, b * b);
+        let env = &self.env;
+        let mut out = [0.0; 4];
+        for k in 0..2 {
+            let (n_r, dd) = moduli(p_re, p_im, f.ra[k], f.x_net[k], f.neg_y[k]);
+            let (n_rb, _) = moduli(p_re, p_im, self.rb[k], self.xb_net[k], f.neg_y[k]);
+            let inv = 1.0 / dd;
+            let (r_g, rb_g) = (n_r * inv, n_rb * inv);
+            let (t_g, tb_g) = (
+                self.z_down[k] * phase_sq * inv,
+                self.z_up[k] * phase_sq * inv,
+            );
+            let d_below = 1.0 - rb_g * env.rho_below[k];
+            let rho = r_g + t_g * tb_g * env.rho_below[k] / d_below;
+            let tau = t_g * env.tau_below[k] / d_below;
+            let d_above = 1.0 - env.rb[k] * rho;
+            let lases = !(d_below > 0.0 && d_above > 0.0);
+            out[k] = if lases {
+                f64::INFINITY
+            } else {
+                env.r[k] + env.tt[k] * rho / d_above
+            };
+            out[2 + k] = if lases {
+                f64::INFINITY
+            } else {
+                env.t[k] * tau / d_above
+            };
+        }
+        out
     }
 }
 
@@ -342,6 +496,13 @@ simd_dispatch! {
             return;
         }
         let f = v.factors;
+        if let Some(around) = v.around {
+            for j in 0..n {
+                let [rs, rp, ts, tp] = around.polarized(&f, phase_re[j], phase_im[j]);
+                (r[j], t[j]) = (0.5 * (rs + rp), 0.5 * (ts + tp));
+            }
+            return;
+        }
         for j in 0..n {
             let (r_sum, t_sum) = f.sums(phase_re[j], phase_im[j]);
             (r[j], t[j]) = (0.5 * r_sum, 0.5 * t_sum);
@@ -369,6 +530,24 @@ simd_dispatch! {
         // each fused step gives what weighting the unpolarized R would.
         let [w0, w1, w2] = weights.map(|w| 0.5 * w);
         let f = v.factors;
+        macro_rules! add {
+            ($j:expr, $r:expr, $t:expr) => {{
+                let (j, r, t) = ($j, $r, $t);
+                r0[j] = w0.mul_add(r, r0[j]);
+                r1[j] = w1.mul_add(r, r1[j]);
+                r2[j] = w2.mul_add(r, r2[j]);
+                t0[j] = w0.mul_add(t, t0[j]);
+                t1[j] = w1.mul_add(t, t1[j]);
+                t2[j] = w2.mul_add(t, t2[j]);
+            }};
+        }
+        if let (false, Some(around)) = (v.grazing, v.around) {
+            for j in 0..n {
+                let [rs, rp, ts, tp] = around.polarized(&f, phase_re[j], phase_im[j]);
+                add!(j, rs + rp, ts + tp);
+            }
+            return;
+        }
         for j in 0..n {
             // At grazing incidence no power enters: R = 1, T = 0. The test
             // does not change along the loop, which the compiler hoists.
@@ -377,12 +556,7 @@ simd_dispatch! {
             } else {
                 f.sums(phase_re[j], phase_im[j])
             };
-            r0[j] = w0.mul_add(r, r0[j]);
-            r1[j] = w1.mul_add(r, r1[j]);
-            r2[j] = w2.mul_add(r, r2[j]);
-            t0[j] = w0.mul_add(t, t0[j]);
-            t1[j] = w1.mul_add(t, t1[j]);
-            t2[j] = w2.mul_add(t, t2[j]);
+            add!(j, r, t);
         }
     }
 }

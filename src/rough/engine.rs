@@ -1,5 +1,7 @@
 //! F_eff over whole grids, and per angle for `irid color --roughness`.
 
+use std::borrow::Cow;
+
 use rayon::prelude::*;
 use serde::Serialize;
 
@@ -8,7 +10,7 @@ use super::{check_roughness, MuGrid, Quadrature};
 use crate::color::{linear_srgb_to_xyz, stack_colors, SpectralIntegrator};
 use crate::error::{Error, Result};
 use crate::lut::{check_film_domain, rgb_at_nodes};
-use crate::optics::Stack;
+use crate::optics::{Layer, Stack};
 
 /// F_eff (linear RGB of the integrator's white) over thickness × cos θ ×
 /// roughness nodes, and the white lobe's directional albedo per cos θ and
@@ -119,6 +121,26 @@ pub fn rough_reflectance(
     })
 }
 
+/// The stack and the layer [`rough_colors`] sweeps at its own thickness:
+/// the baker's split it goes through needs a coherent layer, so the first
+/// coherent one, or, when every layer is incoherent, a zero-thickness layer
+/// of the ambient's medium put on top, which changes nothing optically.
+fn swept_layer(stack: &Stack) -> (Cow<'_, Stack>, usize) {
+    if stack.layers.is_empty() {
+        return (Cow::Borrowed(stack), 1);
+    }
+    match stack.layers.iter().position(|l| l.coherent) {
+        Some(i) => (Cow::Borrowed(stack), i + 1),
+        None => {
+            let mut on_top = stack.clone();
+            on_top
+                .layers
+                .insert(0, Layer::new(stack.ambient.clone(), 0.0));
+            (Cow::Owned(on_top), 1)
+        }
+    }
+}
+
 /// `out` = Σ_j w_j × row j of `rows` (rows of `len` values), the kernel's
 /// weights on its nodes.
 fn weigh_rows(kernel: &Kernel, rows: &[f64], len: usize, out: &mut [f64]) {
@@ -217,10 +239,11 @@ pub fn rough_colors(
         return Ok(Vec::new());
     }
     let cos: Vec<f64> = angles_deg.iter().map(|a| a.to_radians().cos()).collect();
-    let thickness = stack.layers.first().map_or(0.0, |l| l.thickness_nm);
+    let (stack, layer) = swept_layer(stack);
+    let thickness = stack.layers.get(layer - 1).map_or(0.0, |l| l.thickness_nm);
     let table = rough_reflectance(
-        stack,
-        1,
+        &stack,
+        layer,
         integrator,
         &[thickness],
         &cos,

@@ -97,10 +97,7 @@ fn film(ambient: Material, layers: &[(Material, f64)], substrate: Material) -> S
         ambient,
         layers: layers
             .iter()
-            .map(|(m, d)| Layer {
-                material: m.clone(),
-                thickness_nm: *d,
-            })
+            .map(|(m, d)| Layer::new(m.clone(), *d))
             .collect(),
         substrate,
     }
@@ -264,4 +261,48 @@ fn bad_nodes_are_refused() {
     assert!(run(&[-1.0], &[0.5], &[0.5]).starts_with("thickness: "));
     assert!(run(&[], &[0.5], &[0.5]).starts_with("thickness: "));
     assert!(rough_colors(&stack, &integrator, &[90.0], 0.5).is_err());
+}
+
+#[test]
+fn stacks_with_incoherent_layers_sweep_a_coherent_one() {
+    // A film behind a 1 mm incoherent sheet, and the sheet alone: the
+    // colour sweeps the first coherent layer, or a zero-thickness layer of
+    // the ambient's medium on top, and agrees with the same stack given
+    // that layer explicitly (another split of the same stack) and, at small
+    // roughness, with the smooth colour.
+    let integrator = SpectralIntegrator::new(Sampling::Exact);
+    let sheet = Layer {
+        coherent: false,
+        ..Layer::new(constant(1.52, 0.0), 1e6)
+    };
+    let mut behind = film(
+        constant(1.0, 0.0),
+        &[(constant(1.52, 0.0), 1e6), (constant(2.3, 0.0), 120.0)],
+        constant(1.0, 0.0),
+    );
+    behind.layers[0] = sheet.clone();
+    let mut alone = behind.clone();
+    alone.layers.truncate(1);
+    let angles = [0.0, 40.0, 70.0];
+    for stack in [behind, alone] {
+        let mut explicit = stack.clone();
+        explicit
+            .layers
+            .insert(0, Layer::new(constant(1.0, 0.0), 0.0));
+        let smooth = stack_colors(&stack, &integrator, &angles).unwrap();
+        for roughness in [0.01, 0.3] {
+            let got = rough_colors(&stack, &integrator, &angles, roughness).unwrap();
+            let want = rough_colors(&explicit, &integrator, &angles, roughness).unwrap();
+            for ((g, w), s) in got.iter().zip(&want).zip(&smooth) {
+                for c in 0..3 {
+                    let d = (g.reflectance_rgb[c] - w.reflectance_rgb[c]).abs();
+                    assert!(d < 1e-12, "{roughness} {}°: {d:e}", g.angle_deg);
+                    if roughness == 0.01 {
+                        let d = (g.reflectance_rgb[c] - s.reflectance_rgb[c]).abs();
+                        assert!(d < 1e-4, "{}°: {d:e}", g.angle_deg);
+                    }
+                }
+            }
+        }
+    }
 }

@@ -94,42 +94,82 @@ def read_exr_rgb(path):
         return np.stack([np.asarray(channels[c].pixels, float) for c in "RGB"], -1)
 
 
-def write_synthetic_export(
-    directory, size_u, size_v, cos_range, cos_crit, y_crit, opaque, thickness_power=1
-):
-    """A film table for the mapping test: texel (i, j) holds reflectance
-    (i / (N_u - 1), j / (N_v - 1), 0.25) and transmittance
-    (1 - i / (N_u - 1), 1 - j / (N_v - 1), 0.75), so bilinear sampling gives
-    back the continuous texel coordinates (x, y) the mapping produced."""
-    directory.mkdir(parents=True, exist_ok=True)
-    i = np.arange(size_u) / (size_u - 1)
-    j = np.arange(size_v) / (size_v - 1)
+def _synthetic_chart(size_u, size_v, blue):
+    """A chart's texels (gutter included): node (i, j) holds reflectance
+    (i / (N_u - 1), j / (N_v - 1), blue) and transmittance (1 - the same two,
+    1 - blue)."""
+    i = np.arange(-1, size_u + 1).clip(0, size_u - 1) / max(size_u - 1, 1)
+    j = np.arange(-1, size_v + 1).clip(0, size_v - 1) / max(size_v - 1, 1)
     x, y = np.meshgrid(i, j)  # row r = j-th angle node: row 0 is y = 0
     one = np.ones_like(x)
-    write_exr(directory / "reflectance.exr", np.stack([x, y, 0.25 * one, one], -1))
-    write_exr(directory / "transmittance.exr", np.stack([1 - x, 1 - y, 0.75 * one, one], -1))
+    return (
+        np.stack([x, y, blue * one, one], -1),
+        np.stack([1 - x, 1 - y, (1 - blue) * one, one], -1),
+    )
+
+
+def write_synthetic_export(
+    directory, size_u, size_v, cos_range, cos_crit, y_crit, opaque, thickness_power=1, back=None
+):
+    """A film.json version 2 export for the mapping test, with a one-texel
+    gutter around each chart as irid writes it. The front chart's node (i, j)
+    holds reflectance (i / (N_u - 1), j / (N_v - 1), 0.25) and transmittance
+    (1 - i / (N_u - 1), 1 - j / (N_v - 1), 0.75), so bilinear sampling gives
+    back the continuous chart coordinates (x, y) the mapping produced. back,
+    a dict (size_u, size_v, cos_range, cos_crit, y_crit), adds a back chart
+    above it whose blue channel is 0.5."""
+    directory.mkdir(parents=True, exist_ok=True)
+    specs = [("front", size_u, size_v, cos_range, cos_crit, y_crit, thickness_power, 0.25)]
+    if back:
+        specs.append(
+            ("back", back["size_u"], back["size_v"], back["cos_range"], back["cos_crit"],
+             back["y_crit"], 1, 0.5)
+        )
+    width = max(s[1] for s in specs) + 2
+    height = sum(s[2] + 2 for s in specs)
+    r = np.zeros((height, width, 4))
+    t = np.zeros((height, width, 4))
+    r[..., 3] = t[..., 3] = 1.0
+    charts, sides, row = [], {"front": None, "back": None}, 0
+    for k, (side, nu, nv, cos, cc, yc, power, blue) in enumerate(specs):
+        cr, ct = _synthetic_chart(nu, nv, blue)
+        r[row:row + nv + 2, : nu + 2] = cr
+        t[row:row + nv + 2, : nu + 2] = ct
+        charts.append({
+            "sides": [k],
+            "role": "whole domain",
+            "rect": [1, row + 1, nu, nv],
+            "params": {
+                "thickness_min_nm": 100.0,
+                "thickness_max_nm": 900.0,
+                "cos_min": cos[0],
+                "cos_max": cos[1],
+                "cos_crit": cc,
+                "y_crit": yc,
+                "thickness_power": power,
+                "x0": 1,
+                "y0": row + 1,
+                "width": nu,
+                "height": nv,
+            },
+        })
+        sides[side] = {"index": k, "chart": k}
+        row += nv + 2
+    write_exr(directory / "reflectance.exr", r)
+    write_exr(directory / "transmittance.exr", t)
     film = {
         "format": "irid-film",
-        "version": 1,
+        "version": 2,
         "texture": {
-            "width": size_u,
-            "height": size_v,
+            "width": width,
+            "height": height,
             "format": "rgba16f",
             "files": {"reflectance": "reflectance.exr", "transmittance": "transmittance.exr"},
             "png": None,
         },
         "domain": {"thickness_nm": [100.0, 900.0], "cos_theta": list(cos_range)},
-        "params": {
-            "thickness_min_nm": 100.0,
-            "thickness_max_nm": 900.0,
-            "cos_min": cos_range[0],
-            "cos_max": cos_range[1],
-            "cos_crit": cos_crit,
-            "y_crit": y_crit,
-            "size_u": size_u,
-            "size_v": size_v,
-            "thickness_power": thickness_power,
-        },
+        "charts": charts,
+        "sides": sides,
         "white": "e",
         "stack": {
             "ambient": {"name": "n=1", "dispersion": {"constant": {"n": 1.0, "k": 0.0}}},

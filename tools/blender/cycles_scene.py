@@ -20,6 +20,11 @@ from colour_exr import read_exr_rgb
 
 RESOLUTION = 4  # pixels a side: every pixel sees the same angle
 SAMPLES = 2  # a mirror under a uniform world is noise-free; 2 checks that
+# The white furnace: a lossless material keeps every path's weight at 1,
+# so few samples settle the mean; paths inside glass bounce often.
+FURNACE_SIZE = 24
+FURNACE_SAMPLES = 64
+FURNACE_BOUNCES = 128
 
 # ---------------------------------------------------------------- Blender scene
 
@@ -114,25 +119,72 @@ class Bench:
 
     def set_working_space(self, name):
         """Blender 5.0's scene-linear working space: Linear Rec.709 (the default) or ACEScg."""
+        if bpy.data.colorspace.working_space == name:
+            return
         done = bpy.ops.wm.set_working_color_space(working_space=name, convert_colors=False)
         if done != {"FINISHED"} or bpy.data.colorspace.working_space != name:
             raise RuntimeError(f"cannot set the working colour space to {name}")
 
-    def render(self, material, angle_deg, samples=SAMPLES):
-        """Linear Rec.709 RGB of every pixel, shape (H, W, 3)."""
+    def render(self, material, angle_deg, samples=SAMPLES, below=False):
+        """Linear Rec.709 RGB of every pixel, shape (H, W, 3). below: the camera
+        looks at the plane's back face (from the side its normal points away
+        from), at angle_deg to the normal there."""
         self.scene.cycles.samples = samples
         self.plane.data.materials.clear()
         self.plane.data.materials.append(material)
         theta = math.radians(angle_deg)
         distance = 10.0
-        self.camera.location = (0.0, -distance * math.sin(theta), distance * math.cos(theta))
-        self.camera.rotation_euler = (theta, 0.0, 0.0)
+        up = -1.0 if below else 1.0
+        self.camera.location = (0.0, -distance * math.sin(theta), up * distance * math.cos(theta))
+        self.camera.rotation_euler = (math.pi - theta if below else theta, 0.0, 0.0)
+        return self._render()
+
+    def _render(self):
         path = self.workdir / f"render-{self.renders}.exr"
         self.renders += 1
         self.scene.render.filepath = str(path)
         with quiet_stdout():
             bpy.ops.render.render(write_still=True)
         return read_exr_rgb(path)
+
+    def furnace(self, material, size=FURNACE_SIZE, samples=FURNACE_SAMPLES):
+        """The mean over a cube's pixels of a render of the cube (side 2, turned
+        to show three faces) in the uniform white world, orthographic, with up
+        to FURNACE_BOUNCES bounces of every kind: 1 for a material that
+        neither absorbs nor emits. The cube's pixels are those a black
+        emitter covers in a render of its own."""
+        scene = self.scene
+        saved = (scene.render.resolution_x, scene.camera.data.ortho_scale)
+        cycles = scene.cycles
+        bounces = ("max_bounces", "diffuse_bounces", "glossy_bounces",
+                   "transmission_bounces", "transparent_max_bounces")
+        saved_bounces = {name: getattr(cycles, name) for name in bounces}
+        self.set_world("white")
+        self.plane.hide_render = True
+        cube = bpy.data.objects.new("furnace cube", _cube_mesh())
+        cube.rotation_euler = (0.5, 0.3, 0.7)
+        scene.collection.objects.link(cube)
+        try:
+            for name in bounces:
+                setattr(cycles, name, FURNACE_BOUNCES)
+            scene.render.resolution_x = scene.render.resolution_y = size
+            scene.camera.data.ortho_scale = 4.0
+            self.camera.location = (0.0, -10.0, 0.0)
+            self.camera.rotation_euler = (math.pi / 2, 0.0, 0.0)
+            cycles.samples = 1
+            cube.data.materials.append(emission_black())
+            mask = self._render().mean(axis=-1) < 0.5
+            cube.data.materials[0] = material
+            cycles.samples = samples
+            image = self._render()
+        finally:
+            bpy.data.objects.remove(cube)
+            self.plane.hide_render = False
+            scene.render.resolution_x = scene.render.resolution_y = saved[0]
+            scene.camera.data.ortho_scale = saved[1]
+            for name, value in saved_bounces.items():
+                setattr(cycles, name, value)
+        return float(image[mask].mean()), int(mask.sum())
 
 
 class quiet_stdout:
@@ -150,8 +202,51 @@ class quiet_stdout:
         os.close(self.saved)
 
 
-def emission_material(name, group, output, thickness_fraction):
-    """A material showing one of a film group's colour outputs as emission."""
+def _cube_mesh():
+    """A cube of side 2 about the origin, its faces' normals pointing out."""
+    corners = [(x, y, z) for z in (-1.0, 1.0) for y in (-1.0, 1.0) for x in (-1.0, 1.0)]
+    faces = []
+    for quad in ((0, 1, 3, 2), (4, 5, 7, 6), (0, 1, 5, 4), (2, 3, 7, 6), (0, 2, 6, 4), (1, 3, 7, 5)):
+        a, b, c = (np.array(corners[i]) for i in quad[:3])
+        centre = np.mean([corners[i] for i in quad], axis=0)
+        faces.append(quad if np.dot(np.cross(b - a, c - a), centre) > 0 else quad[::-1])
+    mesh = bpy.data.meshes.new("furnace cube")
+    mesh.from_pydata(corners, [], faces)
+    mesh.update()
+    return mesh
+
+
+def emission_black(name="mask"):
+    """A black emitter: the furnace's mask, the picture's labels."""
+    material = bpy.data.materials.new(name)
+    if material.node_tree is None:
+        material.use_nodes = True
+    tree = material.node_tree
+    tree.nodes.clear()
+    emission = tree.nodes.new("ShaderNodeEmission")
+    emission.inputs["Color"].default_value = (0.0, 0.0, 0.0, 1.0)
+    out = tree.nodes.new("ShaderNodeOutputMaterial")
+    tree.links.new(emission.outputs[0], out.inputs["Surface"])
+    return material
+
+
+def glass_material(ior):
+    """Cycles' Principled glass: the furnace's control."""
+    material = bpy.data.materials.new("Principled glass")
+    if material.node_tree is None:
+        material.use_nodes = True
+    bsdf = next(n for n in material.node_tree.nodes if n.bl_idname == "ShaderNodeBsdfPrincipled")
+    bsdf.inputs["Transmission Weight"].default_value = 1.0
+    bsdf.inputs["Roughness"].default_value = 0.0
+    bsdf.inputs["IOR"].default_value = ior
+    bsdf.inputs["Base Color"].default_value = (1.0, 1.0, 1.0, 1.0)
+    return material
+
+
+def emission_material(name, group, output, thickness_fraction, normal=None, **inputs):
+    """A material showing one of a film group's colour outputs as emission.
+    normal: a constant vector for the group's Normal input; inputs: other
+    input values by name (a space in a name written as an underscore)."""
     material = bpy.data.materials.new(name)
     if material.node_tree is None:
         material.use_nodes = True
@@ -160,6 +255,13 @@ def emission_material(name, group, output, thickness_fraction):
     film = tree.nodes.new("ShaderNodeGroup")
     film.node_tree = group
     film.inputs["Thickness"].default_value = thickness_fraction
+    for key, value in inputs.items():
+        film.inputs[key.replace("_", " ")].default_value = value
+    if normal is not None:
+        vector = tree.nodes.new("ShaderNodeCombineXYZ")
+        for axis, value in zip("XYZ", normal):
+            vector.inputs[axis].default_value = value
+        tree.links.new(vector.outputs["Vector"], film.inputs["Normal"])
     emission = tree.nodes.new("ShaderNodeEmission")
     emission.inputs["Strength"].default_value = 1.0
     out = tree.nodes.new("ShaderNodeOutputMaterial")
@@ -228,19 +330,26 @@ class Irid:
             np.array([row["transmittance_rgb"] for row in rows]),
         )
 
-    def export(self, stack_path, out_dir, layer, thickness_range):
+    def export(self, stack_path, out_dir, layer, thickness_range, white="e"):
+        """An export directory, made once per stack, layer, range and white."""
+        key = (str(stack_path), layer, tuple(thickness_range), white)
+        made = getattr(self, "_exports", {})
+        self._exports = made
+        if key in made:
+            return made[key]
         self.run(
             "export",
             stack_path,
             "-o",
             out_dir,
             "--white",
-            "e",
+            white,
             "--layer",
             layer,
             "--thickness",
             f"{thickness_range[0]:g}:{thickness_range[1]:g}",
         )
+        made[key] = out_dir
         return out_dir
 
 
@@ -329,15 +438,7 @@ def render_picture(irid, case, stack, workdir, png_path):
     bsdf = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeBsdfPrincipled")
     tree.links.new(to_nm.outputs[0], bsdf.inputs["Thin Film Thickness"])
 
-    label_material = bpy.data.materials.new("label")
-    if label_material.node_tree is None:
-        label_material.use_nodes = True
-    tree = label_material.node_tree
-    tree.nodes.clear()
-    emission = tree.nodes.new("ShaderNodeEmission")
-    emission.inputs["Color"].default_value = (0.0, 0.0, 0.0, 1.0)
-    out = tree.nodes.new("ShaderNodeOutputMaterial")
-    tree.links.new(emission.outputs[0], out.inputs["Surface"])
+    label_material = emission_black("label")
 
     for x, material, label in (
         (-1.15, irid_material, "irid export"),

@@ -1,20 +1,24 @@
 """irid thin films in Blender: a Cycles/EEVEE material built from an `irid export`.
 
-`irid export` writes a directory with reflectance.exr, transmittance.exr and
-film.json: the film's exact reflected and transmitted colour over a grid of
-(thickness, cos θ), and the closed-form mapping from (thickness, cos θ) to
-texture coordinates (docs/gpu.md). This module turns such a directory into a
-shader node group that evaluates the same mapping with math nodes, samples
-both tables bilinearly, and shades with a GGX Glossy BSDF coloured by the
-film's reflectance (no Fresnel of its own: the table already holds it) plus,
-when the film transmits into a lossless substrate, a Refraction BSDF coloured
-by its transmittance (into a metal the transmitted power is absorbed).
+`irid export --white e` writes a directory with reflectance.exr,
+transmittance.exr and film.json: an atlas of the film's exact reflected and
+transmitted colour over grids of (thickness, cos θ), one chart for light
+arriving from the ambient and one for light arriving from a lossless
+substrate, and the closed-form mapping from (thickness, cos θ) to texture
+coordinates (docs/gpu.md). This module turns such a directory into a shader
+node group that evaluates the same mapping with math nodes (on a back face,
+the substrate side's chart), samples both tables bilinearly, and shades with
+a GGX Glossy BSDF coloured by the film's reflectance (no Fresnel of its own:
+the table already holds it) plus, when light leaves through the substrate, a
+Refraction BSDF coloured by its transmittance (into a metal the transmitted
+power is absorbed). add_film_layer puts the film over a Principled BSDF.
 
 Use it as a module from Blender's Python:
 
+    import bpy
     import irid_blender
     mat = irid_blender.make_material("/path/to/export", thickness_nm=350.0)
-    obj.data.materials.append(mat)
+    bpy.context.object.data.materials.append(mat)
 
 or install this file as an add-on (Preferences > Add-ons > Install from Disk):
 File > Import > irid film (film.json) builds the material and assigns it to
@@ -44,63 +48,53 @@ bl_info = {
 }
 
 FILM_FORMAT = "irid-film"
-FILM_VERSION = 1
+FILM_VERSION = 2
 # Wavelength at which a transmitting film's refraction index is taken: the
 # one irid grades the substrate's critical angle at (docs/lut-format.md).
 IOR_WAVELENGTH_NM = 550.0
 TABLES = ("reflectance", "transmittance")
+# The white Blender Cycles renders in: a flat spectrum is (1, 1, 1)
+# (docs/color.md); `irid export --white e` makes that export.
+BLENDER_WHITE = "e"
 
 
 class ExportError(ValueError):
     """An export directory that cannot be turned into a material."""
 
 
-class Export:
-    """A checked export directory: the texture files and the mapping parameters."""
+class Chart:
+    """One chart of the export's atlas (docs/gpu.md): the domain and warps of
+    its axes and the rectangle of texels its nodes fill."""
 
-    def __init__(self, directory):
-        self.directory = os.path.abspath(os.fspath(directory))
-        film_path = os.path.join(self.directory, "film.json")
-        if not os.path.isdir(self.directory):
-            raise ExportError(f"irid export {self.directory}: not a directory")
-        if not os.path.isfile(film_path):
-            raise ExportError(f"irid export {self.directory}: film.json is missing")
-        try:
-            with open(film_path, encoding="utf-8") as f:
-                film = json.load(f)
-        except (OSError, UnicodeDecodeError, json.JSONDecodeError) as e:
-            raise ExportError(f"irid export {film_path}: not readable JSON ({e})") from None
-        self.film = film
-        where = film_path
-        if not isinstance(film, dict):
-            raise ExportError(f"irid export {where}: expected a JSON object")
-        if film.get("format") != FILM_FORMAT or film.get("version") != FILM_VERSION:
-            raise ExportError(
-                f"irid export {where}: format {film.get('format')!r} version "
-                f"{film.get('version')!r}, expected {FILM_FORMAT!r} version {FILM_VERSION}"
-            )
-        params = _object(film, "params", where)
-        number = lambda key: _number(params, key, f"{where}: params")  # noqa: E731
+    def __init__(self, chart, where, atlas_size):
+        params = _object(chart, "params", where)
+        number = lambda key: _number(params, key, f"{where}.params")  # noqa: E731
         self.thickness_min_nm = number("thickness_min_nm")
         self.thickness_max_nm = number("thickness_max_nm")
         self.cos_min = number("cos_min")
         self.cos_max = number("cos_max")
         self.cos_crit = number("cos_crit")
         self.y_crit = number("y_crit")
-        self.size_u = number("size_u")
-        self.size_v = number("size_v")
         self.thickness_power = number("thickness_power")
+        self.rect = [number(key) for key in ("x0", "y0", "width", "height")]
         if self.thickness_power not in (1.0, 2.0):
             raise ExportError(
-                f"irid export {where}: params.thickness_power = {self.thickness_power}, "
+                f"irid export {where}.params.thickness_power = {self.thickness_power}, "
                 "expected 1 or 2"
             )
-        for key in ("size_u", "size_v"):
-            value = getattr(self, key)
-            if value < 1 or value != int(value):
-                raise ExportError(f"irid export {where}: params.{key} = {value} is not a size")
-        self.size_u = int(self.size_u)
-        self.size_v = int(self.size_v)
+        x0, y0, w, h = self.rect
+        if (
+            any(v != int(v) for v in self.rect)
+            or min(x0, y0) < 0
+            or min(w, h) < 1
+            or x0 + w > atlas_size[0]
+            or y0 + h > atlas_size[1]
+        ):
+            raise ExportError(
+                f"irid export {where}: rectangle {self.rect} does not lie in the "
+                f"{atlas_size[0]}×{atlas_size[1]} texture"
+            )
+        self.rect = [int(v) for v in self.rect]
         if not 0.0 <= self.thickness_min_nm <= self.thickness_max_nm:
             raise ExportError(
                 f"irid export {where}: thickness range [{self.thickness_min_nm}, "
@@ -119,17 +113,60 @@ class Export:
                     f"irid export {where}: angle warp centre cos {self.cos_crit} (y {self.y_crit}) "
                     f"is not inside the cos θ range [{self.cos_min}, {self.cos_max})"
                 )
+
+
+class Export:
+    """A checked export directory: the texture files, the atlas's charts and
+    which side reads which."""
+
+    def __init__(self, directory):
+        self.directory = os.path.abspath(os.fspath(directory))
+        film_path = os.path.join(self.directory, "film.json")
+        if not os.path.isdir(self.directory):
+            raise ExportError(f"irid export {self.directory}: not a directory")
+        if not os.path.isfile(film_path):
+            raise ExportError(f"irid export {self.directory}: film.json is missing")
+        try:
+            with open(film_path, encoding="utf-8") as f:
+                film = json.load(f)
+        except (OSError, UnicodeDecodeError, json.JSONDecodeError) as e:
+            raise ExportError(f"irid export {film_path}: not readable JSON ({e})") from None
+        self.film = film
+        where = film_path
+        if not isinstance(film, dict):
+            raise ExportError(f"irid export {where}: expected a JSON object")
+        if film.get("format") != FILM_FORMAT:
+            raise ExportError(
+                f"irid export {where}: format {film.get('format')!r}, expected {FILM_FORMAT!r}"
+            )
+        if film.get("version") != FILM_VERSION:
+            raise ExportError(
+                f"irid export {where}: film.json version {film.get('version')!r}; this module "
+                f"reads version {FILM_VERSION}: export the film again with the irid it came with"
+            )
+        texture = _object(film, "texture", where)
+        self.size = (texture.get("width"), texture.get("height"))
+        if not all(isinstance(v, int) and not isinstance(v, bool) and v >= 1 for v in self.size):
+            raise ExportError(f"irid export {where}: texture.width and height must be sizes")
+        charts = film.get("charts")
+        if not isinstance(charts, list) or not charts:
+            raise ExportError(f"irid export {where}: 'charts' is missing or empty")
+        self.charts = [
+            Chart(c if isinstance(c, dict) else {}, f"{where}: charts[{k}]", self.size)
+            for k, c in enumerate(charts)
+        ]
+        sides = _object(film, "sides", where)
+        self.front = self.charts[self._chart_of(sides, "front", where)]
+        self.back = None
+        if sides.get("back") is not None:
+            self.back = self.charts[self._chart_of(sides, "back", where)]
+        self.thickness_min_nm = self.front.thickness_min_nm
+        self.thickness_max_nm = self.front.thickness_max_nm
         opaque = film.get("opaque")
         if not isinstance(opaque, bool):
             raise ExportError(f"irid export {where}: 'opaque' must be true or false")
         self.opaque = opaque
-        texture = _object(film, "texture", where)
         files = _object(texture, "files", f"{where}: texture")
-        if (texture.get("width"), texture.get("height")) != (self.size_u, self.size_v):
-            raise ExportError(
-                f"irid export {where}: texture is {texture.get('width')}×{texture.get('height')}, "
-                f"params say {self.size_u}×{self.size_v}"
-            )
         self.paths = {}
         for table in TABLES:
             name = files.get(table)
@@ -140,8 +177,20 @@ class Export:
                 raise ExportError(f"irid export {self.directory}: {name} is missing")
             self.paths[table] = path
         self.white = film.get("white")
+        if self.white != BLENDER_WHITE:
+            raise ExportError(
+                f"irid export {where}: made for white {self.white!r}, but Blender's colours "
+                f"are white E (a flat spectrum is 1, 1, 1): export it again with `--white e`"
+            )
         self.stack = film.get("stack")
         self.label = os.path.basename(self.directory.rstrip(os.sep)) or "film"
+
+    def _chart_of(self, sides, side, where):
+        entry = sides.get(side)
+        chart = entry.get("chart") if isinstance(entry, dict) else None
+        if not isinstance(chart, int) or isinstance(chart, bool) or not 0 <= chart < len(self.charts):
+            raise ExportError(f"irid export {where}: sides.{side}.chart is not one of the charts")
+        return chart
 
     def thickness_fraction(self, thickness_nm):
         """The 0-1 thickness socket value of a thickness in nm (the export's range)."""
@@ -158,18 +207,11 @@ class Export:
         return min(1.0, max(0.0, (t - self.thickness_min_nm) / span))
 
     def transmits(self):
-        """Whether light leaves through the substrate: the film transmits (film.json
-        "opaque" is false) into a lossless substrate. Into a metal the transmitted
-        power is absorbed, so no refraction lobe is drawn."""
-        if self.opaque:
-            return False
-        try:
-            return not _absorbs(self.stack["substrate"])
-        except (KeyError, TypeError, ValueError) as e:
-            raise ExportError(
-                f"irid export {self.directory}: the stack in film.json does not describe "
-                f"the substrate ({e})"
-            ) from None
+        """Whether light leaves through the substrate: film.json's "opaque" is
+        false (a lossless substrate that the film lets light into). Into an
+        absorbing substrate (a metal) the transmitted power is absorbed, so no
+        refraction lobe is drawn."""
+        return not self.opaque
 
     def relative_ior(self):
         """Substrate over ambient refractive index at IOR_WAVELENGTH_NM, from the stack."""
@@ -221,18 +263,6 @@ def _index_at(material, wavelength_nm):
     return float(n)
 
 
-def _absorbs(material):
-    """Whether a serialized irid material has k != 0 anywhere."""
-    dispersion = material["dispersion"]
-    if "constant" in dispersion:
-        return dispersion["constant"]["k"] != 0
-    if "table" in dispersion:
-        return any(k != 0 for k in dispersion["table"]["k"])
-    if "cauchy" in dispersion or "sellmeier" in dispersion:
-        return False
-    raise ValueError(f"unknown dispersion {sorted(dispersion)}")
-
-
 def _interp(x, xs, ys):
     if not xs or len(xs) != len(ys) or not xs[0] <= x <= xs[-1]:
         raise ValueError(f"{x} nm is outside the material's table")
@@ -276,7 +306,10 @@ class _Builder:
 
 def make_node_group(export_dir, name=None, ior=None):
     """A shader node group for an export: inputs Thickness (0-1 over the export's
-    thickness range) and Roughness; outputs BSDF, Reflectance and Transmittance.
+    thickness range), Thickness nm, Roughness and Normal; outputs BSDF,
+    Reflection, Reflectance and Transmittance (docs/blender.md). A back face
+    is shaded with the export's back side (light arriving from the
+    substrate), when it has one.
 
     Raises ExportError for a bad export directory; nothing stays in the .blend
     when building fails."""
@@ -305,19 +338,21 @@ def make_node_group(export_dir, name=None, ior=None):
 def make_material(export_dir, thickness_nm=None, name=None, roughness=0.0, ior=None):
     """A material shading with the film of an `irid export` directory.
 
-    thickness_nm: the film's thickness, a constant inside the export's range;
-    None leaves the group's Thickness socket (0-1 over the range, like glTF's
-    iridescenceThicknessTexture) for an attribute or texture to drive
-    (default 0.5). roughness: GGX roughness of both lobes. ior: relative
+    thickness_nm: the film's thickness, a constant inside the export's range,
+    set on the group's Thickness nm input; None leaves the 0-1 Thickness input
+    (over the range, like glTF's iridescenceThicknessTexture) for an attribute
+    or texture to drive (default 0.5). roughness: GGX roughness of both lobes. ior: relative
     index of refraction when the film transmits into a lossless substrate
     (default: substrate over ambient at 550 nm, from the stack in film.json);
     over an absorbing substrate (a metal) the material has no refraction lobe.
 
-    Raises ExportError (a ValueError) with one message for a missing file or
-    a damaged film.json, ValueError for a thickness outside the export's
-    range; nothing half-built stays in the .blend."""
+    Raises ExportError (a ValueError) with one message for a missing file, a
+    damaged film.json or an export for another white than Blender's (`--white
+    e`), ValueError for a thickness outside the export's range; nothing
+    half-built stays in the .blend."""
     export = Export(export_dir)
-    fraction = None if thickness_nm is None else export.thickness_fraction(thickness_nm)
+    if thickness_nm is not None:
+        export.thickness_fraction(thickness_nm)  # refuses one outside the range
     roughness = float(roughness)
     if not 0.0 <= roughness <= 1.0:
         raise ValueError(f"roughness {roughness} is outside [0, 1]")
@@ -336,8 +371,8 @@ def make_material(export_dir, thickness_nm=None, name=None, roughness=0.0, ior=N
         film.width = 220
         out = build.node("ShaderNodeOutputMaterial", 2, 0)
         build.link(film.outputs["BSDF"], out.inputs["Surface"])
-        if fraction is not None:
-            film.inputs["Thickness"].default_value = fraction
+        if thickness_nm is not None:
+            film.inputs["Thickness nm"].default_value = float(thickness_nm)
         film.inputs["Roughness"].default_value = roughness
         material["irid_export"] = export.directory
         if thickness_nm is not None:
@@ -367,10 +402,10 @@ def _load_image(export, table, name):
         size = tuple(image.size)
         if size == (0, 0):
             raise ExportError(f"irid export {path}: Blender cannot read it (damaged or not an image)")
-        if size != (export.size_u, export.size_v):
+        if size != export.size:
             raise ExportError(
                 f"irid export {path}: image is {size[0]}×{size[1]}, film.json says "
-                f"{export.size_u}×{export.size_v}"
+                f"{export.size[0]}×{export.size[1]}"
             )
     except BaseException:
         _remove(image)
@@ -403,80 +438,40 @@ def _remove(block):
 
 
 def _build_group(group, export, images, ior):
-    iface = group.interface
-    sock = iface.new_socket("Thickness", in_out="INPUT", socket_type="NodeSocketFloat")
-    sock.subtype = "FACTOR"
-    sock.min_value, sock.max_value, sock.default_value = 0.0, 1.0, 0.5
-    sock.description = (
-        f"Film thickness: 0 = {export.thickness_min_nm:g} nm, 1 = {export.thickness_max_nm:g} nm"
-    )
-    sock = iface.new_socket("Roughness", in_out="INPUT", socket_type="NodeSocketFloat")
-    sock.subtype = "FACTOR"
-    sock.min_value, sock.max_value, sock.default_value = 0.0, 1.0, 0.0
-    iface.new_socket("BSDF", in_out="OUTPUT", socket_type="NodeSocketShader")
-    for table in ("Reflectance", "Transmittance"):
-        iface.new_socket(table, in_out="OUTPUT", socket_type="NodeSocketColor")
-
+    _group_interface(group.interface, export)
     build = _Builder(group)
     inputs = build.node("NodeGroupInput", 0, 0)
-    outputs = build.node("NodeGroupOutput", 9, 0)
-
-    # u: thickness fraction x in [0, 1], square-rooted when the thickness nodes
-    # crowd towards the minimum (thickness_power 2), to texel centres:
-    # u = (x (N_u - 1) + 0.5) / N_u.
-    nu = export.size_u
-    x = build.math("MULTIPLY", 1, 0, inputs.outputs["Thickness"], 1.0, label="x = clamp(thickness)")
-    x.node.use_clamp = True
-    if export.thickness_power == 2.0:
-        x = build.math("SQRT", 1.5, 0, x, label="x = sqrt(x)")
-    u = build.math("MULTIPLY_ADD", 2, 0, x, (nu - 1) / nu, 0.5 / nu, label="u")
-
-    # cos θ: the incoming direction against the shading normal, either side.
-    geometry = build.node("ShaderNodeNewGeometry", 0, 2)
-    dot = build.node("ShaderNodeVectorMath", 1, 2, label="cos θ", operation="DOT_PRODUCT")
+    outputs = build.node("NodeGroupOutput", 10, 0)
+    geometry = build.node("ShaderNodeNewGeometry", 0, 4)
+    x = _thickness_fraction(build, export, inputs)
+    normal = _shading_normal(build, inputs, geometry)
+    # cos θ: the incoming direction against the shading normal, on the side
+    # the light arrives from.
+    dot = build.node("ShaderNodeVectorMath", 2, 4, label="cos θ", operation="DOT_PRODUCT")
     build.link(geometry.outputs["Incoming"], dot.inputs[0])
-    build.link(geometry.outputs["Normal"], dot.inputs[1])
-    cos = build.math("ABSOLUTE", 2, 2, dot.outputs["Value"])
-    clamp = build.node("ShaderNodeClamp", 3, 2, label="clamp to the table")
-    build.link(cos, clamp.inputs["Value"])
-    clamp.inputs["Min"].default_value = export.cos_min
-    clamp.inputs["Max"].default_value = export.cos_max
-    c = clamp.outputs["Result"]
-
-    # y: the export's angle warp, linear in cos θ or square-root on each side
-    # of cos_crit (a branch-free form: one of the two roots is zero; with
-    # cos_crit = cos_min there is no side below).
-    if export.cos_max == export.cos_min:
-        y = build.math("MULTIPLY", 4, 2, c, 0.0, label="y = 0 (one angle)")
-    elif export.cos_crit < 0.0:
-        span = export.cos_max - export.cos_min
-        y = build.math("MULTIPLY_ADD", 4, 2, c, 1.0 / span, -export.cos_min / span, label="y")
-    else:
-        cc, yc = export.cos_crit, export.y_crit
-        above = build.math(
-            "MULTIPLY_ADD", 4, 2, c, 1.0 / (export.cos_max - cc), -cc / (export.cos_max - cc)
-        )
-        above = build.math("SQRT", 5, 2, build.math("MAXIMUM", 4.5, 2, above, 0.0))
-        y = build.math("MULTIPLY_ADD", 5.5, 2, above, 1.0 - yc, yc, label="y")
-        if cc > export.cos_min:
-            below = build.math(
-                "MULTIPLY_ADD", 4, 3, c, -1.0 / (cc - export.cos_min), cc / (cc - export.cos_min)
-            )
-            below = build.math("SQRT", 5, 3, build.math("MAXIMUM", 4.5, 3, below, 0.0))
-            y = build.math("MULTIPLY_ADD", 6, 2, below, -yc, y, label="y")
-    # v in the file's row order is (y (N_v - 1) + 0.5) / N_v; Blender puts the
-    # file's first row at v = 1, so the texture is read at 1 - v.
-    nv = export.size_v
-    v = build.math("MULTIPLY_ADD", 6.5, 1, y, -(nv - 1) / nv, 1.0 - 0.5 / nv, label="v (Blender)")
-    uv = build.node("ShaderNodeCombineXYZ", 7, 0, label="uv")
-    build.link(u, uv.inputs["X"])
-    build.link(v, uv.inputs["Y"])
+    build.link(normal, dot.inputs[1])
+    cos = build.math("ABSOLUTE", 2.5, 4, dot.outputs["Value"])
+    uv = _chart_uv(build, export.front, export.size, x, cos, 0)
+    if export.back is not None and export.back is not export.front:
+        # A back face is seen from the substrate: the back side's chart.
+        # uv = front + backfacing · (back − front): one lookup per image.
+        back = _chart_uv(build, export.back, export.size, x, cos, 6)
+        step = build.node("ShaderNodeVectorMath", 7.5, 3, label="back − front", operation="SUBTRACT")
+        build.link(back, step.inputs[0])
+        build.link(uv, step.inputs[1])
+        scale = build.node("ShaderNodeVectorMath", 8, 3, label="× backfacing", operation="SCALE")
+        build.link(step.outputs["Vector"], scale.inputs[0])
+        build.link(geometry.outputs["Backfacing"], scale.inputs["Scale"])
+        pick = build.node("ShaderNodeVectorMath", 8.5, 3, label="uv of the side", operation="ADD")
+        build.link(uv, pick.inputs[0])
+        build.link(scale.outputs["Vector"], pick.inputs[1])
+        uv = pick.outputs["Vector"]
 
     colours = {}
     for row, table in enumerate(TABLES):
         tex = build.node(
             "ShaderNodeTexImage",
-            7.5,
+            9,
             1 + 2 * row,
             label=table,
             interpolation="Linear",
@@ -484,26 +479,218 @@ def _build_group(group, export, images, ior):
             projection="FLAT",
         )
         tex.image = images[table]
-        build.link(uv.outputs["Vector"], tex.inputs["Vector"])
+        build.link(uv, tex.inputs["Vector"])
         colours[table] = tex.outputs["Color"]
         build.link(tex.outputs["Color"], outputs.inputs[table.capitalize()])
 
-    glossy = build.node("ShaderNodeBsdfGlossy", 8.5, -1, label="film reflection", distribution="GGX")
+    glossy = build.node("ShaderNodeBsdfGlossy", 9.5, -1, label="film reflection", distribution="GGX")
     build.link(colours["reflectance"], glossy.inputs["Color"])
     build.link(inputs.outputs["Roughness"], glossy.inputs["Roughness"])
+    build.link(normal, glossy.inputs["Normal"])
+    build.link(glossy.outputs["BSDF"], outputs.inputs["Reflection"])
     if ior is None:
         build.link(glossy.outputs["BSDF"], outputs.inputs["BSDF"])
         return
+    # Cycles' Refraction BSDF takes 1 / IOR on a back face: from the
+    # substrate the light refracts into the ambient, and past the critical
+    # angle it does not (where the back side's transmittance is 0).
     refraction = build.node(
-        "ShaderNodeBsdfRefraction", 8.5, 1, label="film transmission", distribution="GGX"
+        "ShaderNodeBsdfRefraction", 9.5, 1, label="film transmission", distribution="GGX"
     )
     refraction.inputs["IOR"].default_value = float(ior)
     build.link(colours["transmittance"], refraction.inputs["Color"])
     build.link(inputs.outputs["Roughness"], refraction.inputs["Roughness"])
-    add = build.node("ShaderNodeAddShader", 9, -1)
+    build.link(normal, refraction.inputs["Normal"])
+    add = build.node("ShaderNodeAddShader", 10, -1)
     build.link(glossy.outputs["BSDF"], add.inputs[0])
     build.link(refraction.outputs["BSDF"], add.inputs[1])
     build.link(add.outputs["Shader"], outputs.inputs["BSDF"])
+
+
+def _group_interface(iface, export):
+    """The node group's sockets (docs/blender.md lists them)."""
+    sock = iface.new_socket("Thickness", in_out="INPUT", socket_type="NodeSocketFloat")
+    sock.subtype = "FACTOR"
+    sock.min_value, sock.max_value, sock.default_value = 0.0, 1.0, 0.5
+    sock.description = (
+        f"Film thickness: 0 = {export.thickness_min_nm:g} nm, 1 = {export.thickness_max_nm:g} nm "
+        "(used while Thickness nm is below 0)"
+    )
+    sock = iface.new_socket("Thickness nm", in_out="INPUT", socket_type="NodeSocketFloat")
+    sock.min_value, sock.max_value, sock.default_value = -1.0, 1.0e6, -1.0
+    sock.description = (
+        f"Film thickness in nm, clamped to {export.thickness_min_nm:g}-"
+        f"{export.thickness_max_nm:g} nm; below 0 (the default), the 0-1 Thickness input is used"
+    )
+    sock = iface.new_socket("Roughness", in_out="INPUT", socket_type="NodeSocketFloat")
+    sock.subtype = "FACTOR"
+    sock.min_value, sock.max_value, sock.default_value = 0.0, 1.0, 0.0
+    sock = iface.new_socket("Normal", in_out="INPUT", socket_type="NodeSocketVector")
+    sock.hide_value = True
+    sock.description = (
+        "Shading normal of the film's angle and of both lobes (a normal map, a "
+        "Principled coat's normal); unlinked, the surface's own"
+    )
+    iface.new_socket("BSDF", in_out="OUTPUT", socket_type="NodeSocketShader")
+    sock = iface.new_socket("Reflection", in_out="OUTPUT", socket_type="NodeSocketShader")
+    sock.description = "The reflection lobe alone, for layering over another shader"
+    for table in ("Reflectance", "Transmittance"):
+        iface.new_socket(table, in_out="OUTPUT", socket_type="NodeSocketColor")
+
+
+def _thickness_fraction(build, export, inputs):
+    """The thickness as a fraction of the export's range, clamped: from
+    Thickness nm when it is 0 or more, else the 0-1 Thickness input."""
+    span = export.thickness_max_nm - export.thickness_min_nm
+    scale = 1.0 / span if span > 0.0 else 0.0
+    nm = inputs.outputs["Thickness nm"]
+    from_nm = build.math("MULTIPLY_ADD", 0.5, -1, nm, scale, -export.thickness_min_nm * scale)
+    use_nm = build.math("GREATER_THAN", 0.5, -2, nm, -0.5, label="Thickness nm given")
+    towards = build.math("SUBTRACT", 1, -1, from_nm, inputs.outputs["Thickness"])
+    x = build.math(
+        "MULTIPLY_ADD", 1.5, -1, use_nm, towards, inputs.outputs["Thickness"], label="x = clamp(thickness)"
+    )
+    x.node.use_clamp = True
+    return x
+
+
+def _shading_normal(build, inputs, geometry):
+    """The Normal input, normalized, when it is linked (not zero); else the
+    surface's shading normal."""
+    given = inputs.outputs["Normal"]
+    length = build.node("ShaderNodeVectorMath", 0.5, 6, operation="LENGTH")
+    build.link(given, length.inputs[0])
+    linked = build.math("GREATER_THAN", 1, 6, length.outputs["Value"], 1e-6, label="Normal linked")
+    unit = build.node("ShaderNodeVectorMath", 0.5, 7, operation="NORMALIZE")
+    build.link(given, unit.inputs[0])
+    step = build.node("ShaderNodeVectorMath", 1, 7, operation="SUBTRACT")
+    build.link(unit.outputs["Vector"], step.inputs[0])
+    build.link(geometry.outputs["Normal"], step.inputs[1])
+    scale = build.node("ShaderNodeVectorMath", 1.5, 7, operation="SCALE")
+    build.link(step.outputs["Vector"], scale.inputs[0])
+    build.link(linked, scale.inputs["Scale"])
+    normal = build.node("ShaderNodeVectorMath", 2, 6, label="shading normal", operation="ADD")
+    build.link(geometry.outputs["Normal"], normal.inputs[0])
+    build.link(scale.outputs["Vector"], normal.inputs[1])
+    return normal.outputs["Vector"]
+
+
+def _chart_uv(build, chart, atlas_size, x, cos, row):
+    """The image coordinates of (thickness fraction x, cos θ) in one chart of
+    the atlas: the export's mapping (docs/gpu.md) in math nodes, with the
+    chart's numbers written into them. Returns the vector socket."""
+    width, height = atlas_size
+    x0, y0, w, h = chart.rect
+    # u: thickness fraction, square-rooted when the chart's thickness nodes
+    # crowd towards the minimum (thickness power 2), onto the chart's texel
+    # centres: u = (x0 + 0.5 + x (w - 1)) / W.
+    if chart.thickness_power == 2.0:
+        x = build.math("SQRT", 1.5, row, x, label="x = sqrt(x)")
+    u = build.math("MULTIPLY_ADD", 2, row, x, (w - 1) / width, (x0 + 0.5) / width, label="u")
+    clamp = build.node("ShaderNodeClamp", 3, row + 2, label="clamp to the chart")
+    build.link(cos, clamp.inputs["Value"])
+    clamp.inputs["Min"].default_value = chart.cos_min
+    clamp.inputs["Max"].default_value = chart.cos_max
+    c = clamp.outputs["Result"]
+
+    # y: the chart's angle warp, linear in cos θ or square-root on each side
+    # of cos_crit (a branch-free form: one of the two roots is zero; with
+    # cos_crit = cos_min there is no side below).
+    if chart.cos_max == chart.cos_min:
+        y = build.math("MULTIPLY", 4, row + 2, c, 0.0, label="y = 0 (one angle)")
+    elif chart.cos_crit < 0.0:
+        span = chart.cos_max - chart.cos_min
+        y = build.math("MULTIPLY_ADD", 4, row + 2, c, 1.0 / span, -chart.cos_min / span, label="y")
+    else:
+        cc, yc = chart.cos_crit, chart.y_crit
+        above = build.math(
+            "MULTIPLY_ADD", 4, row + 2, c, 1.0 / (chart.cos_max - cc), -cc / (chart.cos_max - cc)
+        )
+        above = build.math("SQRT", 5, row + 2, build.math("MAXIMUM", 4.5, row + 2, above, 0.0))
+        y = build.math("MULTIPLY_ADD", 5.5, row + 2, above, 1.0 - yc, yc, label="y")
+        if cc > chart.cos_min:
+            below = build.math(
+                "MULTIPLY_ADD", 4, row + 3, c, -1.0 / (cc - chart.cos_min), cc / (cc - chart.cos_min)
+            )
+            below = build.math("SQRT", 5, row + 3, build.math("MAXIMUM", 4.5, row + 3, below, 0.0))
+            y = build.math("MULTIPLY_ADD", 6, row + 2, below, -yc, y, label="y")
+    # v in the file's row order is (y0 + 0.5 + y (h - 1)) / H; Blender puts
+    # the file's first row at v = 1, so the texture is read at 1 - v.
+    v = build.math(
+        "MULTIPLY_ADD", 6.5, row + 1, y, -(h - 1) / height, 1.0 - (y0 + 0.5) / height,
+        label="v (Blender)",
+    )
+    uv = build.node("ShaderNodeCombineXYZ", 7, row, label="uv")
+    build.link(u, uv.inputs["X"])
+    build.link(v, uv.inputs["Y"])
+    return uv.outputs["Vector"]
+
+
+def add_film_layer(material, export_dir, thickness_nm=None, coat=False, name=None):
+    """Puts an export's film on top of a material whose surface is a Principled
+    BSDF: the film's reflection lobe is added to the Principled BSDF, whose
+    Base Color is multiplied by the film's transmittance (the light the film
+    lets through to the base, once, at the viewing angle). Returns the film's
+    group node.
+
+    coat=False, the film over the base: the export's substrate is the base's
+    own top medium (paint, plastic: e.g. n = 1.5), so the film's reflectance
+    already holds that surface's reflection and the Principled's Specular IOR
+    Level is set to 0; the film takes the Principled's Normal and Roughness.
+    coat=True, the film as the coat: the base keeps its own specular layer
+    (the film lies on a clear coat over it), the Principled's Coat Weight is
+    set to 0 (the film replaces the coat) and the film takes its Coat Normal
+    and Coat Roughness.
+
+    Raises ValueError when the material's output is not fed by a Principled
+    BSDF, ExportError for a bad export; the material is unchanged then."""
+    tree = material.node_tree
+    outputs = [n for n in tree.nodes if n.bl_idname == "ShaderNodeOutputMaterial"] if tree else []
+    out = next((n for n in outputs if n.is_active_output), outputs[0] if outputs else None)
+    links = out.inputs["Surface"].links if out is not None else ()
+    base = links[0].from_node if links else None
+    if base is None or base.bl_idname != "ShaderNodeBsdfPrincipled":
+        raise ValueError(f"material {material.name}: its surface is not a Principled BSDF")
+    export = Export(export_dir)
+    if thickness_nm is not None:
+        export.thickness_fraction(thickness_nm)  # refuses one outside the range
+    group = make_node_group(export, name=name or f"{material.name} film")
+    build = _Builder(tree)
+    x, y = base.location
+    film = tree.nodes.new("ShaderNodeGroup")
+    film.node_tree = group
+    film.label = "irid film"
+    film.location = (x - 500.0, y + 300.0)
+    if thickness_nm is not None:
+        film.inputs["Thickness nm"].default_value = float(thickness_nm)
+    normal, roughness = ("Coat Normal", "Coat Roughness") if coat else ("Normal", "Roughness")
+    if base.inputs[normal].links:
+        build.link(base.inputs[normal].links[0].from_socket, film.inputs["Normal"])
+    if base.inputs[roughness].links:
+        build.link(base.inputs[roughness].links[0].from_socket, film.inputs["Roughness"])
+    else:
+        film.inputs["Roughness"].default_value = base.inputs[roughness].default_value
+    through = tree.nodes.new("ShaderNodeVectorMath")
+    through.operation = "MULTIPLY"
+    through.label = "base colour × film transmittance"
+    through.location = (x - 250.0, y + 100.0)
+    colour = base.inputs["Base Color"]
+    if colour.links:
+        build.link(colour.links[0].from_socket, through.inputs[0])
+    else:
+        through.inputs[0].default_value = tuple(colour.default_value)[:3]
+    build.link(film.outputs["Transmittance"], through.inputs[1])
+    build.link(through.outputs["Vector"], colour)
+    off = base.inputs["Coat Weight" if coat else "Specular IOR Level"]
+    for link in list(off.links):
+        tree.links.remove(link)
+    off.default_value = 0.0
+    add = tree.nodes.new("ShaderNodeAddShader")
+    add.location = (x + 300.0, y)
+    build.link(film.outputs["Reflection"], add.inputs[0])
+    build.link(base.outputs["BSDF"], add.inputs[1])
+    build.link(add.outputs["Shader"], out.inputs["Surface"])
+    return film
 
 
 # Add-on: File > Import > irid film (film.json).
@@ -527,6 +714,10 @@ class IRID_OT_import_film(bpy.types.Operator):
     roughness: bpy.props.FloatProperty(name="Roughness", default=0.0, min=0.0, max=1.0)
 
     def execute(self, context):
+        meshes = [obj for obj in context.selected_objects if obj.type == "MESH"]
+        if not meshes:
+            self.report({"ERROR"}, "No mesh is selected: select the meshes to put the film on")
+            return {"CANCELLED"}
         try:
             material = make_material(
                 os.path.dirname(self.filepath),
@@ -536,11 +727,18 @@ class IRID_OT_import_film(bpy.types.Operator):
         except ValueError as e:
             self.report({"ERROR"}, str(e))
             return {"CANCELLED"}
-        for obj in context.selected_objects:
-            if obj.type == "MESH":
-                obj.data.materials.clear()
+        # The film takes the active material slot; the mesh's other slots
+        # (and the faces assigned to them) stay as they were.
+        for obj in meshes:
+            if obj.material_slots:
+                obj.active_material = material
+            else:
                 obj.data.materials.append(material)
-        self.report({"INFO"}, f"Built material {material.name}")
+        self.report(
+            {"INFO"},
+            f"Built material {material.name}, in the active slot of {len(meshes)} mesh"
+            f"{'' if len(meshes) == 1 else 'es'}",
+        )
         return {"FINISHED"}
 
     def invoke(self, context, event):

@@ -2,7 +2,7 @@
 # CI: irid's irid_film BSDF in Mitsuba 3 (docs/mitsuba.md). Installs what is
 # missing (Debian's libllvm19 for Mitsuba's llvm variants: the image's LLVM 15
 # aborts with "Cannot select: fminimum"; a virtualenv with mitsuba, numpy,
-# pytest and colour-science; the irid package built from ./python), then runs
+# pytest and colour-science; the irid package from tools/python_wheel.sh), then runs
 # python/tests_mitsuba. Idempotent; exits non-zero on any failure, including
 # a run that collects no tests.
 set -euo pipefail
@@ -17,8 +17,10 @@ venv=.venv-mitsuba
 pip=(--quiet --disable-pip-version-check)
 [ -x "$venv/bin/python" ] || python3 -m venv "$venv"
 "$venv/bin/pip" install "${pip[@]}" "mitsuba==3.9.1" "drjit==1.5.0" numpy pytest "colour-science==0.4.7"
+# The wheel tools/test.sh built ($IRID_WHEEL), or one built here;
 # --force-reinstall: the version number does not change with the sources.
-"$venv/bin/pip" install "${pip[@]}" --force-reinstall --no-deps ./python
+wheel=$(bash tools/python_wheel.sh "$venv/bin/python")
+"$venv/bin/pip" install "${pip[@]}" --force-reinstall --no-deps "$wheel"
 
 # Dr.Jit looks for libLLVM.so first; point it at version 19 explicitly.
 llvm=$(ldconfig -p | awk '/libLLVM.so.19/ {print $NF; exit}')

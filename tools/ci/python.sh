@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# CI for the Python package (python/): builds it with maturin through
-# `pip install ./python` into a virtualenv, installs the independent
+# CI for the Python package (python/): installs it into a virtualenv (the
+# wheel of tools/python_wheel.sh), installs the independent
 # implementations the tests compare with (Byrnes' tmm, tmm-faster), builds the
 # irid CLI the tests compare with, and runs the pytest suite. Idempotent;
 # exits non-zero on any failure, including a run that collects no tests.
@@ -11,8 +11,10 @@ venv=.venv-python
 pip=(--quiet --disable-pip-version-check)
 [ -x "$venv/bin/python" ] || python3 -m venv "$venv"
 "$venv/bin/pip" install "${pip[@]}" pytest numpy tmm==0.2.0 tmm-faster==0.1.3
+# The wheel tools/test.sh built ($IRID_WHEEL), or one built here;
 # --force-reinstall: the version number does not change with the sources.
-"$venv/bin/pip" install "${pip[@]}" --force-reinstall --no-deps ./python
+wheel=$(bash tools/python_wheel.sh "$venv/bin/python")
+"$venv/bin/pip" install "${pip[@]}" --force-reinstall --no-deps "$wheel"
 
 cargo build --release --bin irid
 export IRID_BIN="$PWD/target/release/irid" IRID_REQUIRE_CLI=1

@@ -155,12 +155,21 @@ async function renderAndCompare(name, route) {
 }
 
 // Bounds on the whole sphere. What they hold is the export's own error
-// (film.json states a mean ΔE00 below 0.01 and a max near 0.04) and the
-// GPU's filtering; a flipped angle axis (ΔE00 about 50) or cos θ from the
-// view position under an orthographic camera (about 2 off the centre) are
-// far outside them.
+// (the soap film's film.json states a mean ΔE00 below 0.01 and a max near
+// 0.04) and the GPU's filtering; a flipped angle axis (ΔE00 about 50) or
+// cos θ from the view position under an orthographic camera (about 2 off
+// the centre) are far outside them. An export whose stated R error is
+// larger (coated glass: R near 4 %, where ΔE00 is large for a small
+// absolute error; mean 0.069, max 0.33) is held to twice its stated mean
+// and its stated max.
 const MEAN_BOUND = 0.03;
 const MAX_BOUND = 0.2;
+
+/** The bounds for export `film`: the fixed ones, or its own stated front R error. */
+function bounds(film) {
+  const e = film.error.front ?? film.error;
+  return { mean: Math.max(MEAN_BOUND, 2 * e.mean_delta_e00[0]), max: Math.max(MAX_BOUND, e.max_delta_e00[0]) };
+}
 
 test('the rasterized sphere is the unit sphere each camera sees, and a bare white metal reflects 1 on it', async () => {
   for (const camera of ['perspective', 'orthographic']) {
@@ -220,8 +229,9 @@ for (const route of ['EXRLoader half', 'EXRLoader float', 'exr.js float', 'exr.j
 test('every export of the preview on a sphere (EXRLoader, its default half float), both cameras', async () => {
   for (const name of [...STACKS.keys()].slice(1)) {
     const { results } = await renderAndCompare(name, 'EXRLoader half');
+    const bound = bounds(readFilm(name));
     for (const [camera, r] of Object.entries(results)) {
-      assert.ok(r.mean <= MEAN_BOUND && r.max <= MAX_BOUND, `${name} ${camera}: ΔE00 mean ${r.mean}, max ${r.max}`);
+      assert.ok(r.mean <= bound.mean && r.max <= bound.max, `${name} ${camera}: ΔE00 mean ${r.mean}, max ${r.max}`);
     }
   }
 });

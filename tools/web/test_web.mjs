@@ -81,14 +81,20 @@ async function setControl(page, id, value) {
 }
 
 /** The canvas as {width, height, data: RGBA8 rows bottom to top}. */
-async function pixels(page) {
-  const { width, height, base64 } = await page.evaluate(() => window.irid.pixels());
+async function pixels(page, options) {
+  const { width, height, base64 } = await page.evaluate((o) => window.irid.pixels(o), options);
   return { width, height, data: new Uint8Array(Buffer.from(base64, 'base64')) };
 }
 
-/** The page's chart pixels against `irid color` at the same (thickness, angle). */
-async function compareChart(page, film, quantity, stackFile) {
-  await page.selectOption('#mode', quantity === 'reflectance' ? 'chart-r' : 'chart-t');
+/**
+ * The page's chart pixels of one side ('front', or 'back': light from the
+ * substrate) against `irid color` at the same (thickness, angle) on the
+ * stack as seen from that side.
+ */
+async function compareChart(page, film, quantity, stackFile, side = 'front') {
+  const back = side === 'back' ? '-back' : '';
+  await page.selectOption('#mode', (quantity === 'reflectance' ? 'chart-r' : 'chart-t') + back);
+  const layer = side === 'back' ? film.sides.back.layer : film.layer;
   const image = await pixels(page);
   const { width, height, data } = image;
   // The chart's mapping, restated from the page's contract: pixel centres,
@@ -115,7 +121,7 @@ async function compareChart(page, film, quantity, stackFile) {
         pys.push(py);
         angles.push(deg);
       }
-      const colours = iridColor(stackWithThickness(text, film.layer, thickness, tmp), angles);
+      const colours = iridColor(stackWithThickness(text, layer, thickness, tmp), angles);
       colours.forEach((c, k) => {
         const o = (pys[k] * width + px) * 4; // readPixels rows run bottom to top
         const shown = [0, 1, 2].map((ch) => srgb8ToLinear(data[o + ch]));
@@ -130,6 +136,26 @@ async function compareChart(page, film, quantity, stackFile) {
   const mean = differences.reduce((s, d) => s + d, 0) / differences.length;
   const max = Math.max(...differences);
   return { mean, max, points: differences.length };
+}
+
+/**
+ * The stack of film.json seen from its substrate (reversed), as a stack file
+ * in `dir`: for stacks of constant indices, which every back-side export of
+ * the test has.
+ */
+function reversedStack(film, dir) {
+  const index = (m) => {
+    const c = m.dispersion && m.dispersion.constant;
+    if (!c) throw new Error(`${m.name}: the test writes constant indices only`);
+    return `[${c.n}, ${c.k}]`;
+  };
+  const lines = [`ambient = { n = ${index(film.stack.substrate)} }`, `substrate = { n = ${index(film.stack.ambient)} }`];
+  for (const layer of [...film.stack.layers].reverse()) {
+    lines.push('[[layers]]', `n = ${index(layer.material)}`, `thickness_nm = ${layer.thickness_nm}`);
+  }
+  const file = path.join(dir, 'reversed.toml');
+  fs.writeFileSync(file, `${lines.join('\n')}\n`);
+  return file;
 }
 
 function readFilm(dir) {
@@ -165,6 +191,99 @@ test('the page opens, draws, and its charts match irid color (ΔE00 after 8-bit 
       assert.ok(r.mean <= 0.5, `${name} ${quantity}: mean ΔE00 ${r.mean}`);
     }
   }
+  await page.close();
+});
+
+test('the charts from the substrate side match the reversed stack, past the critical angle too', async () => {
+  const page = await ready();
+  const labels = await page.evaluate(() => window.irid.preview.exports.map((e) => e.label));
+  const tmp = fs.mkdtempSync(path.join(os.tmpdir(), 'irid-web-back-'));
+  let checked = 0;
+  try {
+    for (const name of STACKS.keys()) {
+      const film = readFilm(path.join('preview', 'exports', name));
+      if (film.sides.back === null || film.sides.back.chart === film.sides.front.chart) continue;
+      await page.selectOption('#export', String(labels.indexOf(name)));
+      const stack = reversedStack(film, tmp);
+      for (const quantity of ['reflectance', 'transmittance']) {
+        const r = await compareChart(page, film, quantity, stack, 'back');
+        console.log(`${name} chart ${quantity} from the substrate: ΔE00 mean ${r.mean.toFixed(3)}, max ${r.max.toFixed(3)} over ${r.points} points`);
+        assert.ok(r.mean <= 0.5, `${name} ${quantity} (back): mean ΔE00 ${r.mean}`);
+      }
+      checked++;
+    }
+  } finally {
+    fs.rmSync(tmp, { recursive: true, force: true });
+  }
+  assert.ok(checked >= 1, 'no export with a back chart of its own');
+  assert.deepEqual(page.errors, []);
+  await page.close();
+});
+
+test('a film over an absorbing substrate (copper) is opaque: the sphere shows R alone', async () => {
+  const name = 'film-on-copper';
+  assert.ok(STACKS.has(name), `IRID_STACKS names no ${name}`);
+  const film = readFilm(path.join('preview', 'exports', name));
+  assert.equal(film.opaque, true);
+  assert.equal(film.sides.back, null);
+  const page = await ready();
+  const labels = await page.evaluate(() => window.irid.preview.exports.map((e) => e.label));
+  await page.selectOption('#export', String(labels.indexOf(name)));
+  assert.match(await page.textContent('#info'), /opaque\s*yes/);
+  await page.selectOption('#mode', 'object');
+  await page.selectOption('#environment', 'white');
+  const image = await pixels(page);
+  // The centre sees the sphere at normal incidence, at the thickness
+  // control's default (the middle of the range): R there, as irid color has
+  // it, and not R + T, which is white for a film that absorbs nothing.
+  const [t0, t1] = film.domain.thickness_nm;
+  const tmp = fs.mkdtempSync(path.join(os.tmpdir(), 'irid-web-copper-'));
+  try {
+    const stack = stackWithThickness(fs.readFileSync(STACKS.get(name), 'utf8'), film.layer, (t0 + t1) / 2, tmp);
+    const exact = iridColor(stack, [0])[0];
+    const o = ((image.height >> 1) * image.width + (image.width >> 1)) * 4;
+    const shown = [0, 1, 2].map((ch) => srgb8ToLinear(image.data[o + ch]));
+    const want = exact.reflectance_rgb.map((v) => Math.min(1, Math.max(0, v)));
+    const de = deltaE00(linearSrgbToLab(want), linearSrgbToLab(shown));
+    console.log(`film on copper, sphere centre in the white environment: ${shown.map((x) => x.toFixed(3))} against R ${want.map((x) => x.toFixed(3))}: ΔE00 ${de.toFixed(3)}`);
+    assert.ok(de <= 1, `ΔE00 ${de}`);
+  } finally {
+    fs.rmSync(tmp, { recursive: true, force: true });
+  }
+  await page.close();
+});
+
+test('inside a coated glass sphere the view is the film from the glass: white in a white world, past the critical angle too', async () => {
+  const name = 'film-on-glass';
+  assert.ok(STACKS.has(name), `IRID_STACKS names no ${name}`);
+  const page = await ready();
+  const labels = await page.evaluate(() => window.irid.preview.exports.map((e) => e.label));
+  await page.selectOption('#export', String(labels.indexOf(name)));
+  await page.selectOption('#mode', 'object');
+  // The eye 0.9 from the centre of the unit sphere: its rays meet the inner
+  // face at up to 64°, past the glass side's critical angle (41.8°).
+  await page.evaluate(() => { window.irid.preview.distance = 0.9; });
+  await page.selectOption('#environment', 'sky');
+  const inside = await pixels(page);
+  const alone = await pixels(page, { objectHidden: true });
+  let changed = 0;
+  for (let i = 0; i < inside.data.length; i += 4) {
+    if ([0, 1, 2].some((ch) => Math.abs(inside.data[i + ch] - alone.data[i + ch]) > 2)) changed++;
+  }
+  await page.selectOption('#environment', 'white');
+  const white = await pixels(page);
+  let dark = 0;
+  for (let i = 0; i < white.data.length; i += 4) {
+    if (Math.min(white.data[i], white.data[i + 1], white.data[i + 2]) < 250) dark++;
+  }
+  const n = white.data.length / 4;
+  console.log(`inside the coated glass sphere: ${(100 * changed / n).toFixed(1)} % of the pixels differ from the sky alone; `
+    + `in the white world ${dark} of ${n} pixels below 250 of 255`);
+  // The inner face is drawn (the back faces, side 1)...
+  assert.ok(changed > 0.5 * n, `only ${changed} pixels show the sphere from inside`);
+  // ...and keeps the light: R + T = 1 from the glass, R = 1 past the critical angle.
+  assert.ok(dark <= 0.001 * n, `${dark} pixels darker than white`);
+  assert.deepEqual(page.errors, []);
   await page.close();
 });
 

@@ -59,7 +59,8 @@ pub enum Source {
     Glsl(String),
 }
 
-/// The compute harness: `irid_film` at every point, six floats out.
+/// The compute harness: `irid_film` at every point for the side in
+/// `irid_repeat.y`, six floats out.
 pub const WGSL_HARNESS: &str = r#"
 @group(1) @binding(0) var<storage, read> irid_points: array<vec2<f32>>;
 @group(1) @binding(1) var<storage, read_write> irid_results: array<f32>;
@@ -77,7 +78,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     // irid_repeat.x calls per point (timing), each at a slightly moved
     // point so that no call can be hoisted out of the loop.
     for (var k = 0u; k < irid_repeat.x; k++) {
-        let f = FILM_FUNCTION(p.x + f32(k) * 1e-3, p.y);
+        let f = FILM_FUNCTION(p.x + f32(k) * 1e-3, p.y, i32(irid_repeat.y));
         r += f.reflectance;
         t += f.transmittance;
     }
@@ -109,7 +110,7 @@ void main() {
     vec3 r = vec3(0.0);
     vec3 t = vec3(0.0);
     for (uint k = 0u; k < irid_repeat.x; k++) {
-        IridFilm f = irid_film(p.x + float(k) * 1e-3, p.y);
+        IridFilm f = irid_film(p.x + float(k) * 1e-3, p.y, int(irid_repeat.y));
         r += f.reflectance;
         t += f.transmittance;
     }
@@ -194,10 +195,10 @@ fn f16_bytes(texels: &[[f32; 4]]) -> Vec<u8> {
         .collect()
 }
 
-/// An export directory as a host reads it: film.json's params and the two
-/// EXR files (rows in file order).
+/// An export directory as a host reads it: film.json's uniform array and
+/// the two EXR files (rows in file order).
 pub struct Files {
-    pub params: [f32; 9],
+    pub uniform: Vec<f32>,
     pub reflectance: irid::export::Texture,
     pub transmittance: irid::export::Texture,
 }
@@ -205,7 +206,13 @@ pub struct Files {
 pub fn read_dir(dir: &std::path::Path) -> Files {
     let film: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(dir.join("film.json")).unwrap()).unwrap();
-    let params = irid::export::PARAM_NAMES.map(|n| film["params"][n].as_f64().unwrap() as f32);
+    let uniform: Vec<f32> = film["uniform_f32"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_f64().unwrap() as f32)
+        .collect();
+    assert_eq!(uniform.len(), 4 * irid::export::UNIFORM_VEC4);
     let read = |name: &str| {
         let image = exr::prelude::read_first_rgba_layer_from_file(
             dir.join(name),
@@ -237,7 +244,7 @@ pub fn read_dir(dir: &std::path::Path) -> Files {
         }
     };
     Files {
-        params,
+        uniform,
         reflectance: read("reflectance.exr"),
         transmittance: read("transmittance.exr"),
     }
@@ -248,7 +255,7 @@ pub fn bind_export(gpu: &Gpu, export: &Export) -> Bound {
     bind(
         gpu,
         &Files {
-            params: export.mapping.params_f32(),
+            uniform: export.atlas.uniform_f32().to_vec(),
             reflectance: export.reflectance.clone(),
             transmittance: export.transmittance.clone(),
         },
@@ -256,7 +263,7 @@ pub fn bind_export(gpu: &Gpu, export: &Export) -> Bound {
 }
 
 /// Uploads the textures (RGBA16F, one mip level), a bilinear clamp-to-edge
-/// sampler and the parameters: bind group 0 of docs/gpu.md.
+/// sampler and the uniform array as it is: bind group 0 of docs/gpu.md.
 pub fn bind(gpu: &Gpu, files: &Files) -> Bound {
     let device = &gpu.device;
     let texture = |label: &str, t: &irid::export::Texture| {
@@ -293,12 +300,7 @@ pub fn bind(gpu: &Gpu, files: &Files) -> Bound {
     });
     let params = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
         label: Some("irid_params"),
-        // Nine f32 and zeros to 48 bytes (std140 rounds the block to 16).
-        contents: bytemuck::cast_slice(&{
-            let mut padded = [0.0f32; 12];
-            padded[..9].copy_from_slice(&files.params);
-            padded
-        }),
+        contents: bytemuck::cast_slice(&files.uniform),
         usage: wgpu::BufferUsages::UNIFORM,
     });
     let entry = |binding, ty| wgpu::BindGroupLayoutEntry {
@@ -418,14 +420,16 @@ pub fn program(gpu: &Gpu, film_layout: &wgpu::BindGroupLayout, source: Source) -
     }
 }
 
-/// Runs the program at `points` (thickness nm, cos θ), `repeat` calls per
-/// point; returns six floats per point and the GPU wall time.
+/// Runs the program at `points` (thickness nm, cos θ) for light from
+/// `side` (0 front, 1 back), `repeat` calls per point; returns six floats
+/// per point and the GPU wall time.
 pub fn run(
     gpu: &Gpu,
     program: &Program,
     film: &Bound,
     points: &[[f32; 2]],
     repeat: u32,
+    side: u32,
 ) -> (Vec<[f32; 6]>, Duration) {
     let device = &gpu.device;
     let points_buf = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
@@ -448,7 +452,7 @@ pub fn run(
     });
     let repeat_buf = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
         label: Some("repeat"),
-        contents: bytemuck::cast_slice(&[repeat, 0, 0, 0]),
+        contents: bytemuck::cast_slice(&[repeat, side, 0, 0]),
         usage: wgpu::BufferUsages::UNIFORM,
     });
     let io = device.create_bind_group(&wgpu::BindGroupDescriptor {

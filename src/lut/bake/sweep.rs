@@ -11,12 +11,12 @@ use std::sync::OnceLock;
 
 use crate::color::refine::{Refinement, MAX_SUB_STEPS};
 use crate::color::{Sampling, SpectralIntegrator};
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::lut::sample::channel_names;
 use crate::lut::{BakeSpec, Kind};
 use crate::optics::lanes::{one_way_many, Path, MAX_LANES};
 use crate::optics::twoport::{Scratch, VaryingLayer};
-use crate::optics::{solve, Layer, Stack, StackGrid};
+use crate::optics::{solve_mixed, Layer, Stack, StackGrid};
 use crate::simd::simd_dispatch;
 
 /// The phase factor along a uniform thickness axis is advanced by complex
@@ -31,10 +31,7 @@ pub(super) const PHASE_RESYNC: usize = 64;
 pub(crate) fn with_varying_layer(stack: &Stack, layer: usize) -> (Stack, usize) {
     let mut stack = stack.clone();
     if stack.layers.is_empty() {
-        stack.layers.push(Layer {
-            material: stack.ambient.clone(),
-            thickness_nm: 0.0,
-        });
+        stack.layers.push(Layer::new(stack.ambient.clone(), 0.0));
         return (stack, 1);
     }
     (stack, layer)
@@ -348,7 +345,49 @@ impl Prepared {
                 Ok(())
             },
         )?;
+        if let Some(k) = out.iter().position(|v| !v.is_finite()) {
+            if !self.stack.is_coherent() {
+                let (row, node) = (k / row_len, (k % row_len) / ch);
+                return Err(self.lasing(grid, stack_grid, row, node));
+            }
+        }
         Ok(out)
+    }
+
+    /// The error for a node whose value came out infinite in a stack with
+    /// incoherent layers: the lasing layer at the first of the row's
+    /// wavelengths where it lases (see [`crate::optics::incoherent`]).
+    fn lasing(&self, grid: &Grid, stack_grid: &StackGrid, row: usize, node: usize) -> Error {
+        let [t_axis, c_axis, w_axis] = &grid.axes;
+        let (w, c) = (row / c_axis.nodes.len(), row % c_axis.nodes.len());
+        let cos = c_axis.nodes[c];
+        let mut thicknesses_nm = stack_grid.thicknesses_nm().to_vec();
+        thicknesses_nm[self.layer - 1] = t_axis.nodes[node];
+        let wavelengths = if grid.spectral {
+            w..w + 1
+        } else {
+            0..stack_grid.wavelengths_nm().len()
+        };
+        wavelengths
+            .into_iter()
+            .find_map(|i| {
+                let diverged = stack_grid.diverged(i, &thicknesses_nm, cos)?;
+                Some(diverged.error(stack_grid.wavelengths_nm()[i], cos))
+            })
+            .unwrap_or_else(|| {
+                Error::invalid(
+                    "baked table",
+                    format!(
+                        "not finite at thickness {:.2} nm, cos θ {cos:.5}{}",
+                        t_axis.nodes[node],
+                        if grid.spectral {
+                            format!(", wavelength {:.1} nm", w_axis.nodes[w])
+                        } else {
+                            String::new()
+                        }
+                    ),
+                )
+            })
     }
 
     /// The values of consecutive thickness `chunks` of one row (cos θ `cos`,
@@ -430,7 +469,8 @@ impl Prepared {
     /// there up to [`padded`] length): the
     /// split-stack form (`split`: the stack split at `stack_grid`'s wavelength
     /// of that index), or the solver node by node where the split is
-    /// degenerate (the varying layer at its own critical angle).
+    /// degenerate (the varying layer at its own critical angle, or a stack
+    /// with incoherent layers that does not split there).
     pub(super) fn responses(
         &self,
         &(i, ref v): &(usize, VaryingLayer),
@@ -454,7 +494,13 @@ impl Prepared {
         let (idx, wavelength_nm) = (stack_grid.indices_at(i), stack_grid.wavelengths_nm()[i]);
         for (j, &t) in nodes.iter().enumerate() {
             wk.thicknesses_nm[self.layer - 1] = t;
-            let resp = solve(idx, &wk.thicknesses_nm, wavelength_nm, cos);
+            let resp = solve_mixed(
+                idx,
+                &wk.thicknesses_nm,
+                stack_grid.coherence(),
+                wavelength_nm,
+                cos,
+            );
             wk.r[j] = resp.r();
             wk.t[j] = resp.t();
         }
@@ -470,9 +516,10 @@ impl Prepared {
         cos: f64,
         scratch: &mut Scratch,
     ) -> VaryingLayer {
-        VaryingLayer::new(
+        VaryingLayer::new_mixed(
             stack_grid.indices_at(i),
             stack_grid.thicknesses_nm(),
+            stack_grid.coherence(),
             self.layer,
             stack_grid.wavelengths_nm()[i],
             cos,

@@ -95,10 +95,10 @@ fn rgb_weights_are_the_color_of_an_impulse() {
 fn dense_side_spec(kind: Kind) -> BakeSpec {
     let mut spec = BakeSpec::new(Stack {
         ambient: crate::optics::Material::constant(1.5, 0.0),
-        layers: vec![Layer {
-            material: crate::optics::Material::constant(1.38, 0.02),
-            thickness_nm: 100.0,
-        }],
+        layers: vec![Layer::new(
+            crate::optics::Material::constant(1.38, 0.02),
+            100.0,
+        )],
         substrate: crate::optics::Material::constant(1.0, 0.0),
     });
     spec.kind = kind;
@@ -268,10 +268,10 @@ fn half_values_round_through_f32() {
 fn frustrated_tir_gap_at_its_critical_angle() {
     let stack = Stack {
         ambient: crate::optics::Material::constant(1.5, 0.0),
-        layers: vec![Layer {
-            material: crate::optics::Material::constant(1.0, 0.0),
-            thickness_nm: 100.0,
-        }],
+        layers: vec![Layer::new(
+            crate::optics::Material::constant(1.0, 0.0),
+            100.0,
+        )],
         substrate: crate::optics::Material::constant(1.0, 0.0),
     };
     let mut spec = BakeSpec::new(stack);
@@ -298,14 +298,8 @@ fn sweep_on_given_nodes_matches_the_solver() {
     let stack = crate::optics::Stack {
         ambient: crate::optics::Material::constant(1.0, 0.0),
         layers: vec![
-            Layer {
-                material: crate::optics::Material::constant(1.5, 0.15),
-                thickness_nm: 300.0,
-            },
-            Layer {
-                material: crate::optics::library::builtin("TiO2").unwrap(),
-                thickness_nm: 80.0,
-            },
+            Layer::new(crate::optics::Material::constant(1.5, 0.15), 300.0),
+            Layer::new(crate::optics::library::builtin("TiO2").unwrap(), 80.0),
         ],
         substrate: crate::optics::library::builtin("gold").unwrap(),
     };

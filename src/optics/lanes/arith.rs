@@ -378,6 +378,25 @@ fn exp_lanes<V: Lanes>(x: V) -> V {
     p.mul(V::exp2_of_rounded(sum))
 }
 
+/// e^x in every lane: [`exp_lanes`] where x is in [EXP_NORMAL_MIN, 0], the
+/// C library's e^x in the other lanes (a growth, or a decay past the normal
+/// range), lane by lane.
+#[inline(always)]
+pub(super) fn exp_any<V: Lanes>(x: V) -> V {
+    let in_range = V::bits(x.ge(V::splat(EXP_NORMAL_MIN))) & V::bits(V::splat(0.0).ge(x));
+    let e = exp_lanes(x);
+    if in_range == V::ALL {
+        return e;
+    }
+    let (mut e, x) = (e.to_array(), x.to_array());
+    for l in 0..V::WIDTH {
+        if in_range & (1 << l) == 0 {
+            e[l] = x[l].exp();
+        }
+    }
+    V::from_array(e)
+}
+
 /// Minimax coefficients of sin r = r + r³ (S1 + r² S2 + … + r¹⁰ S6) on
 /// |r| ≤ π/4, error below 2⁻⁵⁸: fdlibm's `k_sin.c` (Sun Microsystems, 1993),
 /// S1 first, by their bits as fdlibm lists them (decimal -1.666…6632e-1,

@@ -1,8 +1,9 @@
 //! The general kernel: the scalar solver's recursion on one (wavelength,
-//! angle) pair per lane, for any stack, and its two loops: over arbitrary
-//! pairs ([`batch_body`]) and over a [`Spectrum`]'s wavelengths at one angle
-//! ([`spectrum_body`], which takes the non-dispersive kernel of
-//! [`constant`] when it can).
+//! angle) pair per lane, for any stack, and its three loops: over a
+//! (wavelength, angle) grid ([`batch_body`]), over arbitrary points, each
+//! with its own wavelength, angle and thicknesses ([`points_body`]), and
+//! over a [`Spectrum`]'s wavelengths at one angle ([`spectrum_body`], which
+//! takes the non-dispersive kernel of [`constant`] when it can).
 
 use num_complex::Complex64 as C64;
 
@@ -26,11 +27,10 @@ fn solve_lanes<'a, V: Lanes>(
     repeats: &Repeats,
     k0: V,
     lane_point: impl Fn(usize) -> (&'a [C64], f64),
-    thicknesses_nm: &[f64],
+    thicknesses: &impl ThicknessLanes<V>,
     cos_theta0: [f64; MAX_LANES],
 ) -> Power<V> {
-    let last = thicknesses_nm.len() + 1;
-    let zero = V::splat(0.0);
+    let last = thicknesses.layers() + 1;
     let one = V::splat(1.0);
     // Lanes whose answer the scalar solver gives instead: grazing here,
     // near-critical layers below.
@@ -42,9 +42,56 @@ fn solve_lanes<'a, V: Lanes>(
     let shared_q = shared_normal_indices(media, repeats, beta_sq);
 
     let (n_sub, nsq_sub) = media.medium(last);
+    let q_sub = normal_index(repeats.slot(last), &shared_q, nsq_sub, beta_sq);
+    let top = [Cv::real(n0), Cv::real(n0.mul(n0)), Cv::real(n0.mul(cos))];
+    let (power, near_critical) = recurse_lanes(
+        media,
+        (repeats, &shared_q),
+        last,
+        |j| thicknesses.layer(j),
+        (k0, beta_sq),
+        top,
+        [n_sub, nsq_sub, q_sub],
+    );
+
+    for (l, s) in scalar.iter_mut().enumerate() {
+        *s |= near_critical & (1 << l) != 0;
+    }
+    let out = to_power(&power, n0.mul(cos), n_sub, q_sub);
+    if !scalar[..V::WIDTH].contains(&true) {
+        return out;
+    }
+    let mut res = out.responses();
+    for l in 0..V::WIDTH {
+        if scalar[l] {
+            let (indices, wavelength_nm) = lane_point(l);
+            res[l] = solve(indices, thicknesses.lane(l), wavelength_nm, cos_theta0[l]);
+        }
+    }
+    Power::from_responses(&res)
+}
+
+/// The scalar solver's recursion (`recurse_media`) in lanes, over the media
+/// of `media` from `last` (the bottom half-space, given as (n, n², q) in
+/// `bottom`) up to medium 0 (given as `top`): Γ and t of both polarizations,
+/// and the lanes (bits) where a medium between them is near its critical
+/// angle, which the scalar solver must take over. `shared` holds the q of
+/// media that share one index (see [`Repeats`]), `thickness(j)` the
+/// thickness of medium j + 1 in every lane, and `light` (k0, β²).
+#[inline(always)]
+pub(super) fn recurse_lanes<V: Lanes>(
+    media: &impl MediaLanes<V>,
+    (repeats, shared_q): (&Repeats, &[Cv<V>; SHARED_SLOTS]),
+    last: usize,
+    thickness: impl Fn(usize) -> V,
+    (k0, beta_sq): (V, V),
+    top: [Cv<V>; 3],
+    [n_sub, nsq_sub, q_sub]: [Cv<V>; 3],
+) -> (Amplitudes<V>, u32) {
+    let zero = V::splat(0.0);
+    let one = V::splat(1.0);
     let mut n_below = n_sub;
     let mut nsq_below = nsq_sub;
-    let q_sub = normal_index(repeats.slot(last), &shared_q, nsq_sub, beta_sq);
     let mut q_below = q_sub;
     let (mut gamma_s, mut gamma_p) = (Cv::real(zero), Cv::real(zero));
     let (mut ts, mut tp) = (Cv::real(one), Cv::real(one));
@@ -52,17 +99,17 @@ fn solve_lanes<'a, V: Lanes>(
 
     for j in (0..last).rev() {
         let (n_above, nsq_above, q_above) = if j == 0 {
-            (Cv::real(n0), Cv::real(n0.mul(n0)), Cv::real(n0.mul(cos)))
+            (top[0], top[1], top[2])
         } else {
             let (n, nsq) = media.medium(j);
             (
                 n,
                 nsq,
-                normal_index(repeats.slot(j), &shared_q, nsq, beta_sq),
+                normal_index(repeats.slot(j), shared_q, nsq, beta_sq),
             )
         };
         if j + 1 < last {
-            let k0_d = k0.mul(V::splat(thicknesses_nm[j]));
+            let k0_d = k0.mul(thickness(j));
             let one_way = one_way(q_below.scale(k0_d));
             let round_trip = one_way.mul(one_way);
             gamma_s = gamma_s.mul(round_trip);
@@ -98,37 +145,22 @@ fn solve_lanes<'a, V: Lanes>(
         nsq_below = nsq_above;
         q_below = q_above;
     }
-
-    for (l, s) in scalar.iter_mut().enumerate() {
-        *s |= near_critical & (1 << l) != 0;
-    }
-    let power = Amplitudes {
+    let amplitudes = Amplitudes {
         gamma_s,
         gamma_p,
         ts,
         tp,
     };
-    let out = to_power(&power, n0.mul(cos), n_sub, q_sub);
-    if !scalar[..V::WIDTH].contains(&true) {
-        return out;
-    }
-    let mut res = out.responses();
-    for l in 0..V::WIDTH {
-        if scalar[l] {
-            let (indices, wavelength_nm) = lane_point(l);
-            res[l] = solve(indices, thicknesses_nm, wavelength_nm, cos_theta0[l]);
-        }
-    }
-    Power::from_responses(&res)
+    (amplitudes, near_critical)
 }
 
 /// The recursion's result in four lanes: Γ at the top and the transmitted
 /// amplitude t, for s and p.
-struct Amplitudes<V> {
-    gamma_s: Cv<V>,
-    gamma_p: Cv<V>,
-    ts: Cv<V>,
-    tp: Cv<V>,
+pub(super) struct Amplitudes<V> {
+    pub(super) gamma_s: Cv<V>,
+    pub(super) gamma_p: Cv<V>,
+    pub(super) ts: Cv<V>,
+    pub(super) tp: Cv<V>,
 }
 
 /// Power, as the scalar solver's `to_power`: R = |Γ|², T from the Poynting
@@ -184,12 +216,12 @@ fn normal_index<V: Lanes>(
 /// computes it) in every lane. A trait rather than a closure: a closure is
 /// compiled without the kernel copy's target features, and the intrinsics
 /// in it would not be inlined.
-trait MediaLanes<V: Lanes> {
+pub(super) trait MediaLanes<V: Lanes> {
     fn medium(&self, j: usize) -> (Cv<V>, Cv<V>);
 }
 
 /// Each lane's indices from its own slice, gathered lane by lane.
-struct Gathered<'a>([&'a [C64]; MAX_LANES]);
+pub(super) struct Gathered<'a>(pub(super) [&'a [C64]; MAX_LANES]);
 
 impl<V: Lanes> MediaLanes<V> for Gathered<'_> {
     #[inline(always)]
@@ -204,9 +236,9 @@ impl<V: Lanes> MediaLanes<V> for Gathered<'_> {
 }
 
 /// The lanes from `start` on of a [`Spectrum`]'s rows, one load each.
-struct Laid<'a> {
-    spectrum: &'a Spectrum,
-    start: usize,
+pub(super) struct Laid<'a> {
+    pub(super) spectrum: &'a Spectrum,
+    pub(super) start: usize,
 }
 
 impl<V: Lanes> MediaLanes<V> for Laid<'_> {
@@ -223,6 +255,59 @@ impl<V: Lanes> MediaLanes<V> for Laid<'_> {
                 im: V::load(row(3)),
             },
         )
+    }
+}
+
+/// Where the general kernel reads the layers' thicknesses: the same in
+/// every lane, or each lane its own. A trait for the reason [`MediaLanes`]
+/// is one.
+trait ThicknessLanes<V: Lanes> {
+    /// How many layers (N).
+    fn layers(&self) -> usize;
+    /// Layer j's thickness (0-based from the top) in every lane.
+    fn layer(&self, j: usize) -> V;
+    /// Lane l's N thicknesses, for the lanes the scalar solver takes over.
+    fn lane(&self, l: usize) -> &[f64];
+}
+
+/// One set of thicknesses for every lane.
+struct Shared<'a>(&'a [f64]);
+
+impl<V: Lanes> ThicknessLanes<V> for Shared<'_> {
+    #[inline(always)]
+    fn layers(&self) -> usize {
+        self.0.len()
+    }
+    #[inline(always)]
+    fn layer(&self, j: usize) -> V {
+        V::splat(self.0[j])
+    }
+    #[inline(always)]
+    fn lane(&self, _l: usize) -> &[f64] {
+        self.0
+    }
+}
+
+/// Each lane's thicknesses from its own slice of `layers` values.
+struct PerLane<'a> {
+    layers: usize,
+    lanes: [&'a [f64]; MAX_LANES],
+}
+
+impl<V: Lanes> ThicknessLanes<V> for PerLane<'_> {
+    #[inline(always)]
+    fn layers(&self) -> usize {
+        self.layers
+    }
+    #[inline(always)]
+    fn layer(&self, j: usize) -> V {
+        V::from_array(std::array::from_fn(|l| {
+            self.lanes[l].get(j).copied().unwrap_or_default()
+        }))
+    }
+    #[inline(always)]
+    fn lane(&self, l: usize) -> &[f64] {
+        self.lanes[l]
     }
 }
 
@@ -255,7 +340,53 @@ pub(super) fn batch_body<V: Lanes>(
         let k0 = V::splat(std::f64::consts::TAU).div(V::from_array(wl));
         let gathered = Gathered(idx);
         let point = |l: usize| (idx[l], wl[l]);
-        let res = solve_lanes::<V>(&gathered, &Repeats::NONE, k0, point, thicknesses_nm, cos);
+        let res = solve_lanes::<V>(
+            &gathered,
+            &Repeats::NONE,
+            k0,
+            point,
+            &Shared(thicknesses_nm),
+            cos,
+        );
+        Store(&mut *out).take(start, &res);
+    }
+}
+
+/// The kernel's loop over arbitrary points, [`Lanes::WIDTH`] at a time:
+/// point i has its own N + 2 indices (`indices[i(N+2)..]`), N thicknesses
+/// (`thicknesses_nm[iN..]`), wavelength and cos θ0, so no two lanes need
+/// share anything. A last partial group repeats its final point in the
+/// unused lanes.
+#[inline(always)]
+pub(super) fn points_body<V: Lanes>(
+    layers: usize,
+    indices: &[C64],
+    thicknesses_nm: &[f64],
+    wavelengths_nm: &[f64],
+    cos_theta0: &[f64],
+    out: &mut [Response],
+) {
+    let media = layers + 2;
+    let total = out.len();
+    for start in (0..total).step_by(V::WIDTH) {
+        let mut idx: [&[C64]; MAX_LANES] = [&[]; MAX_LANES];
+        let mut thick: [&[f64]; MAX_LANES] = [&[]; MAX_LANES];
+        let mut wl = [0.0; MAX_LANES];
+        let mut cos = [0.0; MAX_LANES];
+        for l in 0..V::WIDTH {
+            let i = (start + l).min(total - 1);
+            idx[l] = &indices[i * media..(i + 1) * media];
+            thick[l] = &thicknesses_nm[i * layers..(i + 1) * layers];
+            wl[l] = wavelengths_nm[i];
+            cos[l] = cos_theta0[i];
+        }
+        let k0 = V::splat(std::f64::consts::TAU).div(V::from_array(wl));
+        let point = |l: usize| (idx[l], wl[l]);
+        let thicknesses = PerLane {
+            layers,
+            lanes: thick,
+        };
+        let res = solve_lanes::<V>(&Gathered(idx), &Repeats::NONE, k0, point, &thicknesses, cos);
         Store(&mut *out).take(start, &res);
     }
 }
@@ -340,7 +471,7 @@ pub(super) fn spectrum_body<V: Lanes>(
             spectrum.repeats(),
             V::load(&spectrum.k0()[start..]),
             point,
-            thicknesses_nm,
+            &Shared(thicknesses_nm),
             [cos_theta0; MAX_LANES],
         );
         sink.take(start, &res);

@@ -43,6 +43,7 @@
 mod arith;
 mod constant;
 mod general;
+mod incoherent;
 mod sink;
 mod spectrum;
 #[cfg(target_arch = "x86_64")]
@@ -50,13 +51,14 @@ mod x86;
 
 pub use arith::MAX_LANES;
 use arith::{Lanes, Portable};
-use general::{batch_body, spectrum_body};
+use general::{batch_body, points_body, spectrum_body};
 use sink::{Integrate, Store};
 pub use sink::{SpectralWeights, WeightedPower};
 pub use spectrum::Spectrum;
 
 use num_complex::Complex64 as C64;
 
+use super::incoherent::Coherence;
 use super::solver::Response;
 
 /// Which copy of the kernel runs.
@@ -177,10 +179,16 @@ kernel_copies! {
         spectrum: &Spectrum,
         indices: &[C64],
         thicknesses_nm: &[f64],
+        coherence: &Coherence,
         cos_theta0: f64,
         out: &mut [Response],
     ) -> () {
-        spectrum_body::<V>(spectrum, indices, thicknesses_nm, cos_theta0, &mut Store(out))
+        let sink = &mut Store(out);
+        if coherence.is_coherent() {
+            spectrum_body::<V>(spectrum, indices, thicknesses_nm, cos_theta0, sink)
+        } else {
+            incoherent::spectrum_body::<V>(spectrum, indices, thicknesses_nm, coherence, cos_theta0, sink)
+        }
     }
 }
 
@@ -189,11 +197,16 @@ kernel_copies! {
         spectrum: &Spectrum,
         indices: &[C64],
         thicknesses_nm: &[f64],
+        coherence: &Coherence,
         cos_theta0: f64,
         weights: &SpectralWeights,
     ) -> WeightedPower {
         let mut sink = Integrate::new(weights);
-        spectrum_body::<V>(spectrum, indices, thicknesses_nm, cos_theta0, &mut sink);
+        if coherence.is_coherent() {
+            spectrum_body::<V>(spectrum, indices, thicknesses_nm, cos_theta0, &mut sink);
+        } else {
+            incoherent::spectrum_body::<V>(spectrum, indices, thicknesses_nm, coherence, cos_theta0, &mut sink);
+        }
         sink.finish()
     }
 }
@@ -202,11 +215,29 @@ kernel_copies! {
     fn batch_copies<V>(
         indices: &[C64],
         thicknesses_nm: &[f64],
+        coherence: &Coherence,
         wavelengths_nm: &[f64],
         cos_theta0: &[f64],
         out: &mut [Response],
     ) -> () {
-        batch_body::<V>(indices, thicknesses_nm, wavelengths_nm, cos_theta0, out)
+        if coherence.is_coherent() {
+            batch_body::<V>(indices, thicknesses_nm, wavelengths_nm, cos_theta0, out)
+        } else {
+            incoherent::batch_body::<V>(indices, thicknesses_nm, coherence, wavelengths_nm, cos_theta0, out)
+        }
+    }
+}
+
+kernel_copies! {
+    fn points_copies<V>(
+        layers: usize,
+        indices: &[C64],
+        thicknesses_nm: &[f64],
+        wavelengths_nm: &[f64],
+        cos_theta0: &[f64],
+        out: &mut [Response],
+    ) -> () {
+        points_body::<V>(layers, indices, thicknesses_nm, wavelengths_nm, cos_theta0, out)
     }
 }
 
@@ -252,7 +283,10 @@ fn check_spectrum_lengths(spectrum: &Spectrum, indices: &[C64], thicknesses_nm: 
 
 /// R and T at every wavelength of `spectrum` at one angle, into `out` (one
 /// per wavelength). `indices` are the same indices, wavelength-major (for
-/// the lanes the scalar solver takes over); `thicknesses_nm` the N layers'.
+/// the lanes the scalar solver takes over); `thicknesses_nm` the N layers';
+/// `coherence` which of them are incoherent (a lasing point of an
+/// incoherent gain layer comes out as +∞, as
+/// [`solve_mixed`](super::incoherent::solve_mixed) gives it).
 ///
 /// # Panics
 /// If the lengths disagree.
@@ -261,6 +295,7 @@ pub fn solve_spectrum_on(
     spectrum: &Spectrum,
     indices: &[C64],
     thicknesses_nm: &[f64],
+    coherence: &Coherence,
     cos_theta0: f64,
     out: &mut [Response],
 ) {
@@ -269,7 +304,15 @@ pub fn solve_spectrum_on(
     if out.is_empty() {
         return;
     }
-    spectrum_copies(path, spectrum, indices, thicknesses_nm, cos_theta0, out)
+    spectrum_copies(
+        path,
+        spectrum,
+        indices,
+        thicknesses_nm,
+        coherence,
+        cos_theta0,
+        out,
+    )
 }
 
 /// The spectrum of [`solve_spectrum_on`] folded into `weights`' three
@@ -284,6 +327,7 @@ pub fn weighted_spectrum_on(
     spectrum: &Spectrum,
     indices: &[C64],
     thicknesses_nm: &[f64],
+    coherence: &Coherence,
     cos_theta0: f64,
     weights: &SpectralWeights,
 ) -> WeightedPower {
@@ -296,7 +340,15 @@ pub fn weighted_spectrum_on(
     if weights.is_empty() {
         return WeightedPower::default();
     }
-    weighted_copies(path, spectrum, indices, thicknesses_nm, cos_theta0, weights)
+    weighted_copies(
+        path,
+        spectrum,
+        indices,
+        thicknesses_nm,
+        coherence,
+        cos_theta0,
+        weights,
+    )
 }
 
 /// [`solve_batch`](super::solver::solve_batch) on a chosen copy of the
@@ -312,8 +364,80 @@ pub fn solve_batch_on(
     if cos_theta0.is_empty() || out.is_empty() {
         return;
     }
+    solve_batch_mixed_on(
+        path,
+        indices,
+        thicknesses_nm,
+        &Coherence::coherent(),
+        wavelengths_nm,
+        cos_theta0,
+        out,
+    )
+}
+
+/// [`solve_batch_on`] for a stack with incoherent layers (`coherence`);
+/// a lasing point of an incoherent gain layer comes out as +∞, as
+/// [`solve_mixed`](super::incoherent::solve_mixed) gives it.
+pub fn solve_batch_mixed_on(
+    path: Path,
+    indices: &[C64],
+    thicknesses_nm: &[f64],
+    coherence: &Coherence,
+    wavelengths_nm: &[f64],
+    cos_theta0: &[f64],
+    out: &mut [Response],
+) {
+    if cos_theta0.is_empty() || out.is_empty() {
+        return;
+    }
     batch_copies(
         path,
+        indices,
+        thicknesses_nm,
+        coherence,
+        wavelengths_nm,
+        cos_theta0,
+        out,
+    )
+}
+
+/// R and T at arbitrary points of one stack of `layers` layers, on a chosen
+/// copy of the kernel: point i has its own indices (`indices[i(N+2)..
+/// (i+1)(N+2)]`: ambient, layers, substrate), thicknesses
+/// (`thicknesses_nm[iN..(i+1)N]`), wavelength and cos θ0, and its result
+/// goes to `out[i]`. The preconditions are [`solve`](super::solver::solve)'s
+/// for every point; nothing is allocated.
+///
+/// # Panics
+/// If the lengths disagree.
+pub fn solve_points_on(
+    path: Path,
+    layers: usize,
+    indices: &[C64],
+    thicknesses_nm: &[f64],
+    wavelengths_nm: &[f64],
+    cos_theta0: &[f64],
+    out: &mut [Response],
+) {
+    let points = out.len();
+    assert_eq!(
+        indices.len(),
+        (layers + 2) * points,
+        "indices: N + 2 per point"
+    );
+    assert_eq!(
+        thicknesses_nm.len(),
+        layers * points,
+        "thicknesses: N per point"
+    );
+    assert_eq!(wavelengths_nm.len(), points, "wavelengths: one per point");
+    assert_eq!(cos_theta0.len(), points, "cos θ0: one per point");
+    if points == 0 {
+        return;
+    }
+    points_copies(
+        path,
+        layers,
         indices,
         thicknesses_nm,
         wavelengths_nm,

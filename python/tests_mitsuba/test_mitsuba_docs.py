@@ -4,7 +4,7 @@ holding the repository's luts/) and prints what its comment says."""
 import os
 import re
 
-from conftest import LUTS, REPO
+from mitsuba_setup import LUTS, REPO
 
 DOC = REPO / "docs" / "mitsuba.md"
 
