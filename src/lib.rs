@@ -7,6 +7,7 @@
 //! over a GGX microfacet lobe.
 
 pub mod analytic;
+pub mod atlas;
 pub mod atomic;
 #[cfg(feature = "bench")]
 pub mod bench;

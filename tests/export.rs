@@ -535,6 +535,9 @@ fn white_e_is_flat_and_recorded_in_tables() {
     spec.sampling = Sampling::Uniform(31);
     spec.white = White::E;
     spec.validation_points = 2000;
+    // An error target bakes an atlas (version 4, whatever the white) by
+    // default; the grid layout keeps versions 2 and 3.
+    spec.layout = irid::lut::Layout::Grid;
     let lut = irid::lut::bake(&spec).unwrap();
     assert_eq!(lut.header().version, irid::lut::WHITE_E_VERSION);
     assert_eq!(lut.header().color.white, White::E);
@@ -556,4 +559,9 @@ fn white_e_is_flat_and_recorded_in_tables() {
     assert_eq!(d65.header().version, irid::lut::FORMAT_VERSION);
     let json = serde_json::to_string(d65.header()).unwrap();
     assert!(!json.contains("\"white\""));
+    spec.white = White::E;
+    spec.layout = irid::lut::Layout::Atlas;
+    let atlas = irid::lut::bake(&spec).unwrap();
+    assert_eq!(atlas.header().version, irid::lut::ATLAS_VERSION);
+    assert_eq!(atlas.header().color.white, White::E);
 }

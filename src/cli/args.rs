@@ -18,7 +18,8 @@ pub struct FilmArgs {
     /// The varying layer, counted from 1 at the ambient side.
     #[arg(long, default_value_t = 1)]
     pub layer: usize,
-    /// cos θ range COS_MIN:COS_MAX in the ambient [default: cos 89°:1].
+    /// cos θ range COS_MIN:COS_MAX in the ambient [default: 0:1, every
+    /// angle; cos 89°:1 for a grid table].
     #[arg(long)]
     pub angles: Option<String>,
 }
@@ -48,11 +49,14 @@ impl FilmArgs {
         }
     }
 
-    /// `--angles`, or cos 89° to 1 when not given.
-    pub fn cos_theta(&self) -> Result<(f64, f64)> {
+    /// `--angles`, or when not given every angle (0 to 1) for an atlas and
+    /// cos 89° to 1 for a grid, which no error target reaches at grazing
+    /// incidence near zero thickness.
+    pub fn cos_theta(&self, grid: bool) -> Result<(f64, f64)> {
         match &self.angles {
             Some(a) => parse_range("--angles", a),
-            None => Ok((DEFAULT_COS_MIN, 1.0)),
+            None if grid => Ok((DEFAULT_COS_MIN, 1.0)),
+            None => Ok((0.0, 1.0)),
         }
     }
 }

@@ -6,7 +6,9 @@ use std::time::Instant;
 
 use anyhow::{anyhow, bail, Context, Result};
 use irid::atomic::OutputSet;
-use irid::lut::{bake_with_progress, validate, BakeSpec, Kind, Resolution, VALIDATION_SEED};
+use irid::lut::{
+    bake_with_progress, validate, BakeSpec, Kind, Layout, Resolution, VALIDATION_SEED,
+};
 use irid::optics::Stack;
 
 use super::args::{parse_choice, parse_range, FilmArgs};
@@ -40,10 +42,19 @@ pub struct Args {
     /// an error target.
     #[arg(long, conflicts_with = "max_error")]
     pub resolution: Option<String>,
-    /// Largest absolute error allowed in any channel, measured at every edge
-    /// midpoint and cell centre of the grid [default: 1e-3].
+    /// Largest absolute error allowed in any channel [default: 1e-3, unless
+    /// --max-de alone is given].
     #[arg(long)]
     pub max_error: Option<f64>,
+    /// Largest CIEDE2000 allowed between the table's and the exact colour of
+    /// the reflected or transmitted light (atlas layout).
+    #[arg(long, conflicts_with = "resolution")]
+    pub max_de: Option<f64>,
+    /// atlas (charts in the layer's optical thickness, format version 4) or
+    /// grid (thickness × cos θ nodes, versions 2 and 3) [default: atlas;
+    /// grid with --resolution].
+    #[arg(long)]
+    pub layout: Option<String>,
     /// Store f16 samples instead of f32.
     #[arg(long)]
     pub half: bool,
@@ -68,17 +79,27 @@ pub fn run(args: Args) -> Result<ExitCode> {
     {
         spec.thickness_nm = range;
     }
-    spec.cos_theta = args.film.cos_theta()?;
     spec.kind = parse_choice(&args.kind)?;
     spec.sampling = parse_choice(&args.sampling)?;
     spec.wavelength_nm = parse_range("--wavelengths", &args.wavelengths)?;
     spec.white = parse_choice(&args.white)?;
     spec.half = args.half;
     spec.validation_points = args.validate_points;
-    spec.resolution = match (&args.resolution, args.max_error) {
-        (Some(r), _) => parse_resolution(r, spec.kind)?,
-        (None, e) => Resolution::MaxError(e.unwrap_or(1e-3)),
+    spec.resolution = match (&args.resolution, args.max_error, args.max_de) {
+        (Some(r), _, _) => parse_resolution(r, spec.kind)?,
+        (None, None, Some(_)) => Resolution::MaxError(f64::INFINITY),
+        (None, e, _) => Resolution::MaxError(e.unwrap_or(1e-3)),
     };
+    spec.max_de = args.max_de;
+    spec.layout = match &args.layout {
+        Some(l) => parse_choice(l)?,
+        None if args.resolution.is_some() => Layout::Grid,
+        None => Layout::Atlas,
+    };
+    if args.resolution.is_some() && spec.layout == Layout::Atlas {
+        bail!("--layout atlas: an atlas is sized for an error target, not --resolution");
+    }
+    spec.cos_theta = args.film.cos_theta(spec.layout() == Layout::Grid)?;
     if args.no_check && args.resolution.is_none() {
         bail!("--no-check needs --resolution: with --max-error (the default) the bake check is how the grid is chosen");
     }
@@ -106,18 +127,38 @@ pub fn run(args: Args) -> Result<ExitCode> {
     }
     let h = lut.header();
     let sizes: Vec<String> = h.axes.iter().map(|a| a.nodes.len().to_string()).collect();
-    println!(
-        "baked {} {} table, {} nodes ({}), in {:.3} s",
-        h.kind,
-        h.precision,
-        sizes.join("×"),
-        h.axes
-            .iter()
-            .map(|a| a.name.as_str())
-            .collect::<Vec<_>>()
-            .join(" × "),
-        baked.as_secs_f64()
-    );
+    match &h.atlas {
+        Some(t) => println!(
+            "baked {} {} table, atlas of {} chart(s) in {}×{} texels ({} channels{}), in {:.3} s",
+            h.kind,
+            h.precision,
+            t.atlas.charts.len(),
+            t.atlas.width,
+            t.atlas.height,
+            h.channels.len(),
+            if t.aliased_below_cos > 0.0 {
+                format!(
+                    "; the colour integration is aliased below cos θ {:.4}, where the target is not sought",
+                    t.aliased_below_cos
+                )
+            } else {
+                String::new()
+            },
+            baked.as_secs_f64()
+        ),
+        None => println!(
+            "baked {} {} table, {} nodes ({}), in {:.3} s",
+            h.kind,
+            h.precision,
+            sizes.join("×"),
+            h.axes
+                .iter()
+                .map(|a| a.name.as_str())
+                .collect::<Vec<_>>()
+                .join(" × "),
+            baked.as_secs_f64()
+        ),
+    }
     match &h.error.bake_check {
         Some(check) => println!(
             "bake check: max abs error {:.3e} over {} off-grid points",

@@ -66,7 +66,7 @@ pub fn run(args: Args) -> Result<ExitCode> {
     {
         spec.thickness_nm = range;
     }
-    spec.cos_theta = args.film.cos_theta()?;
+    spec.cos_theta = args.film.cos_theta(true)?;
     spec.sampling = parse_choice(&args.sampling)?;
     spec.white = parse_choice(&args.white)?;
     spec.max_error = args.max_error;

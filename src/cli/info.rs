@@ -46,6 +46,10 @@ pub fn run(args: Args) -> Result<ExitCode> {
 }
 
 fn say_axes(out: &mut String, h: &Header) {
+    if let Some(t) = &h.atlas {
+        say_atlas(out, h, t);
+        return;
+    }
     super::say!(
         out,
         "axes (x = {}, y = {}{}):",
@@ -71,6 +75,66 @@ fn say_axes(out: &mut String, h: &Header) {
             n[0],
             n[n.len() - 1],
             spacing(n),
+        );
+    }
+}
+
+/// An atlas table's domain and charts.
+fn say_atlas(out: &mut String, h: &Header, t: &irid::lut::TableAtlas) {
+    let a = &t.atlas;
+    let (c0, c1) = {
+        let n = &h.axes[1].nodes;
+        (n[0], n[n.len() - 1])
+    };
+    super::say!(
+        out,
+        "atlas: {}×{} texels{}, thickness {} .. {} nm, cos θ {c0} .. {c1}{}{}",
+        a.width,
+        a.height,
+        match h.axes.get(2) {
+            Some(w) => format!(" per wavelength, {} wavelength nodes", w.nodes.len()),
+            None => String::new(),
+        },
+        a.thickness_nm.0,
+        a.thickness_nm.1,
+        if t.aliased_below_cos > 0.0 {
+            format!(" (colour aliased below cos θ {:.6})", t.aliased_below_cos)
+        } else {
+            String::new()
+        },
+        match t.lossless_white {
+            Some(w) => format!(
+                "; lossless: T = ({:.6}, {:.6}, {:.6}) − R",
+                w[0], w[1], w[2]
+            ),
+            None => String::new(),
+        }
+    );
+    for c in &a.charts {
+        let what = match c.coords {
+            irid::atlas::Coords::Band { p, c } => format!(
+                "band cos θ {:.6} .. {:.6}, optical thickness {:.2} .. {:.2} nm{}",
+                c.lo,
+                c.hi,
+                p.lo_nm,
+                p.hi_nm,
+                if p.p0_nm > 0.0 {
+                    format!(" (log, p0 {} nm)", p.p0_nm)
+                } else {
+                    String::new()
+                }
+            ),
+            irid::atlas::Coords::Corner { scale_nm, radius } => {
+                format!("grazing corner, scale {scale_nm:.2} nm, radius {radius}")
+            }
+        };
+        super::say!(
+            out,
+            "  {}×{} at ({}, {}): {what}",
+            c.rect.width,
+            c.rect.height,
+            c.rect.x,
+            c.rect.y
         );
     }
 }

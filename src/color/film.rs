@@ -3,6 +3,7 @@
 
 use serde::Serialize;
 
+use super::refine::Refinement;
 use super::SpectralIntegrator;
 use crate::error::{Error, Result};
 use crate::optics::{Response, Stack, StackGrid};
@@ -47,26 +48,41 @@ pub fn stack_colors(
     let mut responses = vec![Response::default(); samples * angles_deg.len()];
     grid.solve(&cos_theta0, &mut responses);
     grid.check_solved(&cos_theta0, &responses)?;
-    let (mut r, mut t) = (vec![0.0; samples], vec![0.0; samples]);
-    Ok(angles_deg
+    // Angles where some layer's fringes are narrower than the sampling
+    // step are integrated again with the points per step they need.
+    let refinement = Refinement::new(stack, None, integrator)?;
+    angles_deg
         .iter()
         .enumerate()
         .map(|(j, &angle_deg)| {
-            for (i, resp) in responses
-                .iter()
-                .skip(j)
-                .step_by(angles_deg.len())
-                .enumerate()
-            {
-                (r[i], t[i]) = (resp.r(), resp.t());
-            }
-            FilmColor {
+            let m = refinement.sub_steps(0.0, cos_theta0[j]);
+            let ((r, t), by) = if m > 1 {
+                let level = refinement.level(m)?;
+                let mut refined = vec![Response::default(); level.grid.wavelengths_nm().len()];
+                level.grid.solve(&cos_theta0[j..=j], &mut refined);
+                level.grid.check_solved(&cos_theta0[j..=j], &refined)?;
+                (powers(&refined, 0, 1), &level.integrator)
+            } else {
+                (powers(&responses, j, angles_deg.len()), integrator)
+            };
+            Ok(FilmColor {
                 angle_deg,
-                reflectance_rgb: integrator.rgb(&r),
-                transmittance_rgb: integrator.rgb(&t),
-                reflectance_xyz: integrator.xyz(&r),
-                transmittance_xyz: integrator.xyz(&t),
-            }
+                reflectance_rgb: by.rgb(&r),
+                transmittance_rgb: by.rgb(&t),
+                reflectance_xyz: by.xyz(&r),
+                transmittance_xyz: by.xyz(&t),
+            })
         })
-        .collect())
+        .collect()
+}
+
+/// R and T spectra of the angle at `offset` among `angles` in
+/// wavelength-major `responses`.
+fn powers(responses: &[Response], offset: usize, angles: usize) -> (Vec<f64>, Vec<f64>) {
+    responses
+        .iter()
+        .skip(offset)
+        .step_by(angles)
+        .map(|resp| (resp.r(), resp.t()))
+        .unzip()
 }

@@ -9,6 +9,7 @@
 pub mod cie_tables;
 mod ciede2000;
 mod film;
+pub mod refine;
 mod sampling;
 mod space;
 

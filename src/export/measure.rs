@@ -7,6 +7,7 @@ use serde::{Deserialize, Serialize};
 
 use super::{ExportSpec, Film};
 use crate::color::delta_e2000_rgb;
+use crate::error::Result;
 
 /// The random points of the default error measurement.
 pub const DEFAULT_POINTS: usize = 20_000;
@@ -64,10 +65,10 @@ pub(super) struct Reference {
 
 impl Reference {
     /// `film` is the stack as seen from the side measured.
-    pub(super) fn new(film: &Film, spec: &ExportSpec) -> Reference {
+    pub(super) fn new(film: &Film, spec: &ExportSpec) -> Result<Reference> {
         let points = measurement_points(spec);
-        let exact = film.exact_at(&points);
-        Reference { points, exact }
+        let exact = film.exact_at(&points)?;
+        Ok(Reference { points, exact })
     }
 
     /// The error of `sample` (what the GPU computes at a point) against the

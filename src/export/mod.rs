@@ -33,6 +33,7 @@ pub use search::{F16_MAX, LASING_BOUND};
 
 use rayon::prelude::*;
 
+use crate::color::refine::Refinement;
 use crate::color::{Sampling, SpectralIntegrator, White};
 use crate::error::{Error, Result};
 use crate::optics::{Stack, StackGrid};
@@ -265,6 +266,9 @@ struct Film {
     layer: usize,
     grid: StackGrid,
     integrator: SpectralIntegrator,
+    /// More points per nanometre where the film's fringes are narrower
+    /// than the integration's step.
+    refinement: Refinement,
 }
 
 impl Film {
@@ -272,7 +276,9 @@ impl Film {
         let (stack, layer) = crate::lut::with_varying_layer(&spec.stack, spec.layer);
         let integrator = SpectralIntegrator::with_white(spec.sampling, spec.white);
         let grid = StackGrid::new(&stack, integrator.wavelengths_nm())?;
+        let refinement = Refinement::new(&stack, Some(layer), &integrator)?;
         Ok(Film {
+            refinement,
             stack,
             layer,
             grid,
@@ -294,8 +300,9 @@ impl Film {
     }
 
     /// Exact RGB of R and T at each (thickness, cos θ) point: its whole
-    /// spectrum through the batched solver, integrated as it is solved.
-    fn exact_at(&self, points: &[[f32; 2]]) -> Vec<[f64; 6]> {
+    /// spectrum through the batched solver, integrated as it is solved
+    /// (with more points per nanometre where the film's fringes need them).
+    fn exact_at(&self, points: &[[f32; 2]]) -> Result<Vec<[f64; 6]>> {
         let weights = self.integrator.rgb_lane_weights();
         points
             .par_iter()
@@ -303,11 +310,14 @@ impl Film {
                 || self.grid.thicknesses_nm().to_vec(),
                 |thick, p| {
                     thick[self.layer - 1] = f64::from(p[0]);
-                    let sums = self
-                        .grid
-                        .weighted_spectrum(thick, f64::from(p[1]), &weights);
+                    let sums = self.refinement.weighted_spectrum(
+                        &self.grid,
+                        &weights,
+                        thick,
+                        f64::from(p[1]),
+                    )?;
                     let (r, t) = (sums.reflectance, sums.transmittance);
-                    [r[0], r[1], r[2], t[0], t[1], t[2]]
+                    Ok([r[0], r[1], r[2], t[0], t[1], t[2]])
                 },
             )
             .collect()
@@ -334,7 +344,7 @@ pub fn critical_cos(stack: &Stack) -> Option<f64> {
 /// each point, from irid's solver: what an export is measured against.
 pub fn exact_at(spec: &ExportSpec, side: Side, points: &[[f32; 2]]) -> Result<Vec<[f64; 6]>> {
     spec.validate()?;
-    Ok(Film::new(&spec.seen_from(side))?.exact_at(points))
+    Film::new(&spec.seen_from(side))?.exact_at(points)
 }
 
 /// One chart being sized: the sides it serves, the stack as seen from the

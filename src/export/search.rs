@@ -76,7 +76,7 @@ impl SideSearch<'_> {
             Some(m) => m,
             None => self.choose_warps(progress)?,
         };
-        let reference = Reference::new(self.film, self.spec);
+        let reference = Reference::new(self.film, self.spec)?;
         let waves = self.film.grid.wavelengths_nm().len();
         let target = self.target;
         for _round in 0..MAX_ROUNDS {

@@ -13,9 +13,10 @@ use exr::prelude::{
 };
 
 use super::header::{
-    readable_version, version_for, Header, FORMAT_NAME, OLDEST_READABLE_VERSION, WHITE_E_VERSION,
+    readable_version, version_for, Header, FORMAT_NAME, NEWEST_READABLE_VERSION,
+    OLDEST_READABLE_VERSION,
 };
-use super::sample::{channel_names, check_header, Lut};
+use super::sample::{check_header, Lut};
 use super::Kind;
 use crate::error::{Error, Result};
 
@@ -48,14 +49,17 @@ impl Lut {
     /// [`crate::atomic::OutputSet`]); errors name `path`, the output.
     pub fn write_to(&self, tmp: &Path, path: &Path) -> Result<()> {
         let header = self.header();
-        let channels = channel_names(header.kind);
-        let width = header.axes[0].nodes.len();
+        let channels = header.channel_names();
+        let width = match &header.atlas {
+            Some(t) => t.atlas.width,
+            None => header.axes[0].nodes.len(),
+        };
         let height = self.data().len() / (width * channels.len());
         let half = header.precision == "f16";
         // A table read from an older version is written in the current one:
         // its header is valid in this version too (see OLDEST_READABLE_VERSION).
         let current = Header {
-            version: version_for(header.color.white),
+            version: version_for(header.color.white, header.atlas.is_some()),
             ..header.clone()
         };
         let json = serde_json::to_string(&current)
@@ -150,7 +154,7 @@ fn parse_header(exr_header: &ExrHeader) -> std::result::Result<Header, String> {
     let version = value.get("version").and_then(|v| v.as_u64());
     if !version.is_some_and(readable_version) {
         return Err(format!(
-            "format version {} (this irid reads versions {OLDEST_READABLE_VERSION} to {WHITE_E_VERSION})",
+            "format version {} (this irid reads versions {OLDEST_READABLE_VERSION} to {NEWEST_READABLE_VERSION})",
             version.map_or("missing".into(), |v| v.to_string()),
         ));
     }
@@ -165,7 +169,7 @@ fn check_image(
     width: usize,
     height: usize,
 ) -> std::result::Result<SampleType, String> {
-    let names = channel_names(header.kind);
+    let names = header.channel_names();
     let size = exr_header.layer_size;
     if (size.0, size.1) != (width, height) {
         return Err(format!(
@@ -215,7 +219,7 @@ fn check_load_allocation(
 ) -> Result<()> {
     // The reader's planes (stored sample size), their f32 copies, the
     // interleaved table and, for rgb, its SIMD layout (32 bytes a node).
-    let channels = channel_names(header.kind).len() as u64;
+    let channels = header.channel_names().len() as u64;
     let values = (width as u64).checked_mul(height as u64);
     let per_value = sample_type.bytes_per_sample() as u64 + 8;
     let estimate = values.and_then(|v| {
@@ -232,7 +236,7 @@ fn read_pixels(
     width: usize,
     height: usize,
 ) -> std::result::Result<Vec<f32>, String> {
-    let names = channel_names(header.kind);
+    let names = header.channel_names();
     let image = read()
         .no_deep_data()
         .largest_resolution_level()

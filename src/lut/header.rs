@@ -18,22 +18,32 @@ pub const FORMAT_VERSION: u32 = 2;
 /// are written as version 3, so an older irid refuses them instead of
 /// taking them for D65 tables; D65 tables stay version 2, unchanged.
 pub const WHITE_E_VERSION: u32 = 3;
+/// Version 4: the nodes are an atlas of charts (the header's `atlas`), not
+/// a grid of thickness × cos θ nodes; `color.white` says the white. Grid
+/// tables are still written as versions 2 and 3.
+pub const ATLAS_VERSION: u32 = 4;
 /// The oldest version this irid reads: every version-1 header is a valid
 /// version-2 header (its bake check is always present).
 pub const OLDEST_READABLE_VERSION: u32 = 1;
+/// The newest version this irid reads.
+pub const NEWEST_READABLE_VERSION: u32 = ATLAS_VERSION;
 
 /// Whether this irid reads tables of format `version`.
 pub fn readable_version(version: u64) -> bool {
-    (u64::from(OLDEST_READABLE_VERSION)..=u64::from(WHITE_E_VERSION)).contains(&version)
+    (u64::from(OLDEST_READABLE_VERSION)..=u64::from(NEWEST_READABLE_VERSION)).contains(&version)
 }
 
-/// The version a table of this white is written in.
-pub fn version_for(white: White) -> u32 {
-    match white {
-        White::D65 => FORMAT_VERSION,
-        White::E => WHITE_E_VERSION,
+/// The version a table of this white and layout is written in.
+pub fn version_for(white: White, atlas: bool) -> u32 {
+    match (atlas, white) {
+        (true, _) => ATLAS_VERSION,
+        (false, White::D65) => FORMAT_VERSION,
+        (false, White::E) => WHITE_E_VERSION,
     }
 }
+
+/// The image axes' name in an atlas table: columns and rows of the atlas.
+pub const ATLAS_AXIS: &str = "atlas";
 
 /// Name of the thickness axis (nodes in nm), always the image's x axis.
 pub const THICKNESS_AXIS: &str = "thickness_nm";
@@ -86,6 +96,40 @@ pub struct Header {
     pub tool: String,
     /// [`super::BakeSpec::cache_key`] of the spec that baked it.
     pub cache_key: String,
+    /// Version 4: where the nodes are (then `axes` hold only the domain's
+    /// ends and the wavelength nodes, and both image axes are
+    /// [`ATLAS_AXIS`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub atlas: Option<TableAtlas>,
+}
+
+/// An atlas table's layout.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct TableAtlas {
+    /// The charts and the image size (per wavelength block).
+    #[serde(flatten)]
+    pub atlas: crate::atlas::Atlas,
+    /// cos θ below which the colour integration is aliased (see
+    /// docs/lut-format.md): the table's error target was not sought there.
+    pub aliased_below_cos: f64,
+    /// A lossless film (R + T the same colour at every node): only the
+    /// reflectance channels are stored and T = this colour − R.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub lossless_white: Option<[f64; 3]>,
+}
+
+impl Header {
+    /// The image channels this header's table stores, in order.
+    pub fn channel_names(&self) -> &'static [&'static str] {
+        let lossless = self
+            .atlas
+            .as_ref()
+            .is_some_and(|a| a.lossless_white.is_some());
+        match self.kind {
+            Kind::Rgb if lossless => &super::sample::RGB_CHANNELS[..3],
+            kind => super::sample::channel_names(kind),
+        }
+    }
 }
 
 /// One image channel of the table.

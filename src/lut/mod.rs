@@ -6,7 +6,7 @@
 
 mod axis;
 mod bake;
-pub(crate) use bake::{critical_cos, rgb_at_nodes, with_varying_layer};
+pub(crate) use bake::{critical_cos, rgb_at_nodes, with_varying_layer, Prepared, Row};
 mod file;
 mod header;
 mod sample;
@@ -15,8 +15,8 @@ mod validate;
 pub use axis::Axis;
 pub use bake::{bake, bake_with_progress, VALIDATION_SEED};
 pub use header::{
-    BakeCheck, ColorInfo, ErrorInfo, Header, FORMAT_NAME, FORMAT_VERSION, OLDEST_READABLE_VERSION,
-    WHITE_E_VERSION,
+    BakeCheck, ColorInfo, ErrorInfo, Header, TableAtlas, ATLAS_VERSION, FORMAT_NAME,
+    FORMAT_VERSION, NEWEST_READABLE_VERSION, OLDEST_READABLE_VERSION, WHITE_E_VERSION,
 };
 pub use sample::{FilmRgb, Lut};
 pub use validate::{validate, ErrorStats, RegionStats, MAX_POINTS as MAX_VALIDATION_POINTS};
@@ -113,6 +113,39 @@ impl std::fmt::Display for Kind {
     }
 }
 
+/// How a table places its nodes (docs/lut-format.md).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Layout {
+    /// An atlas of charts in the varying layer's optical thickness (format
+    /// version 4), sized for an error target.
+    #[default]
+    Atlas,
+    /// A grid of thickness × cos θ nodes (versions 2 and 3): always for a
+    /// fixed resolution, and for an error target when asked for.
+    Grid,
+}
+
+impl Layout {
+    fn is_atlas(&self) -> bool {
+        *self == Layout::Atlas
+    }
+}
+
+impl std::str::FromStr for Layout {
+    type Err = Error;
+    fn from_str(s: &str) -> Result<Layout> {
+        match s {
+            "atlas" => Ok(Layout::Atlas),
+            "grid" => Ok(Layout::Grid),
+            _ => Err(Error::invalid(
+                format!("layout '{s}'"),
+                "expected atlas or grid",
+            )),
+        }
+    }
+}
+
 /// How dense the grid is.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -175,6 +208,17 @@ pub struct BakeSpec {
     /// it: an error target chooses its grid by this measurement.
     #[serde(default = "default_check")]
     pub check: bool,
+    /// A CIEDE2000 target beside the absolute one of
+    /// [`Resolution::MaxError`] (atlas layout only): the largest colour
+    /// difference of the reflected or transmitted light. With it the
+    /// absolute target may be infinite (no absolute target).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max_de: Option<f64>,
+    /// How the nodes are placed with an error target (a fixed resolution is
+    /// always a grid): see [`BakeSpec::layout`]. Not serialized when it is
+    /// the atlas, so grid specs keep the cache keys they always had.
+    #[serde(default, skip_serializing_if = "Layout::is_atlas")]
+    pub layout: Layout,
 }
 
 fn default_check() -> bool {
@@ -200,6 +244,18 @@ impl BakeSpec {
             half: false,
             validation_points: 20_000,
             check: true,
+            max_de: None,
+            layout: Layout::Atlas,
+        }
+    }
+
+    /// The layout the table is baked in: a grid for a fixed resolution, a
+    /// spectral table, or when `layout` asks for one, else an atlas.
+    pub fn layout(&self) -> Layout {
+        match self.resolution {
+            Resolution::Nodes { .. } => Layout::Grid,
+            Resolution::MaxError(_) if self.kind == Kind::Spectral => Layout::Grid,
+            Resolution::MaxError(_) => self.layout,
         }
     }
 
@@ -257,11 +313,28 @@ impl BakeSpec {
                 )?;
             }
             Resolution::MaxError(e) => {
-                if !(e > 0.0 && e.is_finite()) {
+                // An infinite absolute target stands for none, beside a
+                // colour target.
+                let colour_only = e == f64::INFINITY && self.max_de.is_some();
+                if !(e > 0.0 && (e.is_finite() || colour_only)) {
                     return Err(Error::invalid(
                         "max-error",
                         format!("must be a positive number, got {e:e}"),
                     ));
+                }
+                if let Some(de) = self.max_de {
+                    if !(de > 0.0 && de.is_finite()) {
+                        return Err(Error::invalid(
+                            "max-de",
+                            format!("must be a positive number, got {de:e}"),
+                        ));
+                    }
+                    if self.layout() != Layout::Atlas {
+                        return Err(Error::invalid(
+                            "max-de",
+                            "needs the atlas layout (a grid refines for max-error only)",
+                        ));
+                    }
                 }
                 let floor = storage_error_floor(self.half);
                 if e < floor {
@@ -316,7 +389,11 @@ impl BakeSpec {
     pub fn cache_key(&self) -> String {
         // serde_json writes struct fields in declaration order and floats
         // exactly (shortest round-trip), so the text is a stable identity.
-        let text = serde_json::to_string(&(FORMAT_VERSION, self)).unwrap_or_default();
+        let version = match self.layout() {
+            Layout::Atlas => ATLAS_VERSION,
+            Layout::Grid => FORMAT_VERSION,
+        };
+        let text = serde_json::to_string(&(version, self)).unwrap_or_default();
         format!("{:016x}", fnv1a64(text.as_bytes()))
     }
 }

@@ -4,8 +4,8 @@ use glam::Vec4;
 
 use super::axis::Locator;
 use super::header::{
-    readable_version, Header, COS_AXIS, OLDEST_READABLE_VERSION, THICKNESS_AXIS, WAVELENGTH_AXIS,
-    WHITE_E_VERSION,
+    readable_version, Header, ATLAS_AXIS, COS_AXIS, NEWEST_READABLE_VERSION,
+    OLDEST_READABLE_VERSION, THICKNESS_AXIS, WAVELENGTH_AXIS,
 };
 use super::Kind;
 use crate::optics::{MAX_THICKNESS_NM, WAVELENGTH_RANGE_NM};
@@ -37,12 +37,72 @@ pub struct Lut {
     rgb_nodes: RgbNodes,
 }
 
+/// An atlas table's lookup: the charts' uniform values (see
+/// [`crate::atlas::locate_f32`]) and the texels, read as a GPU reads an
+/// export.
+#[derive(Clone, Debug)]
+struct AtlasNodes {
+    uniform: Vec<f32>,
+    image: crate::atlas::Image,
+    /// Rows of one wavelength block of a spectral table.
+    block_rows: usize,
+    /// T = this − R, for a lossless film whose T is not stored.
+    white: Option<[f32; 3]>,
+}
+
+impl AtlasNodes {
+    fn new(header: &Header, data: &[f32]) -> Option<AtlasNodes> {
+        let table = header.atlas.as_ref()?;
+        let channels = header.channel_names().len();
+        let blocks = header.axes.get(2).map_or(1, |w| w.nodes.len());
+        Some(AtlasNodes {
+            uniform: table.atlas.uniform_f32(),
+            image: crate::atlas::Image {
+                width: table.atlas.width,
+                height: table.atlas.height * blocks,
+                channels,
+                data: data.to_vec(),
+            },
+            block_rows: table.atlas.height,
+            white: table.lossless_white.map(|w| w.map(|x| x as f32)),
+        })
+    }
+
+    fn rgb(&self, thickness_nm: f32, cos_theta: f32) -> FilmRgb {
+        let mut v = [f32::NAN; 6];
+        if let Some(t) = crate::atlas::locate_f32(&self.uniform, thickness_nm, cos_theta, 0) {
+            self.image.bilinear(t, &mut v);
+        }
+        if let Some(w) = self.white {
+            for k in 0..3 {
+                v[3 + k] = w[k] - v[k];
+            }
+        }
+        FilmRgb {
+            reflectance: [v[0], v[1], v[2]],
+            transmittance: [v[3], v[4], v[5]],
+        }
+    }
+
+    /// (R, T) of wavelength block `block` at (thickness, cos θ).
+    fn spectral(&self, thickness_nm: f32, cos_theta: f32, block: usize) -> [f32; 2] {
+        let mut v = [f32::NAN; 2];
+        if let Some(t) = crate::atlas::locate_f32(&self.uniform, thickness_nm, cos_theta, 0) {
+            let offset = (block * self.block_rows) as f32;
+            self.image.bilinear([t[0], t[1] + offset], &mut v);
+        }
+        v
+    }
+}
+
 /// An rgb table's nodes as SIMD lanes: each colour as (R, G, B, 0), so a
 /// lookup is a few vector lerps instead of eighteen scalar ones.
 #[derive(Clone, Debug)]
 enum RgbNodes {
     /// A spectral table.
     None,
+    /// An atlas table (rgb or spectral).
+    Atlas(AtlasNodes),
     /// Reflectance and transmittance at every node.
     Full(Vec<[Vec4; 2]>),
     /// Every node's R + T is the same colour: a lossless film, where what
@@ -119,12 +179,26 @@ pub const MIN_NODE_SPACING_F32: f32 = 1e-30;
 pub(crate) fn check_header(header: &Header) -> Result<(usize, usize), String> {
     if !readable_version(header.version.into()) {
         return Err(format!(
-            "format version {} (this irid reads versions {OLDEST_READABLE_VERSION} to {WHITE_E_VERSION})",
+            "format version {} (this irid reads versions {OLDEST_READABLE_VERSION} to {NEWEST_READABLE_VERSION})",
             header.version
         ));
     }
+    if (header.version == super::header::ATLAS_VERSION) != header.atlas.is_some() {
+        return Err(format!(
+            "format version {} {} an atlas",
+            header.version,
+            if header.atlas.is_some() {
+                "has no"
+            } else {
+                "needs"
+            }
+        ));
+    }
     check_axes(header)?;
-    let want_channels = channel_names(header.kind);
+    if let Some(table) = &header.atlas {
+        check_atlas(header, table)?;
+    }
+    let want_channels = header.channel_names();
     let channels: Vec<String> = header
         .channels
         .iter()
@@ -147,7 +221,9 @@ pub(crate) fn check_header(header: &Header) -> Result<(usize, usize), String> {
         .validate()
         .map_err(|e| format!("header stack: {e}"))?;
     check_layer(header)?;
-    check_error_entries(header, want_channels.len())?;
+    // Error figures cover every quantity, stored or derived (a lossless
+    // table's T).
+    check_error_entries(header, channel_names(header.kind).len())?;
     image_size(header)
 }
 
@@ -168,9 +244,14 @@ fn check_axes(header: &Header) -> Result<(), String> {
             header.kind
         ));
     }
-    if header.x_axis != THICKNESS_AXIS || header.y_axis != COS_AXIS {
+    let (x_want, y_want) = if header.atlas.is_some() {
+        (ATLAS_AXIS, ATLAS_AXIS)
+    } else {
+        (THICKNESS_AXIS, COS_AXIS)
+    };
+    if header.x_axis != x_want || header.y_axis != y_want {
         return Err(format!(
-            "header x_axis/y_axis are {}/{}, expected {THICKNESS_AXIS}/{COS_AXIS}",
+            "header x_axis/y_axis are {}/{}, expected {x_want}/{y_want}",
             crate::error::escape(&header.x_axis),
             crate::error::escape(&header.y_axis)
         ));
@@ -180,6 +261,41 @@ fn check_axes(header: &Header) -> Result<(), String> {
         check_axis(axis, lo, hi)?;
     }
     Ok(())
+}
+
+/// An atlas table's charts fit its image and its domain is the axes' ends.
+fn check_atlas(header: &Header, table: &super::header::TableAtlas) -> Result<(), String> {
+    let atlas = &table.atlas;
+    atlas.check()?;
+    let ends = |k: usize| {
+        let n = &header.axes[k].nodes;
+        (n[0], n[n.len() - 1])
+    };
+    if ends(0) != atlas.thickness_nm {
+        return Err(format!(
+            "header atlas thickness range {:?} is not the thickness axis's {:?}",
+            atlas.thickness_nm,
+            ends(0)
+        ));
+    }
+    if header.axes[0].nodes.len() > 2 || header.axes[1].nodes.len() > 2 {
+        return Err("an atlas table's thickness and cos θ axes list the domain's ends only".into());
+    }
+    if !(0.0..=1.0).contains(&table.aliased_below_cos) {
+        return Err(format!(
+            "header atlas aliased_below_cos {:e} is not a cos θ",
+            table.aliased_below_cos
+        ));
+    }
+    match table.lossless_white {
+        Some(_) if header.kind != Kind::Rgb => {
+            Err("only an rgb table stores reflectance alone (lossless_white)".into())
+        }
+        Some(w) if w.iter().any(|x| !x.is_finite()) => {
+            Err("header atlas lossless_white must be finite".into())
+        }
+        _ => Ok(()),
+    }
 }
 
 /// `layer` is one of the stack's layers, and coherent (the baker refuses a
@@ -237,10 +353,11 @@ fn check_error_entries(header: &Header, n: usize) -> Result<(), String> {
 /// (thickness nodes, cos θ nodes × wavelength nodes), refused beyond what
 /// an OpenEXR image's i32 dimensions hold.
 fn image_size(header: &Header) -> Result<(usize, usize), String> {
-    let width = header.axes[0].nodes.len();
-    let height = header.axes[1]
-        .nodes
-        .len()
+    let (width, rows) = match &header.atlas {
+        Some(t) => (t.atlas.width, t.atlas.height),
+        None => (header.axes[0].nodes.len(), header.axes[1].nodes.len()),
+    };
+    let height = rows
         .checked_mul(header.axes.get(2).map_or(1, |w| w.nodes.len()))
         .filter(|_| width <= i32::MAX as usize)
         .filter(|&h| h <= i32::MAX as usize)
@@ -298,7 +415,7 @@ impl Lut {
     /// what disagrees.
     pub(crate) fn from_parts(header: Header, data: Vec<f32>) -> Result<Lut, String> {
         let (width, height) = check_header(&header)?;
-        let want_channels = channel_names(header.kind);
+        let want_channels = header.channel_names();
         let values = width
             .checked_mul(height)
             .and_then(|n| n.checked_mul(want_channels.len()));
@@ -311,6 +428,15 @@ impl Lut {
         }
         if let Some(at) = data.iter().position(|v| !v.is_finite()) {
             let node = at / want_channels.len();
+            if header.atlas.is_some() {
+                return Err(format!(
+                    "channel {} is {} at texel ({}, {}): table values must be finite",
+                    want_channels[at % want_channels.len()],
+                    data[at],
+                    node % width,
+                    node / width
+                ));
+            }
             let (i, row) = (node % width, node / width);
             let n_cos = header.axes[1].nodes.len();
             return Err(format!(
@@ -325,7 +451,10 @@ impl Lut {
                     .map_or(String::new(), |w| format!(", {} nm", w.nodes[row / n_cos])),
             ));
         }
-        let rgb_nodes = RgbNodes::new(header.kind, &data);
+        let rgb_nodes = match AtlasNodes::new(&header, &data) {
+            Some(atlas) => RgbNodes::Atlas(atlas),
+            None => RgbNodes::new(header.kind, &data),
+        };
         Ok(Lut {
             rgb_nodes,
             thickness: Locator::new(&header.axes[0].nodes),
@@ -362,6 +491,15 @@ impl Lut {
     /// spectral table every component is NaN. Allocates nothing.
     #[inline(always)]
     pub fn sample_rgb(&self, thickness_nm: f32, cos_theta: f32) -> FilmRgb {
+        if let RgbNodes::Atlas(atlas) = &self.rgb_nodes {
+            if self.header.kind != Kind::Rgb {
+                return FilmRgb {
+                    reflectance: [f32::NAN; 3],
+                    transmittance: [f32::NAN; 3],
+                };
+            }
+            return atlas.rgb(thickness_nm, cos_theta);
+        }
         let (i, fx) = self.thickness.locate(thickness_nm);
         let (j, fy) = self.cos.locate(cos_theta);
         let nt = self.thickness.len();
@@ -383,7 +521,7 @@ impl Lut {
                     lerp(lerp(v00[1], v10[1], fx), lerp(v01[1], v11[1], fx), fy),
                 )
             }
-            RgbNodes::None => (Vec4::NAN, Vec4::NAN),
+            RgbNodes::None | RgbNodes::Atlas(_) => (Vec4::NAN, Vec4::NAN),
         };
         FilmRgb {
             reflectance: [r.x, r.y, r.z],
@@ -394,7 +532,11 @@ impl Lut {
     /// Whether [`Lut::sample_rgb`] reads reflectance only and takes the
     /// transmittance as its complement (an rgb table of a lossless film).
     pub fn samples_as_lossless(&self) -> bool {
-        matches!(self.rgb_nodes, RgbNodes::Lossless { .. })
+        match &self.rgb_nodes {
+            RgbNodes::Lossless { .. } => true,
+            RgbNodes::Atlas(a) => a.white.is_some(),
+            _ => false,
+        }
     }
 
     /// Trilinear (R, T) at one wavelength; clamped like [`Lut::sample_rgb`].
@@ -409,6 +551,16 @@ impl Lut {
         let Some(wl) = &self.wavelength else {
             return (f32::NAN, f32::NAN);
         };
+        if let RgbNodes::Atlas(atlas) = &self.rgb_nodes {
+            let (k, fz) = wl.locate(wavelength_nm);
+            let a = atlas.spectral(thickness_nm, cos_theta, k);
+            let b = if wl.len() > 1 {
+                atlas.spectral(thickness_nm, cos_theta, k + 1)
+            } else {
+                a
+            };
+            return (a[0] + fz * (b[0] - a[0]), a[1] + fz * (b[1] - a[1]));
+        }
         let (i, fx) = self.thickness.locate(thickness_nm);
         let (j, fy) = self.cos.locate(cos_theta);
         let (k, fz) = wl.locate(wavelength_nm);

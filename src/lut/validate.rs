@@ -8,6 +8,7 @@ use serde::{Deserialize, Serialize};
 use super::bake::critical_cos;
 use super::sample::{channel_names, Lut};
 use super::Kind;
+use crate::color::refine::Refinement;
 use crate::color::{delta_e2000_rgb, Sampling, SpectralIntegrator};
 use crate::error::{Error, Result};
 use crate::optics::lanes::SpectralWeights;
@@ -55,7 +56,9 @@ pub struct ErrorStats {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct RegionStats {
     /// `grazing` (incidence beyond 80°), `critical` (within ±0.02 in cos θ
-    /// of the substrate's critical angle) or `other` (everything else).
+    /// of the substrate's critical angle) or `other` (everything else); for
+    /// an atlas table with an aliased strip also `aliased` (below its edge)
+    /// and `resolved` (the rest, where the table's target applies).
     pub name: String,
     /// The region's bounds in words, with the critical cos θ when there is
     /// one.
@@ -106,13 +109,14 @@ pub fn validate(lut: &Lut, points: usize, seed: u64) -> Result<ErrorStats> {
         (0.0, 0.0)
     };
     let checker = PointChecker::new(lut)?;
-    let mut rng = rand_pcg::Pcg64::seed_from_u64(seed);
-    let mut draw = |(lo, hi): (f64, f64)| (lo + rng.random::<f64>() * (hi - lo)) as f32;
+    let mut draw = drawing(seed);
 
     let n_channels = channel_names(h.kind).len();
+
     let critical = critical_cos(&h.stack, h.kind, w_range)
         .filter(|&cc| cc >= c_range.0 - CRITICAL_BAND && cc <= c_range.1 + CRITICAL_BAND);
-    let mut totals = Totals::new(n_channels, critical);
+    let aliased_below = h.atlas.as_ref().map_or(0.0, |t| t.aliased_below_cos);
+    let mut totals = Totals::new(n_channels, critical, aliased_below);
     // Points are drawn and evaluated a chunk at a time and folded into
     // running figures in draw order: memory stays the same for any count,
     // and the figures do not depend on the number of threads.
@@ -121,7 +125,7 @@ pub fn validate(lut: &Lut, points: usize, seed: u64) -> Result<ErrorStats> {
     while done < points {
         let take = CHUNK.min(points - done);
         chunk.clear();
-        chunk.extend((0..take).map(|_| [draw(t_range), draw(c_range), draw(w_range)]));
+        chunk.extend((0..take).map(|_| draw([t_range, c_range, w_range])));
         done += take;
         let errors: Vec<PointError> = chunk
             .par_iter()
@@ -137,6 +141,14 @@ pub fn validate(lut: &Lut, points: usize, seed: u64) -> Result<ErrorStats> {
     Ok(totals.finish(points, seed, channel_names(h.kind), critical))
 }
 
+/// The validation's random points, one call per point: (thickness, cos θ,
+/// wavelength) uniform over the given ranges, from a PCG64 stream seeded
+/// with `seed`, as f32 (what the sampler receives).
+pub(crate) fn drawing(seed: u64) -> impl FnMut([(f64, f64); 3]) -> [f32; 3] {
+    let mut rng = rand_pcg::Pcg64::seed_from_u64(seed);
+    move |ranges| ranges.map(|(lo, hi)| (lo + rng.random::<f64>() * (hi - lo)) as f32)
+}
+
 /// What every point's comparison needs: the table, the stack's indices at
 /// the colour integration's wavelengths, and the integrator.
 struct PointChecker<'a> {
@@ -148,6 +160,9 @@ struct PointChecker<'a> {
     /// table does not span them (its points then get no colour).
     color_grid: StackGrid,
     color_covered: bool,
+    /// Where the film's fringes are narrower than the integration's step,
+    /// the exact colour takes more points per nanometre.
+    refinement: Refinement,
 }
 
 /// One thread's buffers for [`PointChecker::check`].
@@ -183,8 +198,11 @@ impl<'a> PointChecker<'a> {
         } else {
             SpectralWeights::new([&[], &[], &[]])
         };
+        let layer = (h.layer > 0).then_some(h.layer);
+        let refinement = Refinement::new(&h.stack, layer, &integrator)?;
         Ok(PointChecker {
             lut,
+            refinement,
             weights,
             integrator,
             color_grid,
@@ -209,13 +227,16 @@ impl<'a> PointChecker<'a> {
         cos: f64,
         table_r: &[f64; 3],
         table_t: &[f64; 3],
-    ) -> ([f64; 3], [f64; 3], [f64; 2]) {
-        let sums = self
-            .color_grid
-            .weighted_spectrum(&s.thicknesses_nm, cos, &self.weights);
+    ) -> Result<([f64; 3], [f64; 3], [f64; 2])> {
+        let sums = self.refinement.weighted_spectrum(
+            &self.color_grid,
+            &self.weights,
+            &s.thicknesses_nm,
+            cos,
+        )?;
         let (r, t) = (sums.reflectance, sums.transmittance);
         let de = [delta_e2000_rgb(*table_r, r), delta_e2000_rgb(*table_t, t)];
-        (r, t, de)
+        Ok((r, t, de))
     }
 
     /// The table against the solver at one point (thickness, cos θ,
@@ -232,7 +253,7 @@ impl<'a> PointChecker<'a> {
                 let sample = self.lut.sample_rgb(t, c);
                 let table_r = sample.reflectance.map(f64::from);
                 let table_t = sample.transmittance.map(f64::from);
-                let (r, tr, de) = self.exact_color(s, cos, &table_r, &table_t);
+                let (r, tr, de) = self.exact_color(s, cos, &table_r, &table_t)?;
                 for k in 0..3 {
                     abs[k] = (table_r[k] - r[k]).abs();
                     abs[3 + k] = (table_t[k] - tr[k]).abs();
@@ -251,8 +272,11 @@ impl<'a> PointChecker<'a> {
                 let (r, tr) = self.lut.sample_spectral(t, c, w);
                 abs[0] = (f64::from(r) - resp.r()).abs();
                 abs[1] = (f64::from(tr) - resp.t()).abs();
-                self.color_covered
-                    .then(|| self.spectral_color_error(s, t, c))
+                if self.color_covered {
+                    Some(self.spectral_color_error(s, t, c)?)
+                } else {
+                    None
+                }
             }
         };
         Ok(PointError {
@@ -265,7 +289,7 @@ impl<'a> PointChecker<'a> {
 
     /// CIEDE2000 of a spectral table's colour at (t, c), its spectrum read
     /// at every integration wavelength, against the exact colour.
-    fn spectral_color_error(&self, s: &mut PointScratch, t: f32, c: f32) -> [f64; 2] {
+    fn spectral_color_error(&self, s: &mut PointScratch, t: f32, c: f32) -> Result<[f64; 2]> {
         let wavelengths = self.integrator.wavelengths_nm();
         let mut table_r = vec![0.0; wavelengths.len()];
         let mut table_t = vec![0.0; wavelengths.len()];
@@ -276,7 +300,7 @@ impl<'a> PointChecker<'a> {
         }
         let rgb_r = self.integrator.rgb(&table_r);
         let rgb_t = self.integrator.rgb(&table_t);
-        self.exact_color(s, f64::from(c), &rgb_r, &rgb_t).2
+        Ok(self.exact_color(s, f64::from(c), &rgb_r, &rgb_t)?.2)
     }
 }
 
@@ -296,15 +320,20 @@ struct Totals {
     de_sum: [f64; 2],
     de_count: usize,
     worst: Option<(f64, [f64; 3])>,
-    /// grazing, critical, other: points, largest error, sum of errors.
-    regions: [(usize, f64, f64); 3],
+    /// cos θ below which an atlas table's colour integration is aliased (0:
+    /// nowhere).
+    aliased_below: f64,
+    /// grazing, critical, other, aliased, resolved: points, largest error,
+    /// sum of errors.
+    regions: [(usize, f64, f64); 5],
 }
 
 impl Totals {
-    fn new(channels: usize, critical: Option<f64>) -> Totals {
+    fn new(channels: usize, critical: Option<f64>, aliased_below: f64) -> Totals {
         Totals {
             channels,
             critical,
+            aliased_below,
             max: vec![0.0; channels],
             sum: vec![0.0; channels],
             quantile: (0..channels)
@@ -315,7 +344,7 @@ impl Totals {
             de_sum: [0.0; 2],
             de_count: 0,
             worst: None,
-            regions: [(0, 0.0, 0.0); 3],
+            regions: [(0, 0.0, 0.0); 5],
         }
     }
 
@@ -366,6 +395,9 @@ impl Totals {
         if c >= GRAZING_COS && !near_critical {
             count(2);
         }
+        if self.aliased_below > 0.0 {
+            count(if c < self.aliased_below { 3 } else { 4 });
+        }
     }
 
     fn finish(
@@ -411,6 +443,17 @@ impl Totals {
                 }),
             ),
             ("other", "every remaining point".to_string()),
+            (
+                "aliased",
+                format!(
+                    "cos θ below {:.6}, where the colour integration itself is aliased and the table's target is not sought",
+                    self.aliased_below
+                ),
+            ),
+            (
+                "resolved",
+                format!("cos θ from {:.6} up, where the target applies", self.aliased_below),
+            ),
         ];
         for ((name, description), (count, max, sum)) in descriptions.into_iter().zip(self.regions) {
             if count > 0 {

@@ -222,6 +222,59 @@ impl VaryingLayer {
         C64::new(0.0, self.k0) * self.q
     }
 
+    /// The varying layer's sharpest fringe at thickness `thickness_nm`: the
+    /// larger over s and p of |r'_A r_B φ²|, the round trip's amplitude in
+    /// the layer (its fringes have a width in round-trip phase of about
+    /// 2 (1 − |r'_A r_B φ²|), narrowing without bound where it nears 1: a
+    /// free-standing film at grazing incidence), and how much the
+    /// unpolarized R changes between that polarization's resonance and the
+    /// phase opposite, at the layer's absorption over that thickness (0
+    /// where the layer's phase cannot show in R: total internal reflection
+    /// in a lossless stack).
+    pub fn fringe(&self, thickness_nm: f64) -> (f64, f64) {
+        let k = self.sharper();
+        let y = -self.factors.neg_y[k];
+        let decay = self.phase(thickness_nm).norm();
+        // Resonance where y φ² is real and positive: φ² = e^{−i arg y}.
+        let at = |psi: f64| self.response(C64::from_polar(decay, 0.5 * psi)).r();
+        let resonance = -y.arg();
+        let visibility = (at(resonance) - at(resonance + std::f64::consts::PI)).abs();
+        (y.norm() * decay * decay, visibility)
+    }
+
+    /// The polarization (0: s, 1: p) whose round trip is the larger.
+    fn sharper(&self) -> usize {
+        usize::from(self.factors.neg_y[1].norm() > self.factors.neg_y[0].norm())
+    }
+
+    /// The first value of [`Self::fringe`] alone (the round trip's
+    /// amplitude at thickness `thickness_nm`), without the visibility's two
+    /// responses.
+    pub fn round_trip(&self, thickness_nm: f64) -> f64 {
+        let decay = self.phase(thickness_nm).norm();
+        self.factors.neg_y[self.sharper()].norm() * decay * decay
+    }
+
+    /// The width in wavelength (nm) of a fringe of round-trip amplitude `y`
+    /// (from [`Self::fringe`]) at thickness `thickness_nm`: its width in
+    /// round-trip phase, 2 |1 − y| / √y, over the phase's rate
+    /// |dδ/dλ| = 4π Re(q) d / λ² = k₀² Re(q) d / π (the layer's dispersion
+    /// left out). Infinite for a layer at or beyond its own critical angle.
+    pub fn fringe_width_nm(&self, y: f64, thickness_nm: f64) -> f64 {
+        let rate = self.k0 * self.k0 * self.q.re * thickness_nm / std::f64::consts::PI;
+        if rate <= 0.0 {
+            return f64::INFINITY;
+        }
+        2.0 * (1.0 - y).abs() / y.sqrt() / rate
+    }
+
+    /// How fast the varying layer's waves fade, in nepers per nm of
+    /// thickness one way (k₀ Im q): 0 for a lossless layer below its own
+    /// critical angle, negative for a gain layer.
+    pub fn attenuation_per_nm(&self) -> f64 {
+        self.k0 * self.q.im
+    }
+
     /// True when the split is unusable (the layer's q ≈ 0, see the field):
     /// evaluate such a (wavelength, angle) with [`super::solve`] instead.
     pub fn is_degenerate(&self) -> bool {

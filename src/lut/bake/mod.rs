@@ -6,6 +6,7 @@
 //! measures a grid against its doubled grid and [`store`] rounds values as
 //! the file stores them, [`header`] writes what the table records.
 
+mod atlas;
 mod check;
 mod grid;
 mod header;
@@ -25,7 +26,7 @@ use grid::{doubled, initial_axes, refine, Grid};
 use header::header;
 use store::{representable, stored};
 pub(crate) use sweep::with_varying_layer;
-use sweep::Prepared;
+pub(crate) use sweep::{Prepared, Row};
 
 /// Bakes a table (no progress output; see [`bake_with_progress`]).
 pub fn bake(spec: &BakeSpec) -> Result<Lut> {
@@ -62,6 +63,9 @@ const MAX_WORK: usize = 1 << 30;
 /// records no bake check.
 pub fn bake_with_progress(spec: &BakeSpec, progress: &(dyn Fn(f64) + Sync)) -> Result<Lut> {
     spec.validate()?;
+    if spec.layout() == super::Layout::Atlas {
+        return atlas::bake_atlas(spec, &|line| log::debug!("{line}"));
+    }
     let prep = Prepared::new(spec)?;
     let mut axes = initial_axes(spec, &prep);
     if !spec.check {

@@ -7,7 +7,10 @@ use rayon::prelude::*;
 
 use super::critical_cos;
 use super::grid::{AxisGrid, Grid};
-use crate::color::SpectralIntegrator;
+use std::sync::OnceLock;
+
+use crate::color::refine::{Refinement, MAX_SUB_STEPS};
+use crate::color::{Sampling, SpectralIntegrator};
 use crate::error::{Error, Result};
 use crate::lut::sample::channel_names;
 use crate::lut::{BakeSpec, Kind};
@@ -35,15 +38,15 @@ pub(crate) fn with_varying_layer(stack: &Stack, layer: usize) -> (Stack, usize) 
 }
 
 /// The stack and everything about it that is fixed for the whole bake.
-pub(super) struct Prepared {
+pub(crate) struct Prepared {
     /// The stack actually evaluated: a layerless stack gets a zero-thickness
     /// layer of the ambient medium, which changes nothing optically.
-    pub(super) stack: Stack,
-    pub(super) layer: usize,
-    pub(super) channels: usize,
+    pub(crate) stack: Stack,
+    pub(crate) layer: usize,
+    pub(crate) channels: usize,
     /// rgb kind: the stack at the integration wavelengths and the
     /// linear-sRGB weight of each wavelength (the spectral kind has none).
-    pub(super) stack_grid: StackGrid,
+    pub(crate) stack_grid: StackGrid,
     pub(super) weights: Vec<[f64; 3]>,
     /// The substrate's critical cos θ (where its q has a branch point),
     /// when it is lossless and optically thinner than the ambient.
@@ -52,6 +55,31 @@ pub(super) struct Prepared {
     /// but for the layer's own phase (one layer, no dispersion: see
     /// [`VaryingLayer::at_wavelength`]), so a row splits the stack once.
     pub(super) split_per_angle: bool,
+    /// rgb kind with the exact sampling: the colour integrated again, with
+    /// more points per nanometre, at the nodes where the film's fringes
+    /// are narrower than a step.
+    pub(crate) refined: Option<Box<Refined>>,
+}
+
+/// The refinement of a bake's colour integration (see
+/// [`crate::color::refine`]): where it is needed, and the sweep at each
+/// density, made on first use.
+pub(crate) struct Refined {
+    pub(crate) criterion: Refinement,
+    levels: Vec<OnceLock<Prepared>>,
+}
+
+impl Refined {
+    /// The sweep integrating with `m` points per nanometre.
+    fn level(&self, m: usize, base: &Prepared) -> Result<&Prepared> {
+        let slot = &self.levels[m.trailing_zeros() as usize];
+        if let Some(p) = slot.get() {
+            return Ok(p);
+        }
+        let integrator = self.criterion.integrator(m);
+        let prep = Prepared::plain(base.stack.clone(), base.layer, Kind::Rgb, &integrator, None)?;
+        Ok(slot.get_or_init(|| prep))
+    }
 }
 
 impl Prepared {
@@ -67,7 +95,7 @@ impl Prepared {
 
     /// The stack with `layer` varying, for a table of `kind` integrated by
     /// `integrator` (rgb) or over `wavelength_nm` (spectral).
-    pub(super) fn of(
+    pub(crate) fn of(
         stack: &Stack,
         layer: usize,
         kind: Kind,
@@ -75,14 +103,36 @@ impl Prepared {
         wavelength_nm: (f64, f64),
     ) -> Result<Prepared> {
         let (stack, layer) = with_varying_layer(stack, layer);
+        let mut prep = Prepared::plain(stack, layer, kind, &integrator, Some(wavelength_nm))?;
+        if kind == Kind::Rgb && integrator.sampling() == Sampling::Exact {
+            let criterion = Refinement::new(&prep.stack, Some(layer), &integrator)?;
+            prep.refined = Some(Box::new(Refined {
+                criterion,
+                levels: (0..=MAX_SUB_STEPS.trailing_zeros())
+                    .map(|_| OnceLock::new())
+                    .collect(),
+            }));
+        }
+        Ok(prep)
+    }
+
+    /// [`Self::of`] on a stack that has its varying layer, never refined
+    /// (`wavelength_nm`: a spectral table's range, for its critical angle).
+    fn plain(
+        stack: Stack,
+        layer: usize,
+        kind: Kind,
+        integrator: &SpectralIntegrator,
+        wavelength_nm: Option<(f64, f64)>,
+    ) -> Result<Prepared> {
         let (stack_grid, weights) = match kind {
             Kind::Rgb => (
                 StackGrid::new(&stack, integrator.wavelengths_nm())?,
-                rgb_weights(&integrator),
+                rgb_weights(integrator),
             ),
             Kind::Spectral => (StackGrid::new(&stack, &[])?, Vec::new()),
         };
-        let critical_cos = critical_cos(&stack, kind, wavelength_nm);
+        let critical_cos = wavelength_nm.and_then(|w| critical_cos(&stack, kind, w));
         let split_per_angle = stack.layers.len() == 1 && stack_grid.is_non_dispersive();
         Ok(Prepared {
             split_per_angle,
@@ -92,7 +142,123 @@ impl Prepared {
             stack_grid,
             weights,
             critical_cos,
+            refined: None,
         })
+    }
+
+    /// The colour at the thickness `nodes` of one rgb row (cos θ `cos`;
+    /// `dst`: their values, six each) integrated again where the film's
+    /// fringes are narrower than the sampling step, with the points per
+    /// nanometre each node needs.
+    fn refine_row(&self, cos: f64, nodes: &[f64], dst: &mut [f64]) -> Result<()> {
+        let Some(refined) = &self.refined else {
+            return Ok(());
+        };
+        let mut groups: Vec<(usize, Vec<usize>)> = Vec::new();
+        for (j, &d) in nodes.iter().enumerate() {
+            let m = refined.criterion.sub_steps(d, cos);
+            if m <= 1 {
+                continue;
+            }
+            match groups.iter_mut().find(|g| g.0 == m) {
+                Some(g) => g.1.push(j),
+                None => groups.push((m, vec![j])),
+            }
+        }
+        for (m, at) in groups {
+            let level = refined.level(m, self)?;
+            let grid = &level.stack_grid;
+            let thickness: Vec<f64> = at.iter().map(|&j| nodes[j]).collect();
+            let mut wk = Worker::new(thickness.len(), grid.thicknesses_nm());
+            let mut values = vec![0.0; 6 * thickness.len()];
+            level.split_row(grid, 0..grid.wavelengths_nm().len(), cos, &mut wk);
+            level.compute_nodes(
+                false,
+                grid,
+                cos,
+                &thickness,
+                Phases::Exact,
+                &mut values,
+                &mut wk,
+            );
+            for (&j, v) in at.iter().zip(values.chunks_exact(6)) {
+                dst[6 * j..6 * j + 6].copy_from_slice(v);
+            }
+        }
+        Ok(())
+    }
+
+    /// Exact values at atlas rows: each row one cos θ (and, for a spectral
+    /// table, one wavelength of `wavelengths_nm`) with its own thickness
+    /// nodes, spaced as the row's chart places them. The values of each row,
+    /// node by node, `channels` each, one row after another.
+    pub(crate) fn eval_rows(&self, rows: &[Row], wavelengths_nm: &[f64]) -> Result<Vec<f64>> {
+        let ch = self.channels;
+        let spectral_grid;
+        let stack_grid = if wavelengths_nm.is_empty() {
+            &self.stack_grid
+        } else {
+            spectral_grid = StackGrid::new(&self.stack, wavelengths_nm)?;
+            &spectral_grid
+        };
+        let spectral = !wavelengths_nm.is_empty();
+        let longest = rows.iter().map(|r| r.thickness_nm.len()).max().unwrap_or(0);
+        let values: Vec<Vec<f64>> = rows
+            .par_iter()
+            .map_init(
+                || Worker::new(longest, stack_grid.thicknesses_nm()),
+                |wk, row| -> Result<Vec<f64>> {
+                    let mut dst = vec![0.0; row.thickness_nm.len() * ch];
+                    if row.thickness_nm.is_empty() {
+                        return Ok(dst);
+                    }
+                    let wavelengths = if spectral {
+                        row.wavelength..row.wavelength + 1
+                    } else {
+                        0..stack_grid.wavelengths_nm().len()
+                    };
+                    self.split_row(stack_grid, wavelengths, row.cos, wk);
+                    self.compute_nodes(
+                        spectral,
+                        stack_grid,
+                        row.cos,
+                        row.thickness_nm,
+                        Phases::Exact,
+                        &mut dst,
+                        wk,
+                    );
+                    if !spectral {
+                        self.refine_row(row.cos, row.thickness_nm, &mut dst)?;
+                    }
+                    Ok(dst)
+                },
+            )
+            .collect::<Result<_>>()?;
+        Ok(values.concat())
+    }
+
+    /// The row's split stacks, one per wavelength of `wavelengths`, into
+    /// `wk.splits` (one split serving the whole spectrum where
+    /// [`Self::split_per_angle`] allows).
+    fn split_row(
+        &self,
+        stack_grid: &StackGrid,
+        wavelengths: std::ops::Range<usize>,
+        cos: f64,
+        wk: &mut Worker,
+    ) {
+        wk.splits.clear();
+        let mut first = None;
+        for i in wavelengths {
+            let v = match first {
+                Some(f) if self.split_per_angle => {
+                    VaryingLayer::at_wavelength(&f, stack_grid.wavelengths_nm()[i])
+                }
+                _ => self.split(stack_grid, i, cos, &mut wk.scratch),
+            };
+            first.get_or_insert(v);
+            wk.splits.push((i, v));
+        }
     }
 
     /// Exact values on a grid, layout `[w][c][t][channel]`. Rows (one cos θ
@@ -137,9 +303,9 @@ impl Prepared {
             &self.stack_grid
         };
         let n = t_axis.nodes.len();
-        out.par_chunks_mut(row_len).enumerate().for_each_init(
+        out.par_chunks_mut(row_len).enumerate().try_for_each_init(
             || Worker::new(n, stack_grid.thicknesses_nm()),
-            |wk, (row_index, row)| {
+            |wk, (row_index, row)| -> Result<()> {
                 let (w, c) = (row_index / nc, row_index % nc);
                 let cos = c_axis.nodes[c];
                 let wavelengths = if grid.spectral {
@@ -168,23 +334,17 @@ impl Prepared {
                         Piece::Compute(range) => &chunks[range.clone()],
                     };
                     if wk.splits.is_empty() {
-                        let mut first = None;
-                        for i in wavelengths.clone() {
-                            let v = match first {
-                                Some(f) if self.split_per_angle => {
-                                    VaryingLayer::at_wavelength(&f, stack_grid.wavelengths_nm()[i])
-                                }
-                                _ => self.split(stack_grid, i, cos, &mut wk.scratch),
-                            };
-                            first.get_or_insert(v);
-                            wk.splits.push((i, v));
-                        }
+                        self.split_row(stack_grid, wavelengths.clone(), cos, wk);
                     }
                     self.compute(grid, stack_grid, cos, range, row, wk);
                 }
+                if !grid.spectral {
+                    self.refine_row(cos, &t_axis.nodes, row)?;
+                }
                 tick();
+                Ok(())
             },
-        );
+        )?;
         if let Some(k) = out.iter().position(|v| !v.is_finite()) {
             if !self.stack.is_coherent() {
                 let (row, node) = (k / row_len, (k % row_len) / ch);
@@ -251,7 +411,26 @@ impl Prepared {
             - start;
         let nodes = &grid.axes[0].nodes[start..start + m];
         let dst = &mut row[start * ch..(start + m) * ch];
-        if grid.spectral {
+        let phases = Phases::Chunks(chunks);
+        self.compute_nodes(grid.spectral, stack_grid, cos, nodes, phases, dst, wk);
+    }
+
+    /// The values at thickness `nodes` of one row (cos θ `cos`, split
+    /// stacks in `wk.splits`) into `dst`, the phase factors formed as
+    /// `phases` says.
+    #[allow(clippy::too_many_arguments)]
+    fn compute_nodes(
+        &self,
+        spectral: bool,
+        stack_grid: &StackGrid,
+        cos: f64,
+        nodes: &[f64],
+        chunks: Phases,
+        dst: &mut [f64],
+        wk: &mut Worker,
+    ) {
+        let m = nodes.len();
+        if spectral {
             let split = wk.splits[0];
             self.responses(&split, stack_grid, cos, nodes, chunks, wk);
             for (o, (&r, &t)) in dst.chunks_exact_mut(2).zip(wk.r.iter().zip(&wk.t)) {
@@ -298,7 +477,7 @@ impl Prepared {
         stack_grid: &StackGrid,
         cos: f64,
         nodes: &[f64],
-        chunks: &[Chunk],
+        chunks: Phases,
         wk: &mut Worker,
     ) {
         let (m, mp) = (nodes.len(), padded(nodes.len()));
@@ -380,6 +559,16 @@ fn previous_rows<'a>(
         .collect()
 }
 
+/// One row of an atlas chart for [`Prepared::eval_rows`].
+pub(crate) struct Row<'a> {
+    /// cos θ of the row.
+    pub(crate) cos: f64,
+    /// The wavelength node of a spectral table's row (ignored for rgb).
+    pub(crate) wavelength: usize,
+    /// The thickness nodes (nm), in any order.
+    pub(crate) thickness_nm: &'a [f64],
+}
+
 /// The linear-sRGB weight of each integration wavelength, as triples: the
 /// integrator is linear in the spectrum, so the bake accumulates weight × R
 /// per node instead of storing whole spectra.
@@ -421,14 +610,44 @@ fn padded(nodes: usize) -> usize {
     nodes.next_multiple_of(PAD)
 }
 
+/// How a row's phase factors are formed.
+#[derive(Clone, Copy)]
+pub(super) enum Phases<'a> {
+    /// Chunks of evenly spaced nodes, each advanced by a recurrence from an
+    /// exact exponential at its start (see [`phases`]).
+    Chunks(&'a [Chunk]),
+    /// An exact exponential at every node (nodes spaced unevenly, as an
+    /// atlas chart's are).
+    Exact,
+}
+
 /// The phase factors at `nodes` (see [`phases`]) into `wk.phase_re`,
 /// `wk.phase_im`, zero from there up to [`padded`] length.
-fn phase_factors(v: &VaryingLayer, nodes: &[f64], chunks: &[Chunk], wk: &mut Worker) {
+fn phase_factors(v: &VaryingLayer, nodes: &[f64], plan: Phases, wk: &mut Worker) {
     let (m, mp) = (nodes.len(), padded(nodes.len()));
     let (re, im) = (&mut wk.phase_re[..m + PAD], &mut wk.phase_im[..m + PAD]);
-    phases(v, nodes, chunks, re, im);
+    match plan {
+        Phases::Chunks(chunks) => phases(v, nodes, chunks, re, im),
+        Phases::Exact => exact_phases(v, nodes, re, im),
+    }
     re[m..mp].fill(0.0);
     im[m..mp].fill(0.0);
+}
+
+/// The phase factor at every node from the lanes' exponential, eight at a
+/// time.
+fn exact_phases(v: &VaryingLayer, nodes: &[f64], re: &mut [f64], im: &mut [f64]) {
+    for (k, group) in nodes.chunks(MAX_LANES).enumerate() {
+        let mut angles = [C64::new(0.0, 0.0); MAX_LANES];
+        for (a, &d) in angles.iter_mut().zip(group) {
+            *a = v.phase_angle(d);
+        }
+        let exact = one_way_many(Path::Best, &angles);
+        for (l, e) in exact.iter().enumerate().take(group.len()) {
+            re[k * MAX_LANES + l] = e.re;
+            im[k * MAX_LANES + l] = e.im;
+        }
+    }
 }
 
 /// One worker's buffers, allocated once per rayon task.

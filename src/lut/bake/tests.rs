@@ -312,6 +312,10 @@ fn sweep_on_given_nodes_matches_the_solver() {
         .collect();
     let even_axis: Vec<f64> = (0..150).map(|i| 500.0 * f64::from(i) / 149.0).collect();
     let grid = crate::optics::StackGrid::new(&stack, integrator.wavelengths_nm()).unwrap();
+    // Near grazing incidence some nodes integrate more finely (see
+    // crate::color::refine), at the wavelengths of their level.
+    let refinement = crate::color::refine::Refinement::new(&stack, Some(1), &integrator).unwrap();
+    let mut refined = 0;
     for axis in [&sqrt_axis, &even_axis, &vec![250.0]] {
         let values = rgb_at_nodes(&stack, 1, integrator.clone(), axis, &cos).unwrap();
         assert_eq!(values.len(), axis.len() * cos.len());
@@ -320,6 +324,14 @@ fn sweep_on_given_nodes_matches_the_solver() {
             for (t_index, &t) in axis.iter().enumerate().step_by(7) {
                 let mut thick = grid.thicknesses_nm().to_vec();
                 thick[0] = t;
+                let m = refinement.sub_steps(t, c);
+                refined += usize::from(m > 1);
+                let (grid, integrator) = if m > 1 {
+                    let level = refinement.level(m).unwrap();
+                    (&level.grid, &level.integrator)
+                } else {
+                    (&grid, &integrator)
+                };
                 let mut spectrum =
                     vec![crate::optics::Response::default(); grid.wavelengths_nm().len()];
                 grid.solve_spectrum(&thick, c, &mut spectrum);
@@ -335,4 +347,5 @@ fn sweep_on_given_nodes_matches_the_solver() {
         }
         assert!(worst < 1e-12, "{} nodes: worst {worst:e}", axis.len());
     }
+    assert!(refined > 0, "no node at cos θ 0.01 integrated more finely");
 }

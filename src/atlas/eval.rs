@@ -1,0 +1,261 @@
+//! Exact responses at the nodes of charts.
+
+use rayon::prelude::*;
+
+use super::chart::{Chart, Coords, Optical};
+use crate::color::SpectralIntegrator;
+use crate::error::Result;
+use crate::lut::{Kind, Prepared, Row};
+use crate::optics::lanes::SpectralWeights;
+use crate::optics::Stack;
+
+/// One side of a film, with everything fixed for evaluating charts: exact
+/// linear-RGB R and T at rows of constant cos θ (the baker's split-stack
+/// sweep, one split per angle and wavelength) and at scattered points (the
+/// batched solver, a whole spectrum per point).
+pub struct Film {
+    prep: Prepared,
+    weights: SpectralWeights,
+    /// The largest weight one wavelength has in any channel.
+    largest_weight: f64,
+    /// The colour of a flat spectrum 1 (what R + T adds up to for a
+    /// lossless stack), when the stack is lossless.
+    lossless_white: Option<[f64; 3]>,
+    /// The side's optical thickness factor (see [`Optical`]).
+    pub optical: Optical,
+}
+
+impl Film {
+    /// The film `stack` (as seen from the side the light arrives on) with
+    /// layer `layer` (from 1) varying, integrated by `integrator`.
+    pub fn new(stack: &Stack, layer: usize, integrator: SpectralIntegrator) -> Result<Film> {
+        let weights = integrator.rgb_lane_weights();
+        let largest_weight = integrator
+            .rgb_weights()
+            .iter()
+            .flat_map(|w| w.iter())
+            .fold(0.0f64, |a, &b| a.max(b.abs()));
+        let lossless =
+            stack.layers.iter().all(|l| l.material.is_lossless()) && stack.substrate.is_lossless();
+        let flat = vec![1.0; integrator.wavelengths_nm().len()];
+        let lossless_white = lossless.then(|| integrator.rgb(&flat));
+        let prep = Prepared::of(stack, layer, Kind::Rgb, integrator, (380.0, 780.0))?;
+        let optical = optical_of(&prep.stack, prep.layer, 550.0)?;
+        Ok(Film {
+            prep,
+            weights,
+            largest_weight,
+            lossless_white,
+            optical,
+        })
+    }
+
+    /// The stack evaluated: a layerless stack gets a zero-thickness layer of
+    /// the ambient medium.
+    pub fn stack(&self) -> &Stack {
+        &self.prep.stack
+    }
+
+    /// The varying layer, from 1.
+    pub fn layer(&self) -> usize {
+        self.prep.layer
+    }
+
+    /// Exact (R.r, R.g, R.b, T.r, T.g, T.b) at the thickness nodes of each
+    /// row (cos θ, thicknesses nm), row after row.
+    pub fn rows(&self, rows: &[(f64, Vec<f64>)]) -> Result<Vec<[f64; 6]>> {
+        let rows: Vec<Row> = rows
+            .iter()
+            .map(|(cos, t)| Row {
+                cos: *cos,
+                wavelength: 0,
+                thickness_nm: t,
+            })
+            .collect();
+        let values = self.prep.eval_rows(&rows, &[])?;
+        Ok(values
+            .chunks_exact(6)
+            .map(|v| [v[0], v[1], v[2], v[3], v[4], v[5]])
+            .collect())
+    }
+
+    /// Exact values at scattered (thickness nm, cos θ) points (with more
+    /// points per nanometre where the film's fringes are narrower than the
+    /// integration's step, as at the nodes of [`Self::rows`]).
+    pub fn points(&self, points: &[(f64, f64)]) -> Result<Vec<[f64; 6]>> {
+        let grid = &self.prep.stack_grid;
+        let layer = self.prep.layer;
+        points
+            .par_iter()
+            .map_init(
+                || grid.thicknesses_nm().to_vec(),
+                |thick, &(d, c)| {
+                    thick[layer - 1] = d;
+                    let sums = match &self.prep.refined {
+                        Some(r) => r
+                            .criterion
+                            .weighted_spectrum(grid, &self.weights, thick, c)?,
+                        None => grid.weighted_spectrum(thick, c, &self.weights),
+                    };
+                    let (r, t) = (sums.reflectance, sums.transmittance);
+                    Ok([r[0], r[1], r[2], t[0], t[1], t[2]])
+                },
+            )
+            .collect()
+    }
+
+    /// Where the colour integration of [`Self::rows`] and [`Self::points`]
+    /// takes more points per nanometre (`None` for samplings never
+    /// refined).
+    pub fn refinement(&self) -> Option<&crate::color::refine::Refinement> {
+        self.prep.refined.as_ref().map(|r| &r.criterion)
+    }
+
+    /// Exact values at every node of `chart` laid out as `width` × `height`
+    /// nodes (its rectangle's size is ignored), row-major.
+    pub fn chart(&self, chart: &Chart, width: usize, height: usize) -> Result<Vec<[f64; 6]>> {
+        let mut sized = *chart;
+        sized.rect.width = width;
+        sized.rect.height = height;
+        match chart.coords {
+            Coords::Band { .. } => {
+                let rows: Vec<(f64, Vec<f64>)> = (0..height)
+                    .map(|j| {
+                        let c = sized.node(0, j).1;
+                        (c, (0..width).map(|i| sized.node(i, j).0).collect())
+                    })
+                    .collect();
+                self.rows(&rows)
+            }
+            Coords::Corner { .. } => {
+                let points: Vec<(f64, f64)> = (0..height)
+                    .flat_map(|j| (0..width).map(move |i| (i, j)))
+                    .map(|(i, j)| sized.node(i, j))
+                    .collect();
+                self.points(&points)
+            }
+        }
+    }
+}
+
+/// The optical thickness factor of `layer` (from 1) of `stack` with real
+/// indices at `reference_nm`.
+pub(crate) fn optical_of(stack: &Stack, layer: usize, reference_nm: f64) -> Result<Optical> {
+    let n0 = stack.ambient.index_at(reference_nm)?.re;
+    let nj = stack.layers[layer - 1].material.index_at(reference_nm)?.re;
+    Ok(Optical::new(n0, nj))
+}
+
+impl Film {
+    /// The varying layer's sharpest fringe at one wavelength, cos θ and
+    /// thickness: its round trip's amplitude and how much R changes across
+    /// it (see [`crate::optics::twoport::VaryingLayer::fringe`]).
+    pub fn fringe(&self, wavelength_nm: f64, c: f64, thickness_nm: f64) -> Result<(f64, f64)> {
+        let stack = &self.prep.stack;
+        let mut indices = Vec::new();
+        stack.indices_at(wavelength_nm, &mut indices)?;
+        let split = crate::optics::twoport::VaryingLayer::new(
+            &indices,
+            &stack.thicknesses_nm(),
+            self.prep.layer,
+            wavelength_nm,
+            c,
+            &mut Default::default(),
+        );
+        Ok(split.fringe(thickness_nm))
+    }
+
+    /// The largest weight one wavelength has in any colour channel: how much
+    /// a change of R at one wavelength can move the colour.
+    pub fn largest_weight(&self) -> f64 {
+        self.largest_weight
+    }
+
+    /// For a lossless stack (no layer or substrate absorbs or amplifies),
+    /// R + T: the colour of a flat spectrum, the same at every thickness and
+    /// angle.
+    pub fn lossless_white(&self) -> Option<[f64; 3]> {
+        self.lossless_white
+    }
+
+    /// The wavelengths the colour integrates over.
+    pub fn wavelengths_nm(&self) -> &[f64] {
+        self.prep.stack_grid.wavelengths_nm()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::color::{Sampling, White};
+    use crate::optics::{Layer, Material};
+
+    fn soap() -> Stack {
+        Stack {
+            ambient: Material::constant(1.0, 0.0),
+            layers: vec![Layer::new(Material::constant(1.33, 0.0), 500.0)],
+            substrate: Material::constant(1.0, 0.0),
+        }
+    }
+
+    fn film(stack: &Stack) -> Film {
+        let integrator = SpectralIntegrator::with_white(Sampling::Uniform(41), White::D65);
+        Film::new(stack, 1, integrator).unwrap()
+    }
+
+    /// Rows with unevenly spaced nodes (each phase an exact exponential)
+    /// agree with the batched solver point by point.
+    #[test]
+    fn rows_match_points() {
+        let mut stack = soap();
+        stack.substrate = Material::constant(1.52, 0.0);
+        stack
+            .layers
+            .push(Layer::new(Material::constant(2.1, 0.02), 80.0));
+        let f = film(&stack);
+        let rows: Vec<(f64, Vec<f64>)> = [0.02, 0.4, 1.0]
+            .iter()
+            .map(|&c| {
+                (
+                    c,
+                    (0..37).map(|i| 3.7 * f64::from(i) * f64::from(i)).collect(),
+                )
+            })
+            .collect();
+        let got = f.rows(&rows).unwrap();
+        let points: Vec<(f64, f64)> = rows
+            .iter()
+            .flat_map(|(c, t)| t.iter().map(move |&d| (d, *c)))
+            .collect();
+        let want = f.points(&points).unwrap();
+        for (g, w) in got.iter().zip(&want) {
+            for k in 0..6 {
+                assert!((g[k] - w[k]).abs() < 1e-12, "{g:?} {w:?}");
+            }
+        }
+    }
+
+    /// A free-standing film's fringes sharpen without bound towards grazing
+    /// incidence and stay visible; behind total internal reflection in a
+    /// lossless stack they cannot show in R.
+    #[test]
+    fn fringes_sharpen_at_grazing_and_vanish_behind_total_reflection() {
+        let f = film(&soap());
+        let (y_grazing, vis_grazing) = f.fringe(500.0, 1e-3, 300.0).unwrap();
+        let (y_normal, _) = f.fringe(500.0, 1.0, 300.0).unwrap();
+        assert!(y_grazing > 0.99 && y_normal < 0.1, "{y_grazing} {y_normal}");
+        assert!(vis_grazing > 0.5);
+        let mut glass = soap();
+        glass.ambient = Material::constant(1.5, 0.0);
+        glass.layers[0].material = Material::constant(2.0, 0.0);
+        let (y, visibility) = film(&glass).fringe(500.0, 0.3, 300.0).unwrap();
+        assert!(y > 0.0 && visibility < 1e-9, "{y} {visibility}");
+        // An absorbing layer's round trip fades with its thickness.
+        let mut absorbing = soap();
+        absorbing.layers[0].material = Material::constant(1.5, 0.15);
+        let a = film(&absorbing);
+        let (thin, _) = a.fringe(500.0, 1e-3, 10.0).unwrap();
+        let (thick, _) = a.fringe(500.0, 1e-3, 500.0).unwrap();
+        assert!(thick < 0.1 * thin, "{thin} {thick}");
+    }
+}
