@@ -344,12 +344,32 @@ fn cache_key_follows_the_spec() {
     c.stack.layers[0].thickness_nm = 501.0;
     let mut d = a.clone();
     d.thickness_nm.1 = 101.0;
-    let keys = [a.cache_key(), b.cache_key(), c.cache_key(), d.cache_key()];
+    let mut e = a.clone();
+    e.layout = Layout::Grid;
+    let keys = [
+        a.cache_key(),
+        b.cache_key(),
+        c.cache_key(),
+        d.cache_key(),
+        e.cache_key(),
+    ];
     for i in 0..keys.len() {
         for j in 0..i {
             assert_ne!(keys[i], keys[j]);
         }
     }
+    // Where the layout decides nothing (a fixed resolution), naming it
+    // does not change the key: the command line names the grid, the
+    // library's default spec does not.
+    let mut fixed = a.clone();
+    fixed.resolution = Resolution::Nodes {
+        thickness: 96,
+        angle: 24,
+        wavelength: 1,
+    };
+    let mut named = fixed.clone();
+    named.layout = Layout::Grid;
+    assert_eq!(fixed.cache_key(), named.cache_key());
 }
 
 #[test]

@@ -1003,6 +1003,24 @@ fn chart_check(
     Ok((errors, coarse))
 }
 
+/// Refuses a chart check whose memory would exceed the budget (see
+/// [`crate::limits`]): six exact values (f64) at each node of the doubled
+/// grid, and the chart's own nodes kept from them.
+fn within_budget(goal: Goal, w: usize, h: usize) -> Result<()> {
+    let (coarse, fine) = (w as u64 * h as u64, (2 * w as u64 - 1) * (2 * h as u64 - 1));
+    let estimate = crate::limits::product(&[fine.saturating_add(coarse)], 6 * 8);
+    let target = match (goal.max_abs, goal.max_de) {
+        (Some(e), Some(de)) => format!("max-error {e:e}, max-de {de}"),
+        (Some(e), None) => format!("max-error {e:e}"),
+        (None, Some(de)) => format!("max-de {de}"),
+        (None, None) => "atlas".to_string(),
+    };
+    crate::limits::check_allocation(
+        &format!("{target}: a grid of {coarse} nodes checked at {fine}"),
+        estimate,
+    )
+}
+
 /// Evaluates a chart with its doubled grid and grows it until its midpoint
 /// errors meet the target; returns it with its values as stored (six per
 /// node, row-major).
@@ -1019,6 +1037,7 @@ fn confirm(
         if w > max_side || h > max_side || w.saturating_mul(h) > MAX_CHART_TEXELS {
             return Err(unreachable_target(skeleton, &chart, goal));
         }
+        within_budget(goal, w, h)?;
         let ((eu, ev), values) = chart_check(skeleton, &chart, w, h, goal.shares(1.0)?)?;
         if let Some(v) = values.iter().find(|v| v.iter().any(|x| !x.is_finite())) {
             return Err(Error::invalid(

@@ -393,7 +393,16 @@ impl BakeSpec {
             Layout::Atlas => ATLAS_VERSION,
             Layout::Grid => FORMAT_VERSION,
         };
-        let text = serde_json::to_string(&(version, self)).unwrap_or_default();
+        // `layout` only decides an error-target table that is not spectral;
+        // elsewhere it is left out (as for the atlas), so the same table has
+        // one key whichever layout the caller's spec names.
+        let mut identity = self.clone();
+        let decides =
+            matches!(self.resolution, Resolution::MaxError(_)) && self.kind != Kind::Spectral;
+        if !decides {
+            identity.layout = Layout::Atlas;
+        }
+        let text = serde_json::to_string(&(version, &identity)).unwrap_or_default();
         format!("{:016x}", fnv1a64(text.as_bytes()))
     }
 }
