@@ -21,7 +21,7 @@ fn committed_shaders_are_generated_from_the_wgsl() {
     assert_eq!(files.len(), 3);
     for (name, text) in files {
         assert!(
-            read(name) == text,
+            read(&name) == text,
             "shaders/{name} is out of date: run `cargo run -p irid-gpu --bin gen-shaders`"
         );
         assert!(text.contains("GENERATED from irid_film.wgsl"), "{name}");

@@ -71,7 +71,7 @@ pub(super) fn png_textures(export: &Export, scale: f64) -> (Texture, Texture) {
     (back(&export.reflectance), back(&export.transmittance))
 }
 
-fn write_exr(texture: &Texture, path: &Path) -> Result<()> {
+pub(super) fn write_exr(texture: &Texture, path: &Path) -> Result<()> {
     let mut list: SmallVec<[AnyChannel<FlatSamples>; 4]> = SmallVec::new();
     for (k, name) in ["R", "G", "B", "A"].iter().enumerate() {
         let plane = texture
@@ -284,6 +284,7 @@ pub fn film_json(export: &Export) -> serde_json::Value {
         "opaque": export.opaque,
         "refraction": refraction_json(export),
         "error": errors_json(export),
+        "rough": export.rough.as_ref().map_or(serde_json::Value::Null, super::rough::rough_json),
         "shaders": SHADERS.iter().map(|(name, _)| *name).collect::<Vec<_>>(),
         "tool": concat!("irid ", env!("CARGO_PKG_VERSION")),
     })
@@ -346,6 +347,9 @@ fn fill(export: &Export, tmp: &Path) -> Result<()> {
     for (file, text) in SHADERS {
         let path = tmp.join(file);
         std::fs::write(&path, text).map_err(|e| Error::io(&path, e))?;
+    }
+    if let Some(rough) = &export.rough {
+        super::rough::fill(rough, tmp)?;
     }
     Ok(())
 }
