@@ -46,26 +46,14 @@ float2 irid_rough_xy(float thickness_nm, float cos_theta)
     return float2(_e62, _e63);
 }
 
-int naga_mod(int lhs, int rhs) {
-    int divisor = ((lhs == int(-2147483647 - 1) & rhs == -1) | (rhs == 0)) ? 1 : rhs;
-    return lhs - (lhs / divisor) * divisor;
-}
-
-int naga_div(int lhs, int rhs) {
-    return lhs / (((lhs == int(-2147483647 - 1) & rhs == -1) | (rhs == 0)) ? 1 : rhs);
-}
-
-int naga_f2i32(float value) {
-    return int(clamp(value, -2147483600.0, 2147483500.0));
-}
-
-float2 irid_rough_uv(int slice, float2 xy)
+float2 irid_rough_uv(float slice, float2 xy)
 {
     float4 header = irid_rough_params.v[0];
     float4 slices = irid_rough_params.v[3];
-    int columns = naga_f2i32(header.w);
-    float _e23 = irid_rough_params.v[2].w;
-    float2 origin = ((float2(float(naga_mod(slice, columns)), float(naga_div(slice, columns))) * slices.zw) + (_e23).xx);
+    float row = floor(((slice + 0.5) / header.w));
+    float column = (slice - (row * header.w));
+    float _e25 = irid_rough_params.v[2].w;
+    float2 origin = ((float2(column, row) * slices.zw) + (_e25).xx);
     float2 texel = ((origin + (0.5).xx) + (xy * (slices.xy - (1.0).xx)));
     return (texel / header.xy);
 }
@@ -77,9 +65,9 @@ float3 irid_film_rough(float thickness_nm_1, float cos_theta_1, float roughness)
     float s = (sqrt(clamp(roughness, 0.0, 1.0)) * (n - 1.0));
     float s0_ = min(floor(s), (n - 2.0));
     float w = (s - s0_);
-    const float2 _e24 = irid_rough_uv(naga_f2i32(s0_), _e3);
-    float4 a = irid_rough.SampleLevel(irid_rough_sampler, _e24, 0.0);
-    const float2 _e32 = irid_rough_uv(asint(asuint(naga_f2i32(s0_)) + asuint(int(1))), _e3);
-    float4 b = irid_rough.SampleLevel(irid_rough_sampler, _e32, 0.0);
+    const float2 _e23 = irid_rough_uv(s0_, _e3);
+    float4 a = irid_rough.SampleLevel(irid_rough_sampler, _e23, 0.0);
+    const float2 _e30 = irid_rough_uv((s0_ + 1.0), _e3);
+    float4 b = irid_rough.SampleLevel(irid_rough_sampler, _e30, 0.0);
     return ((a.xyz * (1.0 - w)) + (b.xyz * w));
 }

@@ -48,15 +48,17 @@ fn irid_rough_xy(thickness_nm: f32, cos_theta: f32) -> vec2<f32> {
     return vec2<f32>(x, y);
 }
 
-// The texture coordinate of chart point `xy` in slice `slice`: slices lie
-// in rows of v[0].w, each inside a gutter of edge copies, node i at the
-// centre of its texel i.
-fn irid_rough_uv(slice: i32, xy: vec2<f32>) -> vec2<f32> {
+// The texture coordinate of chart point `xy` in slice `slice` (a whole
+// number): slices lie in rows of v[0].w, each inside a gutter of edge
+// copies, node i at the centre of its texel i. In f32 throughout (the half
+// keeps the row off a rounding edge), so no float-to-int conversion helper
+// is generated.
+fn irid_rough_uv(slice: f32, xy: vec2<f32>) -> vec2<f32> {
     let header = irid_rough_params.v[0];
     let slices = irid_rough_params.v[3];
-    let columns = i32(header.w);
-    let origin = vec2<f32>(f32(slice % columns), f32(slice / columns)) * slices.zw
-        + irid_rough_params.v[2].w;
+    let row = floor((slice + 0.5) / header.w);
+    let column = slice - row * header.w;
+    let origin = vec2<f32>(column, row) * slices.zw + irid_rough_params.v[2].w;
     let texel = origin + 0.5 + xy * (slices.xy - 1.0);
     return texel / header.xy;
 }
@@ -74,7 +76,7 @@ fn irid_film_rough(thickness_nm: f32, cos_theta: f32, roughness: f32) -> vec3<f3
     let s = sqrt(clamp(roughness, 0.0, 1.0)) * (n - 1.0);
     let s0 = min(floor(s), n - 2.0);
     let w = s - s0;
-    let a = textureSampleLevel(irid_rough, irid_rough_sampler, irid_rough_uv(i32(s0), xy), 0.0);
-    let b = textureSampleLevel(irid_rough, irid_rough_sampler, irid_rough_uv(i32(s0) + 1, xy), 0.0);
+    let a = textureSampleLevel(irid_rough, irid_rough_sampler, irid_rough_uv(s0, xy), 0.0);
+    let b = textureSampleLevel(irid_rough, irid_rough_sampler, irid_rough_uv(s0 + 1.0, xy), 0.0);
     return a.rgb * (1.0 - w) + b.rgb * w;
 }

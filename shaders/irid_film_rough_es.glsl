@@ -47,12 +47,13 @@ vec2 irid_rough_xy(float thickness_nm, float cos_theta) {
     return vec2(_e62, _e63);
 }
 
-vec2 irid_rough_uv(int slice, vec2 xy) {
+vec2 irid_rough_uv(float slice, vec2 xy) {
     vec4 header = irid_rough_params.v[0];
     vec4 slices = irid_rough_params.v[3];
-    int columns = int(header.w);
-    float _e23 = irid_rough_params.v[2].w;
-    vec2 origin = ((vec2(float((slice % columns)), float((slice / columns))) * slices.zw) + vec2(_e23));
+    float row = floor(((slice + 0.5) / header.w));
+    float column = (slice - (row * header.w));
+    float _e25 = irid_rough_params.v[2].w;
+    vec2 origin = ((vec2(column, row) * slices.zw) + vec2(_e25));
     vec2 texel = ((origin + vec2(0.5)) + (xy * (slices.xy - vec2(1.0))));
     return (texel / header.xy);
 }
@@ -63,9 +64,9 @@ vec3 irid_film_rough(float thickness_nm_1, float cos_theta_1, float roughness) {
     float s = (sqrt(clamp(roughness, 0.0, 1.0)) * (n - 1.0));
     float s0_ = min(floor(s), (n - 2.0));
     float w = (s - s0_);
-    vec2 _e24 = irid_rough_uv(int(s0_), _e3);
-    vec4 a = textureLod(irid_rough, vec2(_e24), 0.0);
-    vec2 _e32 = irid_rough_uv((int(s0_) + 1), _e3);
-    vec4 b = textureLod(irid_rough, vec2(_e32), 0.0);
+    vec2 _e23 = irid_rough_uv(s0_, _e3);
+    vec4 a = textureLod(irid_rough, vec2(_e23), 0.0);
+    vec2 _e30 = irid_rough_uv((s0_ + 1.0), _e3);
+    vec4 b = textureLod(irid_rough, vec2(_e30), 0.0);
     return ((a.xyz * (1.0 - w)) + (b.xyz * w));
 }

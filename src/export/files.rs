@@ -322,6 +322,15 @@ pub fn fill_dir(export: &Export, prepared: &mut Prepared, output: Output) -> Res
     prepared.write(output, |tmp| fill(export, tmp))
 }
 
+/// Writes each (file name, text) into `dir`.
+pub(super) fn write_texts(dir: &Path, files: &[(&str, &str)]) -> Result<()> {
+    for (file, text) in files {
+        let path = dir.join(file);
+        std::fs::write(&path, text).map_err(|e| Error::io(&path, e))?;
+    }
+    Ok(())
+}
+
 /// Whether an existing directory may be replaced: empty, or an export.
 fn replaceable(dir: &Path) -> bool {
     let empty = std::fs::read_dir(dir).is_ok_and(|mut d| d.next().is_none());
@@ -344,10 +353,7 @@ fn fill(export: &Export, tmp: &Path) -> Result<()> {
         .map_err(|e| Error::invalid("film.json", e.to_string()))?;
     let path = tmp.join("film.json");
     std::fs::write(&path, json + "\n").map_err(|e| Error::io(&path, e))?;
-    for (file, text) in SHADERS {
-        let path = tmp.join(file);
-        std::fs::write(&path, text).map_err(|e| Error::io(&path, e))?;
-    }
+    write_texts(tmp, &SHADERS)?;
     if let Some(rough) = &export.rough {
         super::rough::fill(rough, tmp)?;
     }

@@ -148,19 +148,17 @@ impl RoughExport {
         let s = roughness.clamp(0.0, 1.0).sqrt() * (n - 1.0);
         let s0 = s.floor().min(n - 2.0);
         let w = s - s0;
-        let columns = v[3] as i32;
-        let uv = |slice: i32| {
-            let origin = [
-                (slice % columns) as f32 * v[14] + v[11],
-                (slice / columns) as f32 * v[15] + v[11],
-            ];
+        let uv = |slice: f32| {
+            let row = ((slice + 0.5) / v[3]).floor();
+            let column = slice - row * v[3];
+            let origin = [column * v[14] + v[11], row * v[15] + v[11]];
             [
                 ((origin[0] + 0.5) + x * (v[12] - 1.0)) / v[0],
                 ((origin[1] + 0.5) + y * (v[13] - 1.0)) / v[1],
             ]
         };
-        let a = self.texture.sample_bilinear(uv(s0 as i32));
-        let b = self.texture.sample_bilinear(uv(s0 as i32 + 1));
+        let a = self.texture.sample_bilinear(uv(s0));
+        let b = self.texture.sample_bilinear(uv(s0 + 1.0));
         std::array::from_fn(|k| a[k] * (1.0 - w) + b[k] * w)
     }
 }
@@ -497,11 +495,7 @@ pub const ROUGH_FILE: &str = "rough.exr";
 /// folder.
 pub(super) fn fill(rough: &RoughExport, tmp: &std::path::Path) -> Result<()> {
     super::files::write_exr(&rough.texture, &tmp.join(ROUGH_FILE))?;
-    for (file, text) in ROUGH_SHADERS {
-        let path = tmp.join(file);
-        std::fs::write(&path, text).map_err(|e| Error::io(&path, e))?;
-    }
-    Ok(())
+    super::files::write_texts(tmp, &ROUGH_SHADERS)
 }
 
 /// film.json's `rough`: the texture, its slice layout (named and as the

@@ -214,40 +214,83 @@ pub fn read_dir(dir: &std::path::Path) -> Files {
         .collect();
     assert_eq!(uniform.len(), 4 * irid::export::UNIFORM_VEC4);
     let read = |name: &str| {
-        let image = exr::prelude::read_first_rgba_layer_from_file(
-            dir.join(name),
-            |resolution, _| {
-                (
-                    resolution.width(),
-                    vec![[0.0f32; 4]; resolution.width() * resolution.height()],
-                )
-            },
-            |(width, texels), pos, (r, g, b, a): (f32, f32, f32, f32)| {
-                texels[pos.y() * *width + pos.x()] = [r, g, b, a];
-            },
-        )
-        .unwrap();
-        let size = image.layer_data.size;
-        let (_, texels) = image.layer_data.channel_data.pixels;
+        let texture = read_exr(&dir.join(name));
         assert_eq!(
-            size.width(),
+            texture.width,
             film["texture"]["width"].as_u64().unwrap() as usize
         );
         assert_eq!(
-            size.height(),
+            texture.height,
             film["texture"]["height"].as_u64().unwrap() as usize
         );
-        irid::export::Texture {
-            width: size.width(),
-            height: size.height(),
-            texels,
-        }
+        texture
     };
     Files {
         uniform,
         reflectance: read("reflectance.exr"),
         transmittance: read("transmittance.exr"),
     }
+}
+
+/// An RGBA EXR texture, rows in file order.
+pub fn read_exr(path: &std::path::Path) -> irid::export::Texture {
+    let image = exr::prelude::read_first_rgba_layer_from_file(
+        path,
+        |resolution, _| {
+            (
+                resolution.width(),
+                vec![[0.0f32; 4]; resolution.width() * resolution.height()],
+            )
+        },
+        |(width, texels), pos, (r, g, b, a): (f32, f32, f32, f32)| {
+            texels[pos.y() * *width + pos.x()] = [r, g, b, a];
+        },
+    )
+    .unwrap();
+    let size = image.layer_data.size;
+    let (_, texels) = image.layer_data.channel_data.pixels;
+    irid::export::Texture {
+        width: size.width(),
+        height: size.height(),
+        texels,
+    }
+}
+
+/// A texture uploaded as RGBA16F, one mip level.
+pub fn upload(gpu: &Gpu, label: &str, t: &irid::export::Texture) -> wgpu::TextureView {
+    gpu.device
+        .create_texture_with_data(
+            &gpu.queue,
+            &wgpu::TextureDescriptor {
+                label: Some(label),
+                size: wgpu::Extent3d {
+                    width: t.width as u32,
+                    height: t.height as u32,
+                    depth_or_array_layers: 1,
+                },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format: wgpu::TextureFormat::Rgba16Float,
+                usage: wgpu::TextureUsages::TEXTURE_BINDING,
+                view_formats: &[],
+            },
+            wgpu::util::TextureDataOrder::LayerMajor,
+            &f16_bytes(&t.texels),
+        )
+        .create_view(&wgpu::TextureViewDescriptor::default())
+}
+
+/// The sampler docs/gpu.md asks for: bilinear, clamp to edge.
+pub fn bilinear_sampler(gpu: &Gpu, label: &str) -> wgpu::Sampler {
+    gpu.device.create_sampler(&wgpu::SamplerDescriptor {
+        label: Some(label),
+        address_mode_u: wgpu::AddressMode::ClampToEdge,
+        address_mode_v: wgpu::AddressMode::ClampToEdge,
+        mag_filter: wgpu::FilterMode::Linear,
+        min_filter: wgpu::FilterMode::Linear,
+        ..Default::default()
+    })
 }
 
 /// Binds an export's textures and parameters (see [`bind`]).
@@ -266,38 +309,9 @@ pub fn bind_export(gpu: &Gpu, export: &Export) -> Bound {
 /// sampler and the uniform array as it is: bind group 0 of docs/gpu.md.
 pub fn bind(gpu: &Gpu, files: &Files) -> Bound {
     let device = &gpu.device;
-    let texture = |label: &str, t: &irid::export::Texture| {
-        let texture = device.create_texture_with_data(
-            &gpu.queue,
-            &wgpu::TextureDescriptor {
-                label: Some(label),
-                size: wgpu::Extent3d {
-                    width: t.width as u32,
-                    height: t.height as u32,
-                    depth_or_array_layers: 1,
-                },
-                mip_level_count: 1,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D2,
-                format: wgpu::TextureFormat::Rgba16Float,
-                usage: wgpu::TextureUsages::TEXTURE_BINDING,
-                view_formats: &[],
-            },
-            wgpu::util::TextureDataOrder::LayerMajor,
-            &f16_bytes(&t.texels),
-        );
-        texture.create_view(&wgpu::TextureViewDescriptor::default())
-    };
-    let reflectance = texture("irid_reflectance", &files.reflectance);
-    let transmittance = texture("irid_transmittance", &files.transmittance);
-    let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
-        label: Some("irid_sampler"),
-        address_mode_u: wgpu::AddressMode::ClampToEdge,
-        address_mode_v: wgpu::AddressMode::ClampToEdge,
-        mag_filter: wgpu::FilterMode::Linear,
-        min_filter: wgpu::FilterMode::Linear,
-        ..Default::default()
-    });
+    let reflectance = upload(gpu, "irid_reflectance", &files.reflectance);
+    let transmittance = upload(gpu, "irid_transmittance", &files.transmittance);
+    let sampler = bilinear_sampler(gpu, "irid_sampler");
     let params = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
         label: Some("irid_params"),
         contents: bytemuck::cast_slice(&files.uniform),
