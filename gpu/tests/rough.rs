@@ -16,14 +16,14 @@ mod harness;
 use std::path::{Path, PathBuf};
 
 use harness::{
-    bilinear_sampler, gpu, program, read_exr, run, upload, Bound, Gpu, Source, GLSL_HARNESS,
+    bilinear_sampler, bind_group, gpu, program, read_exr, run, upload, Bound, Gpu, Source,
+    GLSL_HARNESS,
 };
 use irid::export::{
     export, rough_exact_at, rough_measurement_axes, write_dir, Export, ExportSpec, Texture,
 };
 use irid::optics::Stack;
 use irid::rough::RoughTable;
-use wgpu::util::DeviceExt;
 
 fn repo() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
@@ -57,64 +57,15 @@ fn read_rough(dir: &Path) -> (Texture, Vec<f32>) {
 /// Bind group 0 of irid_film_rough (docs/gpu.md): the texture at binding
 /// 4, a bilinear clamp-to-edge sampler at 5, the uniform array at 6.
 fn bind_rough(gpu: &Gpu, texture: &Texture, uniform: &[f32]) -> Bound {
-    let device = &gpu.device;
     let view = upload(gpu, "irid_rough", texture);
     let sampler = bilinear_sampler(gpu, "irid_rough_sampler");
-    let params = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-        label: Some("irid_rough_params"),
-        contents: bytemuck::cast_slice(uniform),
-        usage: wgpu::BufferUsages::UNIFORM,
-    });
-    let entry = |binding, ty| wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: wgpu::ShaderStages::COMPUTE,
-        ty,
-        count: None,
-    };
-    let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-        label: Some("irid rough"),
-        entries: &[
-            entry(
-                4,
-                wgpu::BindingType::Texture {
-                    sample_type: wgpu::TextureSampleType::Float { filterable: true },
-                    view_dimension: wgpu::TextureViewDimension::D2,
-                    multisampled: false,
-                },
-            ),
-            entry(
-                5,
-                wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
-            ),
-            entry(
-                6,
-                wgpu::BindingType::Buffer {
-                    ty: wgpu::BufferBindingType::Uniform,
-                    has_dynamic_offset: false,
-                    min_binding_size: None,
-                },
-            ),
-        ],
-    });
-    let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: Some("irid rough"),
-        layout: &layout,
-        entries: &[
-            wgpu::BindGroupEntry {
-                binding: 4,
-                resource: wgpu::BindingResource::TextureView(&view),
-            },
-            wgpu::BindGroupEntry {
-                binding: 5,
-                resource: wgpu::BindingResource::Sampler(&sampler),
-            },
-            wgpu::BindGroupEntry {
-                binding: 6,
-                resource: params.as_entire_binding(),
-            },
-        ],
-    });
-    Bound { group, layout }
+    bind_group(
+        gpu,
+        "irid rough",
+        &[(4, &view)],
+        (5, &sampler),
+        (6, uniform),
+    )
 }
 
 /// The harness calls `FILM_FUNCTION(thickness, cos θ, side)` and stores an

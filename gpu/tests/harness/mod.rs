@@ -308,13 +308,31 @@ pub fn bind_export(gpu: &Gpu, export: &Export) -> Bound {
 /// Uploads the textures (RGBA16F, one mip level), a bilinear clamp-to-edge
 /// sampler and the uniform array as it is: bind group 0 of docs/gpu.md.
 pub fn bind(gpu: &Gpu, files: &Files) -> Bound {
-    let device = &gpu.device;
     let reflectance = upload(gpu, "irid_reflectance", &files.reflectance);
     let transmittance = upload(gpu, "irid_transmittance", &files.transmittance);
     let sampler = bilinear_sampler(gpu, "irid_sampler");
+    bind_group(
+        gpu,
+        "irid film",
+        &[(0, &reflectance), (1, &transmittance)],
+        (2, &sampler),
+        (3, &files.uniform),
+    )
+}
+
+/// Bind group 0 of a shader library: each texture at its binding, the
+/// sampler at its binding, the uniform array (as it is) at its binding.
+pub fn bind_group(
+    gpu: &Gpu,
+    label: &str,
+    textures: &[(u32, &wgpu::TextureView)],
+    sampler: (u32, &wgpu::Sampler),
+    uniform: (u32, &[f32]),
+) -> Bound {
+    let device = &gpu.device;
     let params = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-        label: Some("irid_params"),
-        contents: bytemuck::cast_slice(&files.uniform),
+        label: Some(label),
+        contents: bytemuck::cast_slice(uniform.1),
         usage: wgpu::BufferUsages::UNIFORM,
     });
     let entry = |binding, ty| wgpu::BindGroupLayoutEntry {
@@ -328,46 +346,42 @@ pub fn bind(gpu: &Gpu, files: &Files) -> Bound {
         view_dimension: wgpu::TextureViewDimension::D2,
         multisampled: false,
     };
+    let mut layout_entries: Vec<_> = textures.iter().map(|&(b, _)| entry(b, tex_ty)).collect();
+    layout_entries.push(entry(
+        sampler.0,
+        wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
+    ));
+    layout_entries.push(entry(
+        uniform.0,
+        wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Uniform,
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+    ));
     let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-        label: Some("irid film"),
-        entries: &[
-            entry(0, tex_ty),
-            entry(1, tex_ty),
-            entry(
-                2,
-                wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
-            ),
-            entry(
-                3,
-                wgpu::BindingType::Buffer {
-                    ty: wgpu::BufferBindingType::Uniform,
-                    has_dynamic_offset: false,
-                    min_binding_size: None,
-                },
-            ),
-        ],
+        label: Some(label),
+        entries: &layout_entries,
+    });
+    let mut entries: Vec<_> = textures
+        .iter()
+        .map(|&(binding, view)| wgpu::BindGroupEntry {
+            binding,
+            resource: wgpu::BindingResource::TextureView(view),
+        })
+        .collect();
+    entries.push(wgpu::BindGroupEntry {
+        binding: sampler.0,
+        resource: wgpu::BindingResource::Sampler(sampler.1),
+    });
+    entries.push(wgpu::BindGroupEntry {
+        binding: uniform.0,
+        resource: params.as_entire_binding(),
     });
     let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: Some("irid film"),
+        label: Some(label),
         layout: &layout,
-        entries: &[
-            wgpu::BindGroupEntry {
-                binding: 0,
-                resource: wgpu::BindingResource::TextureView(&reflectance),
-            },
-            wgpu::BindGroupEntry {
-                binding: 1,
-                resource: wgpu::BindingResource::TextureView(&transmittance),
-            },
-            wgpu::BindGroupEntry {
-                binding: 2,
-                resource: wgpu::BindingResource::Sampler(&sampler),
-            },
-            wgpu::BindGroupEntry {
-                binding: 3,
-                resource: params.as_entire_binding(),
-            },
-        ],
+        entries: &entries,
     });
     Bound { group, layout }
 }
