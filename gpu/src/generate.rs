@@ -1,35 +1,115 @@
-//! The GLSL 4.50, GLSL ES 3.00 and HLSL forms of `shaders/irid_film.wgsl`,
-//! generated with naga's back ends and tidied into include-able code with
-//! the interface names of docs/gpu.md.
+//! The GLSL 4.50, GLSL ES 3.00 and HLSL forms of `shaders/irid_film.wgsl`
+//! and `shaders/irid_film_rough.wgsl`, generated with naga's back ends and
+//! tidied into include-able code with the interface names of docs/gpu.md.
 //!
 //! naga writes whole shaders: its GLSL back end needs an entry point, names
 //! resources after their bindings (`_group_0_binding_0_fs`), and its HLSL
 //! back end reads samplers from a heap. The generator therefore compiles the
-//! WGSL with a small fragment entry point that calls `irid_film`, then drops
-//! that entry point and its inputs and outputs, gives every resource its
-//! WGSL name, and declares the HLSL sampler directly. Each step checks that
-//! it found what it replaces, so a change in naga's output stops the
-//! generator instead of producing a wrong file.
+//! WGSL with a small fragment entry point that calls the library's function,
+//! then drops that entry point and its inputs and outputs, gives every
+//! resource its WGSL name, and declares the HLSL sampler directly. Each step
+//! checks that it found what it replaces, so a change in naga's output stops
+//! the generator instead of producing a wrong file.
 
 use std::fmt::Write as _;
 
 use naga::back::{glsl, hlsl};
 
-/// The generated files, name and text, in the order docs/gpu.md lists them.
-pub fn generate(wgsl: &str) -> Result<Vec<(&'static str, String)>, String> {
-    let module = with_entry(wgsl)?;
+/// What differs between the shader libraries the generator handles.
+pub struct Library {
+    /// The WGSL file's stem: `irid_film`.
+    pub stem: &'static str,
+    /// The entry point's body, from `at: vec2<f32>` to a `vec4<f32>`.
+    entry_body: &'static str,
+    /// naga's GLSL names of the textures and the uniform block, and theirs.
+    glsl_names: &'static [(&'static str, &'static str)],
+    /// GLSL 4.50 bindings of the textures and the uniform block.
+    desktop_bindings: &'static [u32],
+    /// What a host binds where, for the GLSL 4.50 and ES 3.00 headers.
+    glsl_notes: [&'static str; 2],
+    /// WGSL binding → HLSL register (textures t, the sampler s, the block b).
+    hlsl_registers: &'static [(u32, u32)],
+    /// The sampler's name and its HLSL register.
+    sampler: (&'static str, u32),
+    /// What a host binds where, for the HLSL header.
+    hlsl_note: &'static str,
+}
+
+/// `irid_film` (shaders/irid_film.wgsl).
+pub const FILM: Library = Library {
+    stem: "irid_film",
+    entry_body: "let film = irid_film(at.x, at.y, select(0, 1, at.x < 0.0));\n    \
+                 return vec4<f32>(film.reflectance + film.transmittance, 1.0);",
+    glsl_names: &[
+        ("_group_0_binding_0_fs", "irid_reflectance"),
+        ("_group_0_binding_1_fs", "irid_transmittance"),
+        ("_group_0_binding_3_fs", "irid_params"),
+        ("IridParams_block_0Fragment", "IridParamsBlock"),
+    ],
+    desktop_bindings: &[0, 1, 3],
+    glsl_notes: [
+        "// Prepend `#version 450` (or `#version 450 core`). Textures are combined samplers\n\
+         // (bilinear, clamp to edge, no mipmaps): irid_reflectance at binding 0,\n\
+         // irid_transmittance at 1; the IridParamsBlock uniform block at binding 3.\n",
+        "// Prepend `#version 300 es`. Textures are combined samplers (bilinear, clamp to\n\
+         // edge, no mipmaps): bind with gl.uniform1i; the IridParamsBlock uniform block\n\
+         // with gl.uniformBlockBinding.\n",
+    ],
+    hlsl_registers: &[(0, 0), (1, 1), (2, 0), (3, 0)],
+    sampler: ("irid_sampler", 0),
+    hlsl_note: "// Textures at t0 and t1, the sampler (bilinear, clamp to edge) at s0, the\n\
+                // parameters in cbuffer irid_params at b0.\n\n",
+};
+
+/// `irid_film_rough` (shaders/irid_film_rough.wgsl): bindings beside
+/// irid_film's, so a shader can hold both.
+pub const ROUGH: Library = Library {
+    stem: "irid_film_rough",
+    entry_body: "return vec4<f32>(irid_film_rough(at.x, at.y, at.x - at.y), 1.0);",
+    glsl_names: &[
+        ("_group_0_binding_4_fs", "irid_rough"),
+        ("_group_0_binding_6_fs", "irid_rough_params"),
+        ("IridRoughParams_block_0Fragment", "IridRoughParamsBlock"),
+    ],
+    desktop_bindings: &[4, 6],
+    glsl_notes: [
+        "// Prepend `#version 450` (or `#version 450 core`). irid_rough is a combined sampler\n\
+         // (bilinear, clamp to edge, no mipmaps) at binding 4; the IridRoughParamsBlock\n\
+         // uniform block at binding 6.\n",
+        "// Prepend `#version 300 es`. irid_rough is a combined sampler (bilinear, clamp to\n\
+         // edge, no mipmaps): bind with gl.uniform1i; the IridRoughParamsBlock uniform\n\
+         // block with gl.uniformBlockBinding.\n",
+    ],
+    hlsl_registers: &[(4, 2), (5, 1), (6, 1)],
+    sampler: ("irid_rough_sampler", 1),
+    hlsl_note: "// The texture at t2, the sampler (bilinear, clamp to edge) at s1, the\n\
+                // parameters in cbuffer irid_rough_params at b1 (beside irid_film's).\n\n",
+};
+
+/// The generated files of `irid_film`, name and text, in the order
+/// docs/gpu.md lists them.
+pub fn generate(wgsl: &str) -> Result<Vec<(String, String)>, String> {
+    generate_library(&FILM, wgsl)
+}
+
+/// The generated files of `library` from its WGSL.
+pub fn generate_library(lib: &Library, wgsl: &str) -> Result<Vec<(String, String)>, String> {
+    let module = with_entry(lib, wgsl)?;
+    let stem = lib.stem;
     Ok(vec![
         (
-            "irid_film.glsl",
+            format!("{stem}.glsl"),
             glsl_form(
+                lib,
                 &module,
                 glsl::Version::Desktop(450),
                 "GLSL 4.50 (OpenGL 4.5, Vulkan)",
             )?,
         ),
         (
-            "irid_film_es.glsl",
+            format!("{stem}_es.glsl"),
             glsl_form(
+                lib,
                 &module,
                 glsl::Version::Embedded {
                     version: 300,
@@ -38,7 +118,7 @@ pub fn generate(wgsl: &str) -> Result<Vec<(&'static str, String)>, String> {
                 "GLSL ES 3.00 (WebGL2)",
             )?,
         ),
-        ("irid_film.hlsl", hlsl_form(&module)?),
+        (format!("{stem}.hlsl"), hlsl_form(lib, &module)?),
     ])
 }
 
@@ -50,11 +130,10 @@ struct Module {
     info: naga::valid::ModuleInfo,
 }
 
-fn with_entry(wgsl: &str) -> Result<Module, String> {
+fn with_entry(lib: &Library, wgsl: &str) -> Result<Module, String> {
     let source = format!(
-        "{wgsl}\n@fragment\nfn {ENTRY}(@location(0) at: vec2<f32>) -> @location(0) vec4<f32> {{\n    \
-         let film = irid_film(at.x, at.y, select(0, 1, at.x < 0.0));\n    \
-         return vec4<f32>(film.reflectance + film.transmittance, 1.0);\n}}\n"
+        "{wgsl}\n@fragment\nfn {ENTRY}(@location(0) at: vec2<f32>) -> @location(0) vec4<f32> {{\n    {}\n}}\n",
+        lib.entry_body
     );
     let module = naga::front::wgsl::parse_str(&source).map_err(|e| e.emit_to_string(&source))?;
     let info = naga::valid::Validator::new(
@@ -66,9 +145,10 @@ fn with_entry(wgsl: &str) -> Result<Module, String> {
     Ok(Module { module, info })
 }
 
-fn header(form: &str) -> String {
+fn header(lib: &Library, form: &str) -> String {
+    let stem = lib.stem;
     format!(
-        "// irid_film, {form}: GENERATED from irid_film.wgsl by naga {} \
+        "// {stem}, {form}: GENERATED from {stem}.wgsl by naga {} \
          (cargo run -p irid-gpu --bin gen-shaders); do not edit.\n\
          // Interface, bindings and upload: docs/gpu.md.\n",
         NAGA_VERSION
@@ -78,11 +158,16 @@ fn header(form: &str) -> String {
 /// The naga release the files come from (Cargo.lock pins it).
 pub const NAGA_VERSION: &str = "30";
 
-fn glsl_form(m: &Module, version: glsl::Version, form: &str) -> Result<String, String> {
+fn glsl_form(
+    lib: &Library,
+    m: &Module,
+    version: glsl::Version,
+    form: &str,
+) -> Result<String, String> {
     let mut binding_map = glsl::BindingMap::default();
     let desktop = matches!(version, glsl::Version::Desktop(_));
     if desktop {
-        for binding in [0, 1, 3] {
+        for &binding in lib.desktop_bindings {
             binding_map.insert(naga::ResourceBinding { group: 0, binding }, binding as u8);
         }
     }
@@ -111,28 +196,11 @@ fn glsl_form(m: &Module, version: glsl::Version, form: &str) -> Result<String, S
     .map_err(|e| format!("glsl: {e}"))?;
 
     let mut text = raw;
-    for (from, to) in [
-        ("_group_0_binding_0_fs", "irid_reflectance"),
-        ("_group_0_binding_1_fs", "irid_transmittance"),
-        ("_group_0_binding_3_fs", "irid_params"),
-    ] {
+    for (from, to) in lib.glsl_names {
         text = replace_all(&text, from, to)?;
     }
-    text = replace_all(&text, "IridParams_block_0Fragment", "IridParamsBlock")?;
-    let mut out = header(form);
-    if desktop {
-        out.push_str(
-            "// Prepend `#version 450` (or `#version 450 core`). Textures are combined samplers\n\
-             // (bilinear, clamp to edge, no mipmaps): irid_reflectance at binding 0,\n\
-             // irid_transmittance at 1; the IridParamsBlock uniform block at binding 3.\n",
-        );
-    } else {
-        out.push_str(
-            "// Prepend `#version 300 es`. Textures are combined samplers (bilinear, clamp to\n\
-             // edge, no mipmaps): bind with gl.uniform1i; the IridParamsBlock uniform block\n\
-             // with gl.uniformBlockBinding.\n",
-        );
-    }
+    let mut out = header(lib, form);
+    out.push_str(lib.glsl_notes[if desktop { 0 } else { 1 }]);
     let mut skipping_entry = false;
     let mut kept_any = false;
     for line in text.lines() {
@@ -171,9 +239,9 @@ fn glsl_form(m: &Module, version: glsl::Version, form: &str) -> Result<String, S
     Ok(tidy(out))
 }
 
-fn hlsl_form(m: &Module) -> Result<String, String> {
+fn hlsl_form(lib: &Library, m: &Module) -> Result<String, String> {
     let mut binding_map = hlsl::BindingMap::default();
-    for (binding, register) in [(0, 0), (1, 1), (2, 0), (3, 0)] {
+    for &(binding, register) in lib.hlsl_registers {
         binding_map.insert(
             naga::ResourceBinding { group: 0, binding },
             hlsl::BindTarget {
@@ -210,11 +278,9 @@ fn hlsl_form(m: &Module) -> Result<String, String> {
     hlsl::Writer::new(&mut raw, &options, &pipeline)
         .write(&m.module, &m.info, None)
         .map_err(|e| format!("hlsl: {e}"))?;
-    let mut out = header("HLSL (Shader Model 5.1)");
-    out.push_str(
-        "// Textures at t0 and t1, the sampler (bilinear, clamp to edge) at s0, the\n\
-         // parameters in cbuffer irid_params at b0.\n\n",
-    );
+    let mut out = header(lib, "HLSL (Shader Model 5.1)");
+    out.push_str(lib.hlsl_note);
+    let (sampler_name, sampler_register) = lib.sampler;
     let (mut sampler, mut skipping) = (false, false);
     for line in raw.lines() {
         // naga reads samplers through a heap and an index buffer (as wgpu's
@@ -223,8 +289,11 @@ fn hlsl_form(m: &Module) -> Result<String, String> {
             || line.contains("nagaComparisonSamplerHeap")
             || line.contains("nagaGroup0SamplerIndexArray")
         {
-            if line.starts_with("static const SamplerState irid_sampler ") {
-                out.push_str("SamplerState irid_sampler : register(s0);\n");
+            if line.starts_with(&format!("static const SamplerState {sampler_name} ")) {
+                let _ = writeln!(
+                    out,
+                    "SamplerState {sampler_name} : register(s{sampler_register});"
+                );
                 sampler = true;
             }
             continue;

@@ -21,7 +21,7 @@ fn committed_shaders_are_generated_from_the_wgsl() {
     assert_eq!(files.len(), 3);
     for (name, text) in files {
         assert!(
-            read(name) == text,
+            read(&name) == text,
             "shaders/{name} is out of date: run `cargo run -p irid-gpu --bin gen-shaders`"
         );
         assert!(text.contains("GENERATED from irid_film.wgsl"), "{name}");
@@ -80,6 +80,19 @@ fn compiles(tool: &str, name: &str, source: &str, args: &[&str]) {
     );
 }
 
+/// Checks GLSL ES 3.00 `source` as ES source (ES 3.00 has no SPIR-V target).
+fn compiles_es(tool: &str, source: &str) {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("film.frag");
+    std::fs::write(&path, source).unwrap();
+    let out = Command::new(tool).arg(&path).output().unwrap();
+    assert!(
+        out.status.success(),
+        "{}\n{source}",
+        String::from_utf8_lossy(&out.stdout)
+    );
+}
+
 const GLSL_MAIN: &str = "void main() { IridFilm f = irid_film(250.0, 0.5, 1); \
                          irid_out = vec4(f.reflectance + f.transmittance, 1.0); }\n";
 
@@ -96,16 +109,7 @@ fn glsl_compiles_for_opengl_vulkan_and_webgl2() {
         "#version 300 es\n{}out vec4 irid_out;\n{GLSL_MAIN}",
         read("irid_film_es.glsl")
     );
-    // ES 3.00 has no SPIR-V target: check it as ES source.
-    let dir = tempfile::tempdir().unwrap();
-    let path = dir.path().join("film.frag");
-    std::fs::write(&path, &es).unwrap();
-    let out = Command::new(tool).arg(&path).output().unwrap();
-    assert!(
-        out.status.success(),
-        "{}\n{es}",
-        String::from_utf8_lossy(&out.stdout)
-    );
+    compiles_es(tool, &es);
 }
 
 #[test]
@@ -121,6 +125,62 @@ fn hlsl_compiles() {
         tool,
         "film.hlsl",
         &source,
+        &["-D", "-V", "-S", "frag", "-e", "main"],
+    );
+}
+
+/// irid_film_rough's generated files are current, and each compiles with a
+/// real compiler together with irid_film's (their bindings coexist).
+#[test]
+fn rough_shaders_are_generated_and_compile_beside_irid_film() {
+    let files = irid_gpu::generate::generate_library(
+        &irid_gpu::generate::ROUGH,
+        &read("irid_film_rough.wgsl"),
+    )
+    .unwrap();
+    assert_eq!(files.len(), 3);
+    for (name, text) in files {
+        assert!(
+            read(&name) == text,
+            "shaders/{name} is out of date: run `cargo run -p irid-gpu --bin gen-shaders`"
+        );
+        assert!(
+            text.contains("GENERATED from irid_film_rough.wgsl"),
+            "{name}"
+        );
+        for interface in ["irid_film_rough(", "irid_rough", "irid_rough_params"] {
+            assert!(text.contains(interface), "{name} lacks {interface}");
+        }
+    }
+    for (name, text) in irid::export::ROUGH_SHADERS {
+        assert_eq!(read(name), text, "{name}");
+    }
+    let Some(tool) = glslang() else { return };
+    let main = "void main() { IridFilm f = irid_film(250.0, 0.5, 0); \
+                irid_out = vec4(f.reflectance + irid_film_rough(250.0, 0.5, 0.3), 1.0); }\n";
+    let desktop = format!(
+        "#version 450\n{}{}layout(location = 0) out vec4 irid_out;\n{main}",
+        read("irid_film.glsl"),
+        read("irid_film_rough.glsl")
+    );
+    compiles(tool, "rough.frag", &desktop, &["-V"]);
+    let es = format!(
+        "#version 300 es\n{}{}out vec4 irid_out;\n{main}",
+        read("irid_film_es.glsl"),
+        read("irid_film_rough_es.glsl")
+    );
+    compiles_es(tool, &es);
+    let hlsl = format!(
+        "{}{}float4 main(float2 at : TEXCOORD0) : SV_Target0 {{\n    \
+         IridFilm f = irid_film(at.x, at.y, 0);\n    \
+         return float4(f.reflectance + irid_film_rough(at.x, at.y, at.x - at.y), 1.0);\n}}\n",
+        read("irid_film.hlsl"),
+        read("irid_film_rough.hlsl")
+    );
+    compiles(
+        tool,
+        "rough.hlsl",
+        &hlsl,
         &["-D", "-V", "-S", "frag", "-e", "main"],
     );
 }

@@ -51,6 +51,15 @@ pub struct Args {
     /// Also write 16-bit PNGs (for engines without OpenEXR import).
     #[arg(long)]
     pub png: bool,
+    /// Also write the rough table: the front side's reflectance
+    /// pre-integrated over a GGX lobe, roughness 0 to 1 (rough.exr,
+    /// irid_film_rough; docs/gpu.md).
+    #[arg(long)]
+    pub rough: bool,
+    /// The rough table's error target against irid's rough reflectance
+    /// [default: --max-error].
+    #[arg(long, requires = "rough")]
+    pub rough_max_error: Option<f64>,
     /// Print nothing but errors.
     #[arg(long, short)]
     pub quiet: bool,
@@ -74,6 +83,9 @@ pub fn run(args: Args) -> Result<ExitCode> {
     spec.front_only = args.front_only;
     spec.points = args.points;
     spec.png = args.png;
+    if args.rough {
+        spec.rough_max_error = Some(args.rough_max_error.unwrap_or(args.max_error));
+    }
     spec.validate()?;
     // The folder's path is checked before the export is computed.
     let mut outputs = OutputSet::new();
@@ -143,5 +155,24 @@ fn report(result: &irid::export::Export, args: &Args, seconds: f64) {
                 png.max_delta_e00[1]
             );
         }
+    }
+    if let Some(rough) = &result.rough {
+        let e = &rough.error;
+        println!(
+            "rough (light from the ambient): {} slices of {}×{} texels (roughness 0 to 1), {}×{} texels, {} KiB; GPU error at {} random points: max {:.2e} (target {:.0e}), p99 {:.2e}, mean {:.2e}; ΔE00 max {:.3}, mean {:.4}",
+            rough.slices,
+            rough.mapping.size_u,
+            rough.mapping.size_v,
+            rough.texture.width,
+            rough.texture.height,
+            rough.texture.width * rough.texture.height * 8 / 1024,
+            e.points,
+            e.max_all(),
+            rough.target,
+            e.p99_abs.iter().fold(0.0f64, |a, &b| a.max(b)),
+            e.mean_abs.iter().sum::<f64>() / 3.0,
+            e.max_delta_e00,
+            e.mean_delta_e00,
+        );
     }
 }

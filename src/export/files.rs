@@ -71,7 +71,7 @@ pub(super) fn png_textures(export: &Export, scale: f64) -> (Texture, Texture) {
     (back(&export.reflectance), back(&export.transmittance))
 }
 
-fn write_exr(texture: &Texture, path: &Path) -> Result<()> {
+pub(super) fn write_exr(texture: &Texture, path: &Path) -> Result<()> {
     let mut list: SmallVec<[AnyChannel<FlatSamples>; 4]> = SmallVec::new();
     for (k, name) in ["R", "G", "B", "A"].iter().enumerate() {
         let plane = texture
@@ -284,6 +284,7 @@ pub fn film_json(export: &Export) -> serde_json::Value {
         "opaque": export.opaque,
         "refraction": refraction_json(export),
         "error": errors_json(export),
+        "rough": export.rough.as_ref().map_or(serde_json::Value::Null, super::rough::rough_json),
         "shaders": SHADERS.iter().map(|(name, _)| *name).collect::<Vec<_>>(),
         "tool": concat!("irid ", env!("CARGO_PKG_VERSION")),
     })
@@ -321,6 +322,15 @@ pub fn fill_dir(export: &Export, prepared: &mut Prepared, output: Output) -> Res
     prepared.write(output, |tmp| fill(export, tmp))
 }
 
+/// Writes each (file name, text) into `dir`.
+pub(super) fn write_texts(dir: &Path, files: &[(&str, &str)]) -> Result<()> {
+    for (file, text) in files {
+        let path = dir.join(file);
+        std::fs::write(&path, text).map_err(|e| Error::io(&path, e))?;
+    }
+    Ok(())
+}
+
 /// Whether an existing directory may be replaced: empty, or an export.
 fn replaceable(dir: &Path) -> bool {
     let empty = std::fs::read_dir(dir).is_ok_and(|mut d| d.next().is_none());
@@ -343,9 +353,9 @@ fn fill(export: &Export, tmp: &Path) -> Result<()> {
         .map_err(|e| Error::invalid("film.json", e.to_string()))?;
     let path = tmp.join("film.json");
     std::fs::write(&path, json + "\n").map_err(|e| Error::io(&path, e))?;
-    for (file, text) in SHADERS {
-        let path = tmp.join(file);
-        std::fs::write(&path, text).map_err(|e| Error::io(&path, e))?;
+    write_texts(tmp, &SHADERS)?;
+    if let Some(rough) = &export.rough {
+        super::rough::fill(rough, tmp)?;
     }
     Ok(())
 }

@@ -20,6 +20,7 @@ mod atlas;
 mod files;
 mod mapping;
 mod measure;
+mod rough;
 mod search;
 
 pub use atlas::{
@@ -29,6 +30,10 @@ pub use atlas::{
 pub use files::{declare_dir, fill_dir, film_json, write_dir, FILM_FORMAT, FILM_VERSION};
 pub use mapping::{AngleWarp, Mapping};
 pub use measure::{measurement_points, ExportError, DEFAULT_POINTS, POINTS_SEED};
+pub use rough::{
+    rough_exact_at, rough_measurement_axes, RoughError, RoughExport, ROUGH_AXIS_POINTS, ROUGH_SEED,
+    ROUGH_SHADERS, ROUGH_VEC4,
+};
 pub use search::{F16_MAX, LASING_BOUND};
 
 use rayon::prelude::*;
@@ -90,6 +95,9 @@ pub struct ExportSpec {
     pub points: usize,
     /// Also write 16-bit PNGs (and measure their quantization).
     pub png: bool,
+    /// Also export the front side's rough reflectance (docs/gpu.md), with
+    /// this error target; `None`: no rough table.
+    pub rough_max_error: Option<f64>,
 }
 
 impl ExportSpec {
@@ -110,6 +118,7 @@ impl ExportSpec {
             front_only: false,
             points: DEFAULT_POINTS,
             png: false,
+            rough_max_error: None,
         }
     }
 
@@ -119,6 +128,9 @@ impl ExportSpec {
         check_target("max-error", self.max_error)?;
         if let Some(e) = self.back_max_error {
             check_target("back-max-error", e)?;
+        }
+        if let Some(e) = self.rough_max_error {
+            check_target("rough-max-error", e)?;
         }
         if !(1..=crate::lut::MAX_VALIDATION_POINTS).contains(&self.points) {
             return Err(Error::invalid(
@@ -239,6 +251,9 @@ pub struct Export {
     /// holds the power absorbed in it), or the transmittance is zero
     /// everywhere.
     pub opaque: bool,
+    /// The front side's rough reflectance over roughness slices, when
+    /// `spec.rough_max_error` asks for it.
+    pub rough: Option<RoughExport>,
 }
 
 impl Export {
@@ -457,9 +472,14 @@ pub fn export(spec: &ExportSpec, progress: &dyn Fn(&str)) -> Result<Export> {
             sides,
             png_scale: None,
             opaque,
+            rough: None,
         };
         if spec.png {
             png_errors(&mut export, &charts);
+        }
+        if let Some(target) = spec.rough_max_error {
+            let front = export.atlas.charts[export.atlas.chart_of(Side::Front)].mapping;
+            export.rough = Some(rough::rough_export(spec, front, target, progress)?);
         }
         return Ok(export);
     }

@@ -1,5 +1,6 @@
 //! Writes shaders/irid_film.glsl, irid_film_es.glsl and irid_film.hlsl from
-//! shaders/irid_film.wgsl (run from the repository root, or anywhere in it:
+//! shaders/irid_film.wgsl, and likewise irid_film_rough.* from
+//! shaders/irid_film_rough.wgsl (run from the repository root, or anywhere in it:
 //! the paths are the crate's):
 //!
 //!     cargo run -p irid-gpu --bin gen-shaders
@@ -12,23 +13,27 @@ use std::process::ExitCode;
 fn main() -> ExitCode {
     let check = std::env::args().any(|a| a == "--check");
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shaders");
-    let wgsl = match std::fs::read_to_string(dir.join("irid_film.wgsl")) {
-        Ok(t) => t,
-        Err(e) => {
-            eprintln!("gen-shaders: {}: {e}", dir.join("irid_film.wgsl").display());
-            return ExitCode::from(2);
+    let mut files = Vec::new();
+    for lib in [&irid_gpu::generate::FILM, &irid_gpu::generate::ROUGH] {
+        let source = dir.join(format!("{}.wgsl", lib.stem));
+        let wgsl = match std::fs::read_to_string(&source) {
+            Ok(t) => t,
+            Err(e) => {
+                eprintln!("gen-shaders: {}: {e}", source.display());
+                return ExitCode::from(2);
+            }
+        };
+        match irid_gpu::generate::generate_library(lib, &wgsl) {
+            Ok(f) => files.extend(f),
+            Err(e) => {
+                eprintln!("gen-shaders: {e}");
+                return ExitCode::from(2);
+            }
         }
-    };
-    let files = match irid_gpu::generate::generate(&wgsl) {
-        Ok(f) => f,
-        Err(e) => {
-            eprintln!("gen-shaders: {e}");
-            return ExitCode::from(2);
-        }
-    };
+    }
     let mut stale = false;
     for (name, text) in files {
-        let path = dir.join(name);
+        let path = dir.join(&name);
         let current = std::fs::read_to_string(&path).unwrap_or_default();
         if current == text {
             continue;

@@ -214,34 +214,16 @@ pub fn read_dir(dir: &std::path::Path) -> Files {
         .collect();
     assert_eq!(uniform.len(), 4 * irid::export::UNIFORM_VEC4);
     let read = |name: &str| {
-        let image = exr::prelude::read_first_rgba_layer_from_file(
-            dir.join(name),
-            |resolution, _| {
-                (
-                    resolution.width(),
-                    vec![[0.0f32; 4]; resolution.width() * resolution.height()],
-                )
-            },
-            |(width, texels), pos, (r, g, b, a): (f32, f32, f32, f32)| {
-                texels[pos.y() * *width + pos.x()] = [r, g, b, a];
-            },
-        )
-        .unwrap();
-        let size = image.layer_data.size;
-        let (_, texels) = image.layer_data.channel_data.pixels;
+        let texture = read_exr(&dir.join(name));
         assert_eq!(
-            size.width(),
+            texture.width,
             film["texture"]["width"].as_u64().unwrap() as usize
         );
         assert_eq!(
-            size.height(),
+            texture.height,
             film["texture"]["height"].as_u64().unwrap() as usize
         );
-        irid::export::Texture {
-            width: size.width(),
-            height: size.height(),
-            texels,
-        }
+        texture
     };
     Files {
         uniform,
@@ -250,24 +232,34 @@ pub fn read_dir(dir: &std::path::Path) -> Files {
     }
 }
 
-/// Binds an export's textures and parameters (see [`bind`]).
-pub fn bind_export(gpu: &Gpu, export: &Export) -> Bound {
-    bind(
-        gpu,
-        &Files {
-            uniform: export.atlas.uniform_f32().to_vec(),
-            reflectance: export.reflectance.clone(),
-            transmittance: export.transmittance.clone(),
+/// An RGBA EXR texture, rows in file order.
+pub fn read_exr(path: &std::path::Path) -> irid::export::Texture {
+    let image = exr::prelude::read_first_rgba_layer_from_file(
+        path,
+        |resolution, _| {
+            (
+                resolution.width(),
+                vec![[0.0f32; 4]; resolution.width() * resolution.height()],
+            )
+        },
+        |(width, texels), pos, (r, g, b, a): (f32, f32, f32, f32)| {
+            texels[pos.y() * *width + pos.x()] = [r, g, b, a];
         },
     )
+    .unwrap();
+    let size = image.layer_data.size;
+    let (_, texels) = image.layer_data.channel_data.pixels;
+    irid::export::Texture {
+        width: size.width(),
+        height: size.height(),
+        texels,
+    }
 }
 
-/// Uploads the textures (RGBA16F, one mip level), a bilinear clamp-to-edge
-/// sampler and the uniform array as it is: bind group 0 of docs/gpu.md.
-pub fn bind(gpu: &Gpu, files: &Files) -> Bound {
-    let device = &gpu.device;
-    let texture = |label: &str, t: &irid::export::Texture| {
-        let texture = device.create_texture_with_data(
+/// A texture uploaded as RGBA16F, one mip level.
+pub fn upload(gpu: &Gpu, label: &str, t: &irid::export::Texture) -> wgpu::TextureView {
+    gpu.device
+        .create_texture_with_data(
             &gpu.queue,
             &wgpu::TextureDescriptor {
                 label: Some(label),
@@ -285,22 +277,62 @@ pub fn bind(gpu: &Gpu, files: &Files) -> Bound {
             },
             wgpu::util::TextureDataOrder::LayerMajor,
             &f16_bytes(&t.texels),
-        );
-        texture.create_view(&wgpu::TextureViewDescriptor::default())
-    };
-    let reflectance = texture("irid_reflectance", &files.reflectance);
-    let transmittance = texture("irid_transmittance", &files.transmittance);
-    let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
-        label: Some("irid_sampler"),
+        )
+        .create_view(&wgpu::TextureViewDescriptor::default())
+}
+
+/// The sampler docs/gpu.md asks for: bilinear, clamp to edge.
+pub fn bilinear_sampler(gpu: &Gpu, label: &str) -> wgpu::Sampler {
+    gpu.device.create_sampler(&wgpu::SamplerDescriptor {
+        label: Some(label),
         address_mode_u: wgpu::AddressMode::ClampToEdge,
         address_mode_v: wgpu::AddressMode::ClampToEdge,
         mag_filter: wgpu::FilterMode::Linear,
         min_filter: wgpu::FilterMode::Linear,
         ..Default::default()
-    });
+    })
+}
+
+/// Binds an export's textures and parameters (see [`bind`]).
+pub fn bind_export(gpu: &Gpu, export: &Export) -> Bound {
+    bind(
+        gpu,
+        &Files {
+            uniform: export.atlas.uniform_f32().to_vec(),
+            reflectance: export.reflectance.clone(),
+            transmittance: export.transmittance.clone(),
+        },
+    )
+}
+
+/// Uploads the textures (RGBA16F, one mip level), a bilinear clamp-to-edge
+/// sampler and the uniform array as it is: bind group 0 of docs/gpu.md.
+pub fn bind(gpu: &Gpu, files: &Files) -> Bound {
+    let reflectance = upload(gpu, "irid_reflectance", &files.reflectance);
+    let transmittance = upload(gpu, "irid_transmittance", &files.transmittance);
+    let sampler = bilinear_sampler(gpu, "irid_sampler");
+    bind_group(
+        gpu,
+        "irid film",
+        &[(0, &reflectance), (1, &transmittance)],
+        (2, &sampler),
+        (3, &files.uniform),
+    )
+}
+
+/// Bind group 0 of a shader library: each texture at its binding, the
+/// sampler at its binding, the uniform array (as it is) at its binding.
+pub fn bind_group(
+    gpu: &Gpu,
+    label: &str,
+    textures: &[(u32, &wgpu::TextureView)],
+    sampler: (u32, &wgpu::Sampler),
+    uniform: (u32, &[f32]),
+) -> Bound {
+    let device = &gpu.device;
     let params = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-        label: Some("irid_params"),
-        contents: bytemuck::cast_slice(&files.uniform),
+        label: Some(label),
+        contents: bytemuck::cast_slice(uniform.1),
         usage: wgpu::BufferUsages::UNIFORM,
     });
     let entry = |binding, ty| wgpu::BindGroupLayoutEntry {
@@ -314,46 +346,42 @@ pub fn bind(gpu: &Gpu, files: &Files) -> Bound {
         view_dimension: wgpu::TextureViewDimension::D2,
         multisampled: false,
     };
+    let mut layout_entries: Vec<_> = textures.iter().map(|&(b, _)| entry(b, tex_ty)).collect();
+    layout_entries.push(entry(
+        sampler.0,
+        wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
+    ));
+    layout_entries.push(entry(
+        uniform.0,
+        wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Uniform,
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+    ));
     let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-        label: Some("irid film"),
-        entries: &[
-            entry(0, tex_ty),
-            entry(1, tex_ty),
-            entry(
-                2,
-                wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
-            ),
-            entry(
-                3,
-                wgpu::BindingType::Buffer {
-                    ty: wgpu::BufferBindingType::Uniform,
-                    has_dynamic_offset: false,
-                    min_binding_size: None,
-                },
-            ),
-        ],
+        label: Some(label),
+        entries: &layout_entries,
+    });
+    let mut entries: Vec<_> = textures
+        .iter()
+        .map(|&(binding, view)| wgpu::BindGroupEntry {
+            binding,
+            resource: wgpu::BindingResource::TextureView(view),
+        })
+        .collect();
+    entries.push(wgpu::BindGroupEntry {
+        binding: sampler.0,
+        resource: wgpu::BindingResource::Sampler(sampler.1),
+    });
+    entries.push(wgpu::BindGroupEntry {
+        binding: uniform.0,
+        resource: params.as_entire_binding(),
     });
     let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: Some("irid film"),
+        label: Some(label),
         layout: &layout,
-        entries: &[
-            wgpu::BindGroupEntry {
-                binding: 0,
-                resource: wgpu::BindingResource::TextureView(&reflectance),
-            },
-            wgpu::BindGroupEntry {
-                binding: 1,
-                resource: wgpu::BindingResource::TextureView(&transmittance),
-            },
-            wgpu::BindGroupEntry {
-                binding: 2,
-                resource: wgpu::BindingResource::Sampler(&sampler),
-            },
-            wgpu::BindGroupEntry {
-                binding: 3,
-                resource: params.as_entire_binding(),
-            },
-        ],
+        entries: &entries,
     });
     Bound { group, layout }
 }
