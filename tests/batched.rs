@@ -15,6 +15,9 @@ use irid::optics::lanes::{avx2_available, avx512_available, best_copy, solve_bat
 use irid::optics::solve_batch;
 use irid::optics::{solve, Response, Stack, StackGrid};
 
+mod common;
+use common::random_stack::{random_stack, Kind, KINDS};
+
 fn c(n: f64, k: f64) -> C64 {
     C64::new(n, k)
 }
@@ -107,14 +110,6 @@ fn check(case: &Case) {
     }
 }
 
-#[derive(Clone, Copy, Debug)]
-enum Kind {
-    Lossless,
-    Passive,
-    WithGain,
-    Metal,
-}
-
 /// A random stack of `layers` layers of up to `max_thickness_nm`, its
 /// indices drifting by up to 2 % over `n_w` wavelengths.
 fn random_case(
@@ -125,30 +120,8 @@ fn random_case(
     n_w: usize,
     n_a: usize,
 ) -> Case {
-    let n0 = rng.random_range(1.0..2.0);
-    let mut base = vec![c(n0, 0.0)];
-    for _ in 0..layers {
-        let k = match kind {
-            Kind::Lossless => 0.0,
-            Kind::Passive | Kind::Metal => {
-                if rng.random_bool(0.5) {
-                    0.0
-                } else {
-                    rng.random_range(0.0..1.0)
-                }
-            }
-            Kind::WithGain => rng.random_range(-0.05..0.5),
-        };
-        base.push(c(rng.random_range(1.0..3.0), k));
-    }
-    base.push(match kind {
-        Kind::Lossless => c(rng.random_range(1.0..2.5), 0.0),
-        Kind::Metal => c(rng.random_range(0.05..2.0), rng.random_range(1.0..8.0)),
-        _ => c(rng.random_range(1.0..2.5), rng.random_range(0.0..0.5)),
-    });
-    let thicknesses_nm = (0..layers)
-        .map(|_| rng.random_range(0.0..max_thickness_nm))
-        .collect();
+    let (base, thicknesses_nm) = random_stack(rng, kind, layers, max_thickness_nm);
+    let n0 = base[0].re;
     let wavelengths_nm: Vec<f64> = (0..n_w).map(|_| rng.random_range(300.0..900.0)).collect();
     let mut indices = Vec::with_capacity(n_w * base.len());
     for _ in 0..n_w {
@@ -201,7 +174,7 @@ fn kernel_copies_are_reported() {
 fn random_stacks_batched_equal_scalar() {
     let mut rng = Pcg64::seed_from_u64(13);
     for round in 0..400 {
-        let kind = [Kind::Lossless, Kind::Passive, Kind::WithGain, Kind::Metal][round % 4];
+        let kind = KINDS[round % 4];
         let layers = rng.random_range(0..8);
         let n_w = rng.random_range(1..10);
         let n_a = rng.random_range(1..6);
@@ -212,7 +185,7 @@ fn random_stacks_batched_equal_scalar() {
 #[test]
 fn hundreds_of_layers() {
     let mut rng = Pcg64::seed_from_u64(14);
-    for kind in [Kind::Lossless, Kind::Passive, Kind::WithGain, Kind::Metal] {
+    for kind in KINDS {
         check(&random_case(&mut rng, kind, 300, 300.0, 5, 3));
     }
 }
@@ -450,7 +423,7 @@ fn non_dispersive_stacks_equal_scalar() {
     // partial groups of four occur.
     let mut rng = Pcg64::seed_from_u64(18);
     for round in 0..300 {
-        let kind = [Kind::Lossless, Kind::Passive, Kind::WithGain, Kind::Metal][round % 4];
+        let kind = KINDS[round % 4];
         let layers = rng.random_range(0..8);
         let case = random_case(&mut rng, kind, layers, 2000.0, 1, 4);
         let media = case.thicknesses_nm.len() + 2;

@@ -19,6 +19,9 @@ use irid::optics::{
     solve, solve_incoherent, LayerThickness, PointSolver, Response, Stack, MAX_THICKNESS_NM,
 };
 
+mod common;
+use common::random_stack::{random_stack, Kind, KINDS};
+
 const TOLERANCE: f64 = 1e-12;
 
 fn c(n: f64, k: f64) -> C64 {
@@ -134,35 +137,6 @@ fn assert_close(at: &str, got: &Response, want: &Response) {
     }
 }
 
-#[derive(Clone, Copy, Debug)]
-enum Kind {
-    Lossless,
-    Passive,
-    WithGain,
-    Metal,
-}
-
-/// A random stack of `layers` layers: its N + 2 indices and N thicknesses.
-fn random_stack(rng: &mut Pcg64, kind: Kind, layers: usize, max_nm: f64) -> (Vec<C64>, Vec<f64>) {
-    let mut n = vec![c(rng.random_range(1.0..2.0), 0.0)];
-    for _ in 0..layers {
-        let k = match kind {
-            Kind::Lossless => 0.0,
-            Kind::Passive | Kind::Metal if rng.random_bool(0.5) => 0.0,
-            Kind::Passive | Kind::Metal => rng.random_range(0.0..1.0),
-            Kind::WithGain => rng.random_range(-0.05..0.5),
-        };
-        n.push(c(rng.random_range(1.0..3.0), k));
-    }
-    n.push(match kind {
-        Kind::Lossless => c(rng.random_range(1.0..2.5), 0.0),
-        Kind::Metal => c(rng.random_range(0.05..2.0), rng.random_range(1.0..8.0)),
-        _ => c(rng.random_range(1.0..2.5), rng.random_range(0.0..0.5)),
-    });
-    let d = (0..layers).map(|_| rng.random_range(0.0..max_nm)).collect();
-    (n, d)
-}
-
 /// Incidences worth testing for a stack of indices `n`: random, normal,
 /// grazing and near-grazing, and each layer's critical angle (exactly and
 /// just off it) where the ambient is denser.
@@ -187,8 +161,7 @@ fn every_point_its_own_stack() {
         let layers = rng.random_range(0..7);
         let mut points = Points::new(format!("round {round}, {layers} layers"), layers);
         for _ in 0..rng.random_range(1..40) {
-            let kind = [Kind::Lossless, Kind::Passive, Kind::WithGain, Kind::Metal]
-                [rng.random_range(0..4)];
+            let kind = KINDS[rng.random_range(0..4)];
             let (n, d) = random_stack(&mut rng, kind, layers, 2000.0);
             let cosines = hard_cosines(&mut rng, &n);
             let cos = cosines[rng.random_range(0..cosines.len())];
@@ -203,7 +176,7 @@ fn one_stack_at_every_hard_angle() {
     // Each stack at all its hard incidences in a row, so grazing and
     // critical lanes sit in a vector with ordinary ones.
     let mut rng = Pcg64::seed_from_u64(42);
-    for kind in [Kind::Lossless, Kind::Passive, Kind::WithGain, Kind::Metal] {
+    for kind in KINDS {
         for layers in [1, 2, 5, 40] {
             let mut points = Points::new(format!("{kind:?}, {layers} layers"), layers);
             for _ in 0..6 {

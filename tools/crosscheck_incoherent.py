@@ -48,21 +48,12 @@ import mpmath
 import numpy as np
 import tmm
 
+from random_stacks import random_lists, stack_toml
+
 TOL = 1e-9
 PHASE_TOL = 1e-9
 PHASES = 256
 POOL = 24
-
-
-def random_lists(rng):
-    wavelengths = sorted(float(round(w, 3)) for w in rng.uniform(300.0, 900.0, int(rng.integers(1, 4))))
-    angles = [float(round(a, 4)) for a in rng.uniform(0.0, 89.0, int(rng.integers(1, 4)))]
-    pick = rng.random()
-    if pick < 0.2:
-        angles.append(0.0)
-    elif pick < 0.35:
-        angles.append(89.999)
-    return list(dict.fromkeys(wavelengths)), sorted(set(angles))
 
 
 def incoherent_layer(rng):
@@ -106,19 +97,6 @@ def random_stack(rng, pool):
         substrate = complex(rng.uniform(0.05, 2.0), rng.uniform(1.0, 8.0))
     wavelengths, angles = pool[int(rng.integers(0, len(pool)))]
     return ambient, media, substrate, wavelengths, angles
-
-
-def toml_index(z):
-    return f"[{z.real!r}, {z.imag!r}]"
-
-
-def stack_toml(ambient, media, substrate):
-    lines = [f"ambient = {{ n = {ambient!r} }}", f"substrate = {{ n = {toml_index(substrate)} }}"]
-    for n, d, coherent in media:
-        lines += ["[[layers]]", f"n = {toml_index(n)}", f"thickness_nm = {d!r}"]
-        if not coherent:
-            lines.append("coherent = false")
-    return "\n".join(lines) + "\n"
 
 
 def evanescent(n, ambient, angle_deg):
@@ -252,7 +230,7 @@ def compare(got, want, tol):
 
 
 def check_random(binary, rng, count, tmp, failures):
-    pool = [random_lists(rng) for _ in range(POOL)]
+    pool = [random_lists(rng, grazing_share=0.15) for _ in range(POOL)]
     cases = [random_stack(rng, pool) for _ in range(count)]
     results = run_irid(binary, cases, tmp, "r")
     worst, samples, adjusted, unanswered = 0.0, 0, 0, 0
@@ -308,7 +286,7 @@ def gain_cases(rng, count):
     weak gain over a moderate thickness."""
     cases = []
     while len(cases) < count:
-        pool = [random_lists(rng)]
+        pool = [random_lists(rng, grazing_share=0.15)]
         ambient, media, substrate, wls, angles = random_stack(rng, pool)
         media = [m for m in media if m[2]][:3]
         gain = (complex(rng.uniform(1.3, 2.5), -rng.uniform(1e-5, 3e-4)), float(rng.uniform(100.0, 3000.0)), False)

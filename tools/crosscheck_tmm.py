@@ -28,23 +28,14 @@ import mpmath
 import numpy as np
 import tmm
 
+from random_stacks import random_lists, stack_toml
+
 TOL = 1e-9
 MP_TOL = 1e-11
 MP_SAMPLES = 20
 # Stacks draw their (wavelengths, angles) lists from a pool, so that stacks
 # sharing lists go to irid in one call.
 POOL = 24
-
-
-def random_lists(rng):
-    wavelengths = sorted(float(round(w, 3)) for w in rng.uniform(300.0, 900.0, int(rng.integers(1, 4))))
-    angles = [float(round(a, 4)) for a in rng.uniform(0.0, 89.0, int(rng.integers(1, 4)))]
-    pick = rng.random()
-    if pick < 0.2:
-        angles.append(0.0)
-    elif pick < 0.4:
-        angles.append(89.999)
-    return list(dict.fromkeys(wavelengths)), sorted(set(angles))
 
 
 def random_stack(rng, pool):
@@ -71,17 +62,6 @@ def random_stack(rng, pool):
         substrate = complex(rng.uniform(0.05, 2.0), rng.uniform(1.0, 8.0))
     wavelengths, angles = pool[int(rng.integers(0, len(pool)))]
     return ambient, media, substrate, wavelengths, angles
-
-
-def toml_index(z):
-    return f"[{z.real!r}, {z.imag!r}]"
-
-
-def write_stack(path, ambient, media, substrate):
-    lines = [f"ambient = {{ n = {ambient!r} }}", f"substrate = {{ n = {toml_index(substrate)} }}"]
-    for n, d in media:
-        lines += ["[[layers]]", f"n = {toml_index(n)}", f"thickness_nm = {d!r}"]
-    path.write_text("\n".join(lines) + "\n")
 
 
 def reference(ambient, media, substrate, wavelength, angle_deg):
@@ -133,7 +113,7 @@ def main():
     binary = os.environ.get("IRID_BIN", "target/release/irid")
     count = int(os.environ.get("CROSSCHECK_STACKS", "1200"))
     rng = np.random.default_rng(20261122)
-    pool = [random_lists(rng) for _ in range(POOL)]
+    pool = [random_lists(rng, grazing_share=0.2) for _ in range(POOL)]
     stacks = [random_stack(rng, pool) for _ in range(count)]
     worst = 0.0
     worst_at = None
@@ -144,7 +124,7 @@ def main():
         groups = {}
         for i, (ambient, media, substrate, wls, angles) in enumerate(stacks):
             path = pathlib.Path(tmp) / f"s{i:05d}.toml"
-            write_stack(path, ambient, media, substrate)
+            path.write_text(stack_toml(ambient, media, substrate))
             key = (",".join(map(repr, wls)), ",".join(map(repr, angles)))
             groups.setdefault(key, []).append((i, path))
         for (wls, angles), members in groups.items():

@@ -4,6 +4,8 @@
 // Each test binary compiles its own copy and uses only part of it.
 #![allow(dead_code)]
 
+pub mod random_stack;
+
 #[cfg(feature = "cli")]
 use std::ffi::OsStr;
 use std::ops::Deref;
