@@ -30,6 +30,7 @@ pub mod ggx;
 mod kernel;
 mod mu_grid;
 mod quadrature;
+pub mod slices;
 #[cfg(test)]
 mod tests;
 

@@ -1,0 +1,900 @@
+//! F_eff on the nodes of an atlas: roughness *slices*, each an image of the
+//! front side's charts (light from the ambient) holding the pre-integrated
+//! rough reflectance at one roughness, read like the smooth atlas (chart
+//! chosen in closed form, one bilinear filter) and blended linearly
+//! between the two slices around the roughness.
+//!
+//! Slice s of S holds roughness (s / (S − 1))²: uniform in √roughness, so
+//! a reader finds its slices in closed form, and dense at small roughness,
+//! where F_eff changes fastest (the lobe starts to wash the fringes out).
+//! Slice 0 is the smooth atlas's reflectance, texel for texel.
+//!
+//! The nodes of an atlas lie at scattered thicknesses and angles (a
+//! chart's thickness axis is the layer's optical thickness, d = p / s(c)),
+//! while F_eff is cheap only on a tensor grid: the film's smooth colour on
+//! thickness nodes × the μ = v·h nodes of the quadrature ([`MuGrid`]),
+//! weighted per (cos θ, roughness) by a [`Kernel`]. So each slice is
+//! computed on a dense tensor grid, thickness (uniform in ln(1 + d / d₀): a
+//! tenth of a nanometre near zero thickness, a twelfth of the shortest
+//! fringe period at the top) × cos θ at the μ grid's own nodes (crowded
+//! towards grazing incidence and split at a critical angle, built to
+//! interpolate the film's colour cubically), and interpolated to each node
+//! cubically in both.
+//!
+//! The slice count is 2^k + 1, so a finer count keeps every slice of a
+//! coarser one: from the second differences between slices at every node
+//! the h² law predicts the count a linear blend needs for its share of the
+//! target; the result is then measured against [`rough_reflectance`] at
+//! random points, and doubled while that misses the target.
+//!
+//! Near grazing incidence (cos θ below [`GRAZING_COS`]) F_eff changes with
+//! roughness on the scale of cos θ itself (the lobe's width α = roughness²
+//! against the view angle's distance from the horizon), which no slice
+//! count uniform in √roughness follows down to cos θ = 0: there the error
+//! is measured and stated separately, as the smooth atlas states its
+//! aliased strip.
+
+use rand::{Rng, SeedableRng};
+use rayon::prelude::*;
+
+use super::kernel::{Kernel, Rules};
+use super::{rough_reflectance, MuGrid, Quadrature};
+use crate::atlas::{pack, Atlas, Chart, Film, Image};
+use crate::color::{delta_e2000_rgb, SpectralIntegrator};
+use crate::error::{Error, Result};
+use crate::lut::rgb_at_nodes;
+use crate::optics::Stack;
+
+/// Slices of the first count tried.
+const START_SLICES: usize = 5;
+/// The most slices.
+pub const MAX_SLICES: usize = 129;
+/// cos θ below which the slices' target is not sought (θ > 88.85°); see
+/// the module docs.
+pub const GRAZING_COS: f64 = 0.02;
+/// The scale d₀ (nm) of the dense thickness grid's warp ln(1 + d / d₀).
+const THICKNESS_SCALE_NM: f64 = 20.0;
+/// The dense grid's least thickness (nm).
+const MIN_THICKNESS_NM: f64 = 1e-6;
+/// The dense grid's spacing near zero thickness (nm).
+const FINEST_SPACING_NM: f64 = 0.1;
+/// Dense-grid intervals per shortest fringe period at the top of the range.
+const INTERVALS_PER_FRINGE: f64 = 12.0;
+/// The shortest wavelength of the colour integration (nm): it sets the
+/// shortest fringe period.
+const SHORTEST_WAVELENGTH_NM: f64 = 380.0;
+/// Share of the target the slice blend may use (the charts' own
+/// interpolation takes the rest).
+const BLEND_SHARE: f64 = 0.5;
+/// Rounds of doubling the slices after the first measurement.
+const MAX_DOUBLINGS: usize = 2;
+/// Random values per axis of the measurement: every combination of that
+/// many thicknesses, cosines and roughnesses.
+pub const MEASURE_AXIS_POINTS: usize = 40;
+/// The seed of the measurement's PCG64 stream.
+pub const MEASURE_SEED: u64 = 29;
+
+/// What the slices give against [`rough_reflectance`] at random points,
+/// per RGB channel of F_eff.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct SliceError {
+    /// Points measured.
+    pub points: usize,
+    /// Largest absolute error per channel.
+    pub max_abs: [f64; 3],
+    /// 99th percentile of the absolute error per channel.
+    pub p99_abs: [f64; 3],
+    /// Mean absolute error per channel.
+    pub mean_abs: [f64; 3],
+    /// Largest and mean CIEDE2000 of the colour.
+    pub max_delta_e00: f64,
+    /// Mean CIEDE2000.
+    pub mean_delta_e00: f64,
+    /// (thickness nm, cos θ, roughness) of the largest absolute error.
+    pub worst_point: [f64; 3],
+}
+
+impl SliceError {
+    /// The largest of `max_abs`.
+    pub fn max_all(&self) -> f64 {
+        self.max_abs.iter().fold(0.0, |a, &b| a.max(b))
+    }
+}
+
+/// F_eff of a film's front side on an atlas, one image per roughness.
+#[derive(Clone, Debug)]
+pub struct RoughSlices {
+    /// The front side's charts, packed on their own.
+    pub atlas: Atlas,
+    /// Roughness of each slice: (s / (S − 1))².
+    pub roughness: Vec<f64>,
+    /// One image (R, G, B of F_eff, as f32) per slice, the atlas's size.
+    pub slices: Vec<Image>,
+    /// The linear blend's error predicted from the slices' second
+    /// differences (cos θ ≥ [`GRAZING_COS`]).
+    pub blend_error: f64,
+    /// Against [`rough_reflectance`] at random points with cos θ ≥
+    /// [`GRAZING_COS`]: what the target is met over.
+    pub measured: SliceError,
+    /// The same at random points with cos θ < [`GRAZING_COS`].
+    pub grazing: SliceError,
+}
+
+/// What [`build`] needs besides the film.
+pub struct SliceRequest<'a> {
+    /// The film, for the smooth reflectance at nodes of grown charts.
+    pub film: &'a Film,
+    /// The smooth atlas: its side-0 charts are the slices' charts.
+    pub atlas: &'a Atlas,
+    /// Its texels, R first (at least three channels): slice 0.
+    pub image: &'a Image,
+    /// The largest absolute error allowed in any channel.
+    pub max_error: f64,
+    /// The largest texture side the slices' atlas may take.
+    pub max_side: usize,
+}
+
+/// The roughness of slice `s` of `count`.
+pub fn slice_roughness(s: usize, count: usize) -> f64 {
+    if count < 2 {
+        return 0.0;
+    }
+    let x = s as f64 / (count - 1) as f64;
+    x * x
+}
+
+impl RoughSlices {
+    /// F_eff at thickness `d` nm, cos θ `c` and roughness `r`, as a reader
+    /// computes it: the chart by the atlas's rule, one bilinear fetch in each
+    /// of the two slices around √r · (S − 1), blended linearly.
+    pub fn sample(&self, d: f64, c: f64, r: f64) -> [f64; 3] {
+        let Some(k) = self.atlas.chart_for(d, c, 0) else {
+            return [0.0; 3];
+        };
+        let chart = &self.atlas.charts[k];
+        let d = d.clamp(self.atlas.thickness_nm.0, self.atlas.thickness_nm.1);
+        let (x, y) = chart.xy(d, c.clamp(0.0, 1.0));
+        let rect = chart.rect;
+        let at = [
+            (rect.x as f64 + 0.5 + x * (rect.width - 1) as f64) as f32,
+            (rect.y as f64 + 0.5 + y * (rect.height - 1) as f64) as f32,
+        ];
+        let last = self.slices.len() - 1;
+        let pos = r.clamp(0.0, 1.0).sqrt() * last as f64;
+        let s = (pos.floor() as usize).min(last.saturating_sub(1));
+        let f = (pos - s as f64).clamp(0.0, 1.0);
+        let (mut a, mut b) = ([0.0f32; 3], [0.0f32; 3]);
+        self.slices[s].bilinear(at, &mut a);
+        self.slices[(s + 1).min(last)].bilinear(at, &mut b);
+        std::array::from_fn(|k| f64::from(a[k]) + f * (f64::from(b[k]) - f64::from(a[k])))
+    }
+}
+
+/// The film's smooth colour on the dense thickness grid × the μ nodes, and
+/// the cubic interpolation in thickness.
+struct Dense {
+    /// Thickness nodes, uniform in w = ln(1 + (d − d_lo) / d₀).
+    lo_nm: f64,
+    step: f64,
+    count: usize,
+    /// R, G, B at (thickness t, μ node m): `values[(t * mus + m) * 3 + ch]`.
+    values: Vec<f64>,
+    mus: usize,
+}
+
+impl Dense {
+    fn position(&self, d: f64) -> f64 {
+        if self.count < 2 {
+            return 0.0;
+        }
+        ((d - self.lo_nm).max(0.0) / THICKNESS_SCALE_NM).ln_1p() / self.step
+    }
+
+    /// The four dense nodes around `d` and their Catmull–Rom weights
+    /// (indices clamped at the ends).
+    fn stencil(&self, d: f64) -> ([usize; 4], [f64; 4]) {
+        let last = self.count.saturating_sub(1);
+        let pos = self.position(d).clamp(0.0, last as f64);
+        let k = (pos.floor() as usize).min(last.saturating_sub(1));
+        let t = pos - k as f64;
+        let (t2, t3) = (t * t, t * t * t);
+        let w = [
+            -0.5 * t3 + t2 - 0.5 * t,
+            1.5 * t3 - 2.5 * t2 + 1.0,
+            -1.5 * t3 + 2.0 * t2 + 0.5 * t,
+            0.5 * t3 - 0.5 * t2,
+        ];
+        let idx = |o: i64| (k as i64 + o).clamp(0, last as i64) as usize;
+        ([idx(-1), idx(0), idx(1), idx(2)], w)
+    }
+
+    /// F_eff at every dense thickness for `kernel`.
+    fn weigh(&self, kernel: &Kernel) -> Vec<[f64; 3]> {
+        let (first, weights) = kernel.weights();
+        (0..self.count)
+            .map(|t| {
+                let column = &self.values[(t * self.mus + first) * 3..];
+                let mut sum = [0.0; 3];
+                for (j, &w) in weights.iter().enumerate() {
+                    for (ch, s) in sum.iter_mut().enumerate() {
+                        *s = w.mul_add(column[j * 3 + ch], *s);
+                    }
+                }
+                sum
+            })
+            .collect()
+    }
+}
+
+/// F_eff at one roughness on the dense tensor grid: `[m * n_t + t]` for μ
+/// node m (as cos θ) and dense thickness t.
+type Table = Vec<[f64; 3]>;
+
+/// What computes F_eff: the dense grid, the μ grid whose nodes are the
+/// tables' cos θ, and the quadrature's rules.
+struct Filler<'a> {
+    dense: &'a Dense,
+    grid: &'a MuGrid,
+    rules: &'a Rules,
+}
+
+impl Filler<'_> {
+    /// F_eff at roughness `r` on the dense tensor grid.
+    fn table(&self, r: f64) -> Table {
+        self.grid
+            .nodes()
+            .par_iter()
+            .flat_map_iter(|&c| {
+                let kernel = Kernel::with_rules(self.grid, c, r, self.rules);
+                self.dense.weigh(&kernel)
+            })
+            .collect()
+    }
+
+    /// F_eff at (`d` nm, cos θ `c`) from `table`: cubic in both.
+    fn at(&self, table: &Table, d: f64, c: f64) -> [f64; 3] {
+        let n_t = self.dense.count;
+        let (idx, wd) = self.dense.stencil(d);
+        let (first, wc) = self.grid.interpolation(c);
+        let mut v = [0.0; 3];
+        for (j, wcj) in wc.iter().enumerate() {
+            let row = &table[(first + j) * n_t..];
+            for (i, wdi) in idx.iter().zip(wd) {
+                let w = wcj * wdi;
+                for (ch, o) in v.iter_mut().enumerate() {
+                    *o = w.mul_add(row[*i][ch], *o);
+                }
+            }
+        }
+        v
+    }
+
+    /// F_eff from `table` at every node of `chart` (its rectangle's size),
+    /// row-major.
+    fn chart(&self, table: &Table, chart: &Chart) -> Vec<[f64; 3]> {
+        chart_nodes(chart)
+            .into_iter()
+            .map(|(d, c)| self.at(table, d, c))
+            .collect()
+    }
+}
+
+/// Every node (thickness nm, cos θ) of `chart`, row-major.
+fn chart_nodes(chart: &Chart) -> Vec<(f64, f64)> {
+    let (w, h) = (chart.rect.width, chart.rect.height);
+    (0..h)
+        .flat_map(|j| (0..w).map(move |i| (i, j)))
+        .map(|(i, j)| {
+            let (d, c) = chart.node(i, j);
+            (d.max(0.0), c.clamp(0.0, 1.0))
+        })
+        .collect()
+}
+
+/// F_eff on the side-0 charts of `req.atlas` (grown where F_eff needs more
+/// nodes than the smooth film) for the film `stack` (layer `layer`
+/// varying), slice count chosen for `req.max_error`, then measured.
+pub fn build(
+    stack: &Stack,
+    layer: usize,
+    integrator: &SpectralIntegrator,
+    req: &SliceRequest,
+    progress: &dyn Fn(&str),
+) -> Result<RoughSlices> {
+    if !(req.max_error > 0.0 && req.max_error.is_finite()) {
+        return Err(Error::invalid(
+            "rough error target",
+            format!("{} is not a positive number", req.max_error),
+        ));
+    }
+    let start = std::time::Instant::now();
+    let say = |what: String| {
+        progress(&format!(
+            "rough: {what} ({:.1} s)",
+            start.elapsed().as_secs_f64()
+        ))
+    };
+    let smooth_charts: Vec<Chart> = req
+        .atlas
+        .charts
+        .iter()
+        .filter(|c| c.side == 0)
+        .copied()
+        .collect();
+    if smooth_charts.is_empty() {
+        return Err(Error::invalid(
+            "rough table",
+            "the atlas has no chart of light from the ambient",
+        ));
+    }
+    let grid = MuGrid::for_stack(stack, Quadrature::default().mu_intervals);
+    let nodes: Vec<(f64, f64)> = smooth_charts.iter().flat_map(chart_nodes).collect();
+    let dense = dense_grid(stack, layer, integrator, &nodes, &grid)?;
+    say(format!(
+        "F_eff from {} thicknesses x {} cos θ",
+        dense.count, dense.mus
+    ));
+    let rules = Rules::new(&Quadrature::default());
+    let filler = Filler {
+        dense: &dense,
+        grid: &grid,
+        rules: &rules,
+    };
+    let smooth0 = smooth_values(req, &smooth_charts);
+    let mut tables: Vec<Table> = Vec::new();
+    grow_tables(&mut tables, START_SLICES, &filler);
+    let mut blend_error = second_difference_error(&filler, &tables, req.atlas, &smooth0);
+    let predicted = predicted_count(tables.len() + 1, blend_error, BLEND_SHARE * req.max_error);
+    if predicted > tables.len() + 1 {
+        say(format!(
+            "{} slices blend to {blend_error:.2e}; {predicted} predicted",
+            tables.len() + 1
+        ));
+        grow_tables(&mut tables, predicted, &filler);
+        blend_error = second_difference_error(&filler, &tables, req.atlas, &smooth0);
+    }
+    let mut doublings = 0;
+    loop {
+        let count = tables.len() + 1;
+        let charts = grown_charts(
+            &filler,
+            &tables,
+            req.atlas,
+            (1.0 - BLEND_SHARE) * req.max_error,
+            req.max_side,
+        );
+        let atlas = packed(req.atlas.thickness_nm, charts, req.max_side)?;
+        let slices = images(req, &filler, &tables, &smooth_charts, &atlas)?;
+        let mut built = RoughSlices {
+            atlas,
+            roughness: (0..count).map(|s| slice_roughness(s, count)).collect(),
+            slices,
+            blend_error,
+            measured: SliceError::default(),
+            grazing: SliceError::default(),
+        };
+        (built.measured, built.grazing) = measure(stack, layer, integrator, &built)?;
+        say(format!(
+            "{count} slices of {}x{}, measured {:.2e} (cos θ ≥ {GRAZING_COS}), {:.2e} below",
+            built.atlas.width,
+            built.atlas.height,
+            built.measured.max_all(),
+            built.grazing.max_all(),
+        ));
+        if built.measured.max_all() <= req.max_error {
+            return Ok(built);
+        }
+        if doublings == MAX_DOUBLINGS || 2 * count - 1 > MAX_SLICES {
+            return Err(Error::invalid(
+                "rough table",
+                format!(
+                    "{count} roughness slices of {}x{} texels are off by {:.2e} at thickness \
+                     {:.1} nm, cos θ {:.4}, roughness {:.3}, above the target {:.1e}",
+                    built.atlas.width,
+                    built.atlas.height,
+                    built.measured.max_all(),
+                    built.measured.worst_point[0],
+                    built.measured.worst_point[1],
+                    built.measured.worst_point[2],
+                    req.max_error
+                ),
+            ));
+        }
+        doublings += 1;
+        grow_tables(&mut tables, 2 * count - 1, &filler);
+        blend_error = second_difference_error(&filler, &tables, req.atlas, &smooth0);
+    }
+}
+
+/// The smooth atlas's reflectance at every node of each of `charts` (its
+/// side-0 charts), row-major per chart.
+fn smooth_values(req: &SliceRequest, charts: &[Chart]) -> Vec<Vec<[f64; 3]>> {
+    charts
+        .iter()
+        .map(|chart| {
+            let r = chart.rect;
+            (0..r.height)
+                .flat_map(|j| (0..r.width).map(move |i| (i, j)))
+                .map(|(i, j)| {
+                    let v = req.image.texel(r.x + i, r.y + j);
+                    [f64::from(v[0]), f64::from(v[1]), f64::from(v[2])]
+                })
+                .collect()
+        })
+        .collect()
+}
+
+/// Makes `tables` (slices 1.. of 2^k + 1, uniform in √roughness; slice 0
+/// is the smooth film's) those of `count` (2^j + 1, j ≥ k) slices: the old
+/// ones keep their places, the new ones are computed.
+fn grow_tables(tables: &mut Vec<Table>, count: usize, filler: &Filler) {
+    let old_count = tables.len() + 1;
+    let stride = if old_count > 1 {
+        (count - 1) / (old_count - 1)
+    } else {
+        1
+    };
+    let mut old = std::mem::take(tables).into_iter();
+    for s in 1..count {
+        if old_count > 1 && s % stride == 0 {
+            if let Some(kept) = old.next() {
+                tables.push(kept);
+                continue;
+            }
+        }
+        tables.push(filler.table(slice_roughness(s, count)));
+    }
+}
+
+/// The linear blend's largest error halfway between slices, estimated as
+/// |F(s−1) − 2 F(s) + F(s+1)| / 8 at every node of `charts` with cos θ ≥
+/// [`GRAZING_COS`] (`smooth` is slice 0 at those nodes).
+fn second_difference_error(
+    filler: &Filler,
+    tables: &[Table],
+    atlas: &Atlas,
+    smooth: &[Vec<[f64; 3]>],
+) -> f64 {
+    let fronts: Vec<(usize, &Chart)> = atlas
+        .charts
+        .iter()
+        .enumerate()
+        .filter(|(_, c)| c.side == 0)
+        .collect();
+    fronts
+        .par_iter()
+        .zip(smooth)
+        .map(|(&(owner, chart), slice0)| {
+            let nodes = chart_nodes(chart);
+            let mut values: Vec<Vec<[f64; 3]>> = vec![slice0.clone()];
+            values.extend(tables.iter().map(|t| filler.chart(t, chart)));
+            let mut worst = 0.0f64;
+            for (k, &(d, c)) in nodes.iter().enumerate() {
+                if c < GRAZING_COS || atlas.chart_for(d, c, 0) != Some(owner) {
+                    continue;
+                }
+                for w in values.windows(3) {
+                    let (a, b, c) = (w[0][k], w[1][k], w[2][k]);
+                    for ((a, b), c) in a.iter().zip(b).zip(c) {
+                        worst = worst.max((a - 2.0 * b + c).abs() / 8.0);
+                    }
+                }
+            }
+            worst
+        })
+        .reduce(|| 0.0, f64::max)
+}
+
+/// The slice count (2^j + 1) whose blend error, falling as the square of
+/// the spacing from `error` at `count` slices, meets `target`.
+fn predicted_count(count: usize, error: f64, target: f64) -> usize {
+    let mut next = count;
+    let mut predicted = error;
+    while predicted > target && 2 * next - 1 <= MAX_SLICES {
+        next = 2 * next - 1;
+        predicted /= 4.0;
+    }
+    next
+}
+
+/// Rounds of growing the charts.
+const CHART_ROUNDS: usize = 3;
+
+/// `charts` with their node counts grown until bilinear interpolation of
+/// every slice's F_eff meets `target` halfway between nodes along each axis
+/// (cos θ ≥ [`GRAZING_COS`]); never fewer nodes than the smooth film's.
+fn grown_charts(
+    filler: &Filler,
+    tables: &[Table],
+    atlas: &Atlas,
+    target: f64,
+    max_side: usize,
+) -> Vec<Chart> {
+    atlas
+        .charts
+        .par_iter()
+        .enumerate()
+        .filter(|(_, c)| c.side == 0)
+        .map(|(k, chart)| {
+            let serves = |d: f64, c: f64| atlas.chart_for(d, c, 0) == Some(k);
+            let mut chart = *chart;
+            for _ in 0..CHART_ROUNDS {
+                let (eu, ev) = midpoint_errors(filler, tables, &chart, &serves);
+
+                let grow = |n: usize, e: f64| -> usize {
+                    if e <= target || n < 2 {
+                        return n;
+                    }
+                    let factor = (e / target).sqrt() * 1.1;
+                    (1 + ((n - 1) as f64 * factor).ceil() as usize).min(max_side)
+                };
+                let (w, h) = (grow(chart.rect.width, eu), grow(chart.rect.height, ev));
+                if (w, h) == (chart.rect.width, chart.rect.height) {
+                    break;
+                }
+                chart.rect.width = w;
+                chart.rect.height = h;
+            }
+            chart
+        })
+        .collect()
+}
+
+/// The largest error of linear interpolation halfway between neighbouring
+/// nodes along u and along v of `chart`, over every slice's F_eff, where
+/// `serves` says the chart is the one a reader picks (a band's nodes
+/// inside a corner chart's radius are never read).
+fn midpoint_errors(
+    filler: &Filler,
+    tables: &[Table],
+    chart: &Chart,
+    serves: &dyn Fn(f64, f64) -> bool,
+) -> (f64, f64) {
+    let (w, h) = (chart.rect.width, chart.rect.height);
+    let frac = |k: f64, n: usize| if n > 1 { k / (n - 1) as f64 } else { 0.0 };
+    let point = |x: f64, y: f64| {
+        let (d, c) = chart.point(x, y);
+        (d.max(0.0), c.clamp(0.0, 1.0))
+    };
+    let (mut eu, mut ev) = (0.0f64, 0.0f64);
+    for table in tables {
+        let node = |i: usize, j: usize| {
+            let (d, c) = point(frac(i as f64, w), frac(j as f64, h));
+            (filler.at(table, d, c), c)
+        };
+        let nodes: Vec<([f64; 3], f64)> = (0..h)
+            .flat_map(|j| (0..w).map(move |i| (i, j)))
+            .map(|(i, j)| node(i, j))
+            .collect();
+        let at = |i: usize, j: usize| nodes[j * w + i];
+        let off = |mid: [f64; 3], a: [f64; 3], b: [f64; 3]| {
+            (0..3)
+                .map(|ch| (mid[ch] - 0.5 * (a[ch] + b[ch])).abs())
+                .fold(0.0, f64::max)
+        };
+        for j in 0..h {
+            for i in 0..w {
+                let (a, c) = at(i, j);
+                if c < GRAZING_COS {
+                    continue;
+                }
+                if i + 1 < w {
+                    let (d, cm) = point(frac(i as f64 + 0.5, w), frac(j as f64, h));
+                    if serves(d, cm) {
+                        eu = eu.max(off(filler.at(table, d, cm), a, at(i + 1, j).0));
+                    }
+                }
+                if j + 1 < h {
+                    let (d, cm) = point(frac(i as f64, w), frac(j as f64 + 0.5, h));
+                    if serves(d, cm) {
+                        ev = ev.max(off(filler.at(table, d, cm), a, at(i, j + 1).0));
+                    }
+                }
+            }
+        }
+    }
+    (eu, ev)
+}
+
+/// `charts` packed in one atlas over `thickness_nm`.
+fn packed(thickness_nm: (f64, f64), charts: Vec<Chart>, max_side: usize) -> Result<Atlas> {
+    let sizes: Vec<(usize, usize)> = charts
+        .iter()
+        .map(|c| (c.rect.width, c.rect.height))
+        .collect();
+    let (places, width, height) = pack(&sizes, max_side).ok_or_else(|| {
+        Error::invalid(
+            "rough table",
+            format!("the slices' charts do not fit in {max_side}x{max_side} texels"),
+        )
+    })?;
+    let charts = charts
+        .into_iter()
+        .zip(places)
+        .map(|(mut c, (x, y))| {
+            c.rect.x = x;
+            c.rect.y = y;
+            c
+        })
+        .collect();
+    Ok(Atlas {
+        width,
+        height,
+        thickness_nm,
+        charts,
+    })
+}
+
+/// The slices' images on `atlas`: slice 0 the smooth film (the smooth
+/// atlas's texels where a chart kept its size, else evaluated exactly), the
+/// others from `tables`.
+fn images(
+    req: &SliceRequest,
+    filler: &Filler,
+    tables: &[Table],
+    smooth_charts: &[Chart],
+    atlas: &Atlas,
+) -> Result<Vec<Image>> {
+    let mut slices = vec![Image::new(atlas.width, atlas.height, 3); tables.len() + 1];
+    for (chart, smooth) in atlas.charts.iter().zip(smooth_charts) {
+        let r = chart.rect;
+        let zero: Vec<[f64; 3]> = if (r.width, r.height) == (smooth.rect.width, smooth.rect.height)
+        {
+            smooth_values(req, std::slice::from_ref(smooth)).remove(0)
+        } else {
+            req.film
+                .chart(chart, r.width, r.height)?
+                .into_iter()
+                .map(|v| [v[0], v[1], v[2]])
+                .collect()
+        };
+        let put = |img: &mut Image, values: &[[f64; 3]]| {
+            for (k, v) in values.iter().enumerate() {
+                let t = img.texel_mut(r.x + k % r.width, r.y + k / r.width);
+                for ch in 0..3 {
+                    t[ch] = v[ch] as f32;
+                }
+            }
+        };
+        put(&mut slices[0], &zero);
+        let rest: Vec<Vec<[f64; 3]>> = tables.par_iter().map(|t| filler.chart(t, chart)).collect();
+        for (img, values) in slices[1..].iter_mut().zip(rest) {
+            put(img, &values);
+        }
+    }
+    Ok(slices)
+}
+
+/// The dense thickness grid over every node's thickness and the film's
+/// smooth colour on it × the quadrature's μ nodes.
+fn dense_grid(
+    stack: &Stack,
+    layer: usize,
+    integrator: &SpectralIntegrator,
+    nodes: &[(f64, f64)],
+    grid: &MuGrid,
+) -> Result<Dense> {
+    let (lo, hi) = nodes
+        .iter()
+        .map(|n| n.0)
+        .fold((f64::INFINITY, 0.0f64), |(a, b), d| (a.min(d), b.max(d)));
+    let index = stack
+        .layers
+        .get(layer.wrapping_sub(1))
+        .and_then(|l| l.material.index_at(550.0).ok())
+        .map_or(1.0, |n| n.re.max(1.0));
+    let period = SHORTEST_WAVELENGTH_NM / (2.0 * index);
+    let span = hi - lo;
+    let step = (FINEST_SPACING_NM / THICKNESS_SCALE_NM)
+        .min(period / INTERVALS_PER_FRINGE / (span + THICKNESS_SCALE_NM));
+    let (count, step) = if span > 1e-9 {
+        let w = (span / THICKNESS_SCALE_NM).ln_1p();
+        let n = (w / step).ceil() as usize;
+        (n + 1, w / n as f64)
+    } else {
+        (1, 1.0)
+    };
+    // The sweep's 0/0 at zero thickness and μ → 0 (the film absent, its
+    // interfaces reflecting fully) is avoided by starting a hair above zero:
+    // only μ below about 1e-6 sees the difference.
+    let thickness: Vec<f64> = (0..count)
+        .map(|k| (lo + THICKNESS_SCALE_NM * (k as f64 * step).exp_m1()).max(MIN_THICKNESS_NM))
+        .collect();
+    let mus = grid.nodes().len();
+    crate::limits::check_allocation(
+        &format!("F_eff over {count} thicknesses x {mus} μ nodes"),
+        crate::limits::product(&[count as u64, mus as u64], 72),
+    )?;
+    let on_grid = rgb_at_nodes(stack, layer, integrator.clone(), &thickness, grid.nodes())?;
+    // rgb_at_nodes gives μ-major rows; the weighing reads thickness-major.
+    let mut values = vec![0.0; count * mus * 3];
+    for m in 0..mus {
+        for t in 0..count {
+            let v = &on_grid[m * count + t];
+            values[(t * mus + m) * 3..(t * mus + m) * 3 + 3].copy_from_slice(&v[..3]);
+        }
+    }
+    Ok(Dense {
+        lo_nm: lo,
+        step,
+        count,
+        values,
+        mus,
+    })
+}
+
+/// Random cosines of the measurement below [`GRAZING_COS`].
+const GRAZING_AXIS_POINTS: usize = 10;
+
+/// The slices against [`rough_reflectance`] at every combination of
+/// [`MEASURE_AXIS_POINTS`] random thicknesses, cosines (≥ [`GRAZING_COS`])
+/// and roughnesses; then with [`GRAZING_AXIS_POINTS`] cosines below it.
+fn measure(
+    stack: &Stack,
+    layer: usize,
+    integrator: &SpectralIntegrator,
+    slices: &RoughSlices,
+) -> Result<(SliceError, SliceError)> {
+    let mut rng = rand_pcg::Pcg64::seed_from_u64(MEASURE_SEED);
+    let (t0, t1) = slices.atlas.thickness_nm;
+    let mut draw = |lo: f64, hi: f64, n: usize| -> Vec<f64> {
+        let mut v: Vec<f64> = (0..n)
+            .map(|_| lo + rng.random::<f64>() * (hi - lo))
+            .collect();
+        v.sort_by(f64::total_cmp);
+        v.dedup();
+        v
+    };
+    let thickness = draw(t0, t1, MEASURE_AXIS_POINTS);
+    let roughness = draw(0.0, 1.0, MEASURE_AXIS_POINTS);
+    let cos = draw(GRAZING_COS, 1.0, MEASURE_AXIS_POINTS);
+    let grazing = draw(0.0, GRAZING_COS, GRAZING_AXIS_POINTS);
+    let all_cos: Vec<f64> = cos.iter().chain(&grazing).copied().collect();
+    let exact = rough_reflectance(
+        stack,
+        layer,
+        integrator,
+        &thickness,
+        &all_cos,
+        &roughness,
+        &Quadrature::default(),
+    )?;
+    let errors_over = |cs: std::ops::Range<usize>| -> SliceError {
+        let mut errors: Vec<([f64; 3], f64, [f64; 3])> = Vec::new();
+        for (r, &rv) in roughness.iter().enumerate() {
+            for c in cs.clone() {
+                for (t, &tv) in thickness.iter().enumerate() {
+                    let want = exact.at(t, c, r);
+                    let got = slices.sample(tv, all_cos[c], rv);
+                    let abs = std::array::from_fn(|k| (got[k] - want[k]).abs());
+                    let de = delta_e2000_rgb(got, want);
+                    let de = if de.is_nan() { f64::INFINITY } else { de };
+                    errors.push((abs, de, [tv, all_cos[c], rv]));
+                }
+            }
+        }
+        summarize(&errors)
+    };
+    Ok((
+        errors_over(0..cos.len()),
+        errors_over(cos.len()..all_cos.len()),
+    ))
+}
+
+/// Figures of (absolute error per channel, ΔE00, point) triples; a NaN
+/// error counts as infinite.
+fn summarize(errors: &[([f64; 3], f64, [f64; 3])]) -> SliceError {
+    let n = errors.len();
+    if n == 0 {
+        return SliceError::default();
+    }
+    let mut out = SliceError {
+        points: n,
+        ..SliceError::default()
+    };
+    for k in 0..3 {
+        let mut e: Vec<f64> = errors
+            .iter()
+            .map(|x| {
+                if x.0[k].is_nan() {
+                    f64::INFINITY
+                } else {
+                    x.0[k]
+                }
+            })
+            .collect();
+        e.sort_by(f64::total_cmp);
+        out.max_abs[k] = e[n - 1];
+        out.p99_abs[k] = e[((n as f64 * 0.99).ceil() as usize).clamp(1, n) - 1];
+        out.mean_abs[k] = e.iter().sum::<f64>() / n as f64;
+    }
+    out.max_delta_e00 = errors.iter().map(|x| x.1).fold(0.0, f64::max);
+    out.mean_delta_e00 = errors.iter().map(|x| x.1).sum::<f64>() / n as f64;
+    let largest = |x: &[f64; 3]| {
+        x.iter().fold(0.0f64, |p, &q| {
+            p.max(if q.is_nan() { f64::INFINITY } else { q })
+        })
+    };
+    out.worst_point = errors
+        .iter()
+        .max_by(|a, b| largest(&a.0).total_cmp(&largest(&b.0)))
+        .map_or([0.0; 3], |x| x.2);
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::atlas::search::{self, Goal, SideRequest};
+    use crate::color::White;
+
+    pub(super) fn slices_of(path: &str, thickness_nm: (f64, f64), max_error: f64) -> RoughSlices {
+        let mut stack = Stack::load(std::path::Path::new(path)).expect("stack");
+        stack.layers[0].thickness_nm = thickness_nm.0;
+        let integrator = SpectralIntegrator::with_white(crate::color::Sampling::Exact, White::D65);
+        let film = Film::new(&stack, 1, integrator.clone()).expect("film");
+        let sides = [SideRequest {
+            film: &film,
+            side: 0,
+            cos: (0.0, 1.0),
+        }];
+        let points = search::random_points(thickness_nm, (0.0, 1.0), 2000, 7);
+        let goal = Goal {
+            max_abs: Some(1e-3),
+            max_de: None,
+            half: false,
+        };
+        let built = search::build(&sides, thickness_nm, goal, 8192, &[points], &|_| {})
+            .expect("smooth atlas");
+        let req = SliceRequest {
+            film: &film,
+            atlas: &built.atlas,
+            image: &built.image,
+            max_error,
+            max_side: 8192,
+        };
+        let t = std::time::Instant::now();
+        let s = build(film.stack(), film.layer(), &integrator, &req, &|l| {
+            eprintln!("{l}")
+        })
+        .expect("slices");
+        eprintln!(
+            "{path}: {} slices of {}x{}, blend {:.2e}, measured {:?}, grazing {:?} in {:.2?}",
+            s.slices.len(),
+            s.atlas.width,
+            s.atlas.height,
+            s.blend_error,
+            s.measured,
+            s.grazing,
+            t.elapsed()
+        );
+        s
+    }
+
+    #[test]
+    fn soap_film_slices_meet_their_target() {
+        let s = slices_of("luts/soap-film.toml", (0.0, 1000.0), 2e-3);
+        assert!(s.measured.max_all() <= 2e-3, "{:?}", s.measured);
+        assert!(s.blend_error <= 2e-3);
+        // The grazing strip is measured and finite (its figure is stated,
+        // not sought).
+        assert!(s.grazing.points > 0 && s.grazing.max_all().is_finite());
+        // Slice 0 is the smooth film, the last roughness 1, and every texel
+        // finite.
+        assert_eq!(s.roughness[0], 0.0);
+        assert_eq!(*s.roughness.last().unwrap(), 1.0);
+        assert!(s
+            .slices
+            .iter()
+            .all(|i| i.data.iter().all(|v| v.is_finite())));
+        // At a slice's own roughness the blend is that slice alone.
+        let k = s.slices.len() / 2;
+        let c = s.atlas.charts.last().unwrap();
+        let (d, cos) = c.node(1, 1);
+        let t = s.slices[k].texel(c.rect.x + 1, c.rect.y + 1);
+        let got = s.sample(d, cos, s.roughness[k]);
+        for ch in 0..3 {
+            assert!((got[ch] - f64::from(t[ch])).abs() < 1e-5, "{got:?} {t:?}");
+        }
+    }
+}
