@@ -589,6 +589,51 @@ fn bad_files_give_clear_errors() {
     expect(&missing, "No such file");
 }
 
+/// `--wavelengths` outside what the stack's data cover, reversed or not
+/// finite, and `--max-de` on a spectral table: one line, exit code 2, no
+/// table written.
+#[cfg(feature = "cli")]
+#[test]
+fn spectral_wavelength_range_errors() {
+    let dir = Scratch::new("spectral-flags");
+    let out = dir.join("t.exr");
+    let gold = luts_dir().join("gain-on-gold.toml");
+    let soap = luts_dir().join("soap-film.toml");
+    let bake = |stack: &Path, extra: &[&str]| {
+        let mut args = vec![
+            "bake",
+            stack.to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+            "--kind",
+            "spectral",
+            "--thickness",
+            "0:100",
+        ];
+        args.extend_from_slice(extra);
+        irid(&args)
+    };
+    for (extra, needles) in [
+        (
+            &["--wavelengths", "100:5000"][..],
+            &["wavelengths", "gold", "187.9–1937 nm"][..],
+        ),
+        (
+            &["--wavelengths", "830:360"],
+            &["--wavelengths", "min ≤ max"],
+        ),
+        (
+            &["--wavelengths", "nan:830"],
+            &["--wavelengths", "not finite"],
+        ),
+        (&["--wavelengths", "0:830"], &["wavelengths", "0 < min"]),
+    ] {
+        bake(&gold, extra).assert_one_line_error(&format!("{extra:?}"), needles);
+    }
+    bake(&soap, &["--max-de", "1"]).assert_one_line_error("max-de", &["max-de", "rgb tables"]);
+    assert!(!out.exists());
+}
+
 /// `irid bake luts/soap-film.toml -o OUT` over 100–400 nm with 16-sample
 /// integration, then `extra`.
 #[cfg(feature = "cli")]
