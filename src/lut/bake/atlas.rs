@@ -25,7 +25,7 @@ pub(super) fn bake_atlas(spec: &BakeSpec, progress: &dyn Fn(&str)) -> Result<Lut
             "an atlas needs an error target",
         ));
     };
-    let (film, goal, wavelengths, charted) = match spec.kind {
+    let plan = match spec.kind {
         Kind::Rgb => {
             let integrator = SpectralIntegrator::with_white(spec.sampling, spec.white);
             let goal = Goal {
@@ -33,11 +33,21 @@ pub(super) fn bake_atlas(spec: &BakeSpec, progress: &dyn Fn(&str)) -> Result<Lut
                 max_de: spec.max_de,
                 half: spec.half,
             };
-            let film = Film::new(&spec.stack, spec.layer, integrator)?;
-            (film, goal, vec![], spec.thickness_nm)
+            FilmPlan {
+                film: Film::new(&spec.stack, spec.layer, integrator)?,
+                goal,
+                wavelengths: vec![],
+                charted: spec.thickness_nm,
+            }
         }
         Kind::Spectral => spectral_film(spec, max_abs, progress)?,
     };
+    let FilmPlan {
+        film,
+        goal,
+        wavelengths,
+        charted,
+    } = plan;
     let sides = [SideRequest {
         film: &film,
         side: 0,
@@ -80,11 +90,7 @@ pub(super) fn bake_atlas(spec: &BakeSpec, progress: &dyn Fn(&str)) -> Result<Lut
 /// up), the charts' share of `max_abs`, and the thickness range the
 /// charts cover (the table's, widened by the ratio of neighbouring
 /// wavelength nodes at which a lookup reads them).
-fn spectral_film(
-    spec: &BakeSpec,
-    max_abs: f64,
-    progress: &dyn Fn(&str),
-) -> Result<(Film, Goal, Vec<f64>, (f64, f64))> {
+fn spectral_film(spec: &BakeSpec, max_abs: f64, progress: &dyn Fn(&str)) -> Result<FilmPlan> {
     let range = spec.wavelength_nm;
     let probe = Film::spectral(&spec.stack, spec.layer, &[range.0, range.1], 0.0)?;
     let floor = spectrum::fringe_floor(&probe, range, spec.thickness_nm, spec.cos_theta, max_abs)?;
@@ -118,7 +124,22 @@ fn spectral_film(
     let ratio = spectrum::largest_ratio(&axis.nodes_nm);
     let (d0, d1) = spec.thickness_nm;
     let widened = (d0 / ratio, d1 * ratio);
-    Ok((film, goal, axis.nodes_nm, widened))
+    Ok(FilmPlan {
+        film,
+        goal,
+        wavelengths: axis.nodes_nm,
+        charted: widened,
+    })
+}
+
+/// What an atlas bake evaluates: the film, what its charts must meet,
+/// a spectral film's wavelength nodes (else none) and the thickness range
+/// its charts cover.
+struct FilmPlan {
+    film: Film,
+    goal: Goal,
+    wavelengths: Vec<f64>,
+    charted: (f64, f64),
 }
 
 /// A spectral atlas image (per texel R at each wavelength node, then T)
