@@ -190,3 +190,41 @@ pub fn markdown(rows: &[TableRow], points: usize) -> String {
     s.push('\n');
     s
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Over a short thickness range both layouts of both kinds bake, meet
+    /// their targets at the bench's points, and pair up in the report.
+    #[test]
+    fn grid_beside_atlas_for_each_kind() {
+        let mut bench = super::super::stacks::find("absorbing").unwrap().unwrap();
+        bench.thickness_range_nm = (0.0, 150.0);
+        let dir = std::env::temp_dir().join(format!("irid-tables-test-{}", std::process::id()));
+        let rows = run(&[bench], 2000, 3, &dir, &|_| {}).unwrap();
+        let _ = std::fs::remove_dir_all(&dir);
+        let order: Vec<(Kind, Layout)> = rows.iter().map(|r| (r.kind, r.layout)).collect();
+        assert_eq!(
+            order,
+            [
+                (Kind::Rgb, Layout::Grid),
+                (Kind::Rgb, Layout::Atlas),
+                (Kind::Spectral, Layout::Grid),
+                (Kind::Spectral, Layout::Atlas)
+            ]
+        );
+        for r in &rows {
+            let f = r.outcome.as_ref().unwrap();
+            assert!(f.nodes > 0 && f.bytes > 0 && f.build_s > 0.0, "{r:?}");
+            assert!(f.max_abs <= r.target, "{r:?}");
+        }
+        let md = markdown(&rows, 2000);
+        let lines: Vec<&str> = md
+            .lines()
+            .filter(|l| l.starts_with("| absorbing"))
+            .collect();
+        assert_eq!(lines.len(), 2, "{md}");
+        assert!(lines[1].contains("| spectral |"), "{md}");
+    }
+}
