@@ -13,9 +13,9 @@ from .mitsuba import MAX_THICKNESS_NM, SPECTRAL_RANGE_NM, FilmError, _FilmSetup,
 MIN_GGX_ALPHA = 1e-4
 
 _SYMBOLIC = (
-    "irid_film: a film without a table was traced in a symbolic Dr.Jit loop or call, where its solver "
+    "irid_film: a film without a table, or with an atlas table, was traced in a symbolic Dr.Jit loop or call, where its solver "
     "cannot run (it runs between kernels); it gives zeros there. Render in the thread that called "
-    "irid.mitsuba.register() (which turns symbolic loops and calls off), or give the film a table. "
+    "irid.mitsuba.register() (which turns symbolic loops and calls off), or give the film a grid table. "
     "(Dr.Jit traces every live BSDF, so a film of another, still referenced scene also shows this.)"
 )
 
@@ -92,9 +92,11 @@ class _SolverResponse:
 
 class _TableResponse:
     """R and T from a spectral table, interpolated as irid's sampler does
-    (linear in each axis value, clamped at the ends): a binary search per
-    non-uniform axis and eight gathers per wavelength in Dr.Jit; in the
-    scalar variant, irid's own sampler. Light from a lossless substrate
+    (linear in each axis value, clamped at the ends): for a grid table a
+    binary search per non-uniform axis and eight gathers per wavelength in
+    Dr.Jit; for an atlas table (format version 4) and in the scalar
+    variant, irid's own sampler (an atlas's lanes go to numpy and back
+    between kernels, as the solver's do). Light from a lossless substrate
     through lossless layers is served by reciprocity: T is the same at the
     corresponding angle in the ambient, and R = 1 − T (total internal
     reflection where no such angle exists)."""
@@ -105,8 +107,10 @@ class _TableResponse:
         self.sizes = [len(a["nodes"]) for a in axes]  # thickness, cos θ, wavelength
         self.ends = [(a["nodes"][0], a["nodes"][-1]) for a in axes]
         self.jit = dr.is_jit_v(mi.Float)
+        self.atlas = "atlas" in self.lut.header
+        self.warned = False
         self.eta_per_nm = setup.eta_per_nm
-        if self.jit:
+        if self.jit and not self.atlas:
             self.nodes = [mi.Float(np.asarray(a["nodes"], dtype=np.float32)) for a in axes]
             data = self.lut.data
             self.reflectance = mi.Float(np.ascontiguousarray(data[..., 0]).ravel())
@@ -149,7 +153,17 @@ class _TableResponse:
                     t += weight * dr.gather(mi.Float, self.transmittance, row + dt)
         return r, t
 
+    def _sampled(self, thickness, cos_theta, wavelength):
+        """irid's sampler on a wavefront's lanes, through numpy."""
+        coordinates = (np.asarray(x, dtype=np.float64) for x in (thickness, cos_theta, wavelength))
+        return (mi.Float(np.asarray(v, dtype=np.float32)) for v in self.lut.sample(*coordinates))
+
     def __call__(self, thickness, cos_theta, wavelengths, front, active):
+        if self.jit and self.atlas and dr.flag(dr.JitFlag.SymbolicScope):
+            if not self.warned:
+                mi.Log(mi.LogLevel.Warn, _SYMBOLIC)
+                self.warned = True
+            return dr.zeros(mi.UnpolarizedSpectrum), dr.zeros(mi.UnpolarizedSpectrum)
         thickness, cos_theta, wavelengths, front = _sanitized(thickness, cos_theta, wavelengths, front, active)
         r, t = [], []
         for k in range(len(wavelengths)):
@@ -158,7 +172,9 @@ class _TableResponse:
             eta = self._eta(wavelengths[k])
             sin2_ambient = (1.0 - cos_theta * cos_theta) * eta * eta
             cos_ambient = dr.select(front, cos_theta, dr.safe_sqrt(1.0 - sin2_ambient))
-            if self.jit:
+            if self.jit and self.atlas:
+                r_k, t_k = self._sampled(thickness, cos_ambient, wavelengths[k])
+            elif self.jit:
                 r_k, t_k = self._lookup(thickness, cos_ambient, wavelengths[k])
             else:
                 r_k, t_k = (float(v) for v in self.lut.sample(thickness, cos_ambient, wavelengths[k]))
@@ -190,12 +206,14 @@ def _make_bsdf(symbolic):
             # masking uses the same α, so the lobe is one GGX throughout.
             self.alpha = max(setup.alpha, MIN_GGX_ALPHA) if setup.alpha > 0.0 else 0.0
             self.rough = setup.alpha > 0.0
-            if setup.table is None and dr.is_jit_v(mi.Float) and symbolic:
+            between_kernels = setup.table is None or "atlas" in setup.table.header
+            if between_kernels and dr.is_jit_v(mi.Float) and symbolic:
                 raise FilmError(
                     "table",
-                    "missing: irid.mitsuba.register(symbolic=True) keeps Dr.Jit's symbolic loops, in which "
-                    "only a table can be looked up (the solver runs between kernels); give a table or "
-                    "register without symbolic=True",
+                    ("missing" if setup.table is None else "an atlas table (format version 4, read by irid's sampler)")
+                    + ": irid.mitsuba.register(symbolic=True) keeps Dr.Jit's symbolic loops, in which "
+                    "only a grid table can be looked up (the solver and irid's sampler run between kernels); "
+                    "give a grid table (irid bake --layout grid) or register without symbolic=True",
                 )
             self.response = _TableResponse(setup) if setup.table is not None else _SolverResponse(setup)
             sides = flags.FrontSide | flags.BackSide if self.transmissive else flags.FrontSide

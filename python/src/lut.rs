@@ -273,23 +273,26 @@ impl PyLut {
         self.lut.kind().to_string()
     }
 
-    /// The stored values (float32), thickness fastest: rgb tables
-    /// (cos θ, thickness, 6) with R r, g, b then T r, g, b; spectral tables
-    /// (wavelength, cos θ, thickness, 2) with R, T. The node positions are
-    /// in header["axes"].
+    /// The stored values (float32), thickness fastest: rgb grid tables
+    /// (cos θ, thickness, 6) with R r, g, b then T r, g, b; spectral grid
+    /// tables (wavelength, cos θ, thickness, 2) with R, T. The node
+    /// positions are in header["axes"]. Atlas tables (format version 4):
+    /// (rows, columns, channels) of the atlas image, per wavelength node
+    /// for a spectral one (header["atlas"] says where each chart is).
     #[getter]
     fn data<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        let sizes: Vec<usize> = self
-            .lut
-            .header()
-            .axes
-            .iter()
-            .rev()
-            .map(|a| a.nodes.len())
-            .collect();
-        let channels = if self.lut.kind() == Kind::Rgb { 6 } else { 2 };
-        let mut shape = sizes;
-        shape.push(channels);
+        let header = self.lut.header();
+        let mut shape: Vec<usize> = match &header.atlas {
+            Some(t) => header
+                .axes
+                .get(2)
+                .map(|w| w.nodes.len())
+                .into_iter()
+                .chain([t.atlas.height, t.atlas.width])
+                .collect(),
+            None => header.axes.iter().rev().map(|a| a.nodes.len()).collect(),
+        };
+        shape.push(header.channel_names().len());
         let data = self.lut.data();
         Footprint::new()
             .items(&[data.len()], 4)

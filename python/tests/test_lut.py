@@ -160,6 +160,26 @@ def test_error_target_is_met(soap):
     assert max(lut.validate(1000, seed=3)["max_abs"]) <= 1e-2
 
 
+def test_spectral_atlas_table(soap):
+    """An error target bakes a spectral table on the atlas (format version
+    4): its data are the atlas image per wavelength node, and irid's
+    sampler meets the target against the solver above its aliased strip."""
+    lut = irid.bake(soap, thickness_nm=(0, 1000), max_error=1e-2, cos_theta=(0, 1), kind="spectral",
+                    wavelengths_nm=(360, 830), validation_points=2000)
+    header = lut.header
+    assert header["version"] == 4 and lut.kind == "spectral"
+    w = header["axes"][2]["nodes"]
+    assert lut.data.shape == (len(w), header["atlas"]["height"], header["atlas"]["width"], 2)
+    floor = header["atlas"]["aliased_below_cos"]
+    rng = np.random.default_rng(5)
+    d = rng.uniform(0, 1000, 2000)
+    c = rng.uniform(floor, 1, 2000)
+    lam = rng.uniform(360, 830, 2000)
+    r, t = lut.sample(d, c, lam)
+    ref_r, ref_t = soap.response(c, lam, thickness_nm=d)
+    assert np.abs(r - ref_r).max() <= 1e-2 and np.abs(t - ref_t).max() <= 1e-2
+
+
 def test_spectral_table(soap):
     lut = irid.bake(soap, thickness_nm=(100, 600), resolution=(11, 6, 9), kind="spectral",
                     wavelengths_nm=(400, 720), validation_points=0)

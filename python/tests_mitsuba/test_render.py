@@ -190,6 +190,44 @@ def test_table_path_agrees_with_solver_path(jit, glass_table, front):
         assert np.abs(a - b).max() <= bound, (np.abs(a - b).max(), bound)
 
 
+@pytest.fixture(scope="module")
+def glass_atlas(tmp_path_factory):
+    """The coated glass's spectral table on the atlas (format version 4),
+    over every angle."""
+    lut = irid.bake(
+        COATED_GLASS,
+        thickness_nm=(150.0, 350.0),
+        kind="spectral",
+        wavelengths_nm=(360.0, 830.0),
+        cos_theta=(0.0, 1.0),
+        max_error=5e-3,
+        validation_points=4000,
+    )
+    path = tmp_path_factory.mktemp("tables") / "coated-glass-atlas.exr"
+    lut.save(path)
+    return path
+
+
+def test_atlas_table_is_irids_sampler_and_meets_the_solver(jit, glass_atlas):
+    """An atlas table is read by irid's own sampler (the JIT lanes through
+    numpy, between kernels) and is within its target of the solver above
+    its aliased strip."""
+    lut = irid.Lut.load(glass_atlas)
+    floor = lut.header["atlas"]["aliased_below_cos"]
+    rng = np.random.default_rng(6)
+    n = 3000
+    thickness = rng.uniform(150.0, 350.0, n)
+    cos_theta = rng.uniform(floor, 1.0, n)
+    wavelengths = rng.uniform(360.0, 830.0, (4, n))
+    front = np.ones(n, bool)
+    r, t = _film_response(JIT, COATED_GLASS, str(glass_atlas), cos_theta, wavelengths, thickness, front)
+    r_ref, t_ref = lut.sample(thickness[None, :], cos_theta[None, :], wavelengths)
+    np.testing.assert_allclose(r, r_ref, atol=2e-6)
+    np.testing.assert_allclose(t, t_ref, atol=2e-6)
+    solver = _film_response(JIT, COATED_GLASS, None, cos_theta, wavelengths, thickness, front)
+    assert np.abs(r - solver[0]).max() <= 5e-3 and np.abs(t - solver[1]).max() <= 5e-3
+
+
 def test_table_render_matches_solver_render(glass_table):
     """The same scene, sampler and seed with a table (symbolic Dr.Jit) and
     with the solver (evaluated): the images differ by the table's error only."""

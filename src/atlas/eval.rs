@@ -23,6 +23,16 @@ pub struct Film {
     lossless_white: Option<[f64; 3]>,
     /// The side's optical thickness factor (see [`Optical`]).
     pub optical: Optical,
+    /// A spectral film's wavelength nodes (else `None`: linear RGB).
+    spectrum: Option<Spectrum>,
+}
+
+/// What a spectral film holds at each node: R and T at these wavelengths.
+struct Spectrum {
+    wavelengths_nm: Vec<f64>,
+    /// cos θ below which the wavelength nodes do not follow the film's
+    /// fringes (see [`super::spectrum`]).
+    aliased_below: f64,
 }
 
 impl Film {
@@ -47,7 +57,128 @@ impl Film {
             largest_weight,
             lossless_white,
             optical,
+            spectrum: None,
         })
+    }
+
+    /// The film `stack` with layer `layer` varying, holding at each node
+    /// its R and T at `wavelengths_nm` (increasing), whose linear
+    /// interpolation follows the fringes down to cos θ `aliased_below`.
+    pub fn spectral(
+        stack: &Stack,
+        layer: usize,
+        wavelengths_nm: &[f64],
+        aliased_below: f64,
+    ) -> Result<Film> {
+        let (lo, hi) = (wavelengths_nm[0], wavelengths_nm[wavelengths_nm.len() - 1]);
+        // Its weights are never read: the nodes hold spectra.
+        let integrator = SpectralIntegrator::new(crate::color::Sampling::Rgb3);
+        let weights = integrator.rgb_lane_weights();
+        let prep = Prepared::of(stack, layer, Kind::Spectral, integrator, (lo, hi))?;
+        let optical = optical_of(&prep.stack, prep.layer, 0.5 * (lo + hi))?;
+        Ok(Film {
+            prep,
+            weights,
+            largest_weight: 1.0,
+            lossless_white: None,
+            optical,
+            spectrum: Some(Spectrum {
+                wavelengths_nm: wavelengths_nm.to_vec(),
+                aliased_below,
+            }),
+        })
+    }
+
+    /// Values per node: R.r, R.g, R.b, T.r, T.g, T.b for a colour film; R
+    /// at every wavelength node, then T at every one, for a spectral film.
+    pub fn channels(&self) -> usize {
+        self.spectrum
+            .as_ref()
+            .map_or(6, |s| 2 * s.wavelengths_nm.len())
+    }
+
+    /// Whether the nodes hold spectra (see [`Self::channels`]).
+    pub fn is_spectral(&self) -> bool {
+        self.spectrum.is_some()
+    }
+
+    /// A spectral film's cos θ below which its wavelength nodes do not
+    /// follow its fringes.
+    pub fn spectral_aliased_below(&self) -> Option<f64> {
+        self.spectrum.as_ref().map(|s| s.aliased_below)
+    }
+
+    /// R and T (two values a node) of a spectral film along rows, each at
+    /// one cos θ and one of its wavelength nodes (an index) with its own
+    /// thickness nodes, row after row.
+    pub fn spectral_rows(&self, rows: &[(f64, usize, Vec<f64>)]) -> Result<Vec<f64>> {
+        let Some(spectrum) = &self.spectrum else {
+            return Err(crate::error::Error::invalid(
+                "film",
+                "holds colours, not spectra",
+            ));
+        };
+        let rows: Vec<Row> = rows
+            .iter()
+            .map(|(cos, k, t)| Row {
+                cos: *cos,
+                wavelength: *k,
+                thickness_nm: t,
+            })
+            .collect();
+        self.prep.eval_rows(&rows, &spectrum.wavelengths_nm)
+    }
+
+    /// The mean of a node's reflectance channels (its first half).
+    pub fn brightness(&self, values: &[f64]) -> f64 {
+        let half = &values[..values.len() / 2];
+        half.iter().sum::<f64>() / half.len().max(1) as f64
+    }
+
+    /// Exact values ([`Self::channels`] per node) at the thickness nodes of
+    /// each row (cos θ, thicknesses nm), row after row.
+    pub fn rows_flat(&self, rows: &[(f64, Vec<f64>)]) -> Result<Vec<f64>> {
+        let Some(spectrum) = &self.spectrum else {
+            let rows: Vec<Row> = rows
+                .iter()
+                .map(|(cos, t)| Row {
+                    cos: *cos,
+                    wavelength: 0,
+                    thickness_nm: t,
+                })
+                .collect();
+            return self.prep.eval_rows(&rows, &[]);
+        };
+        let w = spectrum.wavelengths_nm.len();
+        // One sweep per row and wavelength, wavelength fastest.
+        let split: Vec<Row> = rows
+            .iter()
+            .flat_map(|(cos, t)| {
+                (0..w).map(move |k| Row {
+                    cos: *cos,
+                    wavelength: k,
+                    thickness_nm: t,
+                })
+            })
+            .collect();
+        let swept = self.prep.eval_rows(&split, &spectrum.wavelengths_nm)?;
+        let ch = 2 * w;
+        let nodes: usize = rows.iter().map(|r| r.1.len()).sum();
+        let mut out = vec![0.0; nodes * ch];
+        let (mut at, mut node) = (0, 0);
+        for (_, t) in rows {
+            let n = t.len();
+            for k in 0..w {
+                for i in 0..n {
+                    let v = &swept[at + 2 * i..at + 2 * i + 2];
+                    out[(node + i) * ch + k] = v[0];
+                    out[(node + i) * ch + w + k] = v[1];
+                }
+                at += 2 * n;
+            }
+            node += n;
+        }
+        Ok(out)
     }
 
     /// The stack evaluated: a layerless stack gets a zero-thickness layer of
@@ -63,26 +194,37 @@ impl Film {
 
     /// Exact (R.r, R.g, R.b, T.r, T.g, T.b) at the thickness nodes of each
     /// row (cos θ, thicknesses nm), row after row.
+    /// (A colour film.)
     pub fn rows(&self, rows: &[(f64, Vec<f64>)]) -> Result<Vec<[f64; 6]>> {
-        let rows: Vec<Row> = rows
-            .iter()
-            .map(|(cos, t)| Row {
-                cos: *cos,
-                wavelength: 0,
-                thickness_nm: t,
-            })
-            .collect();
-        let values = self.prep.eval_rows(&rows, &[])?;
-        Ok(values
-            .chunks_exact(6)
-            .map(|v| [v[0], v[1], v[2], v[3], v[4], v[5]])
-            .collect())
+        Ok(sixes(&self.colour()?.rows_flat(rows)?))
+    }
+
+    /// This film when it holds colours, else an error.
+    fn colour(&self) -> Result<&Film> {
+        if self.is_spectral() {
+            return Err(crate::error::Error::invalid(
+                "film",
+                "holds spectra, not six colour channels",
+            ));
+        }
+        Ok(self)
     }
 
     /// Exact values at scattered (thickness nm, cos θ) points (with more
     /// points per nanometre where the film's fringes are narrower than the
     /// integration's step, as at the nodes of [`Self::rows`]).
+    /// (A colour film.)
     pub fn points(&self, points: &[(f64, f64)]) -> Result<Vec<[f64; 6]>> {
+        Ok(sixes(&self.colour()?.points_flat(points)?))
+    }
+
+    /// Exact values ([`Self::channels`] per point) at scattered (thickness
+    /// nm, cos θ) points.
+    pub fn points_flat(&self, points: &[(f64, f64)]) -> Result<Vec<f64>> {
+        if self.is_spectral() {
+            let rows: Vec<(f64, Vec<f64>)> = points.iter().map(|&(d, c)| (c, vec![d])).collect();
+            return self.rows_flat(&rows);
+        }
         let grid = &self.prep.stack_grid;
         let layer = self.prep.layer;
         points
@@ -101,7 +243,8 @@ impl Film {
                     Ok([r[0], r[1], r[2], t[0], t[1], t[2]])
                 },
             )
-            .collect()
+            .collect::<Result<Vec<[f64; 6]>>>()
+            .map(|v| v.concat())
     }
 
     /// Where the colour integration of [`Self::rows`] and [`Self::points`]
@@ -113,7 +256,13 @@ impl Film {
 
     /// Exact values at every node of `chart` laid out as `width` × `height`
     /// nodes (its rectangle's size is ignored), row-major.
+    /// (A colour film.)
     pub fn chart(&self, chart: &Chart, width: usize, height: usize) -> Result<Vec<[f64; 6]>> {
+        Ok(sixes(&self.colour()?.chart_flat(chart, width, height)?))
+    }
+
+    /// [`Self::chart`] with [`Self::channels`] values per node.
+    pub fn chart_flat(&self, chart: &Chart, width: usize, height: usize) -> Result<Vec<f64>> {
         let mut sized = *chart;
         sized.rect.width = width;
         sized.rect.height = height;
@@ -125,17 +274,24 @@ impl Film {
                         (c, (0..width).map(|i| sized.node(i, j).0).collect())
                     })
                     .collect();
-                self.rows(&rows)
+                self.rows_flat(&rows)
             }
             Coords::Corner { .. } => {
                 let points: Vec<(f64, f64)> = (0..height)
                     .flat_map(|j| (0..width).map(move |i| (i, j)))
                     .map(|(i, j)| sized.node(i, j))
                     .collect();
-                self.points(&points)
+                self.points_flat(&points)
             }
         }
     }
+}
+
+/// Six values at a time.
+fn sixes(flat: &[f64]) -> Vec<[f64; 6]> {
+    flat.chunks_exact(6)
+        .map(|v| [v[0], v[1], v[2], v[3], v[4], v[5]])
+        .collect()
 }
 
 /// The optical thickness factor of `layer` (from 1) of `stack` with real
@@ -178,9 +334,13 @@ impl Film {
         self.lossless_white
     }
 
-    /// The wavelengths the colour integrates over.
+    /// The wavelengths the colour integrates over, or a spectral film's
+    /// wavelength nodes.
     pub fn wavelengths_nm(&self) -> &[f64] {
-        self.prep.stack_grid.wavelengths_nm()
+        match &self.spectrum {
+            Some(s) => &s.wavelengths_nm,
+            None => self.prep.stack_grid.wavelengths_nm(),
+        }
     }
 }
 

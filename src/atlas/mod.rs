@@ -2,7 +2,9 @@
 //! rectangles of texels, each with its own closed-form coordinates, chosen
 //! in closed form per lookup and read by one bilinear filter. GPU exports
 //! and tables alike store their nodes this way; [`search`] chooses the
-//! charts and their sizes for an error target.
+//! charts and their sizes for an error target. A texel holds a colour
+//! film's six channels or a spectral film's R and T at the wavelength
+//! nodes [`spectrum`] chooses (see [`Film::channels`]).
 //!
 //! The layout of the uniform values a shader reads is specified in
 //! docs/gpu.md, the table file in docs/lut-format.md.
@@ -11,6 +13,7 @@ mod chart;
 mod eval;
 mod pack;
 pub mod search;
+pub mod spectrum;
 
 pub use chart::{
     texel_f32, Chart, Coords, CosAxis, LogAxis, Optical, Rect, OPTICAL_FLOOR, PARAMS_PER_CHART,

@@ -72,7 +72,8 @@ pub struct SideReport {
 pub struct Built {
     /// Where every chart is.
     pub atlas: Atlas,
-    /// R.r, R.g, R.b, T.r, T.g, T.b per texel, rounded as stored.
+    /// The film's channels per texel (R.r, R.g, R.b, T.r, T.g, T.b for a
+    /// colour film: see [`Film::channels`]), rounded as stored.
     pub image: Image,
     /// Per side.
     pub sides: Vec<SideReport>,
@@ -197,20 +198,21 @@ fn band_p(skeleton: &Skeleton, p0_nm: f64, lo: f64, hi: f64) -> LogAxis {
     }
 }
 
-/// The error of an interpolated (R, T) against the exact one, as a
-/// fraction of what each target allows an axis (`shares`: absolute,
-/// ΔE00).
-fn normalized_error(got: &[f64; 6], exact: &[f64; 6], shares: (f64, f64)) -> f64 {
+/// The error of the midpoint of two nodes' values `a`, `b` against the
+/// exact values there, as a fraction of what each target allows an axis
+/// (`shares`: absolute, ΔE00; ΔE00 for six colour channels only).
+fn normalized_error(a: &[f64], b: &[f64], exact: &[f64], shares: (f64, f64)) -> f64 {
+    let got = |k: usize| 0.5 * (a[k] + b[k]);
     let mut e = 0.0f64;
     if shares.0.is_finite() {
-        let abs = (0..6)
-            .map(|k| (got[k] - exact[k]).abs())
+        let abs = (0..exact.len())
+            .map(|k| (got(k) - exact[k]).abs())
             .fold(0.0, f64::max);
         e = e.max(abs / shares.0);
     }
-    if shares.1.is_finite() {
-        let de = delta_e2000_rgb([got[0], got[1], got[2]], [exact[0], exact[1], exact[2]]).max(
-            delta_e2000_rgb([got[3], got[4], got[5]], [exact[3], exact[4], exact[5]]),
+    if shares.1.is_finite() && exact.len() == 6 {
+        let de = delta_e2000_rgb([got(0), got(1), got(2)], [exact[0], exact[1], exact[2]]).max(
+            delta_e2000_rgb([got(3), got(4), got(5)], [exact[3], exact[4], exact[5]]),
         );
         e = e.max(if de.is_nan() {
             f64::INFINITY
@@ -293,7 +295,10 @@ pub fn build(
                 None => String::new(),
             },
             if skeleton.aliased_below > 0.0 {
-                format!(", colour aliased below cos θ {:.4}", skeleton.aliased_below)
+                format!(
+                    ", fringes aliased below cos θ {:.4}",
+                    skeleton.aliased_below
+                )
             } else {
                 String::new()
             },
@@ -323,7 +328,8 @@ pub fn build(
         ));
     }
     for round in 0.. {
-        let (atlas, image) = assemble(&charts, thickness_nm, max_side)?;
+        let channels = sides.first().map_or(6, |s| s.film.channels());
+        let (atlas, image) = assemble(&charts, thickness_nm, max_side, channels)?;
         let measured = measure(&atlas, &image, sides, &reports, points)?;
         let missed = measured
             .iter()
@@ -442,18 +448,18 @@ fn corner_chart(req: &SideRequest, thickness_nm: (f64, f64), goal: Goal) -> Resu
     let points: Vec<(f64, f64)> = std::iter::once((d0, c))
         .chain(ratios.iter().map(|r| (d0 + r * c / optical.s(c), c)))
         .collect();
-    let values = film.points(&points)?;
-    let lum = |v: &[f64; 6]| (v[0] + v[1] + v[2]) / 3.0;
-    let (start, end) = (lum(&values[0]), lum(&values[values.len() - 1]));
+    let ch = film.channels();
+    let values = film.points_flat(&points)?;
+    let lum = |k: usize| film.brightness(&values[k * ch..(k + 1) * ch]);
+    let (start, end) = (lum(0), lum(points.len() - 1));
     let tolerance = goal.max_abs.unwrap_or(1e-3).max(1e-3);
     if (end - start).abs() < 100.0 * tolerance || d0 > 0.0 {
         return Ok(None);
     }
     // The ratio p / cos θ at which the jump is half done is one unit of ρ.
     let half = 0.5 * (start + end);
-    let k = values[1..]
-        .iter()
-        .position(|v| (lum(v) - start).abs() >= (half - start).abs())
+    let k = (1..points.len())
+        .position(|k| (lum(k) - start).abs() >= (half - start).abs())
         .unwrap_or(ratios.len() - 1);
     let scale_nm = ratios[k].max(1e-3);
     Ok(Some(Chart {
@@ -482,6 +488,9 @@ fn corner_chart(req: &SideRequest, thickness_nm: (f64, f64), goal: Goal) -> Resu
 /// to move the colour by the target through that one wavelength's weight.
 fn aliasing_floor(req: &SideRequest, thickness_nm: (f64, f64), goal: Goal) -> Result<f64> {
     let film = req.film;
+    if let Some(floor) = film.spectral_aliased_below() {
+        return Ok(floor);
+    }
     let w = film.wavelengths_nm();
     if w.len() < 4 {
         return Ok(0.0);
@@ -568,8 +577,9 @@ struct RowNeeds {
 /// The largest normalized midpoint errors at one spacing and at twice it.
 type Pair = (f64, f64);
 
-/// A chart's midpoint errors along u and v, and its exact node values.
-type Checked = ((Pair, Pair), Vec<[f64; 6]>);
+/// A chart's midpoint errors along u and v, and its exact node values
+/// ([`Film::channels`] per node, row-major).
+type Checked = ((Pair, Pair), Vec<f64>);
 
 fn merge(a: Pair, b: Pair) -> Pair {
     (a.0.max(b.0), a.1.max(b.1))
@@ -604,12 +614,8 @@ fn nodes_for(x: f64) -> usize {
 
 /// Normalized midpoint errors of one axis at node k of a line of fine
 /// values `at(k)`: between its neighbours, and between the ones two away.
-fn midpoint_pair(at: &dyn Fn(usize) -> [f64; 6], k: usize, n: usize, shares: Pair) -> Pair {
-    let err = |a: usize, b: usize| {
-        let (va, vb) = (at(a), at(b));
-        let mid: [f64; 6] = std::array::from_fn(|m| 0.5 * (va[m] + vb[m]));
-        normalized_error(&mid, &at(k), shares)
-    };
+fn midpoint_pair<'a>(at: &dyn Fn(usize) -> &'a [f64], k: usize, n: usize, shares: Pair) -> Pair {
+    let err = |a: usize, b: usize| normalized_error(at(a), at(b), at(k), shares);
     let e1 = err(k - 1, k + 1);
     let e2 = if k >= 2 && k + 2 < n {
         err(k - 2, k + 2)
@@ -641,7 +647,9 @@ fn probe(skeleton: &Skeleton, piece: &Piece, shares: Pair) -> Result<RowNeeds> {
         },
     };
     let (nu, nv) = (2 * PROBE_U - 1, 2 * PROBE_V - 1);
-    let fine = skeleton.req.film.chart(&chart, nu, nv)?;
+    let fine = skeleton.req.film.chart_flat(&chart, nu, nv)?;
+    let ch = skeleton.req.film.channels();
+    let node = |k: usize| &fine[k * ch..(k + 1) * ch];
     let mut sized = chart;
     sized.rect.width = nu;
     sized.rect.height = nv;
@@ -662,9 +670,9 @@ fn probe(skeleton: &Skeleton, piece: &Piece, shares: Pair) -> Result<RowNeeds> {
                     continue;
                 }
                 let e = if odd_row {
-                    midpoint_pair(&|k| fine[k * nu + i], jj, nv, shares)
+                    midpoint_pair(&|k| node(k * nu + i), jj, nv, shares)
                 } else {
-                    midpoint_pair(&|k| fine[jj * nu + k], i, nu, shares)
+                    midpoint_pair(&|k| node(jj * nu + k), i, nu, shares)
                 };
                 let e = (weight * e.0, weight * e.1);
                 pair = merge(pair, e);
@@ -947,7 +955,9 @@ fn chart_check(
     shares: Pair,
 ) -> Result<Checked> {
     let (nu, nv) = (2 * w - 1, 2 * h - 1);
-    let fine = skeleton.req.film.chart(chart, nu, nv)?;
+    let fine = skeleton.req.film.chart_flat(chart, nu, nv)?;
+    let ch = skeleton.req.film.channels();
+    let node = |k: usize| &fine[k * ch..(k + 1) * ch];
     let mut sized = *chart;
     sized.rect.width = nu;
     sized.rect.height = nv;
@@ -981,12 +991,12 @@ fn chart_check(
                 if odd_i {
                     eu = merge(
                         eu,
-                        scaled(midpoint_pair(&|k| fine[j * nu + k], i, nu, shares)),
+                        scaled(midpoint_pair(&|k| node(j * nu + k), i, nu, shares)),
                     );
                 } else {
                     ev = merge(
                         ev,
-                        scaled(midpoint_pair(&|k| fine[k * nu + i], j, nv, shares)),
+                        scaled(midpoint_pair(&|k| node(k * nu + i), j, nv, shares)),
                     );
                 }
             }
@@ -998,17 +1008,17 @@ fn chart_check(
     });
     let coarse = (0..h)
         .flat_map(|j| (0..w).map(move |i| 2 * j * nu + 2 * i))
-        .map(|k| fine[k])
+        .flat_map(|k| node(k).iter().copied())
         .collect();
     Ok((errors, coarse))
 }
 
 /// Refuses a chart check whose memory would exceed the budget (see
-/// [`crate::limits`]): six exact values (f64) at each node of the doubled
-/// grid, and the chart's own nodes kept from them.
-fn within_budget(goal: Goal, w: usize, h: usize) -> Result<()> {
+/// [`crate::limits`]): `channels` exact values (f64) at each node of the
+/// doubled grid, and the chart's own nodes kept from them.
+fn within_budget(goal: Goal, w: usize, h: usize, channels: usize) -> Result<()> {
     let (coarse, fine) = (w as u64 * h as u64, (2 * w as u64 - 1) * (2 * h as u64 - 1));
-    let estimate = crate::limits::product(&[fine.saturating_add(coarse)], 6 * 8);
+    let estimate = crate::limits::product(&[fine.saturating_add(coarse)], channels as u64 * 8);
     let target = match (goal.max_abs, goal.max_de) {
         (Some(e), Some(de)) => format!("max-error {e:e}, max-de {de}"),
         (Some(e), None) => format!("max-error {e:e}"),
@@ -1022,8 +1032,8 @@ fn within_budget(goal: Goal, w: usize, h: usize) -> Result<()> {
 }
 
 /// Evaluates a chart with its doubled grid and grows it until its midpoint
-/// errors meet the target; returns it with its values as stored (six per
-/// node, row-major).
+/// errors meet the target; returns it with its values as stored
+/// ([`Film::channels`] per node, row-major).
 fn confirm(
     skeleton: &Skeleton,
     chart: Chart,
@@ -1032,23 +1042,24 @@ fn confirm(
     progress: &dyn Fn(&str),
 ) -> Result<(Chart, Vec<f32>)> {
     let mut chart = chart;
+    // A chart that met the target and was then tried smaller.
+    let mut met: Option<(Chart, Vec<f32>)> = None;
     for _ in 0..MAX_GROWTH {
         let (w, h) = (chart.rect.width, chart.rect.height);
         if w > max_side || h > max_side || w.saturating_mul(h) > MAX_CHART_TEXELS {
             return Err(unreachable_target(skeleton, &chart, goal));
         }
-        within_budget(goal, w, h)?;
+        let ch = skeleton.req.film.channels();
+        within_budget(goal, w, h, ch)?;
         let ((eu, ev), values) = chart_check(skeleton, &chart, w, h, goal.shares(1.0)?)?;
-        if let Some(v) = values.iter().find(|v| v.iter().any(|x| !x.is_finite())) {
+        if let Some(k) = values.iter().position(|x| !x.is_finite()) {
+            let v = &values[k - k % ch..k - k % ch + ch];
             return Err(Error::invalid(
                 "film",
                 format!("R or T is not finite: {v:?}"),
             ));
         }
-        let largest = values
-            .iter()
-            .flat_map(|v| v.iter())
-            .fold(0.0f64, |a, &b| a.max(b.abs()));
+        let largest = values.iter().fold(0.0f64, |a, &b| a.max(b.abs()));
         // f16 rounds values above 1 more: the same errors are a larger
         // fraction of what is left.
         let scale = goal.shares(1.0)?.0 / goal.shares(largest.max(1.0))?.0;
@@ -1061,11 +1072,33 @@ fn confirm(
             ev.0
         ));
         if eu.0 <= 1.0 && ev.0 <= 1.0 {
-            let stored = values
-                .iter()
-                .flat_map(|v| v.map(|x| goal.store(x)))
-                .collect();
-            return Ok((chart, stored));
+            let stored = values.iter().map(|&x| goal.store(x)).collect();
+            // The probe predicts from coarse spacings, where the error has
+            // not reached its h² law: an axis far inside the target is
+            // tried once at the size its measured error asks for.
+            let smaller = (
+                if eu.0 < SHRINK_BELOW {
+                    needed_nodes(w, eu)
+                } else {
+                    w
+                },
+                if ev.0 < SHRINK_BELOW {
+                    needed_nodes(h, ev)
+                } else {
+                    h
+                },
+            );
+            if met.is_some() || smaller.0.max(2) * smaller.1.max(2) >= w * h {
+                return Ok((chart, stored));
+            }
+            met = Some((chart, stored));
+            chart.rect.width = smaller.0.max(2).min(w);
+            chart.rect.height = smaller.1.max(2).min(h);
+            continue;
+        }
+        if let Some(met) = met {
+            // The smaller size misses: keep the one that met.
+            return Ok(met);
         }
         if eu.0 > 1.0 {
             chart.rect.width = needed_nodes(w, eu).max(w + 1);
@@ -1079,6 +1112,9 @@ fn confirm(
 
 /// The most texels one chart may have.
 const MAX_CHART_TEXELS: usize = 1 << 24;
+/// A confirmed chart whose midpoint error along an axis is below this
+/// fraction of what is allowed is tried smaller along it.
+const SHRINK_BELOW: f64 = 0.3;
 
 fn chart_name(chart: &Chart) -> String {
     match chart.coords {
@@ -1125,6 +1161,7 @@ fn assemble(
     charts: &[(Chart, Vec<f32>)],
     thickness_nm: (f64, f64),
     max_side: usize,
+    channels: usize,
 ) -> Result<(Atlas, Image)> {
     let sizes: Vec<(usize, usize)> = charts
         .iter()
@@ -1136,7 +1173,7 @@ fn assemble(
             format!("its charts ({sizes:?} texels) do not fit in {max_side}×{max_side}"),
         )
     })?;
-    let mut image = Image::new(width, height, 6);
+    let mut image = Image::new(width, height, channels);
     let mut placed = Vec::with_capacity(charts.len());
     for ((chart, values), (x, y)) in charts.iter().zip(at) {
         let mut chart = *chart;
@@ -1144,10 +1181,10 @@ fn assemble(
         chart.rect.y = y;
         for j in 0..chart.rect.height {
             for i in 0..chart.rect.width {
-                let k = (j * chart.rect.width + i) * 6;
+                let k = (j * chart.rect.width + i) * channels;
                 image
                     .texel_mut(x + i, y + j)
-                    .copy_from_slice(&values[k..k + 6]);
+                    .copy_from_slice(&values[k..k + channels]);
             }
         }
         placed.push(chart);
@@ -1162,17 +1199,18 @@ fn assemble(
 }
 
 /// Error figures of an atlas at points against the solver. `*_abs` per
-/// channel (R.r, R.g, R.b, T.r, T.g, T.b); `*_de` per colour (R, T).
+/// channel (R.r, R.g, R.b, T.r, T.g, T.b for a colour film; see
+/// [`Film::channels`]); `*_de` per colour (R, T; zero for spectra).
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Measurement {
     /// Points measured.
     pub points: usize,
     /// Largest absolute error per channel.
-    pub max_abs: [f64; 6],
+    pub max_abs: Vec<f64>,
     /// 99th percentile per channel.
-    pub p99_abs: [f64; 6],
+    pub p99_abs: Vec<f64>,
     /// Mean per channel.
-    pub mean_abs: [f64; 6],
+    pub mean_abs: Vec<f64>,
     /// Largest CIEDE2000, reflected and transmitted.
     pub max_de: [f64; 2],
     /// Mean CIEDE2000.
@@ -1187,18 +1225,38 @@ impl Measurement {
         self.max_abs.iter().fold(0.0, |a, &b| a.max(b))
     }
 
-    /// Figures of (got, exact) pairs at `points`.
+    /// Figures of (got, exact) colour pairs at `points`.
     pub fn of(points: &[[f32; 2]], got: &[[f64; 6]], exact: &[[f64; 6]]) -> Measurement {
+        Measurement::of_flat(points, &got.concat(), &exact.concat(), 6, true)
+    }
+
+    /// Figures of (got, exact) at `points`, `channels` values per point
+    /// (with CIEDE2000 when `colour`: six colour channels).
+    pub fn of_flat(
+        points: &[[f32; 2]],
+        got: &[f64],
+        exact: &[f64],
+        channels: usize,
+        colour: bool,
+    ) -> Measurement {
         let n = points.len();
         if n == 0 {
-            return Measurement::default();
+            return Measurement {
+                max_abs: vec![0.0; channels],
+                p99_abs: vec![0.0; channels],
+                mean_abs: vec![0.0; channels],
+                ..Measurement::default()
+            };
         }
-        let errors: Vec<([f64; 6], [f64; 2])> = got
-            .par_iter()
-            .zip(exact)
+        let errors: Vec<(Vec<f64>, [f64; 2])> = got
+            .par_chunks_exact(channels)
+            .zip(exact.par_chunks_exact(channels))
             .map(|(g, e)| {
-                let abs = std::array::from_fn(|k| (g[k] - e[k]).abs());
+                let abs = (0..channels).map(|k| (g[k] - e[k]).abs()).collect();
                 let de = |o: usize| {
+                    if !colour {
+                        return 0.0;
+                    }
                     let d = delta_e2000_rgb([g[o], g[o + 1], g[o + 2]], [e[o], e[o + 1], e[o + 2]]);
                     if d.is_nan() {
                         f64::INFINITY
@@ -1211,9 +1269,12 @@ impl Measurement {
             .collect();
         let mut m = Measurement {
             points: n,
+            max_abs: vec![0.0; channels],
+            p99_abs: vec![0.0; channels],
+            mean_abs: vec![0.0; channels],
             ..Measurement::default()
         };
-        for k in 0..6 {
+        for k in 0..channels {
             let mut e: Vec<f64> = errors.iter().map(|x| x.0[k]).collect();
             e.sort_by(f64::total_cmp);
             m.max_abs[k] = e[n - 1];
@@ -1264,31 +1325,37 @@ pub fn measure(
         .zip(reports)
         .zip(points)
         .map(|((req, report), pts)| {
-            let exact = req.film.points(
+            let exact = req.film.points_flat(
                 &pts.iter()
                     .map(|p| (f64::from(p[0]), f64::from(p[1])))
                     .collect::<Vec<_>>(),
             )?;
-            let got: Vec<[f64; 6]> = pts
+            let ch = req.film.channels();
+            let colour = !req.film.is_spectral();
+            let got: Vec<f64> = pts
                 .par_iter()
-                .map(|p| {
-                    let mut out = [0.0f32; 6];
+                .flat_map_iter(|p| {
+                    let mut out = vec![0.0f32; ch];
                     if let Some(t) = super::locate_f32(&uniform, p[0], p[1], req.side) {
                         image.bilinear(t, &mut out);
                     }
-                    out.map(f64::from)
+                    out.into_iter().map(f64::from)
                 })
                 .collect();
             let split = |keep: &dyn Fn(f32) -> bool| {
                 let idx: Vec<usize> = (0..pts.len()).filter(|&k| keep(pts[k][1])).collect();
-                let pick = |v: &[[f64; 6]]| idx.iter().map(|&k| v[k]).collect::<Vec<_>>();
+                let pick = |v: &[f64]| {
+                    idx.iter()
+                        .flat_map(|&k| v[k * ch..(k + 1) * ch].iter().copied())
+                        .collect::<Vec<_>>()
+                };
                 let p: Vec<[f32; 2]> = idx.iter().map(|&k| pts[k]).collect();
-                Measurement::of(&p, &pick(&got), &pick(&exact))
+                Measurement::of_flat(&p, &pick(&got), &pick(&exact), ch, colour)
             };
             let floor = report.aliased_below as f32;
             Ok(SideMeasurement {
                 side: req.side,
-                all: Measurement::of(pts, &got, &exact),
+                all: Measurement::of_flat(pts, &got, &exact, ch, colour),
                 resolved: split(&|c| c >= floor),
                 aliased: split(&|c| c < floor),
             })

@@ -10,3 +10,4 @@ pub mod renders;
 pub mod report;
 pub mod run;
 pub mod stacks;
+pub mod tables;

@@ -35,7 +35,9 @@ pub struct Args {
     /// docs/color.md.
     #[arg(long, default_value = "d65")]
     pub white: String,
-    /// Wavelength range MIN:MAX in nm of the spectral kind.
+    /// Wavelength range MIN:MAX in nm of the spectral kind (360:830 is
+    /// what spectral renderers such as Mitsuba sample); within the data of
+    /// every material of the stack.
     #[arg(long, default_value = "380:780")]
     pub wavelengths: String,
     /// Fixed node counts T,A[,W] (thickness, angle, wavelength) instead of
@@ -138,7 +140,7 @@ pub fn run(args: Args) -> Result<ExitCode> {
             h.channels.len(),
             if t.aliased_below_cos > 0.0 {
                 format!(
-                    "; the colour integration is aliased below cos θ {:.4}, where the target is not sought",
+                    "; the film's fringes are aliased below cos θ {:.4}, where the target is not sought",
                     t.aliased_below_cos
                 )
             } else {

@@ -57,6 +57,12 @@ pub struct Args {
     /// and print its wall time as JSON instead of evaluating a grid.
     #[arg(long, value_name = "T,A,R", conflicts_with = "bake_nodes")]
     pub rough_nodes: Option<String>,
+    /// Tables mode: bake every bench stack's rgb (to 1e-3) and spectral (to
+    /// 1e-2, 360-830 nm) tables over every angle in the grid layout and in
+    /// the atlas, and write their nodes, bytes, build time and measured
+    /// error to tables.md in the run directory (no other report).
+    #[arg(long, conflicts_with_all = ["grid", "quick"])]
+    pub tables: bool,
     /// Write R then T as little-endian f64 arrays, [angle][thickness][wavelength],
     /// to this file instead of printing them in the JSON.
     #[arg(long, value_name = "PATH")]
@@ -65,6 +71,10 @@ pub struct Args {
 
 pub fn run(args: Args) -> Result<ExitCode> {
     check_threads(args.threads)?;
+    if args.tables {
+        with_threads(Some(args.threads), || run_tables(&args))??;
+        return Ok(ExitCode::SUCCESS);
+    }
     match &args.grid {
         Some(name) => run_grid(name, &args)?,
         // The grid builds its own pool; the report's bakes and renders run
@@ -72,6 +82,40 @@ pub fn run(args: Args) -> Result<ExitCode> {
         None => with_threads(Some(args.threads), || run_report(&args))??,
     }
     Ok(ExitCode::SUCCESS)
+}
+
+fn run_tables(args: &Args) -> Result<()> {
+    let points = args.points.unwrap_or(20_000);
+    check_count("--points", points, irid::lut::MAX_VALIDATION_POINTS)?;
+    let command = std::iter::once("irid".to_string())
+        .chain(std::env::args().skip(1))
+        .collect::<Vec<_>>()
+        .join(" ");
+    let machine = Machine::current();
+    let out = args
+        .out
+        .clone()
+        .unwrap_or_else(|| Path::new(RESULTS_DIR).join(run_dir_name(&machine)));
+    eprintln!(
+        "irid bench --tables: {points} points per table on {}",
+        machine.summary()
+    );
+    let scratch = std::env::temp_dir().join(format!("irid-bench-tables-{}", std::process::id()));
+    let rows = irid::bench::tables::run(&stacks::fixed_stacks()?, points, 7, &scratch, &|line| {
+        eprintln!("{line}")
+    });
+    let _ = std::fs::remove_dir_all(&scratch);
+    let rows = rows?;
+    let doc = format!(
+        "# Tables: grid against atlas\n\n`{command}` on {}, {} threads.\n\n{}",
+        machine.summary(),
+        args.threads,
+        irid::bench::tables::markdown(&rows, points)
+    );
+    std::fs::create_dir_all(&out).with_context(|| out.display().to_string())?;
+    irid::atomic::write(&out.join("tables.md"), doc.as_bytes())?;
+    print!("{doc}");
+    Ok(())
 }
 
 fn run_report(args: &Args) -> Result<()> {

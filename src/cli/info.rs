@@ -98,7 +98,7 @@ fn say_atlas(out: &mut String, h: &Header, t: &irid::lut::TableAtlas) {
         a.thickness_nm.0,
         a.thickness_nm.1,
         if t.aliased_below_cos > 0.0 {
-            format!(" (colour aliased below cos θ {:.6})", t.aliased_below_cos)
+            format!(" (fringes aliased below cos θ {:.6})", t.aliased_below_cos)
         } else {
             String::new()
         },

@@ -227,6 +227,13 @@ impl Locator {
     pub fn len(&self) -> usize {
         self.nodes.len()
     }
+
+    /// `x` clamped to the axis (NaN → its first node), as [`Self::locate`]
+    /// clamps it.
+    #[inline(always)]
+    pub fn clamp(&self, x: f32) -> f32 {
+        x.max(self.first).min(self.last)
+    }
 }
 
 #[cfg(test)]

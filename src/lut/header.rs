@@ -109,7 +109,7 @@ pub struct TableAtlas {
     /// The charts and the image size (per wavelength block).
     #[serde(flatten)]
     pub atlas: crate::atlas::Atlas,
-    /// cos θ below which the colour integration is aliased (see
+    /// cos θ below which the film's fringes are aliased (see
     /// docs/lut-format.md): the table's error target was not sought there.
     pub aliased_below_cos: f64,
     /// A lossless film (R + T the same colour at every node): only the

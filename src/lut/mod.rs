@@ -27,6 +27,33 @@ use crate::color::{Sampling, White};
 use crate::error::{Error, Result};
 use crate::optics::{Stack, MAX_THICKNESS_NM};
 
+/// Every medium of `stack` is defined over `range` (nm): a spectral table
+/// spans no wavelength its materials' data does not.
+fn check_wavelength_data(stack: &Stack, range: (f64, f64)) -> Result<()> {
+    let media = std::iter::once(("ambient".to_string(), &stack.ambient))
+        .chain(
+            stack
+                .layers
+                .iter()
+                .enumerate()
+                .map(|(i, l)| (format!("layers[{}]", i + 1), &l.material)),
+        )
+        .chain(std::iter::once(("substrate".to_string(), &stack.substrate)));
+    for (field, material) in media {
+        let (lo, hi) = material.range_nm();
+        if range.0 < lo || range.1 > hi {
+            return Err(Error::invalid(
+                "wavelengths",
+                format!(
+                    "{}:{} nm is outside the data of {field} ({}), defined over {lo}–{hi} nm",
+                    range.0, range.1, material.name
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
 /// Checks what a table or an export covers: the stack itself, `layer`
 /// within it, 0 ≤ min ≤ max ≤ [`MAX_THICKNESS_NM`] (the stack's own bound,
 /// which also keeps an f32 thickness axis finite), and 0 ≤ cos θ min ≤ max
@@ -249,12 +276,11 @@ impl BakeSpec {
         }
     }
 
-    /// The layout the table is baked in: a grid for a fixed resolution, a
-    /// spectral table, or when `layout` asks for one, else an atlas.
+    /// The layout the table is baked in: a grid for a fixed resolution or
+    /// when `layout` asks for one, else an atlas.
     pub fn layout(&self) -> Layout {
         match self.resolution {
             Resolution::Nodes { .. } => Layout::Grid,
-            Resolution::MaxError(_) if self.kind == Kind::Spectral => Layout::Grid,
             Resolution::MaxError(_) => self.layout,
         }
     }
@@ -270,6 +296,7 @@ impl BakeSpec {
                     format!("need finite 0 < min ≤ max, got {w0}:{w1}"),
                 ));
             }
+            check_wavelength_data(&self.stack, (w0, w1))?;
         }
         if self.validation_points > MAX_VALIDATION_POINTS {
             return Err(Error::invalid(
@@ -323,6 +350,12 @@ impl BakeSpec {
                     ));
                 }
                 if let Some(de) = self.max_de {
+                    if self.kind == Kind::Spectral {
+                        return Err(Error::invalid(
+                            "max-de",
+                            "applies to rgb tables (a spectral table has no colour to target)",
+                        ));
+                    }
                     if !(de > 0.0 && de.is_finite()) {
                         return Err(Error::invalid(
                             "max-de",
@@ -393,12 +426,11 @@ impl BakeSpec {
             Layout::Atlas => ATLAS_VERSION,
             Layout::Grid => FORMAT_VERSION,
         };
-        // `layout` only decides an error-target table that is not spectral;
-        // elsewhere it is left out (as for the atlas), so the same table has
-        // one key whichever layout the caller's spec names.
+        // `layout` only decides an error-target table; elsewhere it is left
+        // out (as for the atlas), so the same table has one key whichever
+        // layout the caller's spec names.
         let mut identity = self.clone();
-        let decides =
-            matches!(self.resolution, Resolution::MaxError(_)) && self.kind != Kind::Spectral;
+        let decides = matches!(self.resolution, Resolution::MaxError(_));
         if !decides {
             identity.layout = Layout::Atlas;
         }

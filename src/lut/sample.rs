@@ -263,7 +263,8 @@ fn check_axes(header: &Header) -> Result<(), String> {
     Ok(())
 }
 
-/// An atlas table's charts fit its image and its domain is the axes' ends.
+/// An atlas table's charts fit its image and its domain is the axes' ends
+/// (a spectral table's charts reach beyond them: they are read at d·λₖ/λ).
 fn check_atlas(header: &Header, table: &super::header::TableAtlas) -> Result<(), String> {
     let atlas = &table.atlas;
     atlas.check()?;
@@ -271,10 +272,20 @@ fn check_atlas(header: &Header, table: &super::header::TableAtlas) -> Result<(),
         let n = &header.axes[k].nodes;
         (n[0], n[n.len() - 1])
     };
-    if ends(0) != atlas.thickness_nm {
+    let (t0, t1) = ends(0);
+    let fits = match header.kind {
+        Kind::Rgb => (t0, t1) == atlas.thickness_nm,
+        Kind::Spectral => atlas.thickness_nm.0 <= t0 && t1 <= atlas.thickness_nm.1,
+    };
+    if !fits {
         return Err(format!(
-            "header atlas thickness range {:?} is not the thickness axis's {:?}",
+            "header atlas thickness range {:?} does not {} the thickness axis's {:?}",
             atlas.thickness_nm,
+            if header.kind == Kind::Rgb {
+                "equal"
+            } else {
+                "hold"
+            },
             ends(0)
         ));
     }
@@ -552,13 +563,21 @@ impl Lut {
             return (f32::NAN, f32::NAN);
         };
         if let RgbNodes::Atlas(atlas) = &self.rgb_nodes {
+            // Each node's block at the same d/λ (see docs/lut-format.md):
+            // the thickness clamped to the table's range, the wavelength to
+            // the nodes (NaN to the first node, at its own thickness).
             let (k, fz) = wl.locate(wavelength_nm);
-            let a = atlas.spectral(thickness_nm, cos_theta, k);
-            let b = if wl.len() > 1 {
-                atlas.spectral(thickness_nm, cos_theta, k + 1)
+            let d = self.thickness.clamp(thickness_nm);
+            let nodes = &self.header.axes[2].nodes;
+            let upper = (k + 1).min(wl.len() - 1);
+            let (lo, hi) = (nodes[k] as f32, nodes[upper] as f32);
+            let lambda = if wavelength_nm.is_nan() {
+                lo
             } else {
-                a
+                wavelength_nm.clamp(lo, nodes[wl.len() - 1] as f32)
             };
+            let a = atlas.spectral(d * (lo / lambda), cos_theta, k);
+            let b = atlas.spectral(d * (hi / lambda), cos_theta, upper);
             return (a[0] + fz * (b[0] - a[0]), a[1] + fz * (b[1] - a[1]));
         }
         let (i, fx) = self.thickness.locate(thickness_nm);

@@ -446,7 +446,7 @@ impl Totals {
             (
                 "aliased",
                 format!(
-                    "cos θ below {:.6}, where the colour integration itself is aliased and the table's target is not sought",
+                    "cos θ below {:.6}, where the film's fringes are aliased (narrower than the colour integration, or at one wavelength than a chart follows) and the table's target is not sought",
                     self.aliased_below
                 ),
             ),

@@ -127,12 +127,14 @@ const ATLAS_CHECK_METRIC: &str = "largest absolute difference, per channel, betw
     points where its target applies (cos θ at or above atlas.aliased_below_cos)";
 
 /// The header of an atlas table of `spec` (layer `layer` of the evaluated
-/// stack), with the charts of `built` and their measurement.
+/// stack), with the charts of `built` and their measurement; a spectral
+/// table's texels hold `wavelengths_nm`.
 pub(super) fn atlas_header(
     spec: &BakeSpec,
     layer: usize,
     built: &crate::atlas::search::Built,
     lossless_white: Option<[f64; 3]>,
+    wavelengths_nm: &[f64],
 ) -> Header {
     let (t0, t1) = spec.thickness_nm;
     let (c0, c1) = spec.cos_theta;
@@ -142,8 +144,7 @@ pub(super) fn atlas_header(
         axis(COS_AXIS, "1", ends(c0, c1)),
     ];
     if spec.kind == Kind::Spectral {
-        let (w0, w1) = spec.wavelength_nm;
-        axes.push(axis(WAVELENGTH_AXIS, "nm", ends(w0, w1)));
+        axes.push(axis(WAVELENGTH_AXIS, "nm", wavelengths_nm.to_vec()));
     }
     let mut header = Header {
         version: version_for(spec.white, true),
@@ -164,6 +165,16 @@ pub(super) fn atlas_header(
     };
     header.channels = channels(header.channel_names());
     let measured = built.measured.first().map(|m| &m.resolved);
+    // A spectral texel's channels are R at each wavelength, then T: the
+    // table's two channels take the largest of each half.
+    let per_channel = |max_abs: &[f64]| -> Vec<f64> {
+        if spec.kind != Kind::Spectral {
+            return max_abs.to_vec();
+        }
+        let half = max_abs.len() / 2;
+        let max = |v: &[f64]| v.iter().fold(0.0f64, |a, &b| a.max(b));
+        vec![max(&max_abs[..half]), max(&max_abs[half..])]
+    };
     header.error = ErrorInfo {
         target_max_abs: match spec.resolution {
             crate::lut::Resolution::MaxError(e) if e.is_finite() => Some(e),
@@ -173,7 +184,7 @@ pub(super) fn atlas_header(
             metric: ATLAS_CHECK_METRIC.into(),
             points: m.points,
             max_abs_all: m.max_all(),
-            max_abs: m.max_abs.to_vec(),
+            max_abs: per_channel(&m.max_abs),
         }),
         validation: None,
     };
