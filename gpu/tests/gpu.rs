@@ -90,7 +90,14 @@ fn cases() -> Vec<(&'static str, ExportSpec)> {
         ),
         ("6-layer mirror", mirror),
         ("dense-side film", dense),
-        ("absorbing film", spec(stack_file("absorbing-film.toml"), 1, (0.0, 600.0))),
+        // Seen from its fused-silica side over 0–600 nm the absorbing film
+        // needs 21 charts (the dispersive critical band is cut in many),
+        // more than the shader's 16: the front alone (docs/gpu.md).
+        ("absorbing film", {
+            let mut s = spec(stack_file("absorbing-film.toml"), 1, (0.0, 600.0));
+            s.front_only = true;
+            s
+        }),
     ]
 }
 
@@ -135,7 +142,7 @@ fn compare(case: &Case, side: Side, got: &[[f32; 6]]) -> (f64, [f64; 6]) {
         .points
         .iter()
         .zip(got)
-        .zip(&case.exact[side_index(side)])
+        .zip(&case.exact[side_index(side) as usize])
     {
         let (r, t) = case.export.sample(p[0], p[1], side);
         let cpu = [r[0], r[1], r[2], t[0], t[1], t[2]];
@@ -149,8 +156,12 @@ fn compare(case: &Case, side: Side, got: &[[f32; 6]]) -> (f64, [f64; 6]) {
 
 /// Float precision of the filtered result: the texel coordinates and
 /// weights are f32 on both sides, but a driver may order the lerps
-/// differently.
-const EMULATION_TOLERANCE: f64 = 2e-6;
+/// differently, and its log and atan2 (the bands' thickness and cos θ
+/// warps, the corner's angle) need not be correctly rounded: WGSL allows
+/// log an absolute error of 2^-21 near 1, which moves a texel coordinate of
+/// a 963-texel band by up to 5e-4 of a texel, times the step between
+/// neighbouring texels.
+const EMULATION_TOLERANCE: f64 = 5e-5;
 
 fn check(gpu: &Gpu, case: &Case, language: &str, source: Source) {
     let files = read_dir(&case.dir.path().join("film"));
@@ -167,14 +178,7 @@ fn check(gpu: &Gpu, case: &Case, language: &str, source: Source) {
     let bound = bind(gpu, &files);
     let program = program(gpu, &bound.layout, source);
     for side in [Side::Front, Side::Back] {
-        let (got, _) = run(
-            gpu,
-            &program,
-            &bound,
-            &case.points,
-            1,
-            side_index(side) as u32,
-        );
+        let (got, _) = run(gpu, &program, &bound, &case.points, 1, side_index(side));
         let (emulation, exact) = compare(case, side, &got);
         assert!(
             emulation <= EMULATION_TOLERANCE,
@@ -184,7 +188,11 @@ fn check(gpu: &Gpu, case: &Case, language: &str, source: Source) {
         // A side the export has is within the error it states; an opaque
         // film's back-side lookups read the front chart.
         let Some(stated) = case.export.side(side) else {
-            assert!(case.export.opaque, "{}: no {side:?} side", case.name);
+            assert!(
+                case.export.opaque || case.export.spec.front_only,
+                "{}: no {side:?} side",
+                case.name
+            );
             continue;
         };
         eprintln!(
@@ -241,7 +249,7 @@ fn check_charts(case: &Case) {
     assert_eq!(e.opaque, absorbs, "{}: opaque", case.name);
     assert_eq!(
         e.side(Side::Back).is_some(),
-        !absorbs,
+        !absorbs && !spec.front_only,
         "{}: back side",
         case.name
     );
