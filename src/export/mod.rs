@@ -529,7 +529,7 @@ fn check_lasing(spec: &ExportSpec, film: &Film) -> Result<()> {
     let values = film.points(&points)?;
     match values
         .iter()
-        .position(|v| v.iter().any(|x| !(x.abs() <= LASING_BOUND)))
+        .position(|v| v.iter().any(|x| !x.is_finite() || x.abs() > LASING_BOUND))
     {
         None => Ok(()),
         Some(k) => Err(Error::invalid(
