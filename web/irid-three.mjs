@@ -21,8 +21,8 @@
 
 import * as THREE from 'three';
 
-/** film.json versions this module knows. */
-export const FILM_VERSIONS = [1, 2];
+/** film.json versions this module knows (docs/gpu.md: version 3, the atlas of bands and corners). */
+export const FILM_VERSIONS = [3];
 
 const BLOCK = /layout\s*\(\s*std140\s*\)\s*uniform\s+(\w+)\s*\{([^}]*)\}\s*;/;
 const SIGNATURE = /IridFilm\s+irid_film\s*\(([^)]*)\)/;
@@ -36,7 +36,7 @@ function fail(where, why) {
 export function checkFilm(film, where = 'film.json') {
   if (!film || film.format !== 'irid-film') throw fail(where, 'not an irid film (no "format": "irid-film")');
   if (!FILM_VERSIONS.includes(film.version)) {
-    throw fail(where, `version ${film.version} is not one this module reads (${FILM_VERSIONS.join(', ')}); use the irid-three.mjs of the irid that wrote it`);
+    throw fail(where, `version ${film.version} is not one this module reads (${FILM_VERSIONS.join(', ')}); export the film again with this irid`);
   }
   if (!film.texture?.row_check) {
     throw fail(where, 'has no texture.row_check, so the row order of a loaded texture cannot be checked; export it again with this irid');

@@ -11,8 +11,8 @@
   'use strict';
 
   // The film.json version this page reads (docs/gpu.md): the atlas of
-  // charts, one per side of the film, and its uniform array.
-  const FILM_VERSION = 2;
+  // charts (bands and a grazing corner per side) and its uniform array.
+  const FILM_VERSION = 3;
   const ENVIRONMENTS = { sky: 0, studio: 1, white: 2 };
   // A chart view: the quantity (0 R, 1 T) and the side (0 light from the
   // ambient, 1 from the substrate).
@@ -121,9 +121,10 @@
       || !film.charts.every((c) => c && c.params && Object.values(c.params).every(isNumber))) {
       fail('charts must list the atlas\'s charts, each with numeric params');
     }
-    const chart = (side) => side && Number.isInteger(side.chart) && side.chart >= 0 && side.chart < film.charts.length;
-    if (!film.sides || !chart(film.sides.front) || !(film.sides.back === null || chart(film.sides.back))) {
-      fail('sides.front must name a chart, sides.back a chart or null');
+    const charts = (side) => side && Array.isArray(side.charts) && side.charts.length > 0
+      && side.charts.every((k) => Number.isInteger(k) && k >= 0 && k < film.charts.length);
+    if (!film.sides || !charts(film.sides.front) || !(film.sides.back === null || charts(film.sides.back))) {
+      fail('sides.front must list its charts, sides.back its charts or be null');
     }
     if (typeof film.opaque !== 'boolean') fail('opaque must be true or false');
     if (!film.opaque && !(film.refraction && isNumber(film.refraction.substrate_over_ambient)
@@ -653,22 +654,22 @@ void main() {
   function describe(exp) {
     const f = exp.film;
     const deg = (c) => (Math.acos(Math.min(1, Math.max(-1, c))) * 180) / Math.PI;
-    const front = f.charts[f.sides.front.chart].params;
+    const kinds = (side) => {
+      const list = side.charts.map((k) => f.charts[k].kind);
+      const bands = list.filter((k) => k === 'band').length;
+      return `${bands} band${bands === 1 ? '' : 's'}${list.includes('corner') ? ' and a grazing corner' : ''}`;
+    };
     const rows = [
       ['export', exp.label],
       ['white', f.white],
       ['layer', `${f.layer ?? '—'} of ${f.stack && Array.isArray(f.stack.layers) ? f.stack.layers.length : '?'}`],
       ['thickness', `${f.domain.thickness_nm[0]} – ${f.domain.thickness_nm[1]} nm`],
       ['angle', `${deg(f.domain.cos_theta[1]).toFixed(1)}° – ${deg(f.domain.cos_theta[0]).toFixed(1)}°`],
-      // cos_crit < 0: angle nodes uniform in cos θ; = cos_min: crowded
-      // towards grazing; inside the domain: a dense side's critical angle.
-      ['angle nodes', front.cos_crit < 0 ? 'uniform in cos θ'
-        : front.cos_crit <= f.domain.cos_theta[0] ? 'crowded towards grazing'
-          : `on the critical angle ${deg(front.cos_crit).toFixed(2)}°`],
+      ['front charts', kinds(f.sides.front)],
       ['texture', `${f.texture.width} × ${f.texture.height}, ${exp.reflectance.kind}`],
       ['sides', f.sides.back === null ? 'front only (no light arrives from the substrate)'
-        : f.sides.back.chart === f.sides.front.chart ? 'front and back, one chart (the stack reads the same)'
-          : 'front and back (reversed stack), a chart each'],
+        : f.sides.back.charts[0] === f.sides.front.charts[0] ? 'front and back, the same charts (the stack reads the same)'
+          : `front and back (reversed stack: ${kinds(f.sides.back)})`],
       ['opaque', f.opaque ? 'yes (no transmission drawn)' : `no (refraction index ratio ${f.refraction.substrate_over_ambient.toFixed(3)})`],
     ];
     for (const side of ['front', 'back']) {

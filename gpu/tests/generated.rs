@@ -15,6 +15,22 @@ fn read(name: &str) -> String {
     std::fs::read_to_string(shaders().join(name)).unwrap()
 }
 
+/// The atlas mapping in the WGSL is the generator's (one source for every
+/// library and language), for the atlas irid writes.
+#[test]
+fn the_wgsl_mapping_is_the_generated_one() {
+    assert_eq!(irid_gpu::generate::MAX_CHARTS, irid::atlas::MAX_CHARTS);
+    let wgsl = read("irid_film.wgsl");
+    let lib = &irid_gpu::generate::FILM;
+    assert_eq!(
+        irid_gpu::generate::with_mapping(lib, &wgsl).unwrap(),
+        wgsl,
+        "shaders/irid_film.wgsl: run `cargo run -p irid-gpu --bin gen-shaders`"
+    );
+    assert!(wgsl.contains(&irid_gpu::generate::mapping_wgsl(lib)));
+    assert!(wgsl.contains(&format!("array<vec4<f32>, {}>", irid::atlas::UNIFORM_VEC4)));
+}
+
 #[test]
 fn committed_shaders_are_generated_from_the_wgsl() {
     let files = irid_gpu::generate::generate(&read("irid_film.wgsl")).unwrap();

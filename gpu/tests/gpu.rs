@@ -45,20 +45,27 @@ fn cases() -> Vec<(&'static str, ExportSpec)> {
         s.thickness_nm = thickness;
         s
     };
-    let mut dense = spec(
+    // Over every angle (cos θ 0 to 1, the default), the grazing corner
+    // included.
+    let dense = spec(
         stack_toml(
             "ambient = { n = 1.5 }\nsubstrate = { n = 1.0 }\n[[layers]]\nn = 1.33\nthickness_nm = 300.0\n",
         ),
         1,
         (0.0, 800.0),
     );
-    dense.cos_theta = (0.02, 1.0);
-    // Seen from the fused-silica side the mirror's critical angle moves
-    // with the substrate's dispersion (cos θc from 0.727 to 0.733 over the
-    // visible), a band no single node can sit on: its 1e-3 back side needs
-    // more than 8192 texels, so this case stays above the band.
-    let mut mirror = spec(stack_file("mirror-10.toml"), 1, (20.0, 100.0));
-    mirror.cos_theta = (0.75, 1.0);
+    // A quarter-wave mirror for 550 nm on glass (non-dispersive indices),
+    // its first layer varying: seen from the glass, total internal
+    // reflection beyond cos θ 0.7265, every angle.
+    let mirror = spec(
+        stack_toml(&format!(
+            "ambient = {{ n = 1.0 }}\nsubstrate = {{ n = 1.46 }}\n{}",
+            "[[layers]]\nn = 2.4\nthickness_nm = 57.3\n[[layers]]\nn = 1.46\nthickness_nm = 94.2\n"
+                .repeat(3)
+        )),
+        1,
+        (20.0, 100.0),
+    );
     vec![
         // One chart for both sides: the stack reads the same from either.
         ("soap film", spec(stack_file("soap-film.toml"), 1, (0.0, 1000.0))),
@@ -81,9 +88,15 @@ fn cases() -> Vec<(&'static str, ExportSpec)> {
                 (0.0, 1000.0),
             ),
         ),
-        ("10-layer mirror", mirror),
+        ("6-layer mirror", mirror),
         ("dense-side film", dense),
-        ("absorbing film", spec(stack_file("absorbing-film.toml"), 1, (0.0, 600.0))),
+        // Seen from its fused-silica side over 0–600 nm the absorbing film
+        // needs 21 charts with its front (the dispersive critical band is
+        // cut in many).
+        (
+            "absorbing film",
+            spec(stack_file("absorbing-film.toml"), 1, (0.0, 600.0)),
+        ),
     ]
 }
 
@@ -128,7 +141,7 @@ fn compare(case: &Case, side: Side, got: &[[f32; 6]]) -> (f64, [f64; 6]) {
         .points
         .iter()
         .zip(got)
-        .zip(&case.exact[side_index(side)])
+        .zip(&case.exact[side_index(side) as usize])
     {
         let (r, t) = case.export.sample(p[0], p[1], side);
         let cpu = [r[0], r[1], r[2], t[0], t[1], t[2]];
@@ -142,8 +155,12 @@ fn compare(case: &Case, side: Side, got: &[[f32; 6]]) -> (f64, [f64; 6]) {
 
 /// Float precision of the filtered result: the texel coordinates and
 /// weights are f32 on both sides, but a driver may order the lerps
-/// differently.
-const EMULATION_TOLERANCE: f64 = 2e-6;
+/// differently, and its log and atan2 (the bands' thickness and cos θ
+/// warps, the corner's angle) need not be correctly rounded: WGSL allows
+/// log an absolute error of 2^-21 near 1, which moves a texel coordinate of
+/// a 963-texel band by up to 5e-4 of a texel, times the step between
+/// neighbouring texels.
+const EMULATION_TOLERANCE: f64 = 5e-5;
 
 fn check(gpu: &Gpu, case: &Case, language: &str, source: Source) {
     let files = read_dir(&case.dir.path().join("film"));
@@ -160,14 +177,7 @@ fn check(gpu: &Gpu, case: &Case, language: &str, source: Source) {
     let bound = bind(gpu, &files);
     let program = program(gpu, &bound.layout, source);
     for side in [Side::Front, Side::Back] {
-        let (got, _) = run(
-            gpu,
-            &program,
-            &bound,
-            &case.points,
-            1,
-            side_index(side) as u32,
-        );
+        let (got, _) = run(gpu, &program, &bound, &case.points, 1, side_index(side));
         let (emulation, exact) = compare(case, side, &got);
         assert!(
             emulation <= EMULATION_TOLERANCE,
@@ -177,15 +187,17 @@ fn check(gpu: &Gpu, case: &Case, language: &str, source: Source) {
         // A side the export has is within the error it states; an opaque
         // film's back-side lookups read the front chart.
         let Some(stated) = case.export.side(side) else {
-            assert!(case.export.opaque, "{}: no {side:?} side", case.name);
+            assert!(
+                case.export.opaque || case.export.spec.front_only,
+                "{}: no {side:?} side",
+                case.name
+            );
             continue;
         };
-        let chart = &case.export.atlas.charts[stated.chart].mapping;
         eprintln!(
-            "{} [{language}, {side:?}, chart {}×{} of {}×{}]: |GPU − CPU emulation| ≤ {emulation:.2e}; |GPU − exact| max {:.2e} (film.json states {:.2e})",
+            "{} [{language}, {side:?}, {} charts in {}×{}]: |GPU − CPU emulation| ≤ {emulation:.2e}; |GPU − exact| max {:.2e} (film.json states {:.2e})",
             case.name,
-            chart.size_u,
-            chart.size_v,
+            stated.charts.len(),
             case.export.atlas.width,
             case.export.atlas.height,
             exact.iter().fold(0.0f64, |a, &b| a.max(b)),
@@ -224,11 +236,11 @@ fn irid_film_on_vulkan_matches_emulation_and_solver() {
     }
 }
 
-/// Which sides an export has and how its charts are laid out: a dense side's
-/// critical angle (inside the range) exactly on a node; a lossless
-/// substrate gets a back side, the reversed stack's own chart unless the
-/// stack reads the same from both sides; past a lossless back side's
-/// critical angle the exact response is total reflection.
+/// Which sides an export has and how its charts are laid out: a dense
+/// side's critical angle (inside the range) is the edge of its bands; a
+/// lossless substrate gets a back side, the reversed stack's own charts
+/// unless the stack reads the same from both sides; past a lossless back
+/// side's critical angle the exact response is total reflection.
 fn check_charts(case: &Case) {
     let e = &case.export;
     let spec = &e.spec;
@@ -236,24 +248,31 @@ fn check_charts(case: &Case) {
     assert_eq!(e.opaque, absorbs, "{}: opaque", case.name);
     assert_eq!(
         e.side(Side::Back).is_some(),
-        !absorbs,
+        !absorbs && !spec.front_only,
         "{}: back side",
         case.name
     );
     for side in &e.sides {
         let seen = spec.seen_from(side.side);
         let (c0, c1) = seen.cos_theta;
-        let mapping = &e.atlas.charts[side.chart].mapping;
+        let charts: Vec<&irid::atlas::Chart> =
+            side.charts.iter().map(|&k| &e.atlas.charts[k]).collect();
         if let Some(cc) = critical_cos(&seen.stack).filter(|&cc| cc > c0 && cc < c1) {
-            assert_eq!(mapping.cos_crit, cc, "{}", case.name);
-            assert!(mapping.cos_nodes().contains(&cc), "{}", case.name);
+            let on_edge = charts.iter().any(|c| match c.coords {
+                irid::atlas::Coords::Band { c: a, .. } => {
+                    (a.lo - cc).abs() < 1e-9 || (a.hi - cc).abs() < 1e-9
+                }
+                _ => false,
+            });
+            assert!(on_edge, "{}: no band ends at cos θc {cc}", case.name);
         }
         let symmetric = seen.stack == spec.stack;
-        assert_eq!(
-            side.chart == 0,
-            side.side == Side::Front || symmetric,
-            "{}",
-            case.name
+        let own = u32::from(side.side == Side::Back && !symmetric);
+        assert!(
+            charts.iter().all(|c| c.side == own),
+            "{}: {:?} reads side {own}",
+            case.name,
+            side.side
         );
     }
     let back = spec.seen_from(Side::Back);

@@ -52,6 +52,7 @@ pub(super) fn bake_atlas(spec: &BakeSpec, progress: &dyn Fn(&str)) -> Result<Lut
         film: &film,
         side: 0,
         cos: spec.cos_theta,
+        goal,
     }];
     // The points the table's validation draws, so that the search grows
     // the charts until that validation meets the target.
@@ -62,7 +63,7 @@ pub(super) fn bake_atlas(spec: &BakeSpec, progress: &dyn Fn(&str)) -> Result<Lut
             [t, c]
         })
         .collect();
-    let built = build(&sides, charted, goal, MAX_AXIS_NODES, &[points], progress)?;
+    let built = build(&sides, charted, MAX_AXIS_NODES, &[points], progress)?;
     let lossless = film.lossless_white();
     let data: Vec<f32> = match lossless {
         _ if film.is_spectral() => wavelength_blocks(&built.image),
