@@ -133,15 +133,9 @@ fn read_export(dir: &Path) -> Result<Export> {
             .get(which)
             .and_then(Value::as_str)
             .ok_or_else(|| Error::malformed(&film_path, format!("no texture file for {which}")))?;
-        // film.json names files beside it, never elsewhere.
-        if name.is_empty() || name.contains(['/', '\\']) || name == ".." {
-            return Err(Error::malformed(
-                &film_path,
-                format!("texture file {name:?} is not a plain file name"),
-            ));
-        }
-        used.push(name.to_string());
+        used.push(plain_file_name(name, &film_path)?);
     }
+    used.extend(rough_files(&film, &film_path)?);
 
     let mut files = Vec::new();
     for entry in fs::read_dir(dir).map_err(|e| Error::io(dir, e))? {
@@ -168,6 +162,47 @@ fn read_export(dir: &Path) -> Result<Export> {
         .filter(|n| !n.is_empty())
         .unwrap_or_else(|| "export".to_string());
     Ok(Export { name, files, used })
+}
+
+/// `name` when it is a file beside film.json: film.json names files there,
+/// never elsewhere.
+fn plain_file_name(name: &str, film_path: &Path) -> Result<String> {
+    if name.is_empty() || name.contains(['/', '\\']) || name == ".." {
+        return Err(Error::malformed(
+            film_path,
+            format!("texture file {name:?} is not a plain file name"),
+        ));
+    }
+    Ok(name.to_string())
+}
+
+/// The files the page reads for the rough table (`irid export --rough`):
+/// its texture and GLSL ES sampler, none for an export without it.
+fn rough_files(film: &Value, film_path: &Path) -> Result<Vec<String>> {
+    let Some(rough) = film.get("rough").filter(|r| !r.is_null()) else {
+        return Ok(Vec::new());
+    };
+    let texture = rough
+        .get("texture")
+        .and_then(|t| t.get("file"))
+        .and_then(Value::as_str)
+        .ok_or_else(|| Error::malformed(film_path, "\"rough\" names no texture file"))?;
+    // The page reads the GLSL ES sampler film.json lists (the file ending in
+    // _es.glsl), by default irid_film_rough_es.glsl.
+    let shader = rough
+        .get("shaders")
+        .and_then(Value::as_array)
+        .and_then(|shaders| {
+            shaders
+                .iter()
+                .filter_map(Value::as_str)
+                .find(|s| s.ends_with("_es.glsl"))
+        })
+        .unwrap_or("irid_film_rough_es.glsl");
+    Ok(vec![
+        plain_file_name(texture, film_path)?,
+        plain_file_name(shader, film_path)?,
+    ])
 }
 
 fn assemble(exports: &[Export], staging: &Path) -> Result<()> {
