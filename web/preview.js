@@ -680,44 +680,95 @@ void main() {
 
   // ---------------------------------------------------------------- GGX
 
+  /** Gauss–Legendre nodes and weights on [0, 1], n points. */
+  function gaussLegendre(n) {
+    const x = [];
+    const w = [];
+    for (let i = 1; i <= n; i++) {
+      let z = Math.cos((Math.PI * (i - 0.25)) / (n + 0.5));
+      let dp = 1;
+      for (let it = 0; it < 100; it++) {
+        let p1 = 1;
+        let p2 = 0;
+        for (let j = 1; j <= n; j++) {
+          const p3 = p2;
+          p2 = p1;
+          p1 = ((2 * j - 1) * z * p2 - (j - 1) * p3) / j;
+        }
+        dp = (n * (z * p1 - p2)) / (z * z - 1);
+        const previous = z;
+        z = previous - p1 / dp;
+        if (Math.abs(z - previous) < 1e-15) break;
+      }
+      x.push((1 - z) / 2);
+      w.push(1 / ((1 - z * z) * dp * dp));
+    }
+    return { x, w };
+  }
+  const GAUSS_48 = gaussLegendre(48);
+
   /**
    * The directional albedo of a white GGX lobe (α = roughness², height-
    * correlated Smith G2, single scattering; docs/rough.md), irid's
-   * lobe_albedo: ∫ D G2 / (4 n·v) dl, by the midpoint rule over the
-   * microfacet normal h drawn from D(h) cos θ_h (tan²θ_h = α² u / (1 − u)),
-   * where it is ∫∫ G2 (v·h) / (n·v n·h) du dφ/2π over l above the surface.
-   * The integrand is continuous (G2 and v·h reach 0 at the edges), so the
-   * rule converges fast.
+   * lobe_albedo: ∫ D G2 / (4 n·v) dl. Over the microfacet normal h drawn
+   * from D(h) cos θ_h (u in [0, 1], tan²θ_h = α² u / (1 − u)) it is
+   * ∫ du ∫ dφ/2π G2 (v·h) / (n·v n·h) over the h whose l = 2(v·h)h − v is
+   * above the surface: for each u an interval cos φ > K(u) (symmetric about
+   * the plane of incidence), so the φ rule runs over that interval alone and
+   * the u rule is cut where the interval starts or stops being whole or
+   * empty (K = −1, K = 1). Gauss–Legendre, 48 points each way: within 4e-4
+   * of irid's at 0–80°, 1.3e-3 at 85° (tools/web/test_web.mjs checks 0–80°).
    */
-  function lobeAlbedo(cosV, roughness, nu = 96, nphi = 96) {
+  function lobeAlbedo(cosV, roughness) {
     const alpha = roughness * roughness;
     if (alpha === 0) return 1;
-    const c = Math.min(1, Math.max(cosV, 1e-4));
-    const v = [Math.sqrt(1 - c * c), 0, c];
+    const c = Math.min(1 - 1e-9, Math.max(cosV, 1e-4));
+    const s = Math.sqrt(1 - c * c);
     const a2 = alpha * alpha;
-    const lambda = (cosW) => {
-      const t2 = Math.max(1 - cosW * cosW, 0) / (cosW * cosW);
-      return (Math.sqrt(1 + a2 * t2) - 1) / 2;
-    };
+    const lambda = (cw) => (Math.sqrt(1 + (a2 * Math.max(1 - cw * cw, 0)) / (cw * cw)) - 1) / 2;
     const lambdaV = lambda(c);
-    let sum = 0;
-    for (let i = 0; i < nu; i++) {
-      const u = (i + 0.5) / nu;
+    const halfway = (u) => {
       const cos2 = (1 - u) / (1 + (a2 - 1) * u);
-      const ch = Math.sqrt(cos2);
-      const sh = Math.sqrt(Math.max(1 - cos2, 0));
-      for (let j = 0; j < nphi; j++) {
-        const phi = (2 * Math.PI * (j + 0.5)) / nphi;
-        const h = [sh * Math.cos(phi), sh * Math.sin(phi), ch];
-        const vh = v[0] * h[0] + v[2] * h[2];
-        if (vh <= 0) continue;
-        const nl = 2 * vh * h[2] - v[2];
-        if (nl <= 0) continue;
-        const g2 = 1 / (1 + lambdaV + lambda(nl));
-        sum += (g2 * vh) / (c * ch);
+      return [Math.sqrt(cos2), Math.sqrt(Math.max(1 - cos2, 0))];
+    };
+    const bound = (u) => {
+      const [ch, sh] = halfway(u);
+      return (c * (1 / (2 * ch) - ch)) / (s * sh);
+    };
+    const cuts = [0, 1];
+    for (const target of [-1, 1]) {
+      let lo = 1e-12;
+      let hi = 1 - 1e-12;
+      if ((bound(lo) - target) * (bound(hi) - target) > 0) continue;
+      for (let it = 0; it < 60; it++) {
+        const mid = (lo + hi) / 2;
+        if ((bound(lo) - target) * (bound(mid) - target) <= 0) hi = mid;
+        else lo = mid;
+      }
+      cuts.push((lo + hi) / 2);
+    }
+    cuts.sort((p, q) => p - q);
+    const { x, w } = GAUSS_48;
+    let sum = 0;
+    for (let p = 0; p + 1 < cuts.length; p++) {
+      const [u0, u1] = [cuts[p], cuts[p + 1]];
+      for (let i = 0; i < x.length; i++) {
+        const u = u0 + (u1 - u0) * x[i];
+        const [ch, sh] = halfway(u);
+        const k = bound(u);
+        if (!(k < 1)) continue;
+        const phiMax = k <= -1 ? Math.PI : Math.acos(k);
+        let inner = 0;
+        for (let j = 0; j < x.length; j++) {
+          const vh = s * sh * Math.cos(phiMax * x[j]) + c * ch;
+          const nl = 2 * vh * ch - c;
+          if (nl <= 0 || vh <= 0) continue;
+          inner += (w[j] * (vh / (c * ch))) / (1 + lambdaV + lambda(nl));
+        }
+        sum += ((u1 - u0) * w[i] * inner * phiMax) / Math.PI;
       }
     }
-    return sum / (nu * nphi);
+    return sum;
   }
 
   /** lobeAlbedo at ALBEDO_NODES + 1 values of cos θ evenly over [0, 1]. */
