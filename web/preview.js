@@ -357,7 +357,7 @@ void main() {
   // the source's mip level whose texel covers the sample's share of the
   // lobe's solid angle (filtered importance sampling, Křivánek and Colbert
   // 2008), so few samples give a smooth map.
-  const PREFILTER_SAMPLES = 192;
+  const PREFILTER_SAMPLES = 256;
   const PREFILTER_FS = `${HEADER}${EQUIRECT}
 uniform sampler2D u_source;
 uniform vec2 u_source_size;
@@ -397,7 +397,7 @@ void main() {
     float sample_solid_angle = 1.0 / (float(SAMPLES) * pdf);
     float sin_l = sqrt(max(1.0 - l.y * l.y, 1e-4));
     float texel_solid_angle = 2.0 * IRID_PI * IRID_PI * sin_l / (u_source_size.x * u_source_size.y);
-    float lod = max(0.5 * log2(sample_solid_angle / texel_solid_angle) + 1.0, 0.0);
+    float lod = max(0.5 * log2(sample_solid_angle / texel_solid_angle), 0.0);
     sum += textureLod(u_source, irid_equirect(l), lod).rgb * nl;
     weight += nl;
   }

@@ -657,3 +657,78 @@ test('rough: without the rough table the control is disabled and says why', asyn
   assert.deepEqual(page.errors, []);
   await page.close();
 });
+
+/** The page's sky (web/preview.js, irid_environment with u_environment 0), restated: linear RGB towards unit d. */
+function sky(d) {
+  const sun = (() => { const v = [0.45, 0.55, 0.7]; const l = Math.hypot(...v); return v.map((x) => x / l); })();
+  const s = Math.max(d[0] * sun[0] + d[1] * sun[1] + d[2] * sun[2], 0);
+  const mix = (a, b, t) => a.map((x, k) => x + (b[k] - x) * t);
+  const smoothstep = (e0, e1, x) => { const t = Math.min(1, Math.max(0, (x - e0) / (e1 - e0))); return t * t * (3 - 2 * t); };
+  let c;
+  if (d[1] >= 0) {
+    c = mix([0.75, 0.85, 1.0], [0.15, 0.35, 0.85], d[1] ** 0.45);
+  } else {
+    const k = Math.max(-d[1], 0.02);
+    let checker = (((Math.floor((d[0] / k) * 2) + Math.floor((d[2] / k) * 2)) % 2) + 2) % 2;
+    checker = 0.5 + (checker - 0.5) * smoothstep(0, -0.12, d[1]);
+    c = mix([0.10, 0.09, 0.08], [0.22, 0.20, 0.17], checker).map((x) => x * (0.6 + 0.4 * smoothstep(0, -0.4, d[1])));
+  }
+  const glow = s ** 900 * 60 + s ** 16 * 0.25;
+  return c.map((x, k) => x + [1, 0.95, 0.85][k] * glow);
+}
+
+/**
+ * The prefiltered environment's definition evaluated densely: about R, with
+ * the normal and the view both R, the mean of env(l) weighted by n·l over
+ * h from D(h) cos θ_h (n × n stratified midpoints), no mip levels.
+ */
+function prefilterReference(env, R, roughness, n = 1024) {
+  const a2 = roughness ** 4;
+  const up = Math.abs(R[1]) < 0.999 ? [0, 1, 0] : [1, 0, 0];
+  const cross = (a, b) => [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]];
+  const norm = (a) => { const l = Math.hypot(...a); return a.map((x) => x / l); };
+  const tx = norm(cross(up, R));
+  const ty = cross(R, tx);
+  const sum = [0, 0, 0];
+  let weight = 0;
+  for (let i = 0; i < n; i++) {
+    const u = (i + 0.5) / n;
+    const cos2 = (1 - u) / (1 + (a2 - 1) * u);
+    const ch = Math.sqrt(cos2);
+    const sh = Math.sqrt(1 - cos2);
+    for (let j = 0; j < n; j++) {
+      const phi = (2 * Math.PI * (j + 0.5)) / n;
+      const h = [0, 1, 2].map((k) => tx[k] * sh * Math.cos(phi) + ty[k] * sh * Math.sin(phi) + R[k] * ch);
+      const nh = ch;
+      const l = [0, 1, 2].map((k) => 2 * nh * h[k] - R[k]);
+      const nl = 2 * nh * nh - 1;
+      if (nl <= 0) continue;
+      const L = env(l);
+      for (let k = 0; k < 3; k++) sum[k] += L[k] * nl;
+      weight += nl;
+    }
+  }
+  return sum.map((x) => x / weight);
+}
+
+test('rough: the prefiltered sky against a dense evaluation of its definition', async () => {
+  const [name] = roughExport();
+  const page = await ready();
+  await selectExport(page, name);
+  const norm = (a) => { const l = Math.hypot(...a); return a.map((x) => x / l); };
+  // Up, the sky at 30°, towards the sun, the horizon, the ground.
+  const directions = [[0, 1, 0], norm([0.8, 0.5, -0.3]), norm([0.45, 0.55, 0.7]), norm([-0.6, 0.05, 0.8]), norm([0.2, -0.8, 0.4])];
+  let worst = 0;
+  for (const r of [0.25, 0.5]) {
+    const shown = await page.evaluate(([rr, dirs]) => dirs.map((d) => window.irid.prefilteredAt('sky', rr, d)), [r, directions]);
+    directions.forEach((d, i) => {
+      const exact = prefilterReference(sky, d, r);
+      const rel = Math.max(...[0, 1, 2].map((k) => Math.abs(shown[i][k] - exact[k]) / exact[k]));
+      worst = Math.max(worst, rel);
+      console.log(`prefiltered sky, roughness ${r}, direction ${d.map((x) => x.toFixed(2))}: page ${shown[i].map((x) => x.toFixed(4))}, `
+        + `dense ${exact.map((x) => x.toFixed(4))}, largest relative difference ${(100 * rel).toFixed(2)} %`);
+    });
+  }
+  assert.ok(worst <= 0.05, `the prefiltered sky is off by ${(100 * worst).toFixed(2)} %`);
+  await page.close();
+});
