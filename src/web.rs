@@ -264,7 +264,34 @@ fn base64(bytes: &[u8]) -> String {
 
 #[cfg(test)]
 mod tests {
-    use super::base64;
+    use super::{base64, rough_files};
+    use serde_json::json;
+    use std::path::Path;
+
+    #[test]
+    fn rough_files_are_the_texture_and_the_es_sampler_film_json_names() {
+        let at = Path::new("film.json");
+        assert!(rough_files(&json!({ "rough": null }), at)
+            .unwrap()
+            .is_empty());
+        assert!(rough_files(&json!({}), at).unwrap().is_empty());
+        let film = json!({ "rough": { "texture": { "file": "rough.exr" },
+            "shaders": ["irid_film_rough.wgsl", "irid_film_rough_es.glsl"] } });
+        assert_eq!(
+            rough_files(&film, at).unwrap(),
+            ["rough.exr", "irid_film_rough_es.glsl"]
+        );
+        let outside = json!({ "rough": { "texture": { "file": "../rough.exr" } } });
+        assert!(rough_files(&outside, at)
+            .unwrap_err()
+            .to_string()
+            .contains("not a plain file name"));
+        let none = json!({ "rough": { "shaders": [] } });
+        assert!(rough_files(&none, at)
+            .unwrap_err()
+            .to_string()
+            .contains("names no texture file"));
+    }
 
     #[test]
     fn base64_matches_rfc_4648_vectors() {
