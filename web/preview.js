@@ -355,8 +355,10 @@ void main() {
   // normal and the view both R, the mean of the radiance over light
   // directions l drawn from D(h) cos θ_h, weighted by n·l. Each sample reads
   // the source's mip level whose texel covers the sample's share of the
-  // lobe's solid angle (filtered importance sampling, Křivánek and Colbert
-  // 2008), so few samples give a smooth map.
+  // lobe's solid angle, plus half a level (filtered importance sampling,
+  // Křivánek and Colbert 2008), so few samples give a smooth map: the half
+  // level removes the sampling pattern from the sun's highlight for a few
+  // per cent there (tools/web/test_web.mjs measures it).
   const PREFILTER_SAMPLES = 256;
   const PREFILTER_FS = `${HEADER}${EQUIRECT}
 uniform sampler2D u_source;
@@ -397,7 +399,7 @@ void main() {
     float sample_solid_angle = 1.0 / (float(SAMPLES) * pdf);
     float sin_l = sqrt(max(1.0 - l.y * l.y, 1e-4));
     float texel_solid_angle = 2.0 * IRID_PI * IRID_PI * sin_l / (u_source_size.x * u_source_size.y);
-    float lod = max(0.5 * log2(sample_solid_angle / texel_solid_angle), 0.0);
+    float lod = max(0.5 * log2(sample_solid_angle / texel_solid_angle) + 0.5, 0.0);
     sum += textureLod(u_source, irid_equirect(l), lod).rgb * nl;
     weight += nl;
   }

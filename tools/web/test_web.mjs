@@ -648,11 +648,11 @@ test('rough: without the rough table the control is disabled and says why', asyn
   assert.equal(await page.evaluate(() => window.irid.preview.controls().roughness), 0);
   const out = process.env.IRID_SCREENSHOT_ROUGH;
   if (out) {
-    await page.screenshot({ path: out.replace(/\.png$/, '-no-table.png'), clip: { x: 0, y: 0, width: 1100, height: 560 } });
+    await page.screenshot({ path: out.replace(/\.png$/, '-no-table.png'), clip: { x: 0, y: 0, width: 1100, height: 560 }, timeout: 120000 });
     await selectExport(page, name);
     await setControl(page, 'roughness', 0.5);
     await page.evaluate(() => window.irid.draw());
-    await page.screenshot({ path: out, clip: { x: 0, y: 0, width: 1100, height: 560 } });
+    await page.screenshot({ path: out, clip: { x: 0, y: 0, width: 1100, height: 560 }, timeout: 120000 });
   }
   assert.deepEqual(page.errors, []);
   await page.close();
