@@ -26,7 +26,7 @@
 import * as THREE from 'three';
 
 /** film.json versions this module knows. */
-export const FILM_VERSIONS = [1, 2];
+export const FILM_VERSIONS = [1, 2, 3];
 
 const BLOCK = /layout\s*\(\s*std140\s*\)\s*uniform\s+(\w+)\s*\{([^}]*)\}\s*;/;
 const SIGNATURE = /IridFilm\s+irid_film\s*\(([^)]*)\)/;
@@ -155,11 +155,9 @@ function roughRowsFlipped(film, rough, reflectance, where) {
   if (check !== undefined) return rowsFlipped(rough, check, where);
   const slice = film.rough.layout?.slice_rects?.[0];
   const chart = film.charts?.[film.sides?.front?.chart]?.params;
-  if (!slice || !chart) return reflectance.flipped;
+  // Version 3 exports spread a side over several charts, none of them slice 0.
+  if (!slice || !chart || slice[2] !== chart.width || slice[3] !== chart.height) return reflectance.flipped;
   const [sx, sy, w, h] = slice;
-  if (w !== chart.width || h !== chart.height) {
-    throw fail(where, `slice 0 is ${w} × ${h} texels, the front chart ${chart.width} × ${chart.height}: film.json does not describe this rough texture`);
-  }
   const refl = reflectance.pixels;
   const matches = (flipped) => {
     const row = (y, height) => (flipped ? height - 1 - y : y);

@@ -12,7 +12,7 @@
 
   // The film.json version this page reads (docs/gpu.md): the atlas of
   // charts, one per side of the film, and its uniform array.
-  const FILM_VERSION = 2;
+  const FILM_VERSIONS = [2, 3];
   const ENVIRONMENTS = { sky: 0, studio: 1, white: 2 };
   // A chart view: the quantity (0 R, 1 T) and the side (0 light from the
   // ambient, 1 from the substrate).
@@ -101,8 +101,8 @@
     const fail = (why) => { throw new Error(`${where}film.json: ${why}`); };
     if (!film || typeof film !== 'object') fail('not an object');
     if (film.format !== 'irid-film') fail(`format is ${JSON.stringify(film.format)}, not "irid-film"`);
-    if (film.version !== FILM_VERSION) {
-      fail(`version ${JSON.stringify(film.version)}: this page reads version ${FILM_VERSION}; export the film again with the irid that wrote this page`);
+    if (!FILM_VERSIONS.includes(film.version)) {
+      fail(`version ${JSON.stringify(film.version)}: this page reads versions ${FILM_VERSIONS.join(' and ')}; export the film again with the irid that wrote this page`);
     }
     const tex = film.texture;
     if (!tex || !Number.isInteger(tex.width) || !Number.isInteger(tex.height) || tex.width < 1 || tex.height < 1) {
@@ -126,7 +126,9 @@
       || !film.charts.every((c) => c && c.params && Object.values(c.params).every(isNumber))) {
       fail('charts must list the atlas\'s charts, each with numeric params');
     }
-    const chart = (side) => side && Number.isInteger(side.chart) && side.chart >= 0 && side.chart < film.charts.length;
+    // A side names its chart (version 2) or the charts its lookups read (3).
+    const known = (k) => Number.isInteger(k) && k >= 0 && k < film.charts.length;
+    const chart = (side) => side && (known(side.chart) || (Array.isArray(side.charts) && side.charts.length > 0 && side.charts.every(known)));
     if (!film.sides || !chart(film.sides.front) || !(film.sides.back === null || chart(film.sides.back))) {
       fail('sides.front must name a chart, sides.back a chart or null');
     }
@@ -971,10 +973,18 @@ void main() {
     return Array.isArray(values) ? values.map((x) => (isNumber(x) ? x.toFixed(digits) : String(x))).join(' / ') : '—';
   }
 
+  /** Whether two sides read the same charts (version 2: chart; 3: charts). */
+  function sameCharts(a, b) {
+    return JSON.stringify(a.charts ?? [a.chart]) === JSON.stringify(b.charts ?? [b.chart]);
+  }
+
   function describe(exp) {
     const f = exp.film;
     const deg = (c) => (Math.acos(Math.min(1, Math.max(-1, c))) * 180) / Math.PI;
-    const front = f.charts[f.sides.front.chart].params;
+    // The angle nodes' placement: version 2 states it in the front chart's
+    // cos_crit; version 3 in the side's critical_cos (null: none).
+    const frontChart = f.charts[f.sides.front.chart ?? f.sides.front.charts[0]].params;
+    const front = { cos_crit: frontChart.cos_crit ?? (f.sides.front.critical_cos ?? -1) };
     const rows = [
       ['export', exp.label],
       ['white', f.white],
@@ -988,7 +998,7 @@ void main() {
           : `on the critical angle ${deg(front.cos_crit).toFixed(2)}°`],
       ['texture', `${f.texture.width} × ${f.texture.height}, ${exp.reflectance.kind}`],
       ['sides', f.sides.back === null ? 'front only (no light arrives from the substrate)'
-        : f.sides.back.chart === f.sides.front.chart ? 'front and back, one chart (the stack reads the same)'
+        : sameCharts(f.sides.back, f.sides.front) ? 'front and back, one chart (the stack reads the same)'
           : 'front and back (reversed stack), a chart each'],
       ['opaque', f.opaque ? 'yes (no transmission drawn)' : `no (refraction index ratio ${f.refraction.substrate_over_ambient.toFixed(3)})`],
     ];
