@@ -133,15 +133,9 @@ fn read_export(dir: &Path) -> Result<Export> {
             .get(which)
             .and_then(Value::as_str)
             .ok_or_else(|| Error::malformed(&film_path, format!("no texture file for {which}")))?;
-        // film.json names files beside it, never elsewhere.
-        if name.is_empty() || name.contains(['/', '\\']) || name == ".." {
-            return Err(Error::malformed(
-                &film_path,
-                format!("texture file {name:?} is not a plain file name"),
-            ));
-        }
-        used.push(name.to_string());
+        used.push(plain_file_name(name, &film_path)?);
     }
+    used.extend(rough_files(&film, &film_path)?);
 
     let mut files = Vec::new();
     for entry in fs::read_dir(dir).map_err(|e| Error::io(dir, e))? {
@@ -168,6 +162,47 @@ fn read_export(dir: &Path) -> Result<Export> {
         .filter(|n| !n.is_empty())
         .unwrap_or_else(|| "export".to_string());
     Ok(Export { name, files, used })
+}
+
+/// `name` when it is a file beside film.json: film.json names files there,
+/// never elsewhere.
+fn plain_file_name(name: &str, film_path: &Path) -> Result<String> {
+    if name.is_empty() || name.contains(['/', '\\']) || name == ".." {
+        return Err(Error::malformed(
+            film_path,
+            format!("texture file {name:?} is not a plain file name"),
+        ));
+    }
+    Ok(name.to_string())
+}
+
+/// The files the page reads for the rough table (`irid export --rough`):
+/// its texture and GLSL ES sampler, none for an export without it.
+fn rough_files(film: &Value, film_path: &Path) -> Result<Vec<String>> {
+    let Some(rough) = film.get("rough").filter(|r| !r.is_null()) else {
+        return Ok(Vec::new());
+    };
+    let texture = rough
+        .get("texture")
+        .and_then(|t| t.get("file"))
+        .and_then(Value::as_str)
+        .ok_or_else(|| Error::malformed(film_path, "\"rough\" names no texture file"))?;
+    // The page reads the GLSL ES sampler film.json lists (the file ending in
+    // _es.glsl), by default irid_film_rough_es.glsl.
+    let shader = rough
+        .get("shaders")
+        .and_then(Value::as_array)
+        .and_then(|shaders| {
+            shaders
+                .iter()
+                .filter_map(Value::as_str)
+                .find(|s| s.ends_with("_es.glsl"))
+        })
+        .unwrap_or("irid_film_rough_es.glsl");
+    Ok(vec![
+        plain_file_name(texture, film_path)?,
+        plain_file_name(shader, film_path)?,
+    ])
 }
 
 fn assemble(exports: &[Export], staging: &Path) -> Result<()> {
@@ -229,7 +264,34 @@ fn base64(bytes: &[u8]) -> String {
 
 #[cfg(test)]
 mod tests {
-    use super::base64;
+    use super::{base64, rough_files};
+    use serde_json::json;
+    use std::path::Path;
+
+    #[test]
+    fn rough_files_are_the_texture_and_the_es_sampler_film_json_names() {
+        let at = Path::new("film.json");
+        assert!(rough_files(&json!({ "rough": null }), at)
+            .unwrap()
+            .is_empty());
+        assert!(rough_files(&json!({}), at).unwrap().is_empty());
+        let film = json!({ "rough": { "texture": { "file": "rough.exr" },
+            "shaders": ["irid_film_rough.wgsl", "irid_film_rough_es.glsl"] } });
+        assert_eq!(
+            rough_files(&film, at).unwrap(),
+            ["rough.exr", "irid_film_rough_es.glsl"]
+        );
+        let outside = json!({ "rough": { "texture": { "file": "../rough.exr" } } });
+        assert!(rough_files(&outside, at)
+            .unwrap_err()
+            .to_string()
+            .contains("not a plain file name"));
+        let none = json!({ "rough": { "shaders": [] } });
+        assert!(rough_files(&none, at)
+            .unwrap_err()
+            .to_string()
+            .contains("names no texture file"));
+    }
 
     #[test]
     fn base64_matches_rfc_4648_vectors() {

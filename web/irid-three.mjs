@@ -5,6 +5,10 @@
 // loader, 'three/addons/loaders/EXRLoader.js') through the page's import map,
 // as three.js's own add-ons do. Documented in docs/web.md.
 //
+// With { rough: true } and an export holding the rough table, the film is on
+// a rough surface: R at v·h for analytic lights, F_eff (irid_film_rough_es.glsl
+// and rough.exr) for the environment light.
+//
 // The shading code is the export's own GLSL ES sampler (irid_film_es.glsl),
 // pasted in as it is, so a change of the export's mapping reaches this module
 // with the export. What the module adds:
@@ -107,7 +111,8 @@ function flipRows({ width, height, data }) {
  * order (row 0 at v = 0), RGBA16F, linear filtering, clamp to edge, no
  * mipmaps, no colour conversion. `loaded` is a three.js DataTexture (e.g.
  * from EXRLoader, half or float) or {width, height, data: Float32Array}
- * (e.g. IridWeb.decodeExr from web/exr.js). Returns {texture, flipped}.
+ * (e.g. IridWeb.decodeExr from web/exr.js). Returns {texture, flipped,
+ * pixels} (pixels: the loaded data as given).
  */
 export function filmTexture(film, quantity, loaded, where = film.texture.files?.[quantity] ?? quantity) {
   const pixels = pixelsOf(loaded, where);
@@ -115,6 +120,11 @@ export function filmTexture(film, quantity, loaded, where = film.texture.files?.
     throw fail(where, `${pixels.width} × ${pixels.height} texels, film.json says ${film.texture.width} × ${film.texture.height}`);
   }
   const flipped = rowsFlipped(pixels, film.texture.row_check[quantity], where);
+  return { texture: dataTexture(pixels, flipped), flipped, pixels };
+}
+
+/** A DataTexture of `pixels` in file order (rows put back when `flipped`), RGBA16F, linear, clamp, no mipmaps. */
+function dataTexture(pixels, flipped) {
   const data = flipped ? flipRows(pixels) : pixels.data;
   const type = pixels.half ? THREE.HalfFloatType : THREE.FloatType;
   const texture = new THREE.DataTexture(data, pixels.width, pixels.height, THREE.RGBAFormat, type);
@@ -127,7 +137,60 @@ export function filmTexture(film, quantity, loaded, where = film.texture.files?.
   texture.flipY = false;
   texture.colorSpace = THREE.NoColorSpace; // linear data
   texture.needsUpdate = true;
-  return { texture, flipped };
+  return texture;
+}
+
+/**
+ * Whether the loaded rough texture's rows are flipped. film.json's rough
+ * texture has a row check of its own when the export gives one; otherwise
+ * its slice 0 is the front chart's reflectance texel for texel
+ * (docs/gpu.md), so the slice is compared, in both row orders, with the
+ * front chart of the reflectance texture loaded by the same route (rows
+ * already known); it must equal it in exactly one. An export that gives
+ * neither is read in the reflectance texture's row order, the same loader
+ * on the same kind of file.
+ */
+function roughRowsFlipped(film, rough, reflectance, where) {
+  const check = film.rough.texture.row_check;
+  if (check !== undefined) return rowsFlipped(rough, check, where);
+  const slice = film.rough.layout?.slice_rects?.[0];
+  const chart = film.charts?.[film.sides?.front?.chart]?.params;
+  // Version 3 exports spread a side over several charts, none of them slice 0.
+  if (!slice || !chart || slice[2] !== chart.width || slice[3] !== chart.height) return reflectance.flipped;
+  const [sx, sy, w, h] = slice;
+  const refl = reflectance.pixels;
+  const matches = (flipped) => {
+    const row = (y, height) => (flipped ? height - 1 - y : y);
+    for (let y = 0; y < h; y++) {
+      for (let x = 0; x < w; x++) {
+        const a = rgbAt(rough, sx + x, row(sy + y, rough.height));
+        const b = rgbAt(refl, chart.x0 + x, reflectance.flipped ? refl.height - 1 - (chart.y0 + y) : chart.y0 + y);
+        if (distance(a, b) > 0) return false;
+      }
+    }
+    return true;
+  };
+  const inFileOrder = matches(false);
+  const inFlippedOrder = matches(true);
+  if (inFileOrder !== inFlippedOrder) return inFlippedOrder;
+  if (inFileOrder) return reflectance.flipped; // a slice symmetric about the texture's middle row
+  throw fail(where, 'slice 0 is not the front chart of the reflectance texture in either row order: not this export\'s rough texture');
+}
+
+/**
+ * The rough texture as irid_film_rough needs it (a DataTexture, rows in file
+ * order, as filmTexture makes). `reflectance` is {pixels, flipped} of the
+ * export's reflectance texture loaded by the same route.
+ */
+export function roughTexture(film, loaded, reflectance, where = film.rough?.texture?.file ?? 'rough') {
+  if (!film.rough) throw fail(where, 'film.json has no rough table (export the film with irid export --rough)');
+  const pixels = pixelsOf(loaded, where);
+  const { width, height } = film.rough.texture;
+  if (pixels.width !== width || pixels.height !== height) {
+    throw fail(where, `${pixels.width} × ${pixels.height} texels, film.json says ${width} × ${height}`);
+  }
+  const flipped = roughRowsFlipped(film, pixels, reflectance, where);
+  return { texture: dataTexture(pixels, flipped), flipped };
 }
 
 // ---------------------------------------------------------------------------
@@ -152,7 +215,10 @@ async function defaultLoader() {
 
 /**
  * Reads an export folder at `url` (ending in '/'): film.json, the GLSL ES
- * sampler and both EXR textures, and returns what `addIridFilm` takes.
+ * sampler and both EXR textures, and, when film.json has the rough table
+ * (`irid export --rough`), irid_film_rough_es.glsl and rough.exr; returns
+ * what `addIridFilm` takes ({film, sampler, reflectance, transmittance,
+ * rough}, rough null without the table).
  *
  * options.loader: a three.js loader with loadAsync (default: EXRLoader,
  *   half float); options.decode: instead, an async function (bytes, name) →
@@ -172,7 +238,19 @@ export async function loadIridFilm(url, { loader, decode } = {}) {
     return filmTexture(film, quantity, loaded, file);
   };
   const [reflectance, transmittance] = await Promise.all([load('reflectance'), load('transmittance')]);
-  return { film, sampler, reflectance, transmittance };
+  let rough = null;
+  if (film.rough) {
+    // The rough table (irid export --rough): F_eff and its sampler.
+    const shaders = film.rough.shaders ?? [];
+    const shaderFile = shaders.find((f) => typeof f === 'string' && f.endsWith('_es.glsl')) ?? 'irid_film_rough_es.glsl';
+    const roughSampler = await (await fetchOk(`${url}${shaderFile}`)).text();
+    const file = `${url}${film.rough.texture.file}`;
+    const loaded = decode
+      ? await decode(new Uint8Array(await (await fetchOk(file)).arrayBuffer()), file)
+      : await source.loadAsync(file);
+    rough = { sampler: roughSampler, ...roughTexture(film, loaded, reflectance, file) };
+  }
+  return { film, sampler, reflectance, transmittance, rough };
 }
 
 // ---------------------------------------------------------------------------
@@ -196,36 +274,38 @@ function structs(code) {
  * from `params`, an array of vec4 from `uniform_f32` (the packed uniform
  * array as film.json gives it), a struct field by field.
  */
-function uniformValue(film, types, { type, name, count }) {
+function uniformValue(values, types, { type, name, count }) {
   if (types.has(type) && count === null) {
-    return Object.fromEntries(types.get(type).map((field) => [field.name, uniformValue(film, types, field)]));
+    return Object.fromEntries(types.get(type).map((field) => [field.name, uniformValue(values, types, field)]));
   }
   if (type === 'float' && count === null) {
-    const v = film.params?.[name];
-    if (typeof v !== 'number') throw fail('film.json', `params has no number "${name}", which the sampler reads`);
+    const v = values.params?.[name];
+    if (typeof v !== 'number') throw fail('film.json', `${values.prefix}params has no number "${name}", which the sampler reads`);
     return v;
   }
   if (type === 'vec4' && count !== null) {
-    const packed = film.uniform_f32;
+    const packed = values.uniform_f32;
     if (!Array.isArray(packed) || packed.length !== 4 * count) {
-      throw fail('film.json', `uniform_f32 must hold ${4 * count} numbers for the sampler's vec4 ${name}[${count}]`);
+      throw fail('film.json', `${values.prefix}uniform_f32 must hold ${4 * count} numbers for the sampler's vec4 ${name}[${count}]`);
     }
     return Array.from({ length: count }, (_, i) => new THREE.Vector4().fromArray(packed, 4 * i));
   }
-  throw fail('irid_film_es.glsl', `the uniform block holds ${type} ${name}${count === null ? '' : `[${count}]`}, which this module cannot fill`);
+  throw fail(values.file, `the uniform block holds ${type} ${name}${count === null ? '' : `[${count}]`}, which this module cannot fill`);
 }
 
 /**
  * The sampler with its uniform block replaced by plain uniforms (three.js's
  * built-in materials take no uniform blocks), and their values from
- * film.json.
+ * film.json: `values` is {uniform_f32, params, prefix, file}, film.json's
+ * top level for irid_film (prefix '') or its "rough" for irid_film_rough
+ * (prefix 'rough.'); the array's length is the sampler's own.
  */
-function unblock(sampler, film) {
+function unblock(sampler, values) {
   const block = sampler.match(BLOCK);
-  if (!block) throw fail('irid_film_es.glsl', 'no std140 uniform block found');
+  if (!block) throw fail(values.file, 'no std140 uniform block found');
   const types = structs(sampler);
   const members = declarations(block[2]);
-  const uniforms = Object.fromEntries(members.map((m) => [m.name, { value: uniformValue(film, types, m) }]));
+  const uniforms = Object.fromEntries(members.map((m) => [m.name, { value: uniformValue(values, types, m) }]));
   const plain = members.map(({ type, name, count }) => `uniform ${type} ${name}${count === null ? '' : `[${count}]`};`);
   const code = sampler
     .replace(/^\s*precision\s+[^\n]*;\s*$/gm, '') // three.js declares precision itself
@@ -259,6 +339,23 @@ function filmCall(sampler) {
   throw fail('irid_film_es.glsl', `irid_film takes ${types.length} parameters; this module knows 2 (thickness, cos θ) and 3 (and the side)`);
 }
 
+/**
+ * three.js's physical lighting with the film as the Fresnel term of
+ * BRDF_GGX (the specular of every analytic light): the film's R at
+ * cos = v·h, the microfacet's own angle, exact for that light and view
+ * (docs/rough.md). `call` is irid_film's call at (irid_thickness_nm,
+ * irid_cos); here the cosine is v·h.
+ */
+function roughLights(call) {
+  const chunk = THREE.ShaderChunk.lights_physical_pars_fragment;
+  const start = chunk.indexOf('vec3 BRDF_GGX(');
+  const fresnel = 'vec3 F = F_Schlick( f0, f90, dotVH );';
+  const at = chunk.indexOf(fresnel, start);
+  if (start < 0 || at < 0) throw new Error('three.js\'s BRDF_GGX has no `F = F_Schlick( f0, f90, dotVH )`: this three.js is not one irid-three.mjs knows');
+  const film = call.replace('irid_cos', 'dotVH');
+  return `${chunk.slice(0, at)}vec3 F = F_Schlick( f0, f90, dotVH ) * ${film}.reflectance;${chunk.slice(at + fresnel.length)}`;
+}
+
 function hash(text) {
   let h = 0;
   for (let i = 0; i < text.length; i++) h = (Math.imul(h, 31) + text.charCodeAt(i)) | 0;
@@ -280,11 +377,23 @@ function replaceChunk(text, chunk, replacement) {
  * metalness 1) three.js's own Fresnel is 1 and what the material reflects is
  * R alone. Returns the uniforms; `irid_thickness_nm.value` is the thickness
  * in nm (starts at the middle of the export's range).
+ *
+ * options.rough (an export made with `irid export --rough`): the film on a
+ * rough (GGX) surface of the material's roughness, as docs/rough.md says a
+ * host should: each analytic light's specular takes the film's R at v·h as
+ * its Fresnel term (inside three.js's BRDF_GGX), and the environment light
+ * (three.js's prefiltered environment, its lobe albedo and multiple-
+ * scattering term) is multiplied by F_eff = irid_film_rough(thickness, n·v,
+ * material.roughness). An export without the rough table is refused, never
+ * replaced by the smooth film.
  */
-export function addIridFilm(material, { film, sampler, reflectance, transmittance }) {
+export function addIridFilm(material, { film, sampler, reflectance, transmittance, rough = null }, { rough: useRough = false } = {}) {
   checkFilm(film);
   if (material.userData.iridFilm) throw new Error('addIridFilm: this material has a film already; make a new material');
-  const { code, uniforms: params } = unblock(sampler, film);
+  if (useRough && !rough) {
+    throw fail('film.json', 'has no rough table, which addIridFilm(..., { rough: true }) needs; export the film with `irid export STACK --rough`');
+  }
+  const { code, uniforms: params } = unblock(sampler, { ...film, prefix: '', file: 'irid_film_es.glsl' });
   const call = filmCall(sampler);
   const [tMin, tMax] = film.domain.thickness_nm;
   const uniforms = {
@@ -293,11 +402,23 @@ export function addIridFilm(material, { film, sampler, reflectance, transmittanc
     irid_transmittance: { value: transmittance.texture ?? transmittance },
     irid_thickness_nm: { value: (tMin + tMax) / 2 },
   };
+  let roughCode = '';
+  if (useRough) {
+    const unblocked = unblock(rough.sampler, { ...film.rough, prefix: 'rough.', file: 'irid_film_rough_es.glsl' });
+    if (!/vec3\s+irid_film_rough\s*\(/.test(unblocked.code)) throw fail('irid_film_rough_es.glsl', 'declares no vec3 irid_film_rough(...)');
+    roughCode = `${unblocked.code}\nuniform float irid_roughness;`;
+    Object.assign(uniforms, unblocked.uniforms, {
+      irid_rough: { value: rough.texture.texture ?? rough.texture },
+      // F_eff's roughness is the material's own, read at every draw.
+      irid_roughness: { get value() { return material.roughness; } },
+    });
+  }
   const before = material.onBeforeCompile;
   material.onBeforeCompile = (shader, renderer) => {
     before.call(material, shader, renderer);
     Object.assign(shader.uniforms, uniforms);
-    let fs = replaceChunk(shader.fragmentShader, '#include <common>', `#include <common>\n${code}\nuniform float irid_thickness_nm;`);
+    let fs = replaceChunk(shader.fragmentShader, '#include <common>', `#include <common>\n${code}\n${roughCode}\nuniform float irid_thickness_nm;`);
+    if (useRough) fs = replaceChunk(fs, '#include <lights_physical_pars_fragment>', roughLights(call));
     fs = replaceChunk(fs, '#include <lights_fragment_end>', `#include <lights_fragment_end>
 	{
 		// cos θ between the shading normal and the direction to the eye, in
@@ -305,14 +426,17 @@ export function addIridFilm(material, { film, sampler, reflectance, transmittanc
 		// camera position under a perspective one.
 		vec3 irid_view = isOrthographic ? vec3( 0.0, 0.0, 1.0 ) : normalize( vViewPosition );
 		float irid_cos = saturate( dot( normal, irid_view ) );
-		IridFilm irid = ${call};
+${useRough ? `		// Rough: the analytic lights took the film at v·h in BRDF_GGX; the
+		// environment light is the lobe's, so F_eff at n·v and the roughness.
+		reflectedLight.indirectSpecular *= irid_film_rough( irid_thickness_nm, irid_cos, irid_roughness );`
+    : `		IridFilm irid = ${call};
 		reflectedLight.directSpecular *= irid.reflectance;
-		reflectedLight.indirectSpecular *= irid.reflectance;
+		reflectedLight.indirectSpecular *= irid.reflectance;`}
 	}`);
     shader.fragmentShader = fs;
   };
   const key = material.customProgramCacheKey.bind(material);
-  const own = `irid-film-${hash(code)}`;
+  const own = `irid-film-${hash(code + roughCode)}`;
   material.customProgramCacheKey = () => `${key()}|${own}`;
   material.userData.iridFilm = true;
   material.needsUpdate = true;

@@ -18,7 +18,12 @@
   // ambient, 1 from the substrate).
   const CHART_VIEW = {
     'chart-r': [0, 0], 'chart-t': [1, 0], 'chart-r-back': [0, 1], 'chart-t-back': [1, 1],
+    'chart-r-rough': [2, 0], // F_eff at the roughness control's value (the rough table)
   };
+  // The environment maps: the source (mipmapped) and the prefiltered map
+  // the rough program reads, equirectangular, RGBA16F.
+  const SOURCE_MAP_SIZE = [1024, 512];
+  const PREFILTERED_SIZE = [512, 256];
   // The objects: each has its own compiled shader (a software renderer runs
   // an untaken branch's loop too), and the radius of a sphere about the
   // origin that holds it (outside it, no back face can be seen).
@@ -185,7 +190,43 @@
     if (!/irid_film\s*\(/.test(sampler)) throw new Error(`${source.name}irid_film_es.glsl: defines no irid_film()`);
     const reflectance = await loadTexture(source, film, 'reflectance');
     const transmittance = await loadTexture(source, film, 'transmittance');
-    return { name: source.name, label: source.label, film, sampler, reflectance, transmittance };
+    const rough = await loadRough(source, film);
+    return { name: source.name, label: source.label, film, sampler, reflectance, transmittance, rough };
+  }
+
+  /**
+   * The rough table of an export made with `irid export --rough` (film.json's
+   * "rough": F_eff(thickness, cos θ, roughness) for light from the ambient,
+   * docs/rough.md): its GLSL ES sampler, texture and uniform array, read by
+   * the names and lengths film.json gives. null when the export has none.
+   */
+  async function loadRough(source, film) {
+    const r = film.rough;
+    if (r === undefined || r === null) return null;
+    const fail = (why) => { throw new Error(`${source.name}film.json: rough.${why}`); };
+    if (typeof r !== 'object') fail(' must be an object or null');
+    const tex = r.texture;
+    if (!tex || typeof tex.file !== 'string' || !Number.isInteger(tex.width) || !Number.isInteger(tex.height)
+      || tex.width < 1 || tex.height < 1) {
+      fail('texture must name its file and give a positive integer width and height');
+    }
+    if (tex.file === '' || /[/\\]/.test(tex.file) || tex.file === '..') fail(`texture.file ${JSON.stringify(tex.file)} is not a plain file name`);
+    const u = r.uniform_f32;
+    if (!Array.isArray(u) || u.length === 0 || u.length % 4 !== 0 || !u.every(isNumber)) {
+      fail('uniform_f32 must be an array of numbers, whole vec4s');
+    }
+    const shaderFile = (Array.isArray(r.shaders) && r.shaders.find((f) => typeof f === 'string' && /_es\.glsl$/.test(f)))
+      || 'irid_film_rough_es.glsl';
+    const sampler = await source.text(shaderFile);
+    if (!/irid_film_rough\s*\(/.test(sampler)) throw new Error(`${source.name}${shaderFile}: defines no irid_film_rough()`);
+    const image = await ns.decodeExr(await source.bytes(tex.file), `${source.name}${tex.file}`);
+    if (image.width !== tex.width || image.height !== tex.height) {
+      throw new Error(`${source.name}${tex.file}: ${image.width}×${image.height} pixels, film.json says ${tex.width}×${tex.height}`);
+    }
+    for (let i = 0; i < image.data.length; i++) {
+      if (!Number.isFinite(image.data[i])) throw new Error(`${source.name}${tex.file}: non-finite value at texel ${i >> 2}`);
+    }
+    return { sampler, shaderFile, file: tex.file, width: tex.width, height: tex.height, data: image.data, uniform: u, error: r.error ?? null };
   }
 
   // ---------------------------------------------------------------- shaders
@@ -287,6 +328,85 @@ float irid_perlin(vec3 p) {
 }
 `;
 
+  // Directions and their place on an equirectangular map: u the azimuth
+  // (atan(x, -z), seam at +z), v the polar angle from +y (v = 0 up).
+  const EQUIRECT = `
+const float IRID_PI = 3.14159265358979;
+vec2 irid_equirect(vec3 d) {
+  return vec2(atan(d.x, -d.z) / (2.0 * IRID_PI) + 0.5, acos(clamp(d.y, -1.0, 1.0)) / IRID_PI);
+}
+vec3 irid_equirect_dir(vec2 uv) {
+  float phi = (uv.x - 0.5) * 2.0 * IRID_PI;
+  float theta = uv.y * IRID_PI;
+  return vec3(sin(theta) * sin(phi), cos(theta), -sin(theta) * cos(phi));
+}
+`;
+
+  // The environment drawn into an equirectangular map (the prefilter's
+  // source; mipmapped after).
+  const ENVIRONMENT_MAP_FS = `${HEADER}${COMMON}${EQUIRECT}
+uniform vec2 u_resolution;
+out vec4 o_color;
+void main() {
+  o_color = vec4(irid_environment(irid_equirect_dir(gl_FragCoord.xy / u_resolution)), 1.0);
+}`;
+
+  // The environment prefiltered for a GGX lobe of roughness r (α = r²), the
+  // split sum's first factor (Karis 2013): for each direction R, with the
+  // normal and the view both R, the mean of the radiance over light
+  // directions l drawn from D(h) cos θ_h, weighted by n·l. Each sample reads
+  // the source's mip level whose texel covers the sample's share of the
+  // lobe's solid angle, plus half a level (filtered importance sampling,
+  // Křivánek and Colbert 2008), so few samples give a smooth map: the half
+  // level removes the sampling pattern from the sun's highlight for a few
+  // per cent there (tools/web/test_web.mjs measures it).
+  const PREFILTER_SAMPLES = 256;
+  const PREFILTER_FS = `${HEADER}${EQUIRECT}
+uniform sampler2D u_source;
+uniform vec2 u_source_size;
+uniform vec2 u_resolution;
+uniform float u_alpha;
+out vec4 o_color;
+const int SAMPLES = ${PREFILTER_SAMPLES};
+float irid_radical_inverse(uint i) {
+  i = (i << 16u) | (i >> 16u);
+  i = ((i & 0x55555555u) << 1u) | ((i & 0xAAAAAAAAu) >> 1u);
+  i = ((i & 0x33333333u) << 2u) | ((i & 0xCCCCCCCCu) >> 2u);
+  i = ((i & 0x0F0F0F0Fu) << 4u) | ((i & 0xF0F0F0F0u) >> 4u);
+  i = ((i & 0x00FF00FFu) << 8u) | ((i & 0xFF00FF00u) >> 8u);
+  return float(i) * 2.3283064365386963e-10;
+}
+void main() {
+  vec3 n = irid_equirect_dir(gl_FragCoord.xy / u_resolution);
+  vec3 up = abs(n.y) < 0.999 ? vec3(0.0, 1.0, 0.0) : vec3(1.0, 0.0, 0.0);
+  vec3 tx = normalize(cross(up, n));
+  vec3 ty = cross(n, tx);
+  float a2 = u_alpha * u_alpha;
+  vec3 sum = vec3(0.0);
+  float weight = 0.0;
+  for (int i = 0; i < SAMPLES; i++) {
+    vec2 xi = vec2((float(i) + 0.5) / float(SAMPLES), irid_radical_inverse(uint(i)));
+    float cos2 = (1.0 - xi.x) / (1.0 + (a2 - 1.0) * xi.x);
+    float cos_h = sqrt(cos2);
+    float sin_h = sqrt(max(1.0 - cos2, 0.0));
+    float phi = 2.0 * IRID_PI * xi.y;
+    vec3 h = tx * (sin_h * cos(phi)) + ty * (sin_h * sin(phi)) + n * cos_h;
+    vec3 l = 2.0 * dot(n, h) * h - n;
+    float nl = dot(n, l);
+    if (nl <= 0.0) continue;
+    // pdf of l with v = n: D(h) cos θ_h / (4 v·h) = D / 4.
+    float q = 1.0 + (a2 - 1.0) * cos2;
+    float pdf = a2 / (IRID_PI * q * q) / 4.0;
+    float sample_solid_angle = 1.0 / (float(SAMPLES) * pdf);
+    float sin_l = sqrt(max(1.0 - l.y * l.y, 1e-4));
+    float texel_solid_angle = 2.0 * IRID_PI * IRID_PI * sin_l / (u_source_size.x * u_source_size.y);
+    float lod = max(0.5 * log2(sample_solid_angle / texel_solid_angle) + 0.5, 0.0);
+    sum += textureLod(u_source, irid_equirect(l), lod).rgb * nl;
+    weight += nl;
+  }
+  o_color = vec4(sum / weight, 1.0);
+}`;
+
   // The depth pass: the object's nearest face, no colour.
   const DEPTH_FS = `#version 300 es
 precision highp float;
@@ -302,6 +422,22 @@ IridFilm irid_film(float thickness_nm, float cos_theta, int side) {
 }
 `;
 
+  // What the rough program adds: the roughness, the prefiltered environment
+  // (equirectangular, texture unit 3) and the white GGX lobe's directional
+  // albedo at ALBEDO_NODES + 1 values of cos θ evenly over [0, 1], computed
+  // by the page (lobeAlbedo) for the current roughness.
+  const ALBEDO_NODES = 64;
+  const ROUGH_UNIFORMS = `
+uniform float u_roughness;
+uniform sampler2D u_prefiltered;
+uniform float u_lobe_albedo[${ALBEDO_NODES + 1}];
+float irid_lobe_albedo(float c) {
+  float x = clamp(c, 0.0, 1.0) * ${ALBEDO_NODES}.0;
+  int i = min(int(x), ${ALBEDO_NODES - 1});
+  return mix(u_lobe_albedo[i], u_lobe_albedo[i + 1], x - float(i));
+}
+`;
+
   // The object (its mesh's normals point out, into the ambient) is shaded on
   // the side the eye sees (gl_FrontFacing: 0, light from the ambient; 1,
   // from the substrate). A film that lets light through has the substrate
@@ -312,9 +448,20 @@ IridFilm irid_film(float thickness_nm, float cos_theta, int side) {
   // substrate side (the export's back side: total internal reflection past
   // the critical angle), where it refracts out weighted by T and reflects on
   // weighted by R; what is left after the last hit leaves along its ray.
-  const OBJECT_FS = (sampler, baseline, kind) => `${HEADER}${baseline ? BASELINE_SAMPLER : sampler}
-${COMMON}${NOISE}
+  //
+  // With the export's rough sampler (rough, the program the page uses at a
+  // roughness above 0), the film seen from the ambient is a GGX lobe of that
+  // roughness, lit by the environment alone (the page has no analytic
+  // light): the prefiltered radiance about the mirror direction × the white
+  // lobe's directional albedo at n·v × F_eff(t, n·v, r) from
+  // irid_film_rough (docs/rough.md). The rough table holds light from the
+  // ambient only: the transmitted light and the inner faces stay smooth.
+  const OBJECT_FS = (sampler, baseline, kind, rough = null) => `${HEADER}${baseline ? BASELINE_SAMPLER : sampler}
+${rough ?? ''}
+${COMMON}${NOISE}${EQUIRECT}
 #define IRID_OBJECT ${kind}
+#define IRID_ROUGH ${rough ? 1 : 0}
+${rough ? ROUGH_UNIFORMS : ''}
 uniform vec3 u_eye;
 uniform float u_exposure;
 uniform int u_thickness_mode;      // 0 uniform, 1 noise
@@ -409,7 +556,14 @@ void main() {
   // through from the inside; seen from inside (the eye in the substrate),
   // the other way round, the transmitted ray bent out of the substrate.
   vec3 mirrored = reflect(-v, n);
+#if IRID_ROUGH
+  vec3 c = gl_FrontFacing
+    ? irid_lobe_albedo(cos_theta) * irid_film_rough(irid_thickness(v_position), cos_theta, u_roughness)
+      * texture(u_prefiltered, irid_equirect(mirrored)).rgb
+    : film.reflectance * (u_opaque ? irid_environment(mirrored) : irid_inside(v_position, mirrored));
+#else
   vec3 c = film.reflectance * (gl_FrontFacing || u_opaque ? irid_environment(mirrored) : irid_inside(v_position, mirrored));
+#endif
   if (!u_opaque) {
     vec3 d = refract(-v, n, gl_FrontFacing ? 1.0 / u_index_ratio : u_index_ratio);
     if (dot(d, d) > 0.0) {
@@ -422,8 +576,12 @@ void main() {
   // The chart of one side: thickness along x (left to right, domain min to
   // max), angle along y (bottom to top, acos(cos_max) to acos(cos_min)),
   // each pixel's centre sampled. Output: the linear colour clamped to [0, 1], sRGB-encoded.
-  const CHART_FS = (sampler) => `${HEADER}${sampler}
+  // u_quantity 2 (with the rough sampler): F_eff at u_roughness.
+  const CHART_FS = (sampler, rough = null) => `${HEADER}${sampler}
+${rough ?? ''}
 ${COMMON}
+#define IRID_ROUGH ${rough ? 1 : 0}
+uniform float u_roughness;
 uniform vec2 u_resolution;
 uniform vec2 u_chart_thickness_nm;
 uniform vec2 u_chart_angle_rad;
@@ -436,6 +594,9 @@ void main() {
   float theta = mix(u_chart_angle_rad.x, u_chart_angle_rad.y, p.y);
   IridFilm film = irid_film(t, cos(theta), u_side);
   vec3 c = u_quantity == 0 ? film.reflectance : film.transmittance;
+#if IRID_ROUGH
+  if (u_quantity == 2) c = irid_film_rough(t, cos(theta), u_roughness);
+#endif
   o_color = vec4(irid_encode_srgb(c), 1.0);
 }`;
 
@@ -494,6 +655,166 @@ void main() {
     if (r === null && t === null) throw new Error(`${what}: declares no sampler irid_reflectance or irid_transmittance`);
     if (r !== null) gl.uniform1i(r, 0);
     if (t !== null) gl.uniform1i(t, 1);
+  }
+
+  // The rough table's uniform array (film.json's rough.uniform_f32, as it
+  // is) into the rough sampler's block, at binding 1; texture unit 2 holds
+  // the rough texture, unit 3 the prefiltered environment.
+  function bindRough(gl, program, exp, what) {
+    gl.useProgram(program);
+    const values = new Float32Array(exp.rough.uniform);
+    const blockIndex = gl.getUniformBlockIndex(program, 'IridRoughParamsBlock');
+    if (blockIndex === gl.INVALID_INDEX) throw new Error(`${what}: declares no uniform block IridRoughParamsBlock`);
+    const size = gl.getActiveUniformBlockParameter(program, blockIndex, gl.UNIFORM_BLOCK_DATA_SIZE);
+    if (size !== values.byteLength) {
+      throw new Error(`${what}: its uniform block takes ${size} bytes, film.json's rough.uniform_f32 holds ${values.byteLength}`);
+    }
+    const buffer = gl.createBuffer();
+    gl.bindBuffer(gl.UNIFORM_BUFFER, buffer);
+    gl.bufferData(gl.UNIFORM_BUFFER, values, gl.STATIC_DRAW);
+    gl.uniformBlockBinding(program, blockIndex, 1);
+    program.iridRoughParams = buffer;
+    const r = program.uniform('irid_rough');
+    if (r === null) throw new Error(`${what}: declares no sampler irid_rough`);
+    gl.uniform1i(r, 2);
+    const env = program.uniform('u_prefiltered');
+    if (env !== null) gl.uniform1i(env, 3);
+  }
+
+  // ---------------------------------------------------------------- GGX
+
+  /** Gauss–Legendre nodes and weights on [0, 1], n points. */
+  function gaussLegendre(n) {
+    const x = [];
+    const w = [];
+    for (let i = 1; i <= n; i++) {
+      let z = Math.cos((Math.PI * (i - 0.25)) / (n + 0.5));
+      let dp = 1;
+      for (let it = 0; it < 100; it++) {
+        let p1 = 1;
+        let p2 = 0;
+        for (let j = 1; j <= n; j++) {
+          const p3 = p2;
+          p2 = p1;
+          p1 = ((2 * j - 1) * z * p2 - (j - 1) * p3) / j;
+        }
+        dp = (n * (z * p1 - p2)) / (z * z - 1);
+        const previous = z;
+        z = previous - p1 / dp;
+        if (Math.abs(z - previous) < 1e-15) break;
+      }
+      x.push((1 - z) / 2);
+      w.push(1 / ((1 - z * z) * dp * dp));
+    }
+    return { x, w };
+  }
+  const GAUSS_48 = gaussLegendre(48);
+
+  /**
+   * The directional albedo of a white GGX lobe (α = roughness², height-
+   * correlated Smith G2, single scattering; docs/rough.md), irid's
+   * lobe_albedo: ∫ D G2 / (4 n·v) dl. Over the microfacet normal h drawn
+   * from D(h) cos θ_h (u in [0, 1], tan²θ_h = α² u / (1 − u)) it is
+   * ∫ du ∫ dφ/2π G2 (v·h) / (n·v n·h) over the h whose l = 2(v·h)h − v is
+   * above the surface: for each u an interval cos φ > K(u) (symmetric about
+   * the plane of incidence), so the φ rule runs over that interval alone and
+   * the u rule is cut where the interval starts or stops being whole or
+   * empty (K = −1, K = 1). Gauss–Legendre, 48 points each way: within 4e-4
+   * of irid's at 0–80°, 1.3e-3 at 85° (tools/web/test_web.mjs checks 0–80°).
+   */
+  function lobeAlbedo(cosV, roughness) {
+    const alpha = roughness * roughness;
+    if (alpha === 0) return 1;
+    const c = Math.min(1 - 1e-9, Math.max(cosV, 1e-4));
+    const s = Math.sqrt(1 - c * c);
+    const a2 = alpha * alpha;
+    const lambda = (cw) => (Math.sqrt(1 + (a2 * Math.max(1 - cw * cw, 0)) / (cw * cw)) - 1) / 2;
+    const lambdaV = lambda(c);
+    const halfway = (u) => {
+      const cos2 = (1 - u) / (1 + (a2 - 1) * u);
+      return [Math.sqrt(cos2), Math.sqrt(Math.max(1 - cos2, 0))];
+    };
+    const bound = (u) => {
+      const [ch, sh] = halfway(u);
+      return (c * (1 / (2 * ch) - ch)) / (s * sh);
+    };
+    const cuts = [0, 1];
+    for (const target of [-1, 1]) {
+      let lo = 1e-12;
+      let hi = 1 - 1e-12;
+      if ((bound(lo) - target) * (bound(hi) - target) > 0) continue;
+      for (let it = 0; it < 60; it++) {
+        const mid = (lo + hi) / 2;
+        if ((bound(lo) - target) * (bound(mid) - target) <= 0) hi = mid;
+        else lo = mid;
+      }
+      cuts.push((lo + hi) / 2);
+    }
+    cuts.sort((p, q) => p - q);
+    const { x, w } = GAUSS_48;
+    let sum = 0;
+    for (let p = 0; p + 1 < cuts.length; p++) {
+      const [u0, u1] = [cuts[p], cuts[p + 1]];
+      for (let i = 0; i < x.length; i++) {
+        const u = u0 + (u1 - u0) * x[i];
+        const [ch, sh] = halfway(u);
+        const k = bound(u);
+        if (!(k < 1)) continue;
+        const phiMax = k <= -1 ? Math.PI : Math.acos(k);
+        let inner = 0;
+        for (let j = 0; j < x.length; j++) {
+          const vh = s * sh * Math.cos(phiMax * x[j]) + c * ch;
+          const nl = 2 * vh * ch - c;
+          if (nl <= 0 || vh <= 0) continue;
+          inner += (w[j] * (vh / (c * ch))) / (1 + lambdaV + lambda(nl));
+        }
+        sum += ((u1 - u0) * w[i] * inner * phiMax) / Math.PI;
+      }
+    }
+    return sum;
+  }
+
+  /** lobeAlbedo at ALBEDO_NODES + 1 values of cos θ evenly over [0, 1]. */
+  function lobeAlbedoTable(roughness) {
+    return Float32Array.from({ length: ALBEDO_NODES + 1 }, (_, i) => lobeAlbedo(i / ALBEDO_NODES, roughness));
+  }
+
+  /**
+   * An RGBA16F texture to render into (equirectangular: repeat in u, clamp
+   * in v), with a mip chain when `mipmapped`. Bound on texture unit 4, the
+   * page's scratch unit.
+   */
+  function renderTarget(gl, width, height, mipmapped) {
+    const texture = gl.createTexture();
+    gl.activeTexture(gl.TEXTURE4);
+    gl.bindTexture(gl.TEXTURE_2D, texture);
+    const levels = mipmapped ? Math.floor(Math.log2(Math.max(width, height))) + 1 : 1;
+    gl.texStorage2D(gl.TEXTURE_2D, levels, gl.RGBA16F, width, height);
+    gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_MIN_FILTER, mipmapped ? gl.LINEAR_MIPMAP_LINEAR : gl.LINEAR);
+    gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_MAG_FILTER, gl.LINEAR);
+    gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_WRAP_S, gl.REPEAT);
+    gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_WRAP_T, gl.CLAMP_TO_EDGE);
+    return texture;
+  }
+
+  /** Runs `draw` with `texture` (level 0) as the colour target, then restores the canvas. */
+  function drawInto(gl, texture, width, height, draw) {
+    const fb = gl.createFramebuffer();
+    gl.bindFramebuffer(gl.FRAMEBUFFER, fb);
+    gl.framebufferTexture2D(gl.FRAMEBUFFER, gl.COLOR_ATTACHMENT0, gl.TEXTURE_2D, texture, 0);
+    const status = gl.checkFramebufferStatus(gl.FRAMEBUFFER);
+    if (status !== gl.FRAMEBUFFER_COMPLETE) {
+      gl.bindFramebuffer(gl.FRAMEBUFFER, null);
+      gl.deleteFramebuffer(fb);
+      throw new Error(`cannot render the environment map into an RGBA16F texture (framebuffer status 0x${status.toString(16)})`);
+    }
+    gl.viewport(0, 0, width, height);
+    gl.disable(gl.DEPTH_TEST);
+    gl.disable(gl.CULL_FACE);
+    draw();
+    gl.bindFramebuffer(gl.FRAMEBUFFER, null);
+    gl.deleteFramebuffer(fb);
+    gl.viewport(0, 0, gl.canvas.width, gl.canvas.height);
   }
 
   function makeTexture(gl, width, height, data) {
@@ -681,6 +1002,17 @@ void main() {
       rows.push([`${side}: max |error| T`, formatList(Array.isArray(e.max_abs) ? e.max_abs.slice(3, 6) : null, 5)]);
       if (isNumber(e.points)) rows.push([`${side}: checked at`, `${e.points} points`]);
     }
+    if (exp.rough) {
+      const e = exp.rough.error;
+      const slices = f.rough.layout && f.rough.layout.slices;
+      rows.push(['rough table', `${exp.rough.file}, ${exp.rough.width} × ${exp.rough.height}${isNumber(slices) ? `, ${slices} roughness slices` : ''}`]);
+      if (e) {
+        rows.push(['rough: max |error|', formatList(e.max_abs, 5)]);
+        rows.push(['rough: max / mean ΔE00', `${isNumber(e.max_delta_e00) ? e.max_delta_e00.toFixed(3) : '—'} / ${isNumber(e.mean_delta_e00) ? e.mean_delta_e00.toFixed(4) : '—'}`]);
+      }
+    } else {
+      rows.push(['rough table', 'none (export with --rough)']);
+    }
     const info = $('info');
     info.replaceChildren();
     for (const [k, v] of rows) {
@@ -706,6 +1038,12 @@ void main() {
       this.empty = gl.createVertexArray();
       this.background = link(gl, FULLSCREEN_VS, BACKGROUND_FS, 'background shader');
       this.depth = link(gl, OBJECT_VS, DEPTH_FS, 'depth shader');
+      // Rough films: the environment maps are float render targets.
+      this.floatTargets = gl.getExtension('EXT_color_buffer_float') !== null;
+      this.environmentProgram = link(gl, FULLSCREEN_VS, ENVIRONMENT_MAP_FS, 'environment map shader');
+      this.prefilterProgram = link(gl, FULLSCREEN_VS, PREFILTER_FS, 'prefilter shader');
+      this.sourceMaps = {};
+      this.prefilter = null;
     }
 
     /** Compiles the export's programs and uploads its textures once. */
@@ -721,14 +1059,123 @@ void main() {
         baseline[name] = link(gl, OBJECT_VS, OBJECT_FS(body, true, kind), 'baseline shader');
         bindFilm(gl, object[name], exp, what);
       }
-      const chart = link(gl, FULLSCREEN_VS, CHART_FS(body), what);
+      const roughBody = exp.rough ? samplerBody(exp.rough.sampler) : null;
+      const roughWhat = exp.rough ? `${exp.name}${exp.rough.shaderFile}` : null;
+      const chart = link(gl, FULLSCREEN_VS, CHART_FS(body, roughBody), exp.rough ? `${what} with ${roughWhat}` : what);
       bindFilm(gl, chart, exp, what);
+      // The rough programs: compiled only for an export with the rough table;
+      // at roughness 0 the page draws with the smooth ones above.
+      let objectRough = null;
+      if (exp.rough) {
+        bindRough(gl, chart, exp, roughWhat);
+        objectRough = {};
+        for (const [name, { kind }] of Object.entries(OBJECTS)) {
+          objectRough[name] = link(gl, OBJECT_VS, OBJECT_FS(body, false, kind, roughBody), `${what} with ${roughWhat}`);
+          bindFilm(gl, objectRough[name], exp, what);
+          bindRough(gl, objectRough[name], exp, roughWhat);
+        }
+      }
       const { width, height } = exp.film.texture;
       exp.gpu = {
-        object, chart, baseline,
+        object, chart, baseline, objectRough,
         reflectance: makeTexture(gl, width, height, exp.reflectance.data),
         transmittance: makeTexture(gl, width, height, exp.transmittance.data),
+        rough: exp.rough ? makeTexture(gl, exp.rough.width, exp.rough.height, exp.rough.data) : null,
       };
+    }
+
+    /**
+     * Why the roughness control cannot be used with `exp`, or null when it
+     * can: an export without the rough table, or a browser that cannot
+     * render the float environment maps.
+     */
+    roughUnavailable(exp) {
+      if (!exp.rough) {
+        return 'This export has no rough table (film.json "rough" is null): the roughness stays 0. '
+          + 'Export it with `irid export STACK --rough` to preview a rough film.';
+      }
+      if (!this.floatTargets) {
+        return 'This browser cannot render to float textures (EXT_color_buffer_float), which the prefiltered environment needs: the roughness stays 0.';
+      }
+      return null;
+    }
+
+    /** The environment `name` as a mipmapped equirectangular map, drawn once. */
+    environmentMap(name) {
+      if (this.sourceMaps[name]) return this.sourceMaps[name];
+      const gl = this.gl;
+      const [w, h] = SOURCE_MAP_SIZE;
+      const texture = renderTarget(gl, w, h, true);
+      drawInto(gl, texture, w, h, () => {
+        gl.useProgram(this.environmentProgram);
+        gl.uniform2f(this.environmentProgram.uniform('u_resolution'), w, h);
+        gl.uniform1i(this.environmentProgram.uniform('u_environment'), ENVIRONMENTS[name]);
+        gl.bindVertexArray(this.empty);
+        gl.drawArrays(gl.TRIANGLES, 0, 3);
+      });
+      gl.activeTexture(gl.TEXTURE4);
+      gl.bindTexture(gl.TEXTURE_2D, texture);
+      gl.generateMipmap(gl.TEXTURE_2D);
+      this.sourceMaps[name] = texture;
+      return texture;
+    }
+
+    /**
+     * The environment prefiltered for roughness r (kept for the last
+     * environment and roughness asked), with the white lobe's albedo table.
+     */
+    prefiltered(name, roughness) {
+      const p = this.prefilter;
+      if (p && p.name === name && p.roughness === roughness) return p;
+      const gl = this.gl;
+      const source = this.environmentMap(name);
+      const [w, h] = PREFILTERED_SIZE;
+      const texture = p ? p.texture : renderTarget(gl, w, h, false);
+      drawInto(gl, texture, w, h, () => {
+        const program = this.prefilterProgram;
+        gl.useProgram(program);
+        gl.activeTexture(gl.TEXTURE4);
+        gl.bindTexture(gl.TEXTURE_2D, source);
+        gl.uniform1i(program.uniform('u_source'), 4);
+        gl.uniform2f(program.uniform('u_source_size'), SOURCE_MAP_SIZE[0], SOURCE_MAP_SIZE[1]);
+        gl.uniform2f(program.uniform('u_resolution'), w, h);
+        gl.uniform1f(program.uniform('u_alpha'), roughness * roughness);
+        gl.bindVertexArray(this.empty);
+        gl.drawArrays(gl.TRIANGLES, 0, 3);
+      });
+      const albedo = p && p.roughness === roughness ? p.albedo : lobeAlbedoTable(roughness);
+      this.prefilter = { name, roughness, texture, albedo };
+      return this.prefilter;
+    }
+
+    /** Linear RGB of the prefiltered map at direction d (bilinear, as the shader reads it), for tests. */
+    prefilteredAt(name, roughness, d) {
+      const gl = this.gl;
+      const p = this.prefiltered(name, roughness);
+      const [w, h] = PREFILTERED_SIZE;
+      if (!p.pixels) {
+        const fb = gl.createFramebuffer();
+        gl.bindFramebuffer(gl.FRAMEBUFFER, fb);
+        gl.framebufferTexture2D(gl.FRAMEBUFFER, gl.COLOR_ATTACHMENT0, gl.TEXTURE_2D, p.texture, 0);
+        p.pixels = new Float32Array(w * h * 4);
+        gl.readPixels(0, 0, w, h, gl.RGBA, gl.FLOAT, p.pixels);
+        gl.bindFramebuffer(gl.FRAMEBUFFER, null);
+        gl.deleteFramebuffer(fb);
+      }
+      const len = Math.hypot(...d);
+      const u = Math.atan2(d[0] / len, -d[2] / len) / (2 * Math.PI) + 0.5;
+      const v = Math.acos(Math.max(-1, Math.min(1, d[1] / len))) / Math.PI;
+      const x = u * w - 0.5;
+      const y = v * h - 0.5;
+      const x0 = Math.floor(x);
+      const y0 = Math.floor(y);
+      const at = (i, j, ch) => p.pixels[((Math.max(0, Math.min(h - 1, j)) * w) + (((i % w) + w) % w)) * 4 + ch];
+      return [0, 1, 2].map((ch) => {
+        const fx = x - x0;
+        const fy = y - y0;
+        return (at(x0, y0, ch) * (1 - fx) + at(x0 + 1, y0, ch) * fx) * (1 - fy)
+          + (at(x0, y0 + 1, ch) * (1 - fx) + at(x0 + 1, y0 + 1, ch) * fx) * fy;
+      });
     }
 
     controls() {
@@ -742,6 +1189,7 @@ void main() {
         thicknessMax: Number($('thickness-max').value),
         noiseScale: Number($('noise-scale').value),
         exposure: Number($('exposure').value),
+        roughness: $('roughness').disabled ? 0 : Number($('roughness').value),
       };
     }
 
@@ -773,6 +1221,10 @@ void main() {
       gl.bindTexture(gl.TEXTURE_2D, exp.gpu.reflectance);
       gl.activeTexture(gl.TEXTURE1);
       gl.bindTexture(gl.TEXTURE_2D, exp.gpu.transmittance);
+      if (exp.gpu.rough) {
+        gl.activeTexture(gl.TEXTURE2);
+        gl.bindTexture(gl.TEXTURE_2D, exp.gpu.rough);
+      }
       if (c.mode in CHART_VIEW) {
         this.drawChart(exp, c);
       } else {
@@ -789,7 +1241,9 @@ void main() {
       const ranges = this.chartRanges(exp);
       gl.useProgram(program);
       if (program.iridParams) gl.bindBufferBase(gl.UNIFORM_BUFFER, 0, program.iridParams);
+      if (program.iridRoughParams) gl.bindBufferBase(gl.UNIFORM_BUFFER, 1, program.iridRoughParams);
       gl.disable(gl.DEPTH_TEST);
+      gl.uniform1f(program.uniform('u_roughness'), c.roughness);
       gl.uniform2f(program.uniform('u_resolution'), canvas.width, canvas.height);
       gl.uniform2f(program.uniform('u_chart_thickness_nm'), ranges.thickness[0], ranges.thickness[1]);
       gl.uniform2f(program.uniform('u_chart_angle_rad'), ranges.angle[0], ranges.angle[1]);
@@ -810,6 +1264,11 @@ void main() {
       const canvas = gl.canvas;
       const cam = this.camera(canvas.width / canvas.height);
       const env = ENVIRONMENTS[c.environment];
+      // A rough film (roughness above 0, never at 0: there the smooth
+      // program draws what it always did) reads the prefiltered environment.
+      const rough = c.roughness > 0 && !options.baseline && exp.gpu.objectRough;
+      const prefilter = rough ? this.prefiltered(c.environment, c.roughness) : null;
+      gl.viewport(0, 0, canvas.width, canvas.height);
       gl.disable(gl.DEPTH_TEST);
       gl.useProgram(this.background);
       gl.uniformMatrix4fv(this.background.uniform('u_inverse_view_proj'), false, cam.inverse);
@@ -836,9 +1295,16 @@ void main() {
         gl.depthFunc(gl.LEQUAL);
       }
 
-      const program = (options.baseline ? exp.gpu.baseline : exp.gpu.object)[c.object];
+      const program = (options.baseline ? exp.gpu.baseline : rough ? exp.gpu.objectRough : exp.gpu.object)[c.object];
       gl.useProgram(program);
       if (program.iridParams) gl.bindBufferBase(gl.UNIFORM_BUFFER, 0, program.iridParams);
+      if (rough) {
+        gl.bindBufferBase(gl.UNIFORM_BUFFER, 1, program.iridRoughParams);
+        gl.activeTexture(gl.TEXTURE3);
+        gl.bindTexture(gl.TEXTURE_2D, prefilter.texture);
+        gl.uniform1f(program.uniform('u_roughness'), c.roughness);
+        gl.uniform1fv(program.uniform('u_lobe_albedo[0]'), prefilter.albedo);
+      }
       gl.uniformMatrix4fv(program.uniform('u_view_proj'), false, cam.viewProj);
       gl.uniform3fv(program.uniform('u_eye'), cam.eye);
       gl.uniform1f(program.uniform('u_exposure'), c.exposure);
@@ -883,6 +1349,18 @@ void main() {
         if (option.value.endsWith('-back')) option.disabled = !back;
       }
       if (!back && $('mode').value.endsWith('-back')) $('mode').value = 'object';
+      // Roughness: only with the export's rough table, never the smooth film
+      // in its place.
+      const unavailable = this.roughUnavailable(exp);
+      const roughness = $('roughness');
+      roughness.disabled = unavailable !== null;
+      if (unavailable !== null) roughness.value = '0';
+      $('mode').querySelector('option[value="chart-r-rough"]').disabled = unavailable !== null;
+      if (unavailable !== null && $('mode').value === 'chart-r-rough') $('mode').value = 'object';
+      const note = $('roughness-note');
+      note.classList.toggle('unavailable', unavailable !== null);
+      note.textContent = unavailable ?? `GGX, α = roughness². Environment light: the prefiltered environment × the white lobe's albedo × F_eff from ${exp.rough.file} `
+        + '(irid_film_rough at n·v). The rough table holds light from the ambient: the transmitted light and the view from inside stay smooth.';
       $('thickness').value = String((tMin + tMax) / 2);
       $('thickness-min').value = String(tMin + 0.25 * (tMax - tMin));
       $('thickness-max').value = String(tMin + 0.75 * (tMax - tMin));
@@ -902,6 +1380,7 @@ void main() {
     $('thickness-max-out').value = `${Number($('thickness-max').value).toFixed(1)} nm`;
     $('noise-scale-out').value = Number($('noise-scale').value).toFixed(2);
     $('exposure-out').value = `${Number($('exposure').value).toFixed(2)} EV`;
+    $('roughness-out').value = $('roughness').disabled ? 'no table' : Number($('roughness').value).toFixed(3);
     const noise = $('thickness-mode').value === 'noise';
     $('row-thickness').hidden = noise;
     $('row-min').hidden = !noise;
@@ -996,7 +1475,7 @@ void main() {
       select.append(option);
     }
     select.addEventListener('change', () => preview.select(loaded[Number(select.value)]));
-    for (const id of ['mode', 'object', 'environment', 'thickness-mode', 'thickness', 'thickness-min', 'thickness-max', 'noise-scale', 'exposure']) {
+    for (const id of ['mode', 'object', 'environment', 'thickness-mode', 'thickness', 'thickness-min', 'thickness-max', 'noise-scale', 'exposure', 'roughness']) {
       $(id).addEventListener('input', () => { updateOutputs(); preview.request(); });
     }
     attachOrbit(canvas, preview);
@@ -1025,6 +1504,11 @@ void main() {
       },
       chartRanges() { return preview.chartRanges(preview.current); },
       timeFrames(frames, baseline) { return timeFrames(preview, frames, baseline); },
+      // Rough films: the white GGX lobe's albedo as the page computes it, and
+      // the prefiltered environment at a direction (linear RGB).
+      lobeAlbedo(cos, roughness) { return lobeAlbedo(cos, roughness); },
+      lobeAlbedoTable(roughness) { return Array.from(lobeAlbedoTable(roughness)); },
+      prefilteredAt(environment, roughness, d) { return preview.prefilteredAt(environment, roughness, d); },
     };
   }
 

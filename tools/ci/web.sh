@@ -28,13 +28,14 @@ trap 'rm -rf "$work"' EXIT
 # absorbing film on gold (opaque), a film seen from its dense side (the
 # warped angle axis), coated glass (a back side with total internal
 # reflection) and a film on copper (opaque though it transmits into the
-# metal). The test compares each one's charts with `irid color` on its
-# stack file, and the back sides' with the reversed stack.
+# metal; with the rough table, --rough, for the roughness control and the
+# three.js module's rough lookup). The test compares each one's charts with
+# `irid color` on its stack file, and the back sides' with the reversed stack.
 "$irid" export luts/soap-film.toml --thickness 100:1000 --png -o "$work/soap-film" --quiet
 "$irid" export luts/two-layer.toml --layer 1 --thickness 50:600 -o "$work/two-layer" --quiet
 "$irid" export tools/web/dense-side.toml --thickness 100:800 -o "$work/dense-side" --quiet
 "$irid" export tests/blender/film-on-glass.toml --thickness 100:800 -o "$work/film-on-glass" --quiet
-"$irid" export tests/blender/film-on-copper.toml --thickness 100:500 -o "$work/film-on-copper" --quiet
+"$irid" export tests/blender/film-on-copper.toml --thickness 100:500 --rough -o "$work/film-on-copper" --quiet
 "$irid" preview "$work/soap-film" "$work/two-layer" "$work/dense-side" "$work/film-on-glass" \
     "$work/film-on-copper" -o "$work/preview"
 

@@ -73,9 +73,14 @@ export function stackWithThickness(text, layer, thickness, dir) {
   return file;
 }
 
-/** `irid color STACK --json` at `angles` (degrees): one {reflectance_rgb, transmittance_rgb, ...} per angle. */
-export function iridColor(stackFile, angles) {
-  const out = execFileSync(IRID, ['color', stackFile, '--json', '--angles', angles.map((a) => a.toPrecision(17)).join(',')],
+/**
+ * `irid color STACK --json` at `angles` (degrees): one {reflectance_rgb,
+ * transmittance_rgb, ...} per angle; with `roughness`, `--roughness R`: F_eff
+ * as reflectance_rgb and the white lobe's lobe_albedo (docs/rough.md).
+ */
+export function iridColor(stackFile, angles, roughness = null) {
+  const rough = roughness === null ? [] : ['--roughness', String(roughness)];
+  const out = execFileSync(IRID, ['color', stackFile, '--json', ...rough, '--angles', angles.map((a) => a.toPrecision(17)).join(',')],
     { encoding: 'utf8', maxBuffer: 1 << 28 });
   const colours = JSON.parse(out);
   if (colours.length !== angles.length) throw new Error(`irid color gave ${colours.length} colours for ${angles.length} angles`);

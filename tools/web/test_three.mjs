@@ -109,16 +109,20 @@ function summary(differences) {
   return { mean, max: Math.max(...differences), points: differences.length };
 }
 
-/** The rendered sphere against `irid color` at each pixel's cos θ (`geometry`): ΔE00 of R. */
-function compareSphere(rgba, geometry, stackFile, film, thickness) {
+/**
+ * The rendered sphere against `irid color` at each pixel's cos θ
+ * (`geometry`): ΔE00 of R; with `roughness`, of F_eff (`irid color
+ * --roughness`), at every `stride`-th pixel.
+ */
+function compareSphere(rgba, geometry, stackFile, film, thickness, roughness = null, stride = 1) {
   const pixels = [];
-  for (let o = 0; o < rgba.length; o += 4) {
+  for (let o = 0; o < rgba.length; o += 4 * stride) {
     if (rgba[o + 3] < 0.5 || geometry[o] < COS_MIN) continue;
     pixels.push({ o, angle: (Math.acos(Math.min(1, geometry[o])) * 180) / Math.PI });
   }
   const angles = [...new Set(pixels.map((p) => p.angle))];
   const text = fs.readFileSync(stackFile, 'utf8');
-  const colours = iridColor(stackWithThickness(text, film.layer, thickness, scratch), angles);
+  const colours = iridColor(stackWithThickness(text, film.layer, thickness, scratch), angles, roughness);
   const exact = new Map(angles.map((a, i) => [a, linearSrgbToLab(colours[i].reflectance_rgb)]));
   return summary(pixels.map(({ o, angle }) => deltaE00(exact.get(angle), linearSrgbToLab([rgba[o], rgba[o + 1], rgba[o + 2]]))));
 }
@@ -243,4 +247,80 @@ test('a texture that is not the export\'s, a film.json without row check or of a
   assert.match(await refusal('size'), /^reflectance\.exr: \d+ × \d+ texels, film\.json says \d+ × \d+$/);
   assert.match(await refusal('no row check'), /^film\.json: has no texture\.row_check/);
   assert.match(await refusal('version'), /^film\.json: version 99 is not one this module reads/);
+});
+
+// ------------------------------------------------------------------ rough films
+
+/** The export of IRID_STACKS with the rough table, as [name, film]. */
+function roughExport() {
+  for (const name of STACKS.keys()) {
+    const film = readFilm(name);
+    if (film.rough) return [name, film];
+  }
+  throw new Error('no export of IRID_STACKS has the rough table: make one with `irid export STACK --rough`');
+}
+
+test('rough: { rough: true } in a white furnace shows F_eff (irid color --roughness) at every pixel, both cameras, both row orders', async () => {
+  const [name, film] = roughExport();
+  const [t0, t1] = film.domain.thickness_nm;
+  const thickness = t0 + 0.4 * (t1 - t0);
+  for (const route of ['EXRLoader half', 'exr.js float']) {
+    const flipped = await page.evaluate(([url, r]) => window.threeCheck.loadRough(url, r, 0.5), [`/exports/${name}/`, route]);
+    assert.equal(flipped.rough, route.startsWith('EXRLoader'), `${route}: the rough texture's rows`);
+    assert.equal(flipped.rough, flipped.reflectance);
+    for (const roughness of route.startsWith('EXRLoader') ? [0.3, 0.6] : [0.6]) {
+      await page.evaluate((r) => window.threeCheck.setRoughness(r), roughness);
+      for (const camera of ['perspective', 'orthographic']) {
+        // The bare white metal of this roughness reflects 1 (three.js's
+        // multiple-scattering term keeps the furnace), so the film's
+        // material shows F_eff alone.
+        const bare = await page.evaluate((c) => window.threeCheck.bare(c), camera);
+        let furnace = 0;
+        for (let o = 0; o < bare.length; o += 4) {
+          if (bare[o + 3] >= 0.5 && geometry[camera][o] >= COS_MIN) furnace = Math.max(furnace, ...[0, 1, 2].map((k) => Math.abs(bare[o + k] - 1)));
+        }
+        const rgba = await render(camera, thickness);
+        const rough = compareSphere(rgba, geometry[camera], STACKS.get(name), film, thickness, roughness, 3);
+        const smooth = compareSphere(rgba, geometry[camera], STACKS.get(name), film, thickness, null, 3);
+        console.log(`${name}, ${route}, roughness ${roughness}, ${camera}: against F_eff ΔE00 mean ${rough.mean.toFixed(4)}, `
+          + `max ${rough.max.toFixed(4)} over ${rough.points} pixels (the smooth film's R at n·v instead: mean ${smooth.mean.toFixed(3)}, `
+          + `max ${smooth.max.toFixed(3)}); bare white metal within ${furnace.toExponential(2)} of 1`);
+        assert.ok(furnace < 2e-3, `the bare metal reflects ${furnace} off 1`);
+        assert.ok(rough.mean <= 0.05 && rough.max <= 0.3, `${camera}: ΔE00 mean ${rough.mean}, max ${rough.max}`);
+      }
+    }
+  }
+  assert.deepEqual(page.errors, []);
+});
+
+test('rough: an analytic light takes the film at v·h (a light along the view: R at normal incidence everywhere)', async () => {
+  const [name, film] = roughExport();
+  await page.evaluate((url) => window.threeCheck.loadRough(url, 'EXRLoader half', 0.5), `/exports/${name}/`);
+  await page.evaluate(() => window.threeCheck.setRoughness(0.5));
+  const [t0, t1] = film.domain.thickness_nm;
+  const thickness = t0 + 0.4 * (t1 - t0);
+  const { film: lit, bare } = await page.evaluate((t) => window.threeCheck.directLight(t), thickness);
+  const exact = iridColor(stackWithThickness(fs.readFileSync(STACKS.get(name), 'utf8'), film.layer, thickness, scratch), [0])[0].reflectance_rgb;
+  const want = linearSrgbToLab(exact);
+  const differences = [];
+  let spread = 0;
+  for (let o = 0; o < lit.length; o += 4) {
+    if (lit[o + 3] < 0.5 || Math.min(bare[o], bare[o + 1], bare[o + 2]) < 1e-3) continue;
+    const ratio = [0, 1, 2].map((k) => lit[o + k] / bare[o + k]);
+    spread = Math.max(spread, ...ratio.map((v, k) => Math.abs(v - exact[k])));
+    differences.push(deltaE00(want, linearSrgbToLab(ratio)));
+  }
+  const r = summary(differences);
+  console.log(`${name}, directional light along the view, roughness 0.5: film / bare white metal against R(0°): `
+    + `ΔE00 mean ${r.mean.toFixed(4)}, max ${r.max.toFixed(4)}, largest |Δ| ${spread.toExponential(2)} over ${r.points} lit pixels`);
+  assert.ok(r.points > 1000, `${r.points} lit pixels`);
+  assert.ok(r.mean <= 0.05 && r.max <= 0.2, `ΔE00 mean ${r.mean}, max ${r.max}`);
+  assert.deepEqual(page.errors, []);
+});
+
+test('rough: { rough: true } with an export that has no rough table is refused by name', async () => {
+  const other = [...STACKS.keys()].find((n) => !readFilm(n).rough);
+  assert.ok(other, 'every export has the rough table: the test needs one without');
+  const message = await page.evaluate((url) => window.threeCheck.roughRefusal(url), `/exports/${other}/`);
+  assert.match(message ?? '', /^film\.json: has no rough table.*irid export STACK --rough/);
 });

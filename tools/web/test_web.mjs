@@ -91,9 +91,10 @@ async function pixels(page, options) {
  * substrate) against `irid color` at the same (thickness, angle) on the
  * stack as seen from that side.
  */
-async function compareChart(page, film, quantity, stackFile, side = 'front') {
+async function compareChart(page, film, quantity, stackFile, side = 'front', roughness = null) {
   const back = side === 'back' ? '-back' : '';
-  await page.selectOption('#mode', (quantity === 'reflectance' ? 'chart-r' : 'chart-t') + back);
+  const rough = roughness === null ? '' : '-rough';
+  await page.selectOption('#mode', (quantity === 'reflectance' ? 'chart-r' : 'chart-t') + back + rough);
   const layer = side === 'back' ? film.sides.back.layer : film.layer;
   const image = await pixels(page);
   const { width, height, data } = image;
@@ -121,7 +122,7 @@ async function compareChart(page, film, quantity, stackFile, side = 'front') {
         pys.push(py);
         angles.push(deg);
       }
-      const colours = iridColor(stackWithThickness(text, layer, thickness, tmp), angles);
+      const colours = iridColor(stackWithThickness(text, layer, thickness, tmp), angles, roughness);
       colours.forEach((c, k) => {
         const o = (pys[k] * width + px) * 4; // readPixels rows run bottom to top
         const shown = [0, 1, 2].map((ch) => srgb8ToLinear(data[o + ch]));
@@ -454,5 +455,280 @@ test('a missing export, damaged ones, and no WebGL2 each show a message', async 
     };
   });
   assert.match(await page.textContent('#message'), /does not offer WebGL2/);
+  await page.close();
+});
+
+// ------------------------------------------------------------------ rough films
+
+/** The export of IRID_STACKS made with `irid export --rough` (film.json "rough"), as [name, film]. */
+function roughExport() {
+  for (const name of STACKS.keys()) {
+    const film = readFilm(path.join('preview', 'exports', name));
+    if (film.rough) return [name, film];
+  }
+  throw new Error('no export of IRID_STACKS has the rough table: make one with `irid export STACK --rough`');
+}
+
+async function selectExport(page, name) {
+  const labels = await page.evaluate(() => window.irid.preview.exports.map((e) => e.label));
+  assert.ok(labels.includes(name), `the page offers no export ${name}`);
+  await page.selectOption('#export', String(labels.indexOf(name)));
+}
+
+/**
+ * The page's camera restated (yaw, pitch, distance, 35° field, looking at the
+ * origin): for pixel (px, py) of a width × height canvas (py counted from
+ * the bottom, as readPixels has it), the unit sphere's point it sees, or
+ * null: {cos: n·v, mirrored: the reflected view direction}.
+ */
+function sphereAt(px, py, width, height, { yaw, pitch, distance }) {
+  const eye = [distance * Math.cos(pitch) * Math.sin(yaw), distance * Math.sin(pitch), distance * Math.cos(pitch) * Math.cos(yaw)];
+  const norm = (a) => { const l = Math.hypot(...a); return a.map((x) => x / l); };
+  const cross = (a, b) => [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]];
+  const dot = (a, b) => a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+  const z = norm(eye);
+  const x = norm(cross([0, 1, 0], z));
+  const y = cross(z, x);
+  const f = Math.tan((35 * Math.PI) / 360);
+  const sx = (((px + 0.5) / width) * 2 - 1) * f * (width / height);
+  const sy = (((py + 0.5) / height) * 2 - 1) * f;
+  const d = norm([0, 1, 2].map((k) => -z[k] + sx * x[k] + sy * y[k]));
+  const b = dot(eye, d);
+  const disc = b * b - dot(eye, eye) + 1;
+  if (disc <= 0) return null;
+  const s = -b - Math.sqrt(disc);
+  const n = [0, 1, 2].map((k) => eye[k] + s * d[k]);
+  const cos = -dot(n, d);
+  return { cos, mirrored: [0, 1, 2].map((k) => d[k] + 2 * cos * n[k]) };
+}
+
+test('rough: the page\'s white GGX lobe albedo is irid\'s lobe_albedo', async () => {
+  const [name, film] = roughExport();
+  const page = await ready();
+  await selectExport(page, name);
+  const angles = [0, 15, 30, 45, 60, 70, 80];
+  const stack = STACKS.get(name);
+  let worst = 0;
+  let worstTable = 0;
+  for (const r of [0.1, 0.3, 0.5, 0.8, 1]) {
+    const exact = iridColor(stack, angles, r);
+    const table = await page.evaluate((rr) => window.irid.lobeAlbedoTable(rr), r);
+    for (const [k, a] of angles.entries()) {
+      const c = Math.cos((a * Math.PI) / 180);
+      const direct = await page.evaluate(([cc, rr]) => window.irid.lobeAlbedo(cc, rr), [c, r]);
+      // The shader's linear interpolation in the table (nodes i / (table.length − 1)).
+      const x = c * (table.length - 1);
+      const i = Math.min(Math.floor(x), table.length - 2);
+      const interpolated = table[i] + (table[i + 1] - table[i]) * (x - i);
+      worst = Math.max(worst, Math.abs(direct - exact[k].lobe_albedo));
+      worstTable = Math.max(worstTable, Math.abs(interpolated - exact[k].lobe_albedo));
+    }
+  }
+  console.log(`lobe albedo, roughness 0.1-1, 0-80°: page's quadrature within ${worst.toExponential(2)} of irid's, `
+    + `the shader's table interpolation within ${worstTable.toExponential(2)}`);
+  assert.ok(worst <= 1e-3, `lobe albedo off by ${worst}`);
+  assert.ok(worstTable <= 2e-3, `interpolated lobe albedo off by ${worstTable}`);
+  assert.ok(film.rough.uniform_f32.length % 4 === 0);
+  await page.close();
+});
+
+test('rough: the rough R chart matches irid color --roughness (ΔE00 after 8-bit sRGB encoding)', async () => {
+  const [name, film] = roughExport();
+  const page = await ready();
+  await selectExport(page, name);
+  for (const r of [0.25, 0.5]) {
+    await setControl(page, 'roughness', r);
+    const res = await compareChart(page, film, 'reflectance', STACKS.get(name), 'front', r);
+    console.log(`${name} rough R chart at roughness ${r}: ΔE00 mean ${res.mean.toFixed(3)}, max ${res.max.toFixed(3)} over ${res.points} points`);
+    assert.ok(res.mean <= 0.5 && res.max <= 2, `roughness ${r}: ΔE00 mean ${res.mean}, max ${res.max}`);
+  }
+  assert.deepEqual(page.errors, []);
+  await page.close();
+});
+
+/**
+ * The sphere's pixels (every 16th in x and y, n·v ≥ 0.2) at roughness r in
+ * `environment` against lobe_albedo × F_eff from `irid color --roughness r`
+ * × the page's prefiltered environment about the mirror direction: ΔE00
+ * and the largest difference in 8-bit codes.
+ */
+async function compareRoughSphere(page, name, film, r, environment) {
+  await page.selectOption('#mode', 'object');
+  await page.selectOption('#environment', environment);
+  await setControl(page, 'roughness', r);
+  const image = await pixels(page);
+  const camera = await page.evaluate(() => ({ yaw: window.irid.preview.yaw, pitch: window.irid.preview.pitch, distance: window.irid.preview.distance }));
+  const points = [];
+  for (let py = 8; py < image.height; py += 16) {
+    for (let px = 8; px < image.width; px += 16) {
+      const hit = sphereAt(px, py, image.width, image.height, camera);
+      if (hit && hit.cos >= 0.2) points.push({ px, py, ...hit });
+    }
+  }
+  const [t0, t1] = film.domain.thickness_nm;
+  const tmp = fs.mkdtempSync(path.join(os.tmpdir(), 'irid-web-rough-'));
+  let exact;
+  try {
+    const stack = stackWithThickness(fs.readFileSync(STACKS.get(name), 'utf8'), film.layer, (t0 + t1) / 2, tmp);
+    exact = iridColor(stack, points.map((p) => (Math.acos(Math.min(1, p.cos)) * 180) / Math.PI), r);
+  } finally {
+    fs.rmSync(tmp, { recursive: true, force: true });
+  }
+  const env = await page.evaluate(([e, rr, dirs]) => dirs.map((d) => window.irid.prefilteredAt(e, rr, d)),
+    [environment, r, points.map((p) => p.mirrored)]);
+  const differences = [];
+  let codes = 0;
+  points.forEach((p, k) => {
+    const o = (p.py * image.width + p.px) * 4;
+    const want = [0, 1, 2].map((ch) => Math.min(1, Math.max(0, exact[k].lobe_albedo * exact[k].reflectance_rgb[ch] * env[k][ch])));
+    const shown = [0, 1, 2].map((ch) => srgb8ToLinear(image.data[o + ch]));
+    differences.push(deltaE00(linearSrgbToLab(want), linearSrgbToLab(shown)));
+    const encode = (c) => 255 * (c <= 0.0031308 ? 12.92 * c : 1.055 * c ** (1 / 2.4) - 0.055);
+    codes = Math.max(codes, ...[0, 1, 2].map((ch) => Math.abs(encode(want[ch]) - image.data[o + ch])));
+  });
+  const mean = differences.reduce((s, d) => s + d, 0) / differences.length;
+  return { mean, max: Math.max(...differences), codes, points: points.length, env };
+}
+
+test('rough: the sphere at roughness 0.5 is lobe albedo × F_eff × the prefiltered environment', async () => {
+  const [name, film] = roughExport();
+  assert.equal(film.opaque, true, `${name}: the test needs an opaque film (R alone on the sphere)`);
+  const page = await ready();
+  await selectExport(page, name);
+  for (const [environment, r] of [['white', 0.5], ['white', 0.25], ['sky', 0.5], ['studio', 0.5]]) {
+    const res = await compareRoughSphere(page, name, film, r, environment);
+    console.log(`${name} sphere, roughness ${r}, ${environment} environment: ΔE00 mean ${res.mean.toFixed(3)}, `
+      + `max ${res.max.toFixed(3)}, max ${res.codes.toFixed(2)} of 255 over ${res.points} pixels`);
+    if (environment === 'white') {
+      // A white world stays white when prefiltered.
+      const off = Math.max(...res.env.flat().map((v) => Math.abs(v - 1)));
+      assert.ok(off <= 1e-3, `the prefiltered white environment is off by ${off}`);
+    }
+    assert.ok(res.mean <= 0.5 && res.max <= 2 && res.codes <= 2,
+      `${environment}, roughness ${r}: ΔE00 mean ${res.mean}, max ${res.max}, ${res.codes} of 255`);
+  }
+  assert.deepEqual(page.errors, []);
+  await page.close();
+});
+
+test('rough: at roughness 0 the page draws what it draws without the rough table', async () => {
+  const [name, film] = roughExport();
+  const dir = path.join(root, 'preview', 'exports', name);
+  const smooth = path.join(root, 'smooth-only');
+  fs.cpSync(dir, smooth, { recursive: true });
+  fs.writeFileSync(path.join(smooth, 'film.json'), JSON.stringify({ ...film, rough: null }));
+  const images = [];
+  for (const query of [`?export=exports/${name}/`, '?export=../smooth-only/']) {
+    const page = await ready(query);
+    await page.selectOption('#mode', 'object');
+    await setControl(page, 'roughness', 0.5);
+    await setControl(page, 'roughness', 0);
+    images.push(await pixels(page));
+    await page.close();
+  }
+  assert.equal(Buffer.compare(Buffer.from(images[0].data), Buffer.from(images[1].data)), 0);
+});
+
+test('rough: without the rough table the control is disabled and says why', async () => {
+  const page = await ready();
+  const [name] = roughExport();
+  const other = [...STACKS.keys()].find((n) => !readFilm(path.join('preview', 'exports', n)).rough);
+  assert.ok(other, 'every export has the rough table: the test needs one without');
+  await selectExport(page, name);
+  assert.equal(await page.$eval('#roughness', (e) => e.disabled), false);
+  await setControl(page, 'roughness', 0.5);
+  await selectExport(page, other);
+  assert.equal(await page.$eval('#roughness', (e) => e.disabled), true);
+  assert.equal(await page.$eval('#roughness', (e) => Number(e.value)), 0);
+  assert.equal(await page.$eval('option[value="chart-r-rough"]', (e) => e.disabled), true);
+  const note = await page.textContent('#roughness-note');
+  assert.match(note, /no rough table.*irid export STACK --rough/s);
+  assert.ok(await page.isVisible('#roughness-note'), 'the reason is not visible');
+  // Drawn at roughness 0 with the smooth film: the disabled control reads 0.
+  assert.equal(await page.evaluate(() => window.irid.preview.controls().roughness), 0);
+  const out = process.env.IRID_SCREENSHOT_ROUGH;
+  if (out) {
+    await page.screenshot({ path: out.replace(/\.png$/, '-no-table.png'), clip: { x: 0, y: 0, width: 1100, height: 560 }, timeout: 120000 });
+    await selectExport(page, name);
+    await setControl(page, 'roughness', 0.5);
+    await page.evaluate(() => window.irid.draw());
+    await page.screenshot({ path: out, clip: { x: 0, y: 0, width: 1100, height: 560 }, timeout: 120000 });
+  }
+  assert.deepEqual(page.errors, []);
+  await page.close();
+});
+
+/** The page's sky (web/preview.js, irid_environment with u_environment 0), restated: linear RGB towards unit d. */
+function sky(d) {
+  const sun = (() => { const v = [0.45, 0.55, 0.7]; const l = Math.hypot(...v); return v.map((x) => x / l); })();
+  const s = Math.max(d[0] * sun[0] + d[1] * sun[1] + d[2] * sun[2], 0);
+  const mix = (a, b, t) => a.map((x, k) => x + (b[k] - x) * t);
+  const smoothstep = (e0, e1, x) => { const t = Math.min(1, Math.max(0, (x - e0) / (e1 - e0))); return t * t * (3 - 2 * t); };
+  let c;
+  if (d[1] >= 0) {
+    c = mix([0.75, 0.85, 1.0], [0.15, 0.35, 0.85], d[1] ** 0.45);
+  } else {
+    const k = Math.max(-d[1], 0.02);
+    let checker = (((Math.floor((d[0] / k) * 2) + Math.floor((d[2] / k) * 2)) % 2) + 2) % 2;
+    checker = 0.5 + (checker - 0.5) * smoothstep(0, -0.12, d[1]);
+    c = mix([0.10, 0.09, 0.08], [0.22, 0.20, 0.17], checker).map((x) => x * (0.6 + 0.4 * smoothstep(0, -0.4, d[1])));
+  }
+  const glow = s ** 900 * 60 + s ** 16 * 0.25;
+  return c.map((x, k) => x + [1, 0.95, 0.85][k] * glow);
+}
+
+/**
+ * The prefiltered environment's definition evaluated densely: about R, with
+ * the normal and the view both R, the mean of env(l) weighted by n·l over
+ * h from D(h) cos θ_h (n × n stratified midpoints), no mip levels.
+ */
+function prefilterReference(env, R, roughness, n = 1024) {
+  const a2 = roughness ** 4;
+  const up = Math.abs(R[1]) < 0.999 ? [0, 1, 0] : [1, 0, 0];
+  const cross = (a, b) => [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]];
+  const norm = (a) => { const l = Math.hypot(...a); return a.map((x) => x / l); };
+  const tx = norm(cross(up, R));
+  const ty = cross(R, tx);
+  const sum = [0, 0, 0];
+  let weight = 0;
+  for (let i = 0; i < n; i++) {
+    const u = (i + 0.5) / n;
+    const cos2 = (1 - u) / (1 + (a2 - 1) * u);
+    const ch = Math.sqrt(cos2);
+    const sh = Math.sqrt(1 - cos2);
+    for (let j = 0; j < n; j++) {
+      const phi = (2 * Math.PI * (j + 0.5)) / n;
+      const h = [0, 1, 2].map((k) => tx[k] * sh * Math.cos(phi) + ty[k] * sh * Math.sin(phi) + R[k] * ch);
+      const nh = ch;
+      const l = [0, 1, 2].map((k) => 2 * nh * h[k] - R[k]);
+      const nl = 2 * nh * nh - 1;
+      if (nl <= 0) continue;
+      const L = env(l);
+      for (let k = 0; k < 3; k++) sum[k] += L[k] * nl;
+      weight += nl;
+    }
+  }
+  return sum.map((x) => x / weight);
+}
+
+test('rough: the prefiltered sky against a dense evaluation of its definition', async () => {
+  const [name] = roughExport();
+  const page = await ready();
+  await selectExport(page, name);
+  const norm = (a) => { const l = Math.hypot(...a); return a.map((x) => x / l); };
+  // Up, the sky at 30°, towards the sun, the horizon, the ground.
+  const directions = [[0, 1, 0], norm([0.8, 0.5, -0.3]), norm([0.45, 0.55, 0.7]), norm([-0.6, 0.05, 0.8]), norm([0.2, -0.8, 0.4])];
+  let worst = 0;
+  for (const r of [0.25, 0.5]) {
+    const shown = await page.evaluate(([rr, dirs]) => dirs.map((d) => window.irid.prefilteredAt('sky', rr, d)), [r, directions]);
+    directions.forEach((d, i) => {
+      const exact = prefilterReference(sky, d, r);
+      const rel = Math.max(...[0, 1, 2].map((k) => Math.abs(shown[i][k] - exact[k]) / exact[k]));
+      worst = Math.max(worst, rel);
+      console.log(`prefiltered sky, roughness ${r}, direction ${d.map((x) => x.toFixed(2))}: page ${shown[i].map((x) => x.toFixed(4))}, `
+        + `dense ${exact.map((x) => x.toFixed(4))}, largest relative difference ${(100 * rel).toFixed(2)} %`);
+    });
+  }
+  assert.ok(worst <= 0.05, `the prefiltered sky is off by ${(100 * worst).toFixed(2)} %`);
   await page.close();
 });
