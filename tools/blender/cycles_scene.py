@@ -330,9 +330,10 @@ class Irid:
             np.array([row["transmittance_rgb"] for row in rows]),
         )
 
-    def export(self, stack_path, out_dir, layer, thickness_range, white="e"):
-        """An export directory, made once per stack, layer, range and white."""
-        key = (str(stack_path), layer, tuple(thickness_range), white)
+    def export(self, stack_path, out_dir, layer, thickness_range, white="e", rough=False):
+        """An export directory, made once per stack, layer, range, white and
+        rough table (`--rough`) or not."""
+        key = (str(stack_path), layer, tuple(thickness_range), white, rough)
         made = getattr(self, "_exports", {})
         self._exports = made
         if key in made:
@@ -348,6 +349,7 @@ class Irid:
             layer,
             "--thickness",
             f"{thickness_range[0]:g}:{thickness_range[1]:g}",
+            *(["--rough"] if rough else []),
         )
         made[key] = out_dir
         return out_dir
