@@ -295,6 +295,16 @@ def test_addon(results, workdir):
                       "No mesh is selected" in str(done) and len(bpy.data.materials) == count,
                       f"(operator: {done}; materials {count} -> {len(bpy.data.materials)})")
         obj.select_set(True)
+        try:
+            done = bpy.ops.import_scene.irid_film(
+                filepath=str(directory / "film.json"), thickness_nm=500.0, roughness=0.3
+            )
+        except RuntimeError as e:
+            done = str(e)
+        results.check("add-on: a roughness above 0 with an export without the rough table is "
+                      "refused, naming --rough",
+                      "--rough" in str(done) and len(bpy.data.materials) == count,
+                      f"(operator: {done}; materials {count} -> {len(bpy.data.materials)})")
         done = bpy.ops.import_scene.irid_film(
             filepath=str(directory / "film.json"), thickness_nm=500.0
         )
