@@ -229,6 +229,66 @@ def write_synthetic_export(
     (directory / "film.json").write_text(json.dumps(film, indent=1))
 
 
+def write_synthetic_atlas(directory, charts, sides, thickness_range, opaque):
+    """A film.json version 3 export (an atlas of band and corner charts,
+    docs/gpu.md) for the mapping test. charts: dicts of a chart's params by
+    name (film.json charts[k].params: side, kind, a, floor and the band's or
+    corner's numbers) plus "size" (nodes along u, v); they are stacked in
+    one column, each inside a one-texel gutter. Chart k's node (i, j) holds
+    reflectance (i / (N_u - 1), j / (N_v - 1), (k + 1) / 16) and
+    transmittance (1 - the same), so a render names the chart and the point
+    in it. sides: {"front": [chart numbers], "back": [...] or None}."""
+    directory.mkdir(parents=True, exist_ok=True)
+    width = max(c["size"][0] for c in charts) + 2
+    height = sum(c["size"][1] + 2 for c in charts)
+    r = np.zeros((height, width, 4))
+    r[..., 3] = 1.0
+    entries, row = [], 0
+    for k, chart in enumerate(charts):
+        nu, nv = chart["size"]
+        cr, _ = _synthetic_chart(nu, nv, (k + 1) / 16)
+        r[row:row + nv + 2, : nu + 2] = cr
+        params = {key: value for key, value in chart.items() if key != "size"}
+        params.update({"x0": 1, "y0": row + 1, "width": nu, "height": nv})
+        entries.append({
+            "side": params["side"],
+            "kind": "corner" if params["kind"] == 1 else "band",
+            "rect": [1, row + 1, nu, nv],
+            "params": params,
+        })
+        row += nv + 2
+    t = 1.0 - r
+    t[..., 3] = 1.0
+    write_exr(directory / "reflectance.exr", r)
+    write_exr(directory / "transmittance.exr", t)
+    side = lambda k, numbers: None if numbers is None else {"index": k, "charts": numbers}  # noqa: E731
+    film = {
+        "format": "irid-film",
+        "version": 3,
+        "texture": {
+            "width": width,
+            "height": height,
+            "format": "rgba16f",
+            "files": {"reflectance": "reflectance.exr", "transmittance": "transmittance.exr"},
+            "png": None,
+        },
+        "domain": {"thickness_nm": list(thickness_range), "cos_theta": [0.0, 1.0]},
+        "charts": entries,
+        "sides": {"front": side(0, sides["front"]), "back": side(1, sides.get("back"))},
+        "white": "e",
+        "stack": {
+            "ambient": {"name": "n=1", "dispersion": {"constant": {"n": 1.0, "k": 0.0}}},
+            "layers": [],
+            "substrate": {"name": "n=1.5", "dispersion": {"constant": {"n": 1.5, "k": 0.0}}},
+        },
+        "layer": 1,
+        "sampling": "exact",
+        "opaque": opaque,
+        "rough": None,
+    }
+    (directory / "film.json").write_text(json.dumps(film, indent=1))
+
+
 def expected_x(fraction, thickness_power):
     """The export's thickness warp (docs/gpu.md), written out directly."""
     x = min(max(fraction, 0.0), 1.0)

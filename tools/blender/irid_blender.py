@@ -52,7 +52,10 @@ bl_info = {
 }
 
 FILM_FORMAT = "irid-film"
-FILM_VERSION = 2
+# Version 2: one chart per side in physical thickness (Chart); version 3: an
+# atlas of charts in optical thickness, several per side, chosen per lookup
+# (AtlasChart). Both are read.
+FILM_VERSIONS = (2, 3)
 # Wavelength at which a transmitting film's refraction index is taken: the
 # one irid grades the substrate's critical angle at (docs/lut-format.md).
 IOR_WAVELENGTH_NM = 550.0
@@ -114,6 +117,95 @@ class Chart(Mapping):
         super().__init__(params, where)
         self.rect = _rect([_number(params, key, f"{where}.params") for key in ("x0", "y0", "width", "height")],
                           where, atlas_size)
+
+
+class AtlasChart:
+    """One chart of a version 3 atlas (docs/gpu.md, "The mapping";
+    src/atlas/chart.rs): a band of cos θ in optical thickness
+    p = d · s(cos θ), s(c) = √max(1 − a (1 − c²), floor²), on a log (or
+    uniform) p axis and a cos θ axis warped about an anchor (log, square
+    root or uniform), or the polar corner of a free-standing film near zero
+    thickness at grazing incidence. Its numbers are the uniform array's f32
+    values, by name (film.json charts[k].params)."""
+
+    BAND = ("p0_nm", "p_lo_nm", "p_hi_nm", "cos_lo", "cos_hi", "anchor", "offset")
+    CORNER = ("scale_nm", "radius")
+
+    def __init__(self, chart, where, atlas_size):
+        params = _object(chart, "params", where)
+        number = lambda key: _number(params, key, f"{where}.params")  # noqa: E731
+        self.kind = chart.get("kind")
+        if self.kind not in ("band", "corner"):
+            raise ExportError(f"irid export {where}.kind: {self.kind!r}, expected 'band' or 'corner'")
+        if number("kind") != (0.0 if self.kind == "band" else 1.0):
+            raise ExportError(f"irid export {where}: params.kind disagrees with kind {self.kind!r}")
+        self.side = number("side")
+        if self.side not in (0.0, 1.0):
+            raise ExportError(f"irid export {where}.params.side = {self.side}, expected 0 or 1")
+        self.side = int(self.side)
+        self.a, self.floor = number("a"), number("floor")
+        if not (self.a >= 0.0 and 0.0 < self.floor <= 1.0):
+            raise ExportError(f"irid export {where}: optical a {self.a}, floor {self.floor}")
+        self.rect = _rect([number(key) for key in ("x0", "y0", "width", "height")], where, atlas_size)
+        for key in self.BAND if self.kind == "band" else self.CORNER:
+            setattr(self, key, number(key))
+        if self.kind == "band":
+            if not (self.p0_nm >= 0.0 and 0.0 <= self.p_lo_nm <= self.p_hi_nm
+                    and 0.0 <= self.cos_lo <= self.cos_hi <= 1.0
+                    and (self.anchor <= self.cos_lo or self.anchor >= self.cos_hi)):
+                raise ExportError(f"irid export {where}: band axes out of their ranges")
+        elif not (self.scale_nm > 0.0 and self.radius > 0.0):
+            raise ExportError(f"irid export {where}: corner scale {self.scale_nm}, radius {self.radius}")
+
+    def p_warp(self, p):
+        """The p axis's warp U(p): ln(1 + p / p₀), or p when p₀ is 0."""
+        return math.log1p(max(p, 0.0) / self.p0_nm) if self.p0_nm > 0.0 else p
+
+    def sign(self):
+        return 1.0 if self.cos_lo >= self.anchor else -1.0
+
+    def c_warp(self, c):
+        """The cos θ axis's warp W(c) = σ g(|c − anchor|)."""
+        t = abs(c - self.anchor)
+        if self.offset > 0.0:
+            g = math.log(t + self.offset)
+        elif self.offset == 0.0:
+            g = math.sqrt(t)
+        else:
+            g = t
+        return self.sign() * g
+
+    def xy(self, d, c):
+        """(x, y) in [0, 1]² of thickness d nm at cos θ c, in Python: what the
+        node graph computes (the reference of the tests)."""
+        s = lambda c: math.sqrt(max(1.0 - self.a * (1.0 - c * c), self.floor ** 2))  # noqa: E731
+        clamp = lambda v: min(max(v, 0.0), 1.0)  # noqa: E731
+        if self.kind == "corner":
+            pp = d * s(c) / self.scale_nm
+            return clamp(math.atan2(pp, c) / (math.pi / 2)), clamp(math.hypot(pp, c) / self.radius)
+        c = min(max(c, self.cos_lo), self.cos_hi)
+        u0, u1 = self.p_warp(self.p_lo_nm), self.p_warp(self.p_hi_nm)
+        x = clamp((self.p_warp(d * s(c)) - u0) / (u1 - u0)) if u1 > u0 else 0.0
+        v0, v1 = self.c_warp(self.cos_lo), self.c_warp(self.cos_hi)
+        y = clamp((self.c_warp(c) - v0) / (v1 - v0)) if v1 > v0 else 0.0
+        return x, y
+
+    def serves(self, d, c):
+        """The choice rule's test (in Python): a corner serves inside its
+        radius, a band up to its cos θ maximum."""
+        if self.kind == "corner":
+            s = math.sqrt(max(1.0 - self.a * (1.0 - c * c), self.floor ** 2))
+            return math.hypot(d * s / self.scale_nm, c) < self.radius
+        return c <= self.cos_hi
+
+
+def atlas_chart_for(charts, d, c):
+    """The chart of a side's charts that serves (d, c): the first that
+    serves it, else the last band (src/atlas/mod.rs Atlas::chart_for)."""
+    for chart in charts:
+        if chart.serves(d, c):
+            return chart
+    return [chart for chart in charts if chart.kind == "band"][-1]
 
 
 def _rect(rect, where, atlas_size):
@@ -213,10 +305,12 @@ class Export:
             raise ExportError(
                 f"irid export {where}: format {film.get('format')!r}, expected {FILM_FORMAT!r}"
             )
-        if film.get("version") != FILM_VERSION:
+        self.version = film.get("version")
+        if self.version not in FILM_VERSIONS or isinstance(self.version, bool):
             raise ExportError(
                 f"irid export {where}: film.json version {film.get('version')!r}; this module "
-                f"reads version {FILM_VERSION}: export the film again with the irid it came with"
+                f"reads versions {' and '.join(map(str, FILM_VERSIONS))}: export the film again "
+                "with the irid it came with"
             )
         texture = _object(film, "texture", where)
         self.size = (texture.get("width"), texture.get("height"))
@@ -225,17 +319,36 @@ class Export:
         charts = film.get("charts")
         if not isinstance(charts, list) or not charts:
             raise ExportError(f"irid export {where}: 'charts' is missing or empty")
+        kind = Chart if self.version == 2 else AtlasChart
         self.charts = [
-            Chart(c if isinstance(c, dict) else {}, f"{where}: charts[{k}]", self.size)
+            kind(c if isinstance(c, dict) else {}, f"{where}: charts[{k}]", self.size)
             for k, c in enumerate(charts)
         ]
         sides = _object(film, "sides", where)
-        self.front = self.charts[self._chart_of(sides, "front", where)]
-        self.back = None
-        if sides.get("back") is not None:
-            self.back = self.charts[self._chart_of(sides, "back", where)]
-        self.thickness_min_nm = self.front.thickness_min_nm
-        self.thickness_max_nm = self.front.thickness_max_nm
+        if self.version == 2:
+            # One chart per side: front and back are Chart objects.
+            self.front = self.charts[self._chart_of(sides, "front", where)]
+            self.back = None
+            if sides.get("back") is not None:
+                self.back = self.charts[self._chart_of(sides, "back", where)]
+            self.thickness_min_nm = self.front.thickness_min_nm
+            self.thickness_max_nm = self.front.thickness_max_nm
+        else:
+            # Several charts per side, in the order the choice rule reads
+            # them: front and back are tuples of AtlasChart (the same tuple
+            # when both sides read the same charts).
+            self.front = self._charts_of(sides, "front", where)
+            self.back = None
+            if sides.get("back") is not None:
+                self.back = self._charts_of(sides, "back", where)
+                if self.back == self.front:
+                    self.back = self.front
+            domain = _object(film, "domain", where).get("thickness_nm")
+            if (not isinstance(domain, list) or len(domain) != 2
+                    or not all(isinstance(v, (int, float)) and math.isfinite(v) for v in domain)
+                    or not 0.0 <= domain[0] <= domain[1]):
+                raise ExportError(f"irid export {where}: domain.thickness_nm is not a range")
+            self.thickness_min_nm, self.thickness_max_nm = map(float, domain)
         opaque = film.get("opaque")
         if not isinstance(opaque, bool):
             raise ExportError(f"irid export {where}: 'opaque' must be true or false")
@@ -270,6 +383,26 @@ class Export:
                 )
             self.rough = Rough(rough, self.directory, where)
         self.label = os.path.basename(self.directory.rstrip(os.sep)) or "film"
+
+    def _charts_of(self, sides, side, where):
+        """Version 3: the side's charts, in the atlas's order (the order the
+        choice rule reads them in), each serving that side."""
+        entry = sides.get(side)
+        numbers = entry.get("charts") if isinstance(entry, dict) else None
+        index = 0 if side == "front" else 1
+        if (not isinstance(numbers, list) or not numbers
+                or not all(isinstance(k, int) and not isinstance(k, bool)
+                           and 0 <= k < len(self.charts) for k in numbers)):
+            raise ExportError(f"irid export {where}: sides.{side}.charts is not a list of the charts")
+        charts = tuple(self.charts[k] for k in sorted(set(numbers)))
+        served = {chart.side for chart in charts}
+        if len(served) != 1:
+            raise ExportError(f"irid export {where}: sides.{side}.charts serve sides {sorted(served)}")
+        if served != {index} and not (side == "back" and served == {0}):
+            raise ExportError(f"irid export {where}: sides.{side}.charts serve side {served.pop()}")
+        if not any(chart.kind == "band" for chart in charts):
+            raise ExportError(f"irid export {where}: sides.{side} has no band chart")
+        return charts
 
     def _chart_of(self, sides, side, where):
         entry = sides.get(side)
@@ -567,11 +700,18 @@ def _build_group(group, export, images, ior):
     build.link(geometry.outputs["Incoming"], dot.inputs[0])
     build.link(normal, dot.inputs[1])
     cos = build.math("ABSOLUTE", 2.5, 4, dot.outputs["Value"])
-    uv = _chart_uv(build, export.front, export.size, x, cos, 0)
+    if export.version == 2:
+        side_uv = lambda side, row: _chart_uv(build, side, export.size, x, cos, row)  # noqa: E731
+    else:
+        span = export.thickness_max_nm - export.thickness_min_nm
+        d = build.math("MULTIPLY_ADD", 2, -1, x, span, export.thickness_min_nm, label="thickness nm")
+        c = build.math("MINIMUM", 3, 4, cos, 1.0, label="cos θ ≤ 1")
+        side_uv = lambda side, row: _atlas_uv(build, side, export.size, d, c, row)  # noqa: E731
+    uv = side_uv(export.front, 0)
     if export.back is not None and export.back is not export.front:
-        # A back face is seen from the substrate: the back side's chart.
+        # A back face is seen from the substrate: the back side's chart(s).
         # uv = front + backfacing · (back − front): one lookup per image.
-        back = _chart_uv(build, export.back, export.size, x, cos, 6)
+        back = side_uv(export.back, 6 if export.version == 2 else 6 * len(export.front) + 2)
         uv = _blend(build, uv, back, geometry.outputs["Backfacing"], 7.5, 3, "uv of the side")
 
     colours = {}
@@ -828,6 +968,104 @@ def _chart_uv(build, chart, atlas_size, x, cos, row):
     x, y = _mapping_xy(build, chart, x, cos, row)
     x0, y0, w, h = chart.rect
     return _uv(build, x, y, (x0, y0), (w, h), atlas_size, row)
+
+
+def _atlas_uv(build, charts, atlas_size, d, c, row):
+    """Version 3: the image coordinates of thickness d (nm, inside the
+    range) at cos θ c (in [0, 1]) in the chart of `charts` (one side's, in
+    the choice rule's order) that serves them. Every chart's (u, v) is
+    computed, then chosen in closed form as the shader does: the first
+    chart that serves (d, c), else the side's last band; one image lookup
+    follows."""
+    found = []
+    for k, chart in enumerate(charts):
+        at = row + 6 * k
+        if chart.kind == "corner":
+            x, y, serves = _corner_xy(build, chart, d, c, at)
+        else:
+            x, y = _band_xy(build, chart, d, c, at)
+            serves = build.math("SUBTRACT", 4, at + 5, 1.0, build.math(
+                "GREATER_THAN", 3.5, at + 5, c, chart.cos_hi), label=f"c ≤ {chart.cos_hi:.4g}")
+        found.append((chart, serves, _uv(build, x, y, chart.rect[:2], chart.rect[2:], atlas_size, at)))
+    last = max(k for k, (chart, _, _) in enumerate(found) if chart.kind == "band")
+    uv = found[last][2]
+    # From the last chart back to the first, each that serves replaces what
+    # follows it: the first that serves wins.
+    for k in reversed(range(last)):
+        uv = _blend(build, uv, found[k][2], found[k][1], 8, row + 6 * k + 3, f"chart {k} serves")
+    return uv
+
+
+def _optical(build, chart, d, c, column, row):
+    """p = d · s(c), s(c) = √max(1 − a (1 − c²), floor²): the optical
+    thickness along which a band's fringes run."""
+    if chart.a == 0.0:
+        return d  # s = 1 (floor ≤ 1)
+    t = build.math("MULTIPLY_ADD", column, row, build.math("MULTIPLY", column - 0.5, row, c, c),
+                   chart.a, 1.0 - chart.a, label="1 − a (1 − c²)")
+    s = build.math("SQRT", column + 1, row, build.math("MAXIMUM", column + 0.5, row, t,
+                                                      chart.floor ** 2), label="s(c)")
+    return build.math("MULTIPLY", column + 1.5, row, d, s, label="p = d s(c)")
+
+
+def _log_e(build, value, column, row, label=None):
+    """ln(value) (Blender's logarithm: 0 for value ≤ 0)."""
+    return build.math("LOGARITHM", column, row, value, math.e, label=label)
+
+
+def _band_xy(build, chart, d, c, row):
+    """A band's (x, y): p on its log (or uniform) axis, cos θ (clamped to
+    the band) on its warped axis, both clamped to [0, 1]."""
+    clamp = build.node("ShaderNodeClamp", 3, row + 2, label="clamp to the band")
+    build.link(c, clamp.inputs["Value"])
+    clamp.inputs["Min"].default_value = chart.cos_lo
+    clamp.inputs["Max"].default_value = chart.cos_hi
+    ck = clamp.outputs["Result"]
+    p = _optical(build, chart, d, ck, 4, row)
+    u0, u1 = chart.p_warp(chart.p_lo_nm), chart.p_warp(chart.p_hi_nm)
+    if u1 > u0:
+        w = p
+        if chart.p0_nm > 0.0:
+            w = _log_e(build, build.math("MULTIPLY_ADD", 5.5, row, p, 1.0 / chart.p0_nm, 1.0), 6, row,
+                       label="ln(1 + p / p0)")
+        x = build.math("MULTIPLY_ADD", 6.5, row, w, 1.0 / (u1 - u0), -u0 / (u1 - u0), label="x")
+        x.node.use_clamp = True
+    else:
+        x = build.math("MULTIPLY", 6.5, row, p, 0.0, label="x = 0 (one thickness)")
+    v0, v1 = chart.c_warp(chart.cos_lo), chart.c_warp(chart.cos_hi)
+    if v1 > v0:
+        sign = chart.sign()
+        t = build.math("MULTIPLY_ADD", 4, row + 1, ck, sign, -sign * chart.anchor, label="|c − anchor|")
+        t = build.math("MAXIMUM", 4.5, row + 1, t, 0.0)
+        if chart.offset > 0.0:
+            g = _log_e(build, build.math("ADD", 5, row + 1, t, chart.offset), 5.5, row + 1)
+        elif chart.offset == 0.0:
+            g = build.math("SQRT", 5.5, row + 1, t)
+        else:
+            g = t
+        # y = (σ g − W(lo)) / (W(hi) − W(lo))
+        y = build.math("MULTIPLY_ADD", 6.5, row + 1, g, sign / (v1 - v0), -v0 / (v1 - v0), label="y")
+        y.node.use_clamp = True
+    else:
+        y = build.math("MULTIPLY", 6.5, row + 1, ck, 0.0, label="y = 0 (one angle)")
+    return x, y
+
+
+def _corner_xy(build, chart, d, c, row):
+    """The corner's polar (x, y) about zero thickness at grazing incidence,
+    P = p / scale, ρ = √(P² + c²), φ = atan2(P, c): x = φ / (π/2), y = ρ /
+    radius; and whether it serves (ρ < radius)."""
+    pp = build.math("MULTIPLY", 5.5, row, _optical(build, chart, d, c, 4, row), 1.0 / chart.scale_nm,
+                    label="P")
+    rho = build.math("SQRT", 6.5, row + 1, build.math(
+        "MULTIPLY_ADD", 6, row + 1, c, c, build.math("MULTIPLY", 5.5, row + 1, pp, pp)), label="ρ")
+    phi = build.math("ARCTAN2", 6, row, pp, c, label="φ")
+    x = build.math("MULTIPLY", 6.5, row, phi, 2.0 / math.pi, label="x")
+    x.node.use_clamp = True
+    y = build.math("MULTIPLY", 7, row + 1, rho, 1.0 / chart.radius, label="y")
+    y.node.use_clamp = True
+    serves = build.math("LESS_THAN", 7, row + 2, rho, chart.radius, label="ρ < radius")
+    return x, y, serves
 
 
 def _slice_uv(build, rough, xy, slice_, row):

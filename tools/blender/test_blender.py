@@ -78,6 +78,7 @@ from colour_exr import (  # noqa: E402
     expected_x,
     expected_y,
     write_exr,
+    write_synthetic_atlas,
     write_synthetic_export,
 )
 from cycles_scene import (  # noqa: E402
@@ -342,6 +343,54 @@ def test_back_side_mapping(results, bench, workdir):
             worst = max(worst, np.abs(got - np.array([expected_x(0.37, 1), y, blue])).max())
     results.check("back faces read the back chart, front faces the front one", worst < 2e-3,
                   f"(largest |rendered - closed form| {worst:.1e})")
+
+
+# A synthetic version 3 atlas: on the front, a polar corner, a band near
+# grazing incidence (log cos θ axis about 0, log p axis) and a band above it
+# (square-root cos θ axis about its own minimum, uniform p); on the back,
+# one band of another optical factor with a uniform cos θ axis.
+A_SOAP = (1.0 / 1.33) ** 2
+SYNTHETIC_ATLAS = [
+    {"side": 0, "kind": 1, "a": A_SOAP, "floor": 0.2, "scale_nm": 40.0, "radius": 0.25,
+     "size": (9, 7)},
+    {"side": 0, "kind": 0, "a": A_SOAP, "floor": 0.2, "p0_nm": 150.0, "p_lo_nm": 0.0,
+     "p_hi_nm": 600.0, "cos_lo": 0.0, "cos_hi": 0.35, "anchor": 0.0, "offset": 0.02,
+     "size": (11, 8)},
+    {"side": 0, "kind": 0, "a": A_SOAP, "floor": 0.2, "p0_nm": 0.0, "p_lo_nm": 100.0,
+     "p_hi_nm": 600.0, "cos_lo": 0.35, "cos_hi": 1.0, "anchor": 0.35, "offset": 0.0,
+     "size": (10, 9)},
+    {"side": 1, "kind": 0, "a": 0.5, "floor": 0.3, "p0_nm": 80.0, "p_lo_nm": 0.0,
+     "p_hi_nm": 600.0, "cos_lo": 0.0, "cos_hi": 1.0, "anchor": 0.0, "offset": -1.0,
+     "size": (8, 6)},
+]
+
+
+def test_atlas_mapping(results, bench, workdir):
+    """Version 3: a synthetic atlas whose texels hold their own chart
+    coordinates and chart number, rendered through the node group, gives
+    back the chart the closed-form choice picks and its (x, y), at
+    thicknesses and angles that reach every chart, front and back faces."""
+    directory = workdir / "synthetic-atlas"
+    write_synthetic_atlas(directory, SYNTHETIC_ATLAS, {"front": [0, 1, 2], "back": [3]},
+                          (0.0, 600.0), False)
+    export = irid_blender.Export(directory)
+    group = irid_blender.make_node_group(export, name="synthetic atlas")
+    worst, picked = 0.0, set()
+    for fraction in (0.0, 0.01, 0.05, 0.3, 0.8, 1.0):
+        material = emission_material(f"R atlas {fraction}", group, "Reflectance", fraction)
+        d = 600.0 * fraction
+        for angle in (0.0, 30.0, 60.0, 75.0, 82.0, 87.0, 89.5):
+            c = math.cos(math.radians(angle))
+            for below, charts in ((False, export.front), (True, export.back)):
+                chart = irid_blender.atlas_chart_for(charts, d, c)
+                k = export.charts.index(chart)
+                picked.add(k)
+                x, y = chart.xy(d, c)
+                got = bench.render(material, angle, below=below)
+                worst = max(worst, np.abs(got - np.array([x, y, (k + 1) / 16])).max())
+    results.check("version 3 atlas: the chart chosen in closed form and its (x, y), both sides",
+                  worst < 2e-3 and picked == {0, 1, 2, 3},
+                  f"(largest |rendered - closed form| {worst:.1e}; charts read {sorted(picked)})")
 
 
 def test_inputs(results, bench, workdir):
@@ -791,6 +840,7 @@ def main():
         test_back_side_mapping(results, bench, workdir)
         test_inputs(results, bench, workdir)
         test_rough_mapping(results, bench, workdir)
+        test_atlas_mapping(results, bench, workdir)
         test_rough_refused(results, workdir)
         test_white(results, irid, workdir)
         test_docs_snippets(results)
