@@ -52,7 +52,7 @@ REPO = HERE.parent.parent
 sys.path.insert(0, str(HERE))
 from colour_exr import delta_e2000_rgb  # noqa: E402
 import irid_blender  # noqa: E402
-from cycles_scene import Bench, Irid, stack_with_thickness  # noqa: E402
+from cycles_scene import Bench, Irid, render_rough_picture, stack_with_thickness  # noqa: E402
 
 STACK = "tests/blender/film-on-glass.toml"  # 300 nm, n = 1.38, on n = 1.5
 SUBSTRATE_IOR = 1.5
@@ -246,6 +246,7 @@ def main():
     parser.add_argument("--resolution", type=int, default=RESOLUTION, help="pixels a side")
     parser.add_argument("--skip-principled", action="store_true",
                         help="only the irid material's check")
+    parser.add_argument("--image", help="render docs/blender.md's rough spheres to this PNG")
     args = parser.parse_args()
 
     started = time.monotonic()
@@ -267,6 +268,10 @@ def main():
             print(f"{cases} cases ({len(ROUGHNESS)} roughnesses x {len(ANGLES_DEG)} angles) of "
                   "Cycles' Principled thin film")
         rows = material_check(bench, irid, workdir, args.samples, check)
+        if args.image:
+            copper = next(c for c in MATERIAL_CASES if c["name"] == "film on copper")
+            render_rough_picture(workdir / "export-film-on-copper", copper["thickness_nm"],
+                                 Path(args.image))
     print("the material's F_eff against irid color --roughness (dE00 mean / max), and the smooth "
           "colour at the view angle (mean / max):")
     for case, mean, worst, view_mean, view_max in rows:
