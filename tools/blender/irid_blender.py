@@ -2,12 +2,14 @@
 
 `irid export --white e` writes a directory with reflectance.exr,
 transmittance.exr and film.json: an atlas of the film's exact reflected and
-transmitted colour over grids of (thickness, cos θ), one chart for light
-arriving from the ambient and one for light arriving from a lossless
-substrate, and the closed-form mapping from (thickness, cos θ) to texture
-coordinates (docs/gpu.md). This module turns such a directory into a shader
-node group that evaluates the same mapping with math nodes (on a back face,
-the substrate side's chart), samples both tables bilinearly, and shades with
+transmitted colour in charts over (thickness, cos θ), for light arriving
+from the ambient and for light arriving from a lossless substrate, and the
+closed-form mapping from (thickness, cos θ) to texture coordinates
+(docs/gpu.md; film.json version 3: several charts per side in optical
+thickness, chosen per lookup; version 2: one chart per side). This module
+turns such a directory into a shader node group that evaluates the same
+mapping and choice with math nodes (on a back face, the substrate side's
+charts), samples both tables bilinearly, and shades with
 a GGX Glossy BSDF coloured by the film's reflectance (no Fresnel of its own:
 the table already holds it) plus, when light leaves through the substrate, a
 Refraction BSDF coloured by its transmittance (into a metal the transmitted
