@@ -11,7 +11,7 @@ struct IridFilm {
 };
 
 struct IridParams {
-    float4 v[25];
+    float4 v[66];
 };
 
 Texture2D<float4> irid_reflectance : register(t0);
@@ -19,56 +19,163 @@ Texture2D<float4> irid_transmittance : register(t1);
 SamplerState irid_sampler : register(s0);
 cbuffer irid_params : register(b0) { IridParams irid_params; }
 
-int naga_f2i32(float value) {
-    return int(clamp(value, -2147483600.0, 2147483500.0));
+float irid_film_optical(float4 q1_, float c)
+{
+    return sqrt(max((1.0 - (q1_.z * (1.0 - (c * c)))), (q1_.w * q1_.w)));
 }
 
-int irid_film_chart(float thickness_nm, float cos_theta, int side)
+float irid_film_warp_p(float p, float p0_)
 {
-    float4 header = irid_params.v[0];
-    if ((side == int(0))) {
-        return naga_f2i32(header.z);
+    if ((p0_ > 0.0)) {
+        return log((1.0 + (max(p, 0.0) / p0_)));
     }
-    return naga_f2i32(header.w);
+    return p;
 }
 
-float2 irid_film_uv(int chart, float thickness_nm_1, float cos_theta_1)
+float irid_film_warp_c(float c_1, float anchor, float offset, float sign_)
 {
-    float x = 0.0;
-    float y = 0.0;
+    float g = (float)0;
 
-    int k = asint(asuint(int(1)) + asuint(asint(asuint(int(3)) * asuint(chart))));
-    float4 domain = irid_params.v[k];
-    float4 warp = irid_params.v[asint(asuint(k) + asuint(int(1)))];
-    float4 rect = irid_params.v[asint(asuint(k) + asuint(int(2)))];
-    float t_span = (domain.y - domain.x);
-    if ((t_span > 0.0)) {
-        x = clamp(((thickness_nm_1 - domain.x) / t_span), 0.0, 1.0);
+    float t = abs((c_1 - anchor));
+    g = t;
+    if ((offset > 0.0)) {
+        g = log((t + offset));
+    } else {
+        if ((offset == 0.0)) {
+            g = sqrt(t);
+        }
     }
-    if ((warp.z > 1.5)) {
-        float _e39 = x;
-        x = sqrt(_e39);
-    }
-    float c = clamp(cos_theta_1, domain.z, domain.w);
-    float cos_crit = warp.x;
-    float y_crit = warp.y;
-    if ((cos_crit < 0.0)) {
-        float c_span = (domain.w - domain.z);
-        if ((c_span > 0.0)) {
-            y = ((c - domain.z) / c_span);
+    float _e14 = g;
+    return (sign_ * _e14);
+}
+
+float2 irid_film_chart_texel(int k, float d, float c_2)
+{
+    float2 xy = float2(0.0, 0.0);
+    float sign_1 = -1.0;
+    float phi = 0.0;
+
+    int at_2 = asint(asuint(int(2)) + asuint(asint(asuint(int(4)) * asuint(k))));
+    float4 rect = irid_params.v[at_2];
+    float4 q1_1 = irid_params.v[asint(asuint(at_2) + asuint(int(1)))];
+    float4 q2_ = irid_params.v[asint(asuint(at_2) + asuint(int(2)))];
+    float4 q3_ = irid_params.v[asint(asuint(at_2) + asuint(int(3)))];
+    if ((q1_1.y < 0.5)) {
+        float cc = min(max(c_2, q3_.x), q3_.y);
+        const float _e40 = irid_film_optical(q1_1, cc);
+        float p_1 = (d * _e40);
+        const float _e44 = irid_film_warp_p(q2_.y, q2_.x);
+        const float _e47 = irid_film_warp_p(q2_.z, q2_.x);
+        if ((_e47 > _e44)) {
+            const float _e51 = irid_film_warp_p(p_1, q2_.x);
+            xy.x = clamp(((_e51 - _e44) / (_e47 - _e44)), 0.0, 1.0);
+        }
+        if ((q3_.x >= q3_.z)) {
+            sign_1 = 1.0;
+        }
+        float _e67 = sign_1;
+        const float _e68 = irid_film_warp_c(q3_.x, q3_.z, q3_.w, _e67);
+        float _e72 = sign_1;
+        const float _e73 = irid_film_warp_c(q3_.y, q3_.z, q3_.w, _e72);
+        if ((_e73 > _e68)) {
+            float _e78 = sign_1;
+            const float _e79 = irid_film_warp_c(cc, q3_.z, q3_.w, _e78);
+            xy.y = clamp(((_e79 - _e68) / (_e73 - _e68)), 0.0, 1.0);
         }
     } else {
-        if ((c >= cos_crit)) {
-            y = (y_crit + ((1.0 - y_crit) * sqrt(((c - cos_crit) / (domain.w - cos_crit)))));
+        const float _e86 = irid_film_optical(q1_1, c_2);
+        float pp = ((d * _e86) / q2_.x);
+        float rho = sqrt(((pp * pp) + (c_2 * c_2)));
+        if ((rho > 0.0)) {
+            phi = atan2(pp, c_2);
+        }
+        float _e99 = phi;
+        xy = float2(clamp((_e99 / 1.5707964), 0.0, 1.0), clamp((rho / q2_.y), 0.0, 1.0));
+    }
+    float2 _e115 = xy;
+    return ((rect.xy + (0.5).xx) + (_e115 * (rect.zw - (1.0).xx)));
+}
+
+float2 irid_film_texel(float thickness_nm, float cos_theta, int side)
+{
+    float s = 0.0;
+    int chosen = int(-1);
+    int last = int(-1);
+    int k_1 = int(0);
+    bool local = (bool)0;
+
+    float4 header = irid_params.v[0];
+    float4 range = irid_params.v[1];
+    if ((side != int(0))) {
+        s = header.w;
+    }
+    float d_1 = min(max(thickness_nm, range.x), range.y);
+    float c_3 = clamp(cos_theta, 0.0, 1.0);
+    uint2 loop_bound = uint2(4294967295u, 4294967295u);
+    bool loop_init = true;
+    while(true) {
+        if (all(loop_bound == uint2(0u, 0u))) { break; }
+        loop_bound -= uint2(loop_bound.y == 0u, 1u);
+        if (!loop_init) {
+            int _e89 = k_1;
+            k_1 = asint(asuint(_e89) + asuint(int(1)));
+        }
+        loop_init = false;
+        int _e29 = k_1;
+        if ((_e29 < int(16))) {
         } else {
-            y = (y_crit - (y_crit * sqrt(((cos_crit - c) / (cos_crit - domain.z)))));
+            break;
+        }
+        {
+            int _e32 = k_1;
+            if (!((float(_e32) >= header.z))) {
+                int _e39 = chosen;
+                local = (_e39 >= int(0));
+            } else {
+                local = true;
+            }
+            bool _e43 = local;
+            if (_e43) {
+                break;
+            }
+            int _e44 = k_1;
+            int at_3 = asint(asuint(int(2)) + asuint(asint(asuint(int(4)) * asuint(_e44))));
+            float4 q1_2 = irid_params.v[asint(asuint(at_3) + asuint(int(1)))];
+            float _e56 = s;
+            if ((q1_2.x != _e56)) {
+                continue;
+            }
+            if ((q1_2.y > 0.5)) {
+                float4 q2_1 = irid_params.v[asint(asuint(at_3) + asuint(int(2)))];
+                const float _e67 = irid_film_optical(q1_2, c_3);
+                float pp_1 = ((d_1 * _e67) / q2_1.x);
+                if ((sqrt(((pp_1 * pp_1) + (c_3 * c_3))) < q2_1.y)) {
+                    int _e77 = k_1;
+                    chosen = _e77;
+                }
+                continue;
+            }
+            int _e78 = k_1;
+            last = _e78;
+            float _e85 = irid_params.v[asint(asuint(at_3) + asuint(int(3)))].y;
+            if ((c_3 <= _e85)) {
+                int _e87 = k_1;
+                chosen = _e87;
+            }
         }
     }
-    float _e79 = x;
-    float _e80 = y;
-    float2 texel = ((rect.xy + (0.5).xx) + (float2(_e79, _e80) * (rect.zw - (1.0).xx)));
-    float4 _e91 = irid_params.v[0];
-    return (texel / _e91.xy);
+    int _e91 = chosen;
+    if ((_e91 < int(0))) {
+        int _e94 = last;
+        chosen = _e94;
+    }
+    int _e95 = chosen;
+    if ((_e95 < int(0))) {
+        return float2(0.5, 0.5);
+    }
+    int _e101 = chosen;
+    const float2 _e102 = irid_film_chart_texel(_e101, d_1, c_3);
+    return _e102;
 }
 
 IridFilm ConstructIridFilm(float3 arg0, float3 arg1) {
@@ -78,12 +185,13 @@ IridFilm ConstructIridFilm(float3 arg0, float3 arg1) {
     return ret;
 }
 
-IridFilm irid_film(float thickness_nm_2, float cos_theta_2, int side_1)
+IridFilm irid_film(float thickness_nm_1, float cos_theta_1, int side_1)
 {
-    const int _e3 = irid_film_chart(thickness_nm_2, cos_theta_2, side_1);
-    const float2 _e4 = irid_film_uv(_e3, thickness_nm_2, cos_theta_2);
-    float4 r = irid_reflectance.SampleLevel(irid_sampler, _e4, 0.0);
-    float4 t = irid_transmittance.SampleLevel(irid_sampler, _e4, 0.0);
-    const IridFilm iridfilm = ConstructIridFilm(r.xyz, t.xyz);
+    const float2 _e3 = irid_film_texel(thickness_nm_1, cos_theta_1, side_1);
+    float4 _e7 = irid_params.v[0];
+    float2 uv = (_e3 / _e7.xy);
+    float4 r = irid_reflectance.SampleLevel(irid_sampler, uv, 0.0);
+    float4 t_1 = irid_transmittance.SampleLevel(irid_sampler, uv, 0.0);
+    const IridFilm iridfilm = ConstructIridFilm(r.xyz, t_1.xyz);
     return iridfilm;
 }

@@ -38,13 +38,11 @@ fn main() {
     let e = export(&spec, &|_| {}).unwrap();
     let bytes = 2 * e.atlas.width * e.atlas.height * 8;
     let front = e.side(irid::export::Side::Front).unwrap();
-    let chart = &e.atlas.charts[front.chart].mapping;
     println!(
-        "export: atlas {}×{} texels (front chart {}×{}), two RGBA16F textures = {} KiB, front max error {:.2e}",
+        "export: atlas {}×{} texels ({} charts), two RGBA16F textures = {} KiB, front max error {:.2e}",
         e.atlas.width,
         e.atlas.height,
-        chart.size_u,
-        chart.size_v,
+        e.atlas.charts.len(),
         bytes / 1024,
         front.error.max_all()
     );

@@ -17,8 +17,13 @@ use naga::back::{glsl, hlsl};
 
 /// What differs between the shader libraries the generator handles.
 pub struct Library {
-    /// The WGSL file's stem: `irid_film`.
+    /// The WGSL file's stem: `irid_film`; also the prefix of its mapping's
+    /// functions.
     pub stem: &'static str,
+    /// The uniform array its mapping reads (`irid_params.v`).
+    uniform: &'static str,
+    /// The vec4 of that array the atlas header starts at.
+    atlas_base: usize,
     /// The entry point's body, from `at: vec2<f32>` to a `vec4<f32>`.
     entry_body: &'static str,
     /// naga's GLSL names of the textures and the uniform block, and theirs.
@@ -38,6 +43,8 @@ pub struct Library {
 /// `irid_film` (shaders/irid_film.wgsl).
 pub const FILM: Library = Library {
     stem: "irid_film",
+    uniform: "irid_params.v",
+    atlas_base: 0,
     entry_body: "let film = irid_film(at.x, at.y, select(0, 1, at.x < 0.0));\n    \
                  return vec4<f32>(film.reflectance + film.transmittance, 1.0);",
     glsl_names: &[
@@ -65,6 +72,8 @@ pub const FILM: Library = Library {
 /// irid_film's, so a shader can hold both.
 pub const ROUGH: Library = Library {
     stem: "irid_film_rough",
+    uniform: "irid_rough_params.v",
+    atlas_base: 2,
     entry_body: "return vec4<f32>(irid_film_rough(at.x, at.y, at.x - at.y), 1.0);",
     glsl_names: &[
         ("_group_0_binding_4_fs", "irid_rough"),
@@ -343,4 +352,166 @@ fn tidy(text: String) -> String {
         let _ = writeln!(out, "{}", line.trim_end());
     }
     out.trim_end().to_string() + "\n"
+}
+
+/// The atlas mapping both libraries share, in WGSL: which chart serves a
+/// lookup (chosen in closed form) and where in it the lookup lands, in
+/// texels. `{P}` is the library's prefix, `{U}` its uniform array and `{B}`
+/// the vec4 its atlas header starts at (docs/gpu.md "Uniform array").
+/// Operation for operation `irid::atlas::locate_f32`.
+const ATLAS_MAPPING: &str = r#"// The optical thickness factor s(c) = sqrt(max(1 - a (1 - c^2), floor^2))
+// of a chart whose (side, kind, a, floor) is q1.
+fn {P}_optical(q1: vec4<f32>, c: f32) -> f32 {
+    return sqrt(max(1.0 - q1.z * (1.0 - c * c), q1.w * q1.w));
+}
+
+// A band's thickness warp: ln(1 + p / p0), or p itself when p0 is 0.
+fn {P}_warp_p(p: f32, p0: f32) -> f32 {
+    if p0 > 0.0 {
+        return log(1.0 + max(p, 0.0) / p0);
+    }
+    return p;
+}
+
+// A band's cos θ warp: sign · g(|c - anchor|), g = ln(x + offset) for
+// offset > 0, sqrt(x) for offset 0, x for offset < 0.
+fn {P}_warp_c(c: f32, anchor: f32, offset: f32, sign: f32) -> f32 {
+    let t = abs(c - anchor);
+    var g = t;
+    if offset > 0.0 {
+        g = log(t + offset);
+    } else if offset == 0.0 {
+        g = sqrt(t);
+    }
+    return sign * g;
+}
+
+// The texel position (in texels) of thickness d (nm) and cos θ c in chart
+// k: node i of its rectangle sits at the centre of texel i, and positions
+// clamp to its first and last nodes, so the filter reads that chart only.
+fn {P}_chart_texel(k: i32, d: f32, c: f32) -> vec2<f32> {
+    let at = {B} + 2 + 4 * k;
+    let rect = {U}[at];
+    let q1 = {U}[at + 1];
+    let q2 = {U}[at + 2];
+    let q3 = {U}[at + 3];
+    var xy = vec2<f32>(0.0, 0.0);
+    if q1.y < 0.5 {
+        // A band: u along ln(1 + p / p0) of the optical thickness p, v along
+        // the warped cos θ.
+        let cc = min(max(c, q3.x), q3.y);
+        let p = d * {P}_optical(q1, cc);
+        let u0 = {P}_warp_p(q2.y, q2.x);
+        let u1 = {P}_warp_p(q2.z, q2.x);
+        if u1 > u0 {
+            xy.x = clamp(({P}_warp_p(p, q2.x) - u0) / (u1 - u0), 0.0, 1.0);
+        }
+        var sign = -1.0;
+        if q3.x >= q3.z {
+            sign = 1.0;
+        }
+        let v0 = {P}_warp_c(q3.x, q3.z, q3.w, sign);
+        let v1 = {P}_warp_c(q3.y, q3.z, q3.w, sign);
+        if v1 > v0 {
+            xy.y = clamp(({P}_warp_c(cc, q3.z, q3.w, sign) - v0) / (v1 - v0), 0.0, 1.0);
+        }
+    } else {
+        // The grazing corner: polar coordinates about (p = 0, cos θ = 0).
+        let pp = d * {P}_optical(q1, c) / q2.x;
+        let rho = sqrt(pp * pp + c * c);
+        var phi = 0.0;
+        if rho > 0.0 {
+            phi = atan2(pp, c);
+        }
+        xy = vec2<f32>(clamp(phi / 1.5707964, 0.0, 1.0), clamp(rho / q2.y, 0.0, 1.0));
+    }
+    return rect.xy + 0.5 + xy * (rect.zw - 1.0);
+}
+
+// The texel position (in texels) a film at thickness_nm and cos_theta is
+// read at, for light from `side`: the chart is the first of the side's
+// corners whose radius holds the point, else the first of its bands whose
+// cos θ range reaches up to cos_theta, else its last band. Any side but 0
+// reads the side the header names (1, or 0 for a film that reads the same
+// from both sides or that no light crosses).
+fn {P}_texel(thickness_nm: f32, cos_theta: f32, side: i32) -> vec2<f32> {
+    let header = {U}[{B}];
+    let range = {U}[{B} + 1];
+    // The count stays in f32: no float-to-int helper that would clash when
+    // a shader holds both libraries' HLSL.
+    var s = 0.0;
+    if side != 0 {
+        s = header.w;
+    }
+    let d = min(max(thickness_nm, range.x), range.y);
+    let c = clamp(cos_theta, 0.0, 1.0);
+    var chosen = -1;
+    var last = -1;
+    for (var k = 0; k < {MAX}; k++) {
+        if f32(k) >= header.z || chosen >= 0 {
+            break;
+        }
+        let at = {B} + 2 + 4 * k;
+        let q1 = {U}[at + 1];
+        if q1.x != s {
+            continue;
+        }
+        if q1.y > 0.5 {
+            let q2 = {U}[at + 2];
+            let pp = d * {P}_optical(q1, c) / q2.x;
+            if sqrt(pp * pp + c * c) < q2.y {
+                chosen = k;
+            }
+            continue;
+        }
+        last = k;
+        if c <= {U}[at + 3].y {
+            chosen = k;
+        }
+    }
+    if chosen < 0 {
+        chosen = last;
+    }
+    if chosen < 0 {
+        return vec2<f32>(0.5, 0.5);
+    }
+    return {P}_chart_texel(chosen, d, c);
+}"#;
+
+/// The most charts an atlas holds: `irid::atlas::MAX_CHARTS` (the gpu
+/// tests check they agree).
+pub const MAX_CHARTS: usize = 16;
+
+/// The first and last line of the generated mapping in a WGSL library.
+pub const MAPPING_BEGIN: &str =
+    "// BEGIN atlas mapping: generated by gpu/src/generate.rs (cargo run -p irid-gpu --bin gen-shaders); do not edit.";
+/// See [`MAPPING_BEGIN`].
+pub const MAPPING_END: &str = "// END atlas mapping";
+
+/// The atlas mapping for `lib`, between its markers.
+pub fn mapping_wgsl(lib: &Library) -> String {
+    let text = ATLAS_MAPPING
+        .replace("{P}", lib.stem)
+        .replace("{U}", lib.uniform)
+        .replace("{B}", &lib.atlas_base.to_string())
+        .replace("{MAX}", &MAX_CHARTS.to_string());
+    format!("{MAPPING_BEGIN}\n{text}\n{MAPPING_END}")
+}
+
+/// `wgsl` with its mapping region (between the markers) replaced by
+/// [`mapping_wgsl`]; an error when the markers are missing.
+pub fn with_mapping(lib: &Library, wgsl: &str) -> Result<String, String> {
+    let begin = wgsl
+        .find(MAPPING_BEGIN)
+        .ok_or_else(|| format!("{}.wgsl has no `{MAPPING_BEGIN}`", lib.stem))?;
+    let end = wgsl[begin..]
+        .find(MAPPING_END)
+        .map(|e| begin + e + MAPPING_END.len())
+        .ok_or_else(|| format!("{}.wgsl has no `{MAPPING_END}`", lib.stem))?;
+    Ok(format!(
+        "{}{}{}",
+        &wgsl[..begin],
+        mapping_wgsl(lib),
+        &wgsl[end..]
+    ))
 }

@@ -443,16 +443,17 @@ impl Chart {
 
 /// What the shader computes, in f32, from one chart's uniform values: the
 /// texel position (in texels, before dividing by the atlas size) of a film
-/// at `d` nm and cos θ `c`. Operation for operation the WGSL's
-/// `irid_film_texel`.
+/// at `d` nm and cos θ `c`. Operation for operation the shaders'
+/// `irid_film_chart_texel` (gpu/src/generate.rs).
 pub fn texel_f32(q: &[f32; PARAMS_PER_CHART], d: f32, c: f32) -> [f32; 2] {
     let s = |c: f32| (1.0 - q[6] * (1.0 - c * c)).max(q[7] * q[7]).sqrt();
     let (x, y) = if q[5] < 0.5 {
         let c = c.max(q[12]).min(q[13]);
         let p = d * s(c);
+        // ln(1 + x) as the shaders write it (no log1p in WGSL or GLSL).
         let u_warp = |p: f32| {
             if q[8] > 0.0 {
-                (p.max(0.0) / q[8]).ln_1p()
+                (1.0 + p.max(0.0) / q[8]).ln()
             } else {
                 p
             }
@@ -486,7 +487,8 @@ pub fn texel_f32(q: &[f32; PARAMS_PER_CHART], d: f32, c: f32) -> [f32; 2] {
     } else {
         let pp = d * s(c) / q[8];
         let rho = (pp * pp + c * c).sqrt();
-        let phi = pp.atan2(c);
+        // atan2(0, 0) is undefined in GLSL: the corner itself reads φ = 0.
+        let phi = if rho > 0.0 { pp.atan2(c) } else { 0.0 };
         (
             (phi / std::f32::consts::FRAC_PI_2).clamp(0.0, 1.0),
             (rho / q[9]).clamp(0.0, 1.0),

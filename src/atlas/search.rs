@@ -52,6 +52,8 @@ pub struct SideRequest<'a> {
     pub side: u32,
     /// The cos θ range (in the medium the light arrives from).
     pub cos: (f64, f64),
+    /// What this side's charts must meet.
+    pub goal: Goal,
 }
 
 /// What [`build`] found for one side.
@@ -264,13 +266,12 @@ fn f16_half_ulp(v: f64) -> f64 {
     2f64.powf(v.log2().floor() - 11.0)
 }
 
-/// Builds the atlas of `sides` over `thickness_nm` that meets `goal`, its
-/// textures at most `max_side` texels a side. `progress` gets one line per
-/// stage.
+/// Builds the atlas of `sides` over `thickness_nm` that meets each side's
+/// goal, its textures at most `max_side` texels a side. `progress` gets one
+/// line per stage.
 pub fn build(
     sides: &[SideRequest],
     thickness_nm: (f64, f64),
-    goal: Goal,
     max_side: usize,
     points: &[Vec<[f32; 2]>],
     progress: &dyn Fn(&str),
@@ -278,7 +279,7 @@ pub fn build(
     let mut reports = Vec::new();
     let mut skeletons = Vec::new();
     for req in sides {
-        let skeleton = skeleton(req, thickness_nm, goal)?;
+        let skeleton = skeleton(req, thickness_nm, req.goal)?;
         progress(&format!(
             "side {}: {} piece(s) of cos θ{}{}{}",
             req.side,
@@ -308,6 +309,7 @@ pub fn build(
     let mut charts: Vec<(Chart, Vec<f32>)> = Vec::new();
     let mut owner = Vec::new();
     for (k, skeleton) in skeletons.iter().enumerate() {
+        let goal = skeleton.req.goal;
         for chart in layout(skeleton, goal, progress)? {
             charts.push(confirm(skeleton, chart, goal, max_side, progress)?);
             owner.push(k);
@@ -328,7 +330,7 @@ pub fn build(
         let missed = measured
             .iter()
             .zip(&skeletons)
-            .find(|(m, _)| !meets(&m.resolved, goal));
+            .find(|(m, s)| !meets(&m.resolved, s.req.goal));
         let Some((m, skeleton)) = missed else {
             return Ok(Built {
                 atlas,
@@ -342,7 +344,11 @@ pub fn build(
             .chart_for(d, c, skeleton.req.side)
             .expect("the side has charts");
         if round >= MAX_GROWTH {
-            return Err(unreachable_target(skeleton, &charts[k].0, goal));
+            return Err(unreachable_target(
+                skeleton,
+                &charts[k].0,
+                skeleton.req.goal,
+            ));
         }
         // A feature between the midpoints: grow the chart of the worst point.
         progress(&format!(
@@ -353,7 +359,8 @@ pub fn build(
         let mut grown = charts[k].0;
         grown.rect.width = grown.rect.width * 5 / 4 + 1;
         grown.rect.height = grown.rect.height * 5 / 4 + 1;
-        charts[k] = confirm(&skeletons[owner[k]], grown, goal, max_side, progress)?;
+        let owner = &skeletons[owner[k]];
+        charts[k] = confirm(owner, grown, owner.req.goal, max_side, progress)?;
     }
     unreachable!("the loop returns")
 }
@@ -1249,7 +1256,8 @@ pub struct SideMeasurement {
     pub aliased: Measurement,
 }
 
-/// Measures `image` read through `atlas` (bilinear, f32, as a GPU) at each
+/// Measures `image` read through `atlas` (bilinear, f32, as a GPU, from a
+/// normalized texture coordinate) at each
 /// side's `points` (thickness nm, cos θ) against the solver.
 pub fn measure(
     atlas: &Atlas,
@@ -1274,7 +1282,7 @@ pub fn measure(
                 .map(|p| {
                     let mut out = [0.0f32; 6];
                     if let Some(t) = super::locate_f32(&uniform, p[0], p[1], req.side) {
-                        image.bilinear(t, &mut out);
+                        image.bilinear(gpu_round_trip(t, image), &mut out);
                     }
                     out.map(f64::from)
                 })
@@ -1294,6 +1302,14 @@ pub fn measure(
             })
         })
         .collect()
+}
+
+/// A texel position as the filter of a GPU sees it: the shader divides it
+/// by the texture's size (a texture coordinate in f32), and the filter
+/// multiplies it back, off by an f32 rounding of each.
+fn gpu_round_trip(t: [f32; 2], image: &Image) -> [f32; 2] {
+    let size = [image.width as f32, image.height as f32];
+    [0, 1].map(|k| (t[k] / size[k]) * size[k])
 }
 
 /// Whether a measurement meets the goal.

@@ -75,7 +75,7 @@ pub fn run(args: Args) -> Result<ExitCode> {
     {
         spec.thickness_nm = range;
     }
-    spec.cos_theta = args.film.cos_theta(true)?;
+    spec.cos_theta = args.film.cos_theta(false)?;
     spec.sampling = parse_choice(&args.sampling)?;
     spec.white = parse_choice(&args.white)?;
     spec.max_error = args.max_error;
@@ -126,17 +126,22 @@ fn report(result: &irid::export::Export, args: &Args, seconds: f64) {
     );
     for side in &result.sides {
         let e = &side.error;
-        let m = &atlas.charts[side.chart].mapping;
         let name = match side.side {
             Side::Front => "front (light from the ambient)",
             Side::Back => "back (light from the substrate)",
         };
+        let texels: usize = side
+            .charts
+            .iter()
+            .map(|&k| atlas.charts[k].rect.width * atlas.charts[k].rect.height)
+            .sum();
         println!(
-            "{name}: chart {} of {}×{} texels (thickness × angle); GPU error (bilinear, f16) at {} random points: max {:.2e} (target {:.0e}), p99 {:.2e}, mean {:.2e}; ΔE00 max {:.3} / {:.3}, mean {:.4} / {:.4} (R / T); 8-bit filter weights add at most {:.2e}",
-            side.chart,
-            m.size_u,
-            m.size_v,
+            "{name}: {} chart{} of {texels} texels; GPU error (f32 coordinates, bilinear, f16) at {} random points over cos θ {:.4}–{:.4}: max {:.2e} (target {:.0e}), p99 {:.2e}, mean {:.2e}; ΔE00 max {:.3} / {:.3}, mean {:.4} / {:.4} (R / T); 8-bit filter weights add at most {:.2e}",
+            side.charts.len(),
+            if side.charts.len() == 1 { "" } else { "s" },
             e.points,
+            result.spec.cos_theta.0,
+            result.spec.cos_theta.1,
             e.max_all(),
             result.spec.target(side.side),
             e.p99_abs.iter().fold(0.0f64, |a, &b| a.max(b)),
@@ -147,6 +152,14 @@ fn report(result: &irid::export::Export, args: &Args, seconds: f64) {
             e.mean_delta_e00[1],
             side.weights_8bit_extra,
         );
+        if let Some(a) = &side.aliased_error {
+            println!(
+                "{name}: below cos θ {:.6} the colour integration itself is aliased and the target is not sought: {} points there, max {:.2e}",
+                side.aliased_below,
+                a.points,
+                a.max_all()
+            );
+        }
         if let (Some(scale), Some(png)) = (result.png_scale, &side.png_error) {
             println!(
                 "{name}: PNG (16-bit, scale {scale}): max error {:.2e}, ΔE00 max {:.3} / {:.3}",

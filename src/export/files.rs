@@ -11,17 +11,19 @@ use exr::prelude::{
 };
 use serde_json::json;
 
-use super::atlas::{side_index, Texture, CHART_PARAM_NAMES, CHART_VEC4, UNIFORM_VEC4};
-use super::{Export, Side, SHADERS};
+use super::{side_index, Export, Side, Texture, HEADER_VEC4, SHADERS, UNIFORM_VEC4};
+use crate::atlas::{Chart, Coords, PARAMS_PER_CHART};
 use crate::atomic::{Output, OutputSet, Prepared, Replace};
 use crate::error::{Error, Result};
 
 /// film.json's `format` and `version`.
 pub const FILM_FORMAT: &str = "irid-film";
 /// See [`FILM_FORMAT`]. Version 1 had one chart (the front) and its
-/// parameters as nine named fields; 2 is the atlas of charts with the
-/// uniform array and `irid_film(thickness, cos θ, side)`.
-pub const FILM_VERSION: u32 = 2;
+/// parameters as nine named fields; 2 an atlas of one chart per side in
+/// physical thickness with square-root warps; 3 is the atlas of
+/// [`crate::atlas`] (bands in optical thickness, a polar corner chart, the
+/// chart chosen in closed form per lookup).
+pub const FILM_VERSION: u32 = 3;
 
 /// The PNGs' scale: texel value = PNG value / 65535 × scale. 1 when every
 /// value lies in [0, 1], else the largest value rounded up to a multiple of
@@ -130,42 +132,61 @@ fn side_name(side: Side) -> &'static str {
     }
 }
 
-/// film.json's `charts`: each chart's sides, rectangle, named parameters
-/// (the values of the uniform array) and the axis value at every node.
+/// The names of a chart's uniform values by its kind (docs/gpu.md); empty
+/// names are zeros.
+pub fn chart_param_names(chart: &Chart) -> [&'static str; PARAMS_PER_CHART] {
+    let head = ["x0", "y0", "width", "height", "side", "kind", "a", "floor"];
+    let tail = match chart.coords {
+        Coords::Band { .. } => [
+            "p0_nm", "p_lo_nm", "p_hi_nm", "", "cos_lo", "cos_hi", "anchor", "offset",
+        ],
+        Coords::Corner { .. } => ["scale_nm", "radius", "", "", "", "", "", ""],
+    };
+    let mut names = [""; PARAMS_PER_CHART];
+    names[..8].copy_from_slice(&head);
+    names[8..].copy_from_slice(&tail);
+    names
+}
+
+/// film.json's `charts`: each chart's side, kind, rectangle and named
+/// parameters (the values of the uniform array, as f32), and its
+/// coordinates in full precision.
 fn charts_json(export: &Export) -> serde_json::Value {
-    let uniform = export.atlas.uniform_f32();
+    let uniform = export.uniform_f32();
     let charts: Vec<serde_json::Value> = export
         .atlas
         .charts
         .iter()
         .enumerate()
         .map(|(k, chart)| {
-            let at = 4 * (1 + CHART_VEC4 * k);
-            let params: serde_json::Map<String, serde_json::Value> = CHART_PARAM_NAMES
+            let at = 4 * HEADER_VEC4 + k * PARAMS_PER_CHART;
+            let params: serde_json::Map<String, serde_json::Value> = chart_param_names(chart)
                 .iter()
-                .zip(&uniform[at..at + 4 * CHART_VEC4])
-                .filter(|(name, _)| **name != "reserved")
+                .zip(&uniform[at..at + PARAMS_PER_CHART])
+                .filter(|(name, _)| !name.is_empty())
                 .map(|(name, v)| (name.to_string(), json!(v)))
                 .collect();
-            let m = &chart.mapping;
+            let r = chart.rect;
             json!({
-                "sides": chart.sides.iter().map(|&s| side_index(s)).collect::<Vec<_>>(),
-                "role": "whole domain",
-                "rect": chart.rect(),
-                "params": params,
-                "axes": {
-                    "thickness_nm": m.thickness_nodes(),
-                    "cos_theta": m.cos_nodes(),
+                "side": chart.side,
+                "kind": match chart.coords {
+                    Coords::Band { .. } => "band",
+                    Coords::Corner { .. } => "corner",
                 },
+                "rect": [r.x, r.y, r.width, r.height],
+                "params": params,
+                "optical": chart.optical,
+                "coords": chart.coords,
             })
         })
         .collect();
     json!(charts)
 }
 
-/// film.json's `sides`: for each side, its number in the shader, the chart
-/// it reads, and the stack as seen from it; `back` is null when light
-/// cannot arrive from the substrate (its lookups then read the front chart).
+/// film.json's `sides`: for each side, its number in the shader, the
+/// charts it reads, the stack as seen from it and where its colour
+/// integration is aliased; `back` is null when light cannot arrive from
+/// the substrate (its lookups then read the front's charts).
 fn sides_json(export: &Export) -> serde_json::Value {
     let spec = &export.spec;
     let entry = |side: Side| match export.side(side) {
@@ -174,11 +195,12 @@ fn sides_json(export: &Export) -> serde_json::Value {
             let seen = spec.seen_from(side);
             json!({
                 "index": side_index(side),
-                "chart": s.chart,
+                "charts": s.charts,
                 "light_from": if side == Side::Front { "ambient" } else { "substrate" },
                 "stack": if side == Side::Front { "as written" } else { "reversed" },
                 "layer": if seen.stack.layers.is_empty() { 0 } else { seen.layer },
                 "critical_cos": super::critical_cos(&seen.stack),
+                "aliased_below_cos": s.aliased_below,
             })
         }
     };
@@ -206,9 +228,10 @@ fn errors_json(export: &Export) -> serde_json::Value {
     let mut error = json!({
         "channels": ["R.r", "R.g", "R.b", "T.r", "T.g", "T.b"],
         "metric": "absolute difference between the bilinear filtering (f32 weights, clamp to edge) of the f16 \
-         texels at the shader's texture coordinates and irid's exact solver on the stack as seen from the \
-         side, at random points uniform over the domain; delta_e00 is CIEDE2000 of the reflected [0] and \
-         transmitted [1] colour",
+         texels at the shader's texture coordinates (f32) and irid's exact solver on the stack as seen from the \
+         side, at random points uniform over the whole domain; delta_e00 is CIEDE2000 of the reflected [0] and \
+         transmitted [1] colour; aliased: the same over the points below the side's aliased_below_cos, where \
+         the colour integration itself is aliased and the target is not sought (null when there are none)",
         "front": null,
         "back": null,
     });
@@ -216,6 +239,10 @@ fn errors_json(export: &Export) -> serde_json::Value {
         let mut e = error_json(&side.error);
         e["target_max_abs"] = json!(export.spec.target(side.side));
         e["weights_8bit_extra_max_abs"] = json!(side.weights_8bit_extra);
+        e["aliased"] = side
+            .aliased_error
+            .as_ref()
+            .map_or(serde_json::Value::Null, error_json);
         e["png"] = side
             .png_error
             .as_ref()
@@ -257,6 +284,7 @@ pub fn film_json(export: &Export) -> serde_json::Value {
             "width": export.atlas.width,
             "height": export.atlas.height,
             "format": "rgba16f",
+            "alpha": "1 everywhere: WebGPU has no 3-channel 16-bit float format (docs/gpu.md)",
             "files": {"reflectance": "reflectance.exr", "transmittance": "transmittance.exr"},
             "png": png,
             "row_check": {
@@ -268,7 +296,7 @@ pub fn film_json(export: &Export) -> serde_json::Value {
             "thickness_nm": [spec.thickness_nm.0, spec.thickness_nm.1],
             "cos_theta": [spec.cos_theta.0, spec.cos_theta.1],
         },
-        "uniform_f32": export.atlas.uniform_f32(),
+        "uniform_f32": export.uniform_f32(),
         "uniform_vec4": UNIFORM_VEC4,
         "charts": charts_json(export),
         "sides": sides_json(export),

@@ -1,49 +1,58 @@
-//! GPU-ready tables: a stack's reflectance and transmittance on texel grids
-//! that hardware bilinear filtering reads correctly, chosen so that what the
-//! GPU computes (bilinear, f16 texels) meets an error target, with the
-//! shaders that read them. `irid export` writes the result; the file set and
-//! the shader interface are specified in `docs/gpu.md`.
+//! GPU-ready tables: a stack's reflectance and transmittance in an atlas
+//! of charts ([`crate::atlas`]) that hardware bilinear filtering reads,
+//! sized so that what the GPU computes (f32 texture coordinates, f16
+//! texels, bilinear filter) meets an error target, with the shaders that
+//! read them. `irid export` writes the result; the file set and the shader
+//! interface are specified in `docs/gpu.md`.
 //!
-//! An export is an atlas ([`Atlas`]): one chart per side of the film that
-//! light can arrive from. The front chart holds the stack as written, cos θ
-//! in the ambient; the back chart, present whenever the substrate is
-//! lossless over the spectrum, the reversed stack, cos θ in the substrate
-//! (with total internal reflection beyond a dense substrate's critical
-//! angle). A stack that reads the same from both sides has one chart for
-//! both. Each chart's axes are uniform in its chart coordinates: thickness
-//! linearly or quadratically, cos θ through a closed-form warp
-//! ([`Mapping`]) that puts a node exactly on a dense side's critical angle
-//! and crowds nodes quadratically towards it, so the square-root kink of R
-//! there becomes a corner on a node.
+//! The charts cover each side of the film light can arrive from: side 0
+//! the stack as written, cos θ in the ambient; side 1, whenever the
+//! substrate is lossless over the spectrum and the stack reads differently
+//! from there, the reversed stack, cos θ in the substrate (with total
+//! internal reflection beyond a dense substrate's critical angle). Both
+//! sides' charts share one atlas; [`crate::atlas::search`] chooses them and
+//! their sizes, and measures the packed, f16-rounded atlas against the
+//! solver as the shader reads it.
 
-mod atlas;
 mod files;
 mod mapping;
 mod measure;
 mod rough;
-mod search;
+mod texture;
 
-pub use atlas::{
-    side_index, Atlas, Chart, RowCheck, Texture, CHART_PARAM_NAMES, CHART_VEC4, GUTTER, MAX_CHARTS,
-    MAX_SIZE, UNIFORM_VEC4,
-};
+pub use crate::atlas::{Atlas, Chart, HEADER_VEC4, MAX_CHARTS, PARAMS_PER_CHART, UNIFORM_VEC4};
 pub use files::{declare_dir, fill_dir, film_json, write_dir, FILM_FORMAT, FILM_VERSION};
-pub use mapping::{AngleWarp, Mapping};
 pub use measure::{measurement_points, ExportError, DEFAULT_POINTS, POINTS_SEED};
 pub use rough::{
     rough_exact_at, rough_measurement_axes, RoughError, RoughExport, ROUGH_AXIS_POINTS, ROUGH_SEED,
     ROUGH_SHADERS, ROUGH_VEC4,
 };
-pub use search::{F16_MAX, LASING_BOUND};
+pub use texture::{RowCheck, Texture};
 
-use rayon::prelude::*;
-
-use crate::color::refine::Refinement;
+use crate::atlas::search::{build, Goal, SideMeasurement, SideRequest};
+use crate::atlas::Film;
 use crate::color::{Sampling, SpectralIntegrator, White};
 use crate::error::{Error, Result};
-use crate::optics::{Stack, StackGrid};
+use crate::optics::Stack;
 pub use crate::render::Side;
-use search::{SideSearch, SizedChart};
+
+/// The largest texture side an atlas uses: WebGPU's default limit for 2D
+/// textures, which desktop GPUs exceed.
+pub const MAX_SIZE: usize = 8192;
+/// The largest finite f16 value: a table holding more is not representable.
+pub const F16_MAX: f64 = 65504.0;
+/// |R| or |T| beyond which a gain film is taken to be at a lasing pole: a
+/// hundredfold amplification is no film a renderer shows, and near a pole
+/// the response is unbounded anyway.
+pub const LASING_BOUND: f64 = 100.0;
+
+/// The side's number in the shader: 0 front, 1 back.
+pub fn side_index(side: Side) -> u32 {
+    match side {
+        Side::Front => 0,
+        Side::Back => 1,
+    }
+}
 
 /// The shaders, as committed in `shaders/` (the GLSL and HLSL forms are
 /// generated from the WGSL by `cargo run -p irid-gpu --bin gen-shaders`).
@@ -101,8 +110,8 @@ pub struct ExportSpec {
 }
 
 impl ExportSpec {
-    /// The defaults of `irid export`: layer 1 over its own thickness, cos θ
-    /// from cos 89° to 1, exact integration, D65, 1e-3 on both sides,
+    /// The defaults of `irid export`: layer 1 over its own thickness, every
+    /// angle (cos θ 0 to 1), exact integration, D65, 1e-3 on both sides,
     /// 20 000 points.
     pub fn new(stack: Stack) -> ExportSpec {
         let t = stack.layers.first().map_or(0.0, |l| l.thickness_nm);
@@ -110,7 +119,7 @@ impl ExportSpec {
             stack,
             layer: 1,
             thickness_nm: (t, t),
-            cos_theta: (crate::lut::DEFAULT_COS_MIN, 1.0),
+            cos_theta: (0.0, 1.0),
             sampling: Sampling::Exact,
             white: White::D65,
             max_error: 1e-3,
@@ -212,18 +221,25 @@ fn check_target(option: &str, target: f64) -> Result<()> {
     Ok(())
 }
 
-/// One side of a finished export: which chart serves it and its error.
+/// One side of a finished export: the charts that serve it and its error.
 #[derive(Clone, Debug)]
 pub struct SideExport {
     /// Which side.
     pub side: Side,
-    /// The chart its lookups read.
-    pub chart: usize,
-    /// What the GPU computes (bilinear with f32 weights on f16 texels)
-    /// against the exact solver on the stack seen from this side.
+    /// The charts its lookups read (indices into the atlas's charts).
+    pub charts: Vec<usize>,
+    /// cos θ below which the colour integration itself is aliased (the
+    /// film's fringes are narrower than its wavelength steps): the target
+    /// is not sought there, and its error is stated apart; 0 when nowhere.
+    pub aliased_below: f64,
+    /// What the GPU computes (f32 texture coordinates, bilinear with f32
+    /// weights on f16 texels) against the exact solver on the stack seen
+    /// from this side, over every measured point.
     pub error: ExportError,
+    /// The same over the points below `aliased_below` (none when 0).
+    pub aliased_error: Option<ExportError>,
     /// The most a filter with 1/256 weight steps adds to `error.max_abs`:
-    /// the largest neighbouring-texel step of its chart / 256.
+    /// the largest neighbouring-texel step of its charts / 256.
     pub weights_8bit_extra: f64,
     /// The error through the 16-bit PNGs, when asked for.
     pub png_error: Option<ExportError>,
@@ -254,17 +270,30 @@ pub struct Export {
     /// The front side's rough reflectance over roughness slices, when
     /// `spec.rough_max_error` asks for it.
     pub rough: Option<RoughExport>,
+    uniform: Vec<f32>,
 }
 
 impl Export {
     /// `irid_film` as a GPU computes it from the f16 textures: R and T for
     /// light arriving from `side`.
     pub fn sample(&self, thickness_nm: f32, cos_theta: f32, side: Side) -> ([f32; 3], [f32; 3]) {
-        let chart = self.atlas.chart_of(side);
-        let uv = self.atlas.uv(chart, thickness_nm, cos_theta);
-        let r = self.reflectance.sample_bilinear(uv);
-        let t = self.transmittance.sample_bilinear(uv);
-        ([r[0], r[1], r[2]], [t[0], t[1], t[2]])
+        match crate::atlas::locate_f32(&self.uniform, thickness_nm, cos_theta, side_index(side)) {
+            Some(t) => {
+                let uv = [
+                    t[0] / self.atlas.width as f32,
+                    t[1] / self.atlas.height as f32,
+                ];
+                let r = self.reflectance.sample_bilinear(uv);
+                let t = self.transmittance.sample_bilinear(uv);
+                ([r[0], r[1], r[2]], [t[0], t[1], t[2]])
+            }
+            None => ([0.0; 3], [0.0; 3]),
+        }
+    }
+
+    /// The uniform array the shaders read: [`Atlas::uniform_f32`].
+    pub fn uniform_f32(&self) -> &[f32] {
+        &self.uniform
     }
 
     /// The export's record of `side`, if it has that side.
@@ -273,70 +302,11 @@ impl Export {
     }
 }
 
-/// The stack with everything fixed for the whole export, seen from one side.
-struct Film {
-    /// A layerless stack gets a zero-thickness layer of the ambient, which
-    /// changes nothing optically.
-    stack: Stack,
-    layer: usize,
-    grid: StackGrid,
-    integrator: SpectralIntegrator,
-    /// More points per nanometre where the film's fringes are narrower
-    /// than the integration's step.
-    refinement: Refinement,
-}
-
-impl Film {
-    fn new(spec: &ExportSpec) -> Result<Film> {
-        let (stack, layer) = crate::lut::with_varying_layer(&spec.stack, spec.layer);
-        let integrator = SpectralIntegrator::with_white(spec.sampling, spec.white);
-        let grid = StackGrid::new(&stack, integrator.wavelengths_nm())?;
-        let refinement = Refinement::new(&stack, Some(layer), &integrator)?;
-        Ok(Film {
-            refinement,
-            stack,
-            layer,
-            grid,
-            integrator,
-        })
-    }
-
-    /// Exact RGB of R and T at every node of `mapping`, row-major (row =
-    /// cos θ node), six values per node: the baker's sweep on the
-    /// mapping's nodes.
-    fn eval(&self, mapping: &Mapping) -> Result<Vec<[f64; 6]>> {
-        crate::lut::rgb_at_nodes(
-            &self.stack,
-            self.layer,
-            self.integrator.clone(),
-            &mapping.thickness_nodes(),
-            &mapping.cos_nodes(),
-        )
-    }
-
-    /// Exact RGB of R and T at each (thickness, cos θ) point: its whole
-    /// spectrum through the batched solver, integrated as it is solved
-    /// (with more points per nanometre where the film's fringes need them).
-    fn exact_at(&self, points: &[[f32; 2]]) -> Result<Vec<[f64; 6]>> {
-        let weights = self.integrator.rgb_lane_weights();
-        points
-            .par_iter()
-            .map_init(
-                || self.grid.thicknesses_nm().to_vec(),
-                |thick, p| {
-                    thick[self.layer - 1] = f64::from(p[0]);
-                    let sums = self.refinement.weighted_spectrum(
-                        &self.grid,
-                        &weights,
-                        thick,
-                        f64::from(p[1]),
-                    )?;
-                    let (r, t) = (sums.reflectance, sums.transmittance);
-                    Ok([r[0], r[1], r[2], t[0], t[1], t[2]])
-                },
-            )
-            .collect()
-    }
+/// The film seen from `spec`'s side (its stack and varying layer), with
+/// everything fixed for evaluating it.
+fn film_of(spec: &ExportSpec) -> Result<Film> {
+    let integrator = SpectralIntegrator::with_white(spec.sampling, spec.white);
+    Film::new(&spec.stack, spec.layer, integrator)
 }
 
 /// The substrate's critical cos θ at 550 nm, when the stack is seen from
@@ -359,191 +329,252 @@ pub fn critical_cos(stack: &Stack) -> Option<f64> {
 /// each point, from irid's solver: what an export is measured against.
 pub fn exact_at(spec: &ExportSpec, side: Side, points: &[[f32; 2]]) -> Result<Vec<[f64; 6]>> {
     spec.validate()?;
-    Film::new(&spec.seen_from(side))?.exact_at(points)
+    let film = film_of(&spec.seen_from(side))?;
+    film.points(
+        &points
+            .iter()
+            .map(|p| (f64::from(p[0]), f64::from(p[1])))
+            .collect::<Vec<_>>(),
+    )
 }
 
-/// One chart being sized: the sides it serves, the stack as seen from the
-/// first of them, and its grid.
-struct ChartWork {
-    sides: Vec<Side>,
-    spec: ExportSpec,
-    film: Film,
-    sized: SizedChart,
-}
-
-impl ChartWork {
-    /// The search of the chart's first side, against `target`.
-    fn search(&self, target: f64) -> SideSearch<'_> {
-        SideSearch {
-            film: &self.film,
-            spec: &self.spec,
-            side: self.sides[0],
-            target,
-        }
-    }
-}
-
-/// Chooses for each side the chart size that meets its target as the GPU
-/// computes it, packs the charts into one atlas, bakes it and measures each
-/// side through it (see the module docs). `progress` receives one line per
-/// size tried.
-pub fn export(spec: &ExportSpec, progress: &dyn Fn(&str)) -> Result<Export> {
-    spec.validate()?;
+/// The sides that get charts of their own: the front, and the back unless
+/// no light arrives from the substrate, `front_only` was asked, or the
+/// stack reads the same from both sides (its back lookups read the front's
+/// charts). Also whether the substrate absorbs.
+fn charted_sides(spec: &ExportSpec) -> Result<(Vec<Side>, bool)> {
     let absorbs = spec.substrate_absorbs()?;
-    let mut plan: Vec<(Vec<Side>, ExportSpec)> = vec![(vec![Side::Front], spec.clone())];
+    let mut sides = vec![Side::Front];
     if !absorbs && !spec.front_only {
         let seen = spec.seen_from(Side::Back);
-        if seen.stack == spec.stack && seen.layer == spec.layer {
-            // The stack reads the same from both sides: one chart serves both.
-            plan[0].0.push(Side::Back);
-        } else {
-            plan.push((vec![Side::Back], seen));
+        if !(seen.stack == spec.stack && seen.layer == spec.layer) {
+            sides.push(Side::Back);
         }
     }
-    let mut charts: Vec<ChartWork> = Vec::new();
-    for (sides, seen) in plan {
-        let film = Film::new(&seen)?;
-        let sized = SideSearch {
-            film: &film,
-            spec: &seen,
-            side: sides[0],
-            target: chart_target(spec, &sides),
-        }
-        .size(None, progress)
-        .map_err(|e| on_side(sides[0], e))?;
-        charts.push(ChartWork {
-            sides,
-            spec: seen,
+    Ok((sides, absorbs))
+}
+
+/// Builds the atlas of every side that meets its target as the GPU
+/// computes it (see the module docs), and measures each side through it.
+/// `progress` receives one line per stage.
+pub fn export(spec: &ExportSpec, progress: &dyn Fn(&str)) -> Result<Export> {
+    spec.validate()?;
+    let (charted, absorbs) = charted_sides(spec)?;
+    let films = charted
+        .iter()
+        .map(|&side| film_of(&spec.seen_from(side)))
+        .collect::<Result<Vec<_>>>()?;
+    for film in &films {
+        check_lasing(spec, film)?;
+    }
+    let requests: Vec<SideRequest> = charted
+        .iter()
+        .zip(&films)
+        .map(|(&side, film)| SideRequest {
             film,
-            sized,
+            side: side_index(side),
+            cos: spec.cos_theta,
+            goal: Goal {
+                max_abs: Some(spec.target(side)),
+                max_de: None,
+                half: true,
+            },
+        })
+        .collect();
+    let points = measurement_points(spec);
+    let all_points = vec![points; requests.len()];
+    let built = build(
+        &requests,
+        spec.thickness_nm,
+        MAX_SIZE,
+        &all_points,
+        progress,
+    )
+    .map_err(|e| match charted.get(1) {
+        // The back side's failure names how to do without it.
+        Some(&Side::Back) if e.to_string().contains("side 1") => on_back_side(e),
+        _ => e,
+    })?;
+    check_representable(spec, &built.image)?;
+    let [reflectance, transmittance] = [0, 3].map(|at| Texture {
+        width: built.image.width,
+        height: built.image.height,
+        texels: built
+            .image
+            .data
+            .chunks_exact(6)
+            .map(|v| [v[at], v[at + 1], v[at + 2], 1.0])
+            .collect(),
+    });
+    let atlas = built.atlas;
+    let mut sides = Vec::new();
+    let measured_side = |side: Side| {
+        // A side without charts of its own reads the front's, measured on
+        // its own stack (the same stack, read from the other side).
+        let own = charted.iter().position(|&s| s == side).unwrap_or(0);
+        (own, &built.measured[own])
+    };
+    let mut listed = vec![Side::Front];
+    if !absorbs && !spec.front_only {
+        listed.push(Side::Back);
+    }
+    for side in listed {
+        let (own, m) = measured_side(side);
+        let chart_side = side_index(charted[own]);
+        let charts: Vec<usize> = (0..atlas.charts.len())
+            .filter(|&k| atlas.charts[k].side == chart_side)
+            .collect();
+        let step = charts
+            .iter()
+            .map(|&k| {
+                let r = atlas.charts[k].rect;
+                let rect = [r.x, r.y, r.width, r.height];
+                reflectance
+                    .max_neighbour_step(rect)
+                    .max(transmittance.max_neighbour_step(rect))
+            })
+            .fold(0.0f32, f32::max);
+        sides.push(SideExport {
+            side,
+            charts,
+            aliased_below: built.sides[own].aliased_below,
+            error: export_error(&m.all),
+            aliased_error: aliased_error(m),
+            weights_8bit_extra: f64::from(step) / 256.0,
+            png_error: None,
         });
     }
-    for _round in 0..search::MAX_ROUNDS {
-        let atlas = Atlas::pack(
-            charts
-                .iter()
-                .map(|c| (c.sides.clone(), c.sized.mapping))
-                .collect(),
-        )?;
-        let nodes: Vec<&[[f64; 6]]> = charts.iter().map(|c| c.sized.nodes.as_slice()).collect();
-        let (reflectance, transmittance) = atlas.textures(&nodes);
-        let mut sides = Vec::new();
-        let mut regrow = None;
-        for (k, chart) in charts.iter().enumerate() {
-            let error = chart
-                .sized
-                .reference
-                .measure(|t, c| search::sample(&atlas, &reflectance, &transmittance, k, t, c));
-            let rect = atlas.charts[k].rect();
-            let step = reflectance
-                .max_neighbour_step(rect)
-                .max(transmittance.max_neighbour_step(rect));
-            for &side in &chart.sides {
-                if error.max_all() > spec.target(side) {
-                    regrow = Some((k, error.max_all() / spec.target(side)));
-                }
-                sides.push(SideExport {
-                    side,
-                    chart: k,
-                    error: error.clone(),
-                    weights_8bit_extra: f64::from(step) / 256.0,
-                    png_error: None,
-                });
-            }
-        }
-        if let Some((k, excess)) = regrow {
-            // Packing moved the chart's texel coordinates by a rounding:
-            // grow it a little and search on from there.
-            regrow_chart(&mut charts[k], spec, excess, progress)?;
-            continue;
-        }
-        sides.sort_by_key(|s| side_index(s.side));
-        let opaque = absorbs
-            || charts[0]
-                .sized
-                .nodes
-                .iter()
-                .all(|v| v[3..].iter().all(|&x| atlas::to_f16(x) == 0.0));
-        let mut export = Export {
-            spec: spec.clone(),
-            atlas,
-            reflectance,
-            transmittance,
-            sides,
-            png_scale: None,
-            opaque,
-            rough: None,
-        };
-        if spec.png {
-            png_errors(&mut export, &charts);
-        }
-        if let Some(target) = spec.rough_max_error {
-            let front = export.atlas.charts[export.atlas.chart_of(Side::Front)].mapping;
-            export.rough = Some(rough::rough_export(spec, front, target, progress)?);
-        }
-        return Ok(export);
+    let opaque = absorbs
+        || transmittance
+            .texels
+            .iter()
+            .all(|t| t[..3].iter().all(|&x| x == 0.0));
+    let uniform = atlas.uniform_f32();
+    let mut export = Export {
+        spec: spec.clone(),
+        atlas,
+        reflectance,
+        transmittance,
+        sides,
+        png_scale: None,
+        opaque,
+        rough: None,
+        uniform,
+    };
+    if spec.png {
+        png_errors(&mut export)?;
     }
-    Err(Error::invalid(
-        "max-error",
-        "the charts' errors through the atlas do not settle below the target",
-    ))
+    if let Some(target) = spec.rough_max_error {
+        export.rough = Some(rough::rough_export(spec, target, progress)?);
+    }
+    Ok(export)
 }
 
-/// Grows a chart whose error through the atlas exceeds its target by the
-/// ratio `excess`, and sizes it again from there.
-fn regrow_chart(
-    chart: &mut ChartWork,
-    spec: &ExportSpec,
-    excess: f64,
-    progress: &dyn Fn(&str),
-) -> Result<()> {
-    let m = chart.sized.mapping;
-    let g = search::growth_for_measured(excess, 1.0);
-    let flat = (
-        spec.thickness_nm.0 == spec.thickness_nm.1,
-        spec.cos_theta.0 == spec.cos_theta.1,
-    );
-    let start = m.resized(
-        search::grown(m.size_u, g, flat.0),
-        search::grown(m.size_v, g, flat.1),
-    );
-    chart.sized = chart
-        .search(chart_target(spec, &chart.sides))
-        .size(Some(start), progress)
-        .map_err(|e| on_side(chart.sides[0], e))?;
-    Ok(())
+/// An [`ExportError`] from the atlas search's measurement.
+fn export_error(m: &crate::atlas::search::Measurement) -> ExportError {
+    ExportError {
+        max_abs: m.max_abs,
+        p99_abs: m.p99_abs,
+        mean_abs: m.mean_abs,
+        max_delta_e00: m.max_de,
+        mean_delta_e00: m.mean_de,
+        points: m.points,
+        seed: POINTS_SEED,
+        worst_point: m.worst_point,
+    }
 }
 
-/// The target of a chart: the strictest of its sides'.
-fn chart_target(spec: &ExportSpec, sides: &[Side]) -> f64 {
-    sides
+fn aliased_error(m: &SideMeasurement) -> Option<ExportError> {
+    (m.aliased.points > 0).then(|| export_error(&m.aliased))
+}
+
+/// Fails when a texel is not finite or beyond f16, or, for a gain film,
+/// beyond [`LASING_BOUND`] (its range reaches or crosses a lasing pole).
+fn check_representable(spec: &ExportSpec, image: &crate::atlas::Image) -> Result<()> {
+    let stack = &spec.stack;
+    let gain = stack.layers.iter().any(|l| l.material.has_gain()) || stack.substrate.has_gain();
+    let bound = if gain { LASING_BOUND } else { F16_MAX } as f32;
+    if image.data.iter().all(|x| x.abs() <= bound) {
+        return Ok(());
+    }
+    Err(if gain {
+        Error::invalid(
+            "gain film",
+            format!("R or T exceeds {LASING_BOUND} or is not finite: the range reaches a lasing pole; narrow --thickness or --angles"),
+        )
+    } else {
+        Error::invalid("export", "R or T is not finite or exceeds the f16 range")
+    })
+}
+
+/// Grid of the lasing check: thicknesses × cos θ.
+const LASING_GRID: (usize, usize) = (257, 129);
+
+/// For a gain film, fails when its range reaches (or crosses) a lasing
+/// pole: |R| or |T| beyond [`LASING_BOUND`], or not finite, on a grid over
+/// the domain. Checked before the search, which would otherwise chase the
+/// pole's growing fringes to the size limit.
+fn check_lasing(spec: &ExportSpec, film: &Film) -> Result<()> {
+    let stack = film.stack();
+    let gain = stack.layers.iter().any(|l| l.material.has_gain()) || stack.substrate.has_gain();
+    if !gain {
+        return Ok(());
+    }
+    let at = |(lo, hi): (f64, f64), k: usize, n: usize| lo + (hi - lo) * k as f64 / (n - 1) as f64;
+    let (nt, nc) = LASING_GRID;
+    let points: Vec<(f64, f64)> = (0..nc)
+        .flat_map(|j| (0..nt).map(move |i| (i, j)))
+        .map(|(i, j)| (at(spec.thickness_nm, i, nt), at(spec.cos_theta, j, nc)))
+        .collect();
+    let values = film.points(&points)?;
+    match values
         .iter()
-        .map(|&s| spec.target(s))
-        .fold(f64::INFINITY, f64::min)
+        .position(|v| v.iter().any(|x| !(x.abs() <= LASING_BOUND)))
+    {
+        None => Ok(()),
+        Some(k) => Err(Error::invalid(
+            "gain film",
+            format!(
+                "R or T exceeds {LASING_BOUND} or is not finite at thickness {:.3} nm, cos θ {:.6}: the range reaches a lasing pole; narrow --thickness or --angles",
+                points[k].0, points[k].1
+            ),
+        )),
+    }
 }
 
 /// A back side's failure says which side failed and how to do without it.
-fn on_side(side: Side, e: Error) -> Error {
-    match side {
-        Side::Front => e,
-        Side::Back => Error::invalid(
-            "back side (light from the substrate)",
-            format!(
-                "{e}; --back-max-error sets this side's own target, --front-only leaves it out"
-            ),
-        ),
-    }
+fn on_back_side(e: Error) -> Error {
+    Error::invalid(
+        "back side (light from the substrate)",
+        format!("{e}; --back-max-error sets this side's own target, --front-only leaves it out"),
+    )
 }
 
 /// The 16-bit PNGs' scale and each side's error through them.
-fn png_errors(export: &mut Export, charts: &[ChartWork]) {
+fn png_errors(export: &mut Export) -> Result<()> {
     let scale = files::png_scale(export);
     let (r, t) = files::png_textures(export, scale);
-    for side in &mut export.sides {
-        let reference = &charts[side.chart].sized.reference;
-        side.png_error = Some(
-            reference.measure(|th, c| search::sample(&export.atlas, &r, &t, side.chart, th, c)),
-        );
+    let points = measurement_points(&export.spec);
+    let through_png = Export {
+        reflectance: r,
+        transmittance: t,
+        sides: Vec::new(),
+        rough: None,
+        ..export.clone()
+    };
+    for k in 0..export.sides.len() {
+        let side = export.sides[k].side;
+        let exact = exact_at(&export.spec, side, &points)?;
+        let got: Vec<[f64; 6]> = points
+            .iter()
+            .map(|p| {
+                let (r, t) = through_png.sample(p[0], p[1], side);
+                [r[0], r[1], r[2], t[0], t[1], t[2]].map(f64::from)
+            })
+            .collect();
+        let m = crate::atlas::search::Measurement::of(&points, &got, &exact);
+        export.sides[k].png_error = Some(export_error(&m));
     }
     export.png_scale = Some(scale);
+    Ok(())
 }

@@ -18,10 +18,9 @@
 use rand::{Rng, SeedableRng};
 use rayon::prelude::*;
 
-use super::atlas::{to_f16, Texture, GUTTER, MAX_SIZE};
-use super::mapping::{chart_xy, Mapping};
-use super::search::{growth_for_measured, F16_MAX};
-use super::ExportSpec;
+use super::mapping::{chart_xy, AngleWarp, Mapping};
+use super::texture::{to_f16, Texture};
+use super::{critical_cos, ExportSpec, F16_MAX, MAX_SIZE};
 use crate::color::{delta_e2000_rgb, SpectralIntegrator};
 use crate::error::{Error, Result};
 use crate::optics::Stack;
@@ -43,6 +42,48 @@ const START_SLICES: usize = 5;
 const MAX_SLICES: usize = 257;
 /// Rounds of the size search before it gives up.
 const MAX_ROUNDS: usize = 8;
+/// Texels of edge copies around every slice.
+const GUTTER: usize = 1;
+/// The slices' first grid: thickness × cos θ nodes.
+const START_GRID: (usize, usize) = (257, 65);
+
+/// The growth of both axes when the random points measure `measured`
+/// above `target` though every midpoint met it: a feature between them.
+fn growth_for_measured(measured: f64, target: f64) -> f64 {
+    ((measured / target).sqrt() * 1.1).clamp(1.15, 2.0)
+}
+
+/// A new axis size: `n` grown by `factor` (by at least one texel when
+/// growing), 1 for a flat axis.
+fn grown(n: usize, factor: f64, flat: bool) -> usize {
+    if flat {
+        return 1;
+    }
+    if factor <= 1.0 {
+        return n;
+    }
+    let intervals = ((n - 1) as f64 * factor).ceil() as usize;
+    (intervals + 1).max(n + 1)
+}
+
+/// The slices' first mapping: thickness nodes crowding quadratically
+/// towards the thinnest, cos θ nodes towards grazing incidence or a
+/// critical angle.
+fn start_mapping(spec: &ExportSpec) -> Mapping {
+    let flat = |(a, b): (f64, f64), n: usize| if a == b { 1 } else { n };
+    let angle = match critical_cos(&spec.stack) {
+        Some(c) => AngleWarp::Critical(c),
+        None => AngleWarp::Grazing,
+    };
+    Mapping::new(
+        spec.thickness_nm,
+        spec.cos_theta,
+        2.0,
+        angle,
+        flat(spec.thickness_nm, START_GRID.0),
+        flat(spec.cos_theta, START_GRID.1),
+    )
+}
 
 /// The shader of the rough table, as committed in `shaders/` (the GLSL and
 /// HLSL forms generated from the WGSL by `cargo run -p irid-gpu --bin
@@ -401,15 +442,14 @@ fn check_representable(table: &RoughTable) -> Result<()> {
     }
 }
 
-/// Sizes, bakes and measures the rough table of `spec`'s front side,
-/// starting from the front chart's `mapping`, against `target`. `progress`
-/// receives one line per size tried.
+/// Sizes, bakes and measures the rough table of `spec`'s front side
+/// against `target`. `progress` receives one line per size tried.
 pub(super) fn rough_export(
     spec: &ExportSpec,
-    mapping: Mapping,
     target: f64,
     progress: &dyn Fn(&str),
 ) -> Result<RoughExport> {
+    let mapping = start_mapping(spec);
     let film = rough_film(spec);
     let axes = rough_measurement_axes(spec);
     let exact = rough_exact_at(spec, &axes)?;
@@ -462,8 +502,8 @@ pub(super) fn rough_export(
         if e_r <= 0.25 * target {
             // The blend between slices is good: the slices' own grid is not.
             mapping = mapping.resized(
-                super::search::grown(mapping.size_u, grow, flat.0),
-                super::search::grown(mapping.size_v, grow, flat.1),
+                grown(mapping.size_u, grow, flat.0),
+                grown(mapping.size_v, grow, flat.1),
             );
         } else {
             slices = grown_slices(slices, grow)?;

@@ -1,5 +1,6 @@
-//! Writes shaders/irid_film.glsl, irid_film_es.glsl and irid_film.hlsl from
-//! shaders/irid_film.wgsl, and likewise irid_film_rough.* from
+//! Writes the atlas mapping (gpu/src/generate.rs) into shaders/irid_film.wgsl,
+//! then shaders/irid_film.glsl, irid_film_es.glsl and irid_film.hlsl from
+//! it, and likewise irid_film_rough.* from
 //! shaders/irid_film_rough.wgsl (run from the repository root, or anywhere in it:
 //! the paths are the crate's):
 //!
@@ -23,6 +24,19 @@ fn main() -> ExitCode {
                 return ExitCode::from(2);
             }
         };
+        // The atlas mapping comes from the generator, into the WGSL too.
+        let wgsl = if wgsl.contains(irid_gpu::generate::MAPPING_BEGIN) {
+            match irid_gpu::generate::with_mapping(lib, &wgsl) {
+                Ok(w) => w,
+                Err(e) => {
+                    eprintln!("gen-shaders: {e}");
+                    return ExitCode::from(2);
+                }
+            }
+        } else {
+            wgsl
+        };
+        files.push((format!("{}.wgsl", lib.stem), wgsl.clone()));
         match irid_gpu::generate::generate_library(lib, &wgsl) {
             Ok(f) => files.extend(f),
             Err(e) => {

@@ -37,6 +37,7 @@ pub(super) fn bake_atlas(spec: &BakeSpec, progress: &dyn Fn(&str)) -> Result<Lut
         film: &film,
         side: 0,
         cos: spec.cos_theta,
+        goal,
     }];
     // The points the table's validation draws, so that the search grows
     // the charts until that validation meets the target.
@@ -50,7 +51,6 @@ pub(super) fn bake_atlas(spec: &BakeSpec, progress: &dyn Fn(&str)) -> Result<Lut
     let built = build(
         &sides,
         spec.thickness_nm,
-        goal,
         MAX_AXIS_NODES,
         &[points],
         progress,
