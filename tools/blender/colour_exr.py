@@ -108,8 +108,51 @@ def _synthetic_chart(size_u, size_v, blue):
     )
 
 
+def _synthetic_rough(directory, rough):
+    """A rough table (film.json "rough", docs/gpu.md) of `slices` slices in
+    rows of `columns`, each of size_u × size_v nodes inside a one-texel
+    gutter: slice s's node (i, j) holds (i / (N_u - 1), j / (N_v - 1),
+    s / (slices - 1)), so the two-slice blend at roughness r gives back the
+    chart coordinates (x, y) and √r. Returns film.json's "rough"."""
+    slices, columns = rough["slices"], rough["columns"]
+    nu, nv = rough["size_u"], rough["size_v"]
+    pitch = (nu + 2, nv + 2)
+    rows = -(-slices // columns)
+    texels = np.zeros((rows * pitch[1], columns * pitch[0], 4))
+    rects = []
+    for s in range(slices):
+        x0, y0 = 1 + (s % columns) * pitch[0], 1 + (s // columns) * pitch[1]
+        chart, _ = _synthetic_chart(nu, nv, s / (slices - 1))
+        texels[y0 - 1:y0 + nv + 1, x0 - 1:x0 + nu + 1] = chart
+        rects.append([x0, y0, nu, nv])
+    write_exr(directory / "rough.exr", texels)
+    return {
+        "texture": {"file": "rough.exr", "width": columns * pitch[0], "height": rows * pitch[1],
+                    "format": "rgba16f"},
+        "light_from": "ambient",
+        "layout": {
+            "slices": slices,
+            "columns": columns,
+            "slice_size": [nu, nv],
+            "pitch": list(pitch),
+            "gutter": 1,
+            "slice_rects": rects,
+            "params": {
+                "thickness_min_nm": 100.0,
+                "thickness_max_nm": 900.0,
+                "cos_min": rough["cos_range"][0],
+                "cos_max": rough["cos_range"][1],
+                "cos_crit": rough["cos_crit"],
+                "y_crit": rough["y_crit"],
+                "thickness_power": rough["thickness_power"],
+            },
+        },
+    }
+
+
 def write_synthetic_export(
-    directory, size_u, size_v, cos_range, cos_crit, y_crit, opaque, thickness_power=1, back=None
+    directory, size_u, size_v, cos_range, cos_crit, y_crit, opaque, thickness_power=1, back=None,
+    rough=None,
 ):
     """A film.json version 2 export for the mapping test, with a one-texel
     gutter around each chart as irid writes it. The front chart's node (i, j)
@@ -117,7 +160,9 @@ def write_synthetic_export(
     (1 - i / (N_u - 1), 1 - j / (N_v - 1), 0.75), so bilinear sampling gives
     back the continuous chart coordinates (x, y) the mapping produced. back,
     a dict (size_u, size_v, cos_range, cos_crit, y_crit), adds a back chart
-    above it whose blue channel is 0.5."""
+    above it whose blue channel is 0.5. rough, a dict (slices, columns,
+    size_u, size_v, cos_range, cos_crit, y_crit, thickness_power), adds a
+    rough table whose slices hold their own coordinates (_synthetic_rough)."""
     directory.mkdir(parents=True, exist_ok=True)
     specs = [("front", size_u, size_v, cos_range, cos_crit, y_crit, thickness_power, 0.25)]
     if back:
@@ -179,6 +224,67 @@ def write_synthetic_export(
         "layer": 1,
         "sampling": "exact",
         "opaque": opaque,
+        "rough": _synthetic_rough(directory, rough) if rough else None,
+    }
+    (directory / "film.json").write_text(json.dumps(film, indent=1))
+
+
+def write_synthetic_atlas(directory, charts, sides, thickness_range, opaque):
+    """A film.json version 3 export (an atlas of band and corner charts,
+    docs/gpu.md) for the mapping test. charts: dicts of a chart's params by
+    name (film.json charts[k].params: side, kind, a, floor and the band's or
+    corner's numbers) plus "size" (nodes along u, v); they are stacked in
+    one column, each inside a one-texel gutter. Chart k's node (i, j) holds
+    reflectance (i / (N_u - 1), j / (N_v - 1), (k + 1) / 16) and
+    transmittance (1 - the same), so a render names the chart and the point
+    in it. sides: {"front": [chart numbers], "back": [...] or None}."""
+    directory.mkdir(parents=True, exist_ok=True)
+    width = max(c["size"][0] for c in charts) + 2
+    height = sum(c["size"][1] + 2 for c in charts)
+    r = np.zeros((height, width, 4))
+    r[..., 3] = 1.0
+    entries, row = [], 0
+    for k, chart in enumerate(charts):
+        nu, nv = chart["size"]
+        cr, _ = _synthetic_chart(nu, nv, (k + 1) / 16)
+        r[row:row + nv + 2, : nu + 2] = cr
+        params = {key: value for key, value in chart.items() if key != "size"}
+        params.update({"x0": 1, "y0": row + 1, "width": nu, "height": nv})
+        entries.append({
+            "side": params["side"],
+            "kind": "corner" if params["kind"] == 1 else "band",
+            "rect": [1, row + 1, nu, nv],
+            "params": params,
+        })
+        row += nv + 2
+    t = 1.0 - r
+    t[..., 3] = 1.0
+    write_exr(directory / "reflectance.exr", r)
+    write_exr(directory / "transmittance.exr", t)
+    side = lambda k, numbers: None if numbers is None else {"index": k, "charts": numbers}  # noqa: E731
+    film = {
+        "format": "irid-film",
+        "version": 3,
+        "texture": {
+            "width": width,
+            "height": height,
+            "format": "rgba16f",
+            "files": {"reflectance": "reflectance.exr", "transmittance": "transmittance.exr"},
+            "png": None,
+        },
+        "domain": {"thickness_nm": list(thickness_range), "cos_theta": [0.0, 1.0]},
+        "charts": entries,
+        "sides": {"front": side(0, sides["front"]), "back": side(1, sides.get("back"))},
+        "white": "e",
+        "stack": {
+            "ambient": {"name": "n=1", "dispersion": {"constant": {"n": 1.0, "k": 0.0}}},
+            "layers": [],
+            "substrate": {"name": "n=1.5", "dispersion": {"constant": {"n": 1.5, "k": 0.0}}},
+        },
+        "layer": 1,
+        "sampling": "exact",
+        "opaque": opaque,
+        "rough": None,
     }
     (directory / "film.json").write_text(json.dumps(film, indent=1))
 

@@ -330,9 +330,10 @@ class Irid:
             np.array([row["transmittance_rgb"] for row in rows]),
         )
 
-    def export(self, stack_path, out_dir, layer, thickness_range, white="e"):
-        """An export directory, made once per stack, layer, range and white."""
-        key = (str(stack_path), layer, tuple(thickness_range), white)
+    def export(self, stack_path, out_dir, layer, thickness_range, white="e", rough=False):
+        """An export directory, made once per stack, layer, range, white and
+        rough table (`--rough`) or not."""
+        key = (str(stack_path), layer, tuple(thickness_range), white, rough)
         made = getattr(self, "_exports", {})
         self._exports = made
         if key in made:
@@ -348,6 +349,7 @@ class Irid:
             layer,
             "--thickness",
             f"{thickness_range[0]:g}:{thickness_range[1]:g}",
+            *(["--rough"] if rough else []),
         )
         made[key] = out_dir
         return out_dir
@@ -474,3 +476,70 @@ def render_picture(irid, case, stack, workdir, png_path):
     bpy.ops.render.render(write_still=True)
     print(f"wrote {png_path}")
 
+
+def render_rough_picture(directory, thickness_nm, png_path, roughness=(0.0, 0.3, 0.6)):
+    """Three spheres of irid's material from an export with the rough table
+    (`directory`), at each roughness, under a sky that is bright above the
+    horizon and dark below it, so the lobe's width shows; labelled."""
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    scene = bpy.context.scene
+    scene.render.engine = "CYCLES"
+    scene.cycles.device = "CPU"
+    scene.cycles.samples = 64
+    scene.cycles.use_denoising = False
+    scene.view_settings.view_transform = "Standard"
+    scene.render.resolution_x, scene.render.resolution_y = 600, 240
+    scene.render.image_settings.file_format = "PNG"
+    scene.render.image_settings.color_mode = "RGB"
+    scene.render.image_settings.compression = 100
+    world = bpy.data.worlds.new("sky")
+    scene.world = world
+    if world.node_tree is None:
+        world.use_nodes = True
+    tree = world.node_tree
+    tree.nodes.clear()
+    coords = tree.nodes.new("ShaderNodeTexCoord")
+    split = tree.nodes.new("ShaderNodeSeparateXYZ")
+    tree.links.new(coords.outputs["Generated"], split.inputs[0])
+    ramp = tree.nodes.new("ShaderNodeValToRGB")
+    ramp.color_ramp.elements[0].position = 0.45
+    ramp.color_ramp.elements[0].color = (0.05, 0.05, 0.05, 1.0)
+    ramp.color_ramp.elements[1].position = 0.55
+    ramp.color_ramp.elements[1].color = (1.5, 1.5, 1.5, 1.0)
+    tree.links.new(split.outputs["Z"], ramp.inputs[0])
+    background = tree.nodes.new("ShaderNodeBackground")
+    tree.links.new(ramp.outputs[0], background.inputs["Color"])
+    out = tree.nodes.new("ShaderNodeOutputWorld")
+    tree.links.new(background.outputs[0], out.inputs["Surface"])
+    label_material = emission_black("label")
+    for k, r in enumerate(roughness):
+        x = 2.2 * (k - (len(roughness) - 1) / 2)
+        material = irid_blender.make_material(directory, thickness_nm=thickness_nm, roughness=r,
+                                              name=f"irid roughness {r:g}")
+        bpy.ops.mesh.primitive_uv_sphere_add(segments=96, ring_count=48, location=(x, 0, 0.2))
+        sphere = bpy.context.active_object
+        bpy.ops.object.shade_smooth()
+        sphere.data.materials.append(material)
+        curve = bpy.data.curves.new(f"roughness {r:g}", "FONT")
+        curve.body = f"roughness {r:g}"
+        curve.size = 0.22
+        curve.align_x = "CENTER"
+        text = bpy.data.objects.new(curve.body, curve)
+        text.location = (x, 0, -1.25)
+        text.rotation_euler = (math.radians(90), 0, 0)
+        text.data.materials.append(label_material)
+        text.visible_glossy = False
+        scene.collection.objects.link(text)
+    camera = bpy.data.cameras.new("camera")
+    camera.type = "ORTHO"
+    camera.ortho_scale = 6.8
+    camera_object = bpy.data.objects.new("camera", camera)
+    camera_object.location = (0, -10, 0)
+    camera_object.rotation_euler = (math.radians(90), 0, 0)
+    scene.collection.objects.link(camera_object)
+    scene.camera = camera_object
+    png_path.parent.mkdir(parents=True, exist_ok=True)
+    scene.render.filepath = str(png_path)
+    with quiet_stdout():
+        bpy.ops.render.render(write_still=True)
+    print(f"wrote {png_path}")

@@ -2,12 +2,14 @@
 
 `irid export --white e` writes a directory with reflectance.exr,
 transmittance.exr and film.json: an atlas of the film's exact reflected and
-transmitted colour over grids of (thickness, cos θ), one chart for light
-arriving from the ambient and one for light arriving from a lossless
-substrate, and the closed-form mapping from (thickness, cos θ) to texture
-coordinates (docs/gpu.md). This module turns such a directory into a shader
-node group that evaluates the same mapping with math nodes (on a back face,
-the substrate side's chart), samples both tables bilinearly, and shades with
+transmitted colour in charts over (thickness, cos θ), for light arriving
+from the ambient and for light arriving from a lossless substrate, and the
+closed-form mapping from (thickness, cos θ) to texture coordinates
+(docs/gpu.md; film.json version 3: several charts per side in optical
+thickness, chosen per lookup; version 2: one chart per side). This module
+turns such a directory into a shader node group that evaluates the same
+mapping and choice with math nodes (on a back face, the substrate side's
+charts), samples both tables bilinearly, and shades with
 a GGX Glossy BSDF coloured by the film's reflectance (no Fresnel of its own:
 the table already holds it) plus, when light leaves through the substrate, a
 Refraction BSDF coloured by its transmittance (into a metal the transmitted
@@ -26,9 +28,13 @@ the selected objects.
 
 What is exact: at roughness 0 the colour of every reflected and transmitted
 ray is the table's bilinear interpolation of the exact film response at the
-ray's angle to the shading normal. What is approximated: with roughness > 0
-the film is still evaluated at the shading normal's angle, not per
-microfacet, and GGX spreads that one colour over the lobe.
+ray's angle to the shading normal. At roughness > 0 the reflection lobe's
+colour is the film's reflectance pre-integrated over the GGX lobe, F_eff of
+docs/rough.md, from the export's rough table (`irid export --rough`; without
+it the material has no roughness: asking for one raises ExportError); the
+refraction lobe keeps the transmittance at the view angle, and a back face
+seen from a substrate with its own chart the smooth reflectance at the view
+angle (the rough table holds light from the ambient only).
 """
 
 import json
@@ -48,7 +54,10 @@ bl_info = {
 }
 
 FILM_FORMAT = "irid-film"
-FILM_VERSION = 2
+# Version 2: one chart per side in physical thickness (Chart); version 3: an
+# atlas of charts in optical thickness, several per side, chosen per lookup
+# (AtlasChart). Both are read.
+FILM_VERSIONS = (2, 3)
 # Wavelength at which a transmitting film's refraction index is taken: the
 # one irid grades the substrate's critical angle at (docs/lut-format.md).
 IOR_WAVELENGTH_NM = 550.0
@@ -62,12 +71,12 @@ class ExportError(ValueError):
     """An export directory that cannot be turned into a material."""
 
 
-class Chart:
-    """One chart of the export's atlas (docs/gpu.md): the domain and warps of
-    its axes and the rectangle of texels its nodes fill."""
+class Mapping:
+    """The closed-form mapping of one rectangle of nodes (docs/gpu.md, "The
+    mapping"): the thickness and cos θ domain and the warps of both axes, as
+    a chart of the atlas and the rough table's slices have it."""
 
-    def __init__(self, chart, where, atlas_size):
-        params = _object(chart, "params", where)
+    def __init__(self, params, where):
         number = lambda key: _number(params, key, f"{where}.params")  # noqa: E731
         self.thickness_min_nm = number("thickness_min_nm")
         self.thickness_max_nm = number("thickness_max_nm")
@@ -76,25 +85,11 @@ class Chart:
         self.cos_crit = number("cos_crit")
         self.y_crit = number("y_crit")
         self.thickness_power = number("thickness_power")
-        self.rect = [number(key) for key in ("x0", "y0", "width", "height")]
         if self.thickness_power not in (1.0, 2.0):
             raise ExportError(
                 f"irid export {where}.params.thickness_power = {self.thickness_power}, "
                 "expected 1 or 2"
             )
-        x0, y0, w, h = self.rect
-        if (
-            any(v != int(v) for v in self.rect)
-            or min(x0, y0) < 0
-            or min(w, h) < 1
-            or x0 + w > atlas_size[0]
-            or y0 + h > atlas_size[1]
-        ):
-            raise ExportError(
-                f"irid export {where}: rectangle {self.rect} does not lie in the "
-                f"{atlas_size[0]}×{atlas_size[1]} texture"
-            )
-        self.rect = [int(v) for v in self.rect]
         if not 0.0 <= self.thickness_min_nm <= self.thickness_max_nm:
             raise ExportError(
                 f"irid export {where}: thickness range [{self.thickness_min_nm}, "
@@ -113,6 +108,179 @@ class Chart:
                     f"irid export {where}: angle warp centre cos {self.cos_crit} (y {self.y_crit}) "
                     f"is not inside the cos θ range [{self.cos_min}, {self.cos_max})"
                 )
+
+
+class Chart(Mapping):
+    """One chart of the export's atlas (docs/gpu.md): its mapping and the
+    rectangle of texels its nodes fill."""
+
+    def __init__(self, chart, where, atlas_size):
+        params = _object(chart, "params", where)
+        super().__init__(params, where)
+        self.rect = _rect([_number(params, key, f"{where}.params") for key in ("x0", "y0", "width", "height")],
+                          where, atlas_size)
+
+
+class AtlasChart:
+    """One chart of a version 3 atlas (docs/gpu.md, "The mapping";
+    src/atlas/chart.rs): a band of cos θ in optical thickness
+    p = d · s(cos θ), s(c) = √max(1 − a (1 − c²), floor²), on a log (or
+    uniform) p axis and a cos θ axis warped about an anchor (log, square
+    root or uniform), or the polar corner of a free-standing film near zero
+    thickness at grazing incidence. Its numbers are the uniform array's f32
+    values, by name (film.json charts[k].params)."""
+
+    BAND = ("p0_nm", "p_lo_nm", "p_hi_nm", "cos_lo", "cos_hi", "anchor", "offset")
+    CORNER = ("scale_nm", "radius")
+
+    def __init__(self, chart, where, atlas_size):
+        params = _object(chart, "params", where)
+        number = lambda key: _number(params, key, f"{where}.params")  # noqa: E731
+        self.kind = chart.get("kind")
+        if self.kind not in ("band", "corner"):
+            raise ExportError(f"irid export {where}.kind: {self.kind!r}, expected 'band' or 'corner'")
+        if number("kind") != (0.0 if self.kind == "band" else 1.0):
+            raise ExportError(f"irid export {where}: params.kind disagrees with kind {self.kind!r}")
+        self.side = number("side")
+        if self.side not in (0.0, 1.0):
+            raise ExportError(f"irid export {where}.params.side = {self.side}, expected 0 or 1")
+        self.side = int(self.side)
+        self.a, self.floor = number("a"), number("floor")
+        if not (self.a >= 0.0 and 0.0 < self.floor <= 1.0):
+            raise ExportError(f"irid export {where}: optical a {self.a}, floor {self.floor}")
+        self.rect = _rect([number(key) for key in ("x0", "y0", "width", "height")], where, atlas_size)
+        for key in self.BAND if self.kind == "band" else self.CORNER:
+            setattr(self, key, number(key))
+        if self.kind == "band":
+            if not (self.p0_nm >= 0.0 and 0.0 <= self.p_lo_nm <= self.p_hi_nm
+                    and 0.0 <= self.cos_lo <= self.cos_hi <= 1.0
+                    and (self.anchor <= self.cos_lo or self.anchor >= self.cos_hi)):
+                raise ExportError(f"irid export {where}: band axes out of their ranges")
+        elif not (self.scale_nm > 0.0 and self.radius > 0.0):
+            raise ExportError(f"irid export {where}: corner scale {self.scale_nm}, radius {self.radius}")
+
+    def p_warp(self, p):
+        """The p axis's warp U(p): ln(1 + p / p₀), or p when p₀ is 0."""
+        return math.log1p(max(p, 0.0) / self.p0_nm) if self.p0_nm > 0.0 else p
+
+    def sign(self):
+        return 1.0 if self.cos_lo >= self.anchor else -1.0
+
+    def c_warp(self, c):
+        """The cos θ axis's warp W(c) = σ g(|c − anchor|)."""
+        t = abs(c - self.anchor)
+        if self.offset > 0.0:
+            g = math.log(t + self.offset)
+        elif self.offset == 0.0:
+            g = math.sqrt(t)
+        else:
+            g = t
+        return self.sign() * g
+
+    def xy(self, d, c):
+        """(x, y) in [0, 1]² of thickness d nm at cos θ c, in Python: what the
+        node graph computes (the reference of the tests)."""
+        s = lambda c: math.sqrt(max(1.0 - self.a * (1.0 - c * c), self.floor ** 2))  # noqa: E731
+        clamp = lambda v: min(max(v, 0.0), 1.0)  # noqa: E731
+        if self.kind == "corner":
+            pp = d * s(c) / self.scale_nm
+            return clamp(math.atan2(pp, c) / (math.pi / 2)), clamp(math.hypot(pp, c) / self.radius)
+        c = min(max(c, self.cos_lo), self.cos_hi)
+        u0, u1 = self.p_warp(self.p_lo_nm), self.p_warp(self.p_hi_nm)
+        x = clamp((self.p_warp(d * s(c)) - u0) / (u1 - u0)) if u1 > u0 else 0.0
+        v0, v1 = self.c_warp(self.cos_lo), self.c_warp(self.cos_hi)
+        y = clamp((self.c_warp(c) - v0) / (v1 - v0)) if v1 > v0 else 0.0
+        return x, y
+
+    def serves(self, d, c):
+        """The choice rule's test (in Python): a corner serves inside its
+        radius, a band up to its cos θ maximum."""
+        if self.kind == "corner":
+            s = math.sqrt(max(1.0 - self.a * (1.0 - c * c), self.floor ** 2))
+            return math.hypot(d * s / self.scale_nm, c) < self.radius
+        return c <= self.cos_hi
+
+
+def atlas_chart_for(charts, d, c):
+    """The chart of a side's charts that serves (d, c): the first that
+    serves it, else the last band (src/atlas/mod.rs Atlas::chart_for)."""
+    for chart in charts:
+        if chart.serves(d, c):
+            return chart
+    return [chart for chart in charts if chart.kind == "band"][-1]
+
+
+def _rect(rect, where, atlas_size):
+    """[x0, y0, width, height] in whole texels inside the texture, or ExportError."""
+    x0, y0, w, h = rect
+    if (
+        any(v != int(v) for v in rect)
+        or min(x0, y0) < 0
+        or min(w, h) < 1
+        or x0 + w > atlas_size[0]
+        or y0 + h > atlas_size[1]
+    ):
+        raise ExportError(
+            f"irid export {where}: rectangle {rect} does not lie in the "
+            f"{atlas_size[0]}×{atlas_size[1]} texture"
+        )
+    return [int(v) for v in rect]
+
+
+class Rough:
+    """The export's rough table (`irid export --rough`, film.json "rough";
+    docs/gpu.md "Rough films"): F_eff of light from the ambient in roughness
+    slices of one texture, slice s at roughness (s / (slices − 1))², each on
+    the same mapping, in rows of `columns` inside a gutter."""
+
+    def __init__(self, rough, directory, where):
+        texture = _object(rough, "texture", where)
+        layout = _object(rough, "layout", where)
+        name = texture.get("file")
+        if not isinstance(name, str) or not name or os.path.basename(name) != name:
+            raise ExportError(f"irid export {where}: rough.texture.file is not a file name")
+        self.path = os.path.join(directory, name)
+        if not os.path.isfile(self.path):
+            raise ExportError(f"irid export {directory}: {name} is missing")
+        self.size = (texture.get("width"), texture.get("height"))
+        whole = lambda v: isinstance(v, int) and not isinstance(v, bool)  # noqa: E731
+        if not all(whole(v) and v >= 1 for v in self.size):
+            raise ExportError(f"irid export {where}: rough.texture.width and height must be sizes")
+        self.slices = layout.get("slices")
+        self.columns = layout.get("columns")
+        self.gutter = layout.get("gutter")
+        if not (whole(self.slices) and self.slices >= 2 and whole(self.columns)
+                and self.columns >= 1 and whole(self.gutter) and self.gutter >= 0):
+            raise ExportError(
+                f"irid export {where}: rough.layout needs slices ≥ 2, columns ≥ 1 and a gutter"
+            )
+        pair = lambda key: layout.get(key) if isinstance(layout.get(key), list) else []  # noqa: E731
+        self.slice_size, self.pitch = pair("slice_size"), pair("pitch")
+        if not all(len(v) == 2 and all(whole(n) and n >= 1 for n in v)
+                   for v in (self.slice_size, self.pitch)):
+            raise ExportError(f"irid export {where}: rough.layout.slice_size and pitch must be sizes")
+        self.mapping = Mapping(_object(layout, "params", f"{where}: rough.layout"),
+                               f"{where}: rough.layout")
+        # The node graph places a slice by the closed form; the export's own
+        # rectangles must agree with it.
+        rects = layout.get("slice_rects")
+        if not isinstance(rects, list) or len(rects) != self.slices:
+            raise ExportError(f"irid export {where}: rough.layout.slice_rects must list every slice")
+        for s, rect in enumerate(rects):
+            placed = list(self.slice_origin(s)) + list(self.slice_size)
+            if not isinstance(rect, list) or rect != placed:
+                raise ExportError(
+                    f"irid export {where}: rough slice {s} lies at {rect}, not at {placed} as "
+                    "the layout's closed form puts it"
+                )
+            _rect(placed, f"{where}: rough slice {s}", self.size)
+
+    def slice_origin(self, s):
+        """The texel of slice s's first node (docs/gpu.md)."""
+        return (
+            self.gutter + (s % self.columns) * self.pitch[0],
+            self.gutter + (s // self.columns) * self.pitch[1],
+        )
 
 
 class Export:
@@ -139,10 +307,12 @@ class Export:
             raise ExportError(
                 f"irid export {where}: format {film.get('format')!r}, expected {FILM_FORMAT!r}"
             )
-        if film.get("version") != FILM_VERSION:
+        self.version = film.get("version")
+        if self.version not in FILM_VERSIONS or isinstance(self.version, bool):
             raise ExportError(
                 f"irid export {where}: film.json version {film.get('version')!r}; this module "
-                f"reads version {FILM_VERSION}: export the film again with the irid it came with"
+                f"reads versions {' and '.join(map(str, FILM_VERSIONS))}: export the film again "
+                "with the irid it came with"
             )
         texture = _object(film, "texture", where)
         self.size = (texture.get("width"), texture.get("height"))
@@ -151,17 +321,36 @@ class Export:
         charts = film.get("charts")
         if not isinstance(charts, list) or not charts:
             raise ExportError(f"irid export {where}: 'charts' is missing or empty")
+        kind = Chart if self.version == 2 else AtlasChart
         self.charts = [
-            Chart(c if isinstance(c, dict) else {}, f"{where}: charts[{k}]", self.size)
+            kind(c if isinstance(c, dict) else {}, f"{where}: charts[{k}]", self.size)
             for k, c in enumerate(charts)
         ]
         sides = _object(film, "sides", where)
-        self.front = self.charts[self._chart_of(sides, "front", where)]
-        self.back = None
-        if sides.get("back") is not None:
-            self.back = self.charts[self._chart_of(sides, "back", where)]
-        self.thickness_min_nm = self.front.thickness_min_nm
-        self.thickness_max_nm = self.front.thickness_max_nm
+        if self.version == 2:
+            # One chart per side: front and back are Chart objects.
+            self.front = self.charts[self._chart_of(sides, "front", where)]
+            self.back = None
+            if sides.get("back") is not None:
+                self.back = self.charts[self._chart_of(sides, "back", where)]
+            self.thickness_min_nm = self.front.thickness_min_nm
+            self.thickness_max_nm = self.front.thickness_max_nm
+        else:
+            # Several charts per side, in the order the choice rule reads
+            # them: front and back are tuples of AtlasChart (the same tuple
+            # when both sides read the same charts).
+            self.front = self._charts_of(sides, "front", where)
+            self.back = None
+            if sides.get("back") is not None:
+                self.back = self._charts_of(sides, "back", where)
+                if self.back == self.front:
+                    self.back = self.front
+            domain = _object(film, "domain", where).get("thickness_nm")
+            if (not isinstance(domain, list) or len(domain) != 2
+                    or not all(isinstance(v, (int, float)) and math.isfinite(v) for v in domain)
+                    or not 0.0 <= domain[0] <= domain[1]):
+                raise ExportError(f"irid export {where}: domain.thickness_nm is not a range")
+            self.thickness_min_nm, self.thickness_max_nm = map(float, domain)
         opaque = film.get("opaque")
         if not isinstance(opaque, bool):
             raise ExportError(f"irid export {where}: 'opaque' must be true or false")
@@ -183,7 +372,39 @@ class Export:
                 f"are white E (a flat spectrum is 1, 1, 1): export it again with `--white e`"
             )
         self.stack = film.get("stack")
+        # The rough table (`irid export --rough`): null or absent without it.
+        rough = film.get("rough")
+        self.rough = None
+        if rough is not None:
+            if not isinstance(rough, dict):
+                raise ExportError(f"irid export {where}: 'rough' is not an object")
+            if rough.get("light_from") != "ambient":
+                raise ExportError(
+                    f"irid export {where}: rough.light_from {rough.get('light_from')!r}, "
+                    "expected 'ambient'"
+                )
+            self.rough = Rough(rough, self.directory, where)
         self.label = os.path.basename(self.directory.rstrip(os.sep)) or "film"
+
+    def _charts_of(self, sides, side, where):
+        """Version 3: the side's charts, in the atlas's order (the order the
+        choice rule reads them in), each serving that side."""
+        entry = sides.get(side)
+        numbers = entry.get("charts") if isinstance(entry, dict) else None
+        index = 0 if side == "front" else 1
+        if (not isinstance(numbers, list) or not numbers
+                or not all(isinstance(k, int) and not isinstance(k, bool)
+                           and 0 <= k < len(self.charts) for k in numbers)):
+            raise ExportError(f"irid export {where}: sides.{side}.charts is not a list of the charts")
+        charts = tuple(self.charts[k] for k in sorted(set(numbers)))
+        served = {chart.side for chart in charts}
+        if len(served) != 1:
+            raise ExportError(f"irid export {where}: sides.{side}.charts serve sides {sorted(served)}")
+        if served != {index} and not (side == "back" and served == {0}):
+            raise ExportError(f"irid export {where}: sides.{side}.charts serve side {served.pop()}")
+        if not any(chart.kind == "band" for chart in charts):
+            raise ExportError(f"irid export {where}: sides.{side} has no band chart")
+        return charts
 
     def _chart_of(self, sides, side, where):
         entry = sides.get(side)
@@ -205,6 +426,21 @@ class Export:
         if span == 0.0:
             return 0.0
         return min(1.0, max(0.0, (t - self.thickness_min_nm) / span))
+
+    def rough_applies_to_back_faces(self):
+        """Whether the rough table (light from the ambient) holds a back
+        face's F_eff too: a back face reads the front chart (an opaque film:
+        the back face of a film on metal) or the two sides are one chart (a
+        free-standing film)."""
+        return self.back is None or self.back is self.front
+
+    def require_rough(self, why):
+        """ExportError unless the export has the rough table."""
+        if self.rough is None:
+            raise ExportError(
+                f"irid export {self.directory}: {why}, but the export has no rough table "
+                "(film.json \"rough\" is null): export it again with `irid export --rough`"
+            )
 
     def transmits(self):
         """Whether light leaves through the substrate: film.json's "opaque" is
@@ -306,10 +542,12 @@ class _Builder:
 
 def make_node_group(export_dir, name=None, ior=None):
     """A shader node group for an export: inputs Thickness (0-1 over the export's
-    thickness range), Thickness nm, Roughness and Normal; outputs BSDF,
-    Reflection, Reflectance and Transmittance (docs/blender.md). A back face
-    is shaded with the export's back side (light arriving from the
-    substrate), when it has one.
+    thickness range), Thickness nm, Roughness (only when the export has the
+    rough table) and Normal; outputs BSDF, Reflection, Reflectance and
+    Transmittance (docs/blender.md). A back face is shaded with the export's
+    back side (light arriving from the substrate), when it has one. Without
+    the rough table both lobes are mirror-smooth: the group has no Roughness
+    input, so no roughness can reach it that it would render wrongly.
 
     Raises ExportError for a bad export directory; nothing stays in the .blend
     when building fails."""
@@ -322,8 +560,11 @@ def make_node_group(export_dir, name=None, ior=None):
     created = []
     try:
         images = {}
-        for table in TABLES:
-            images[table] = _load_image(export, table, f"{group_name} {table}")
+        files = [(table, export.paths[table], export.size) for table in TABLES]
+        if export.rough is not None:
+            files.append(("rough", export.rough.path, export.rough.size))
+        for table, path, size in files:
+            images[table] = _load_image(path, size, f"{group_name} {table}")
             created.append(images[table])
         group = bpy.data.node_groups.new(group_name, "ShaderNodeTree")
         created.append(group)
@@ -341,21 +582,31 @@ def make_material(export_dir, thickness_nm=None, name=None, roughness=0.0, ior=N
     thickness_nm: the film's thickness, a constant inside the export's range,
     set on the group's Thickness nm input; None leaves the 0-1 Thickness input
     (over the range, like glTF's iridescenceThicknessTexture) for an attribute
-    or texture to drive (default 0.5). roughness: GGX roughness of both lobes. ior: relative
-    index of refraction when the film transmits into a lossless substrate
-    (default: substrate over ambient at 550 nm, from the stack in film.json);
-    over an absorbing substrate (a metal) the material has no refraction lobe.
+    or texture to drive (default 0.5). roughness: GGX roughness of both
+    lobes, 0 to 1; above 0 the reflection lobe's colour is the film's F_eff
+    from the export's rough table (`irid export --rough`), which it then
+    needs; None leaves the group's Roughness input (default 0) for a texture
+    or value to drive, and needs the rough table too. ior: relative index of
+    refraction when the film transmits into a lossless substrate (default:
+    substrate over ambient at 550 nm, from the stack in film.json); over an
+    absorbing substrate (a metal) the material has no refraction lobe.
 
     Raises ExportError (a ValueError) with one message for a missing file, a
-    damaged film.json or an export for another white than Blender's (`--white
-    e`), ValueError for a thickness outside the export's range; nothing
-    half-built stays in the .blend."""
+    damaged film.json, an export for another white than Blender's (`--white
+    e`) or a roughness above 0 (or None) with an export without the rough
+    table; ValueError for a thickness outside the export's range or a
+    roughness outside [0, 1]; nothing half-built stays in the .blend."""
     export = Export(export_dir)
     if thickness_nm is not None:
         export.thickness_fraction(thickness_nm)  # refuses one outside the range
-    roughness = float(roughness)
-    if not 0.0 <= roughness <= 1.0:
-        raise ValueError(f"roughness {roughness} is outside [0, 1]")
+    if roughness is None:
+        export.require_rough("roughness=None leaves the roughness to a node")
+    else:
+        roughness = float(roughness)
+        if not 0.0 <= roughness <= 1.0:
+            raise ValueError(f"roughness {roughness} is outside [0, 1]")
+        if roughness > 0.0:
+            export.require_rough(f"roughness {roughness:g} asks for the film's rough reflectance")
     material_name = name or f"irid {export.label}"
     group = make_node_group(export, name=f"{material_name} film", ior=ior)
     material = None
@@ -373,7 +624,8 @@ def make_material(export_dir, thickness_nm=None, name=None, roughness=0.0, ior=N
         build.link(film.outputs["BSDF"], out.inputs["Surface"])
         if thickness_nm is not None:
             film.inputs["Thickness nm"].default_value = float(thickness_nm)
-        film.inputs["Roughness"].default_value = roughness
+        if export.rough is not None:
+            film.inputs["Roughness"].default_value = roughness or 0.0
         material["irid_export"] = export.directory
         if thickness_nm is not None:
             material["irid_thickness_nm"] = float(thickness_nm)
@@ -382,14 +634,13 @@ def make_material(export_dir, thickness_nm=None, name=None, roughness=0.0, ior=N
             _remove(material)
         images = [n.image for n in group.nodes if n.bl_idname == "ShaderNodeTexImage"]
         _remove(group)
-        for image in images:
+        for image in set(images):
             _remove(image)
         raise
     return material
 
 
-def _load_image(export, table, name):
-    path = export.paths[table]
+def _load_image(path, expected_size, name):
     try:
         image = bpy.data.images.load(path, check_existing=False)
     except RuntimeError as e:
@@ -402,10 +653,10 @@ def _load_image(export, table, name):
         size = tuple(image.size)
         if size == (0, 0):
             raise ExportError(f"irid export {path}: Blender cannot read it (damaged or not an image)")
-        if size != export.size:
+        if size != tuple(expected_size):
             raise ExportError(
                 f"irid export {path}: image is {size[0]}×{size[1]}, film.json says "
-                f"{export.size[0]}×{export.size[1]}"
+                f"{expected_size[0]}×{expected_size[1]}"
             )
     except BaseException:
         _remove(image)
@@ -441,7 +692,7 @@ def _build_group(group, export, images, ior):
     _group_interface(group.interface, export)
     build = _Builder(group)
     inputs = build.node("NodeGroupInput", 0, 0)
-    outputs = build.node("NodeGroupOutput", 10, 0)
+    outputs = build.node("NodeGroupOutput", 12, 0)
     geometry = build.node("ShaderNodeNewGeometry", 0, 4)
     x = _thickness_fraction(build, export, inputs)
     normal = _shading_normal(build, inputs, geometry)
@@ -451,41 +702,37 @@ def _build_group(group, export, images, ior):
     build.link(geometry.outputs["Incoming"], dot.inputs[0])
     build.link(normal, dot.inputs[1])
     cos = build.math("ABSOLUTE", 2.5, 4, dot.outputs["Value"])
-    uv = _chart_uv(build, export.front, export.size, x, cos, 0)
+    if export.version == 2:
+        side_uv = lambda side, row: _chart_uv(build, side, export.size, x, cos, row)  # noqa: E731
+    else:
+        span = export.thickness_max_nm - export.thickness_min_nm
+        d = build.math("MULTIPLY_ADD", 2, -1, x, span, export.thickness_min_nm, label="thickness nm")
+        c = build.math("MINIMUM", 3, 4, cos, 1.0, label="cos θ ≤ 1")
+        side_uv = lambda side, row: _atlas_uv(build, side, export.size, d, c, row)  # noqa: E731
+    uv = side_uv(export.front, 0)
     if export.back is not None and export.back is not export.front:
-        # A back face is seen from the substrate: the back side's chart.
+        # A back face is seen from the substrate: the back side's chart(s).
         # uv = front + backfacing · (back − front): one lookup per image.
-        back = _chart_uv(build, export.back, export.size, x, cos, 6)
-        step = build.node("ShaderNodeVectorMath", 7.5, 3, label="back − front", operation="SUBTRACT")
-        build.link(back, step.inputs[0])
-        build.link(uv, step.inputs[1])
-        scale = build.node("ShaderNodeVectorMath", 8, 3, label="× backfacing", operation="SCALE")
-        build.link(step.outputs["Vector"], scale.inputs[0])
-        build.link(geometry.outputs["Backfacing"], scale.inputs["Scale"])
-        pick = build.node("ShaderNodeVectorMath", 8.5, 3, label="uv of the side", operation="ADD")
-        build.link(uv, pick.inputs[0])
-        build.link(scale.outputs["Vector"], pick.inputs[1])
-        uv = pick.outputs["Vector"]
+        back = side_uv(export.back, 6 if export.version == 2 else 6 * len(export.front) + 2)
+        uv = _blend(build, uv, back, geometry.outputs["Backfacing"], 7.5, 3, "uv of the side")
 
     colours = {}
     for row, table in enumerate(TABLES):
-        tex = build.node(
-            "ShaderNodeTexImage",
-            9,
-            1 + 2 * row,
-            label=table,
-            interpolation="Linear",
-            extension="EXTEND",
-            projection="FLAT",
-        )
-        tex.image = images[table]
+        tex = _image_node(build, images[table], 9, 1 + 2 * row, table)
         build.link(uv, tex.inputs["Vector"])
         colours[table] = tex.outputs["Color"]
-        build.link(tex.outputs["Color"], outputs.inputs[table.capitalize()])
+    roughness = inputs.outputs["Roughness"] if export.rough is not None else None
+    reflectance = colours["reflectance"]
+    if roughness is not None:
+        reflectance = _rough_reflectance(
+            build, export, images["rough"], x, cos, roughness, reflectance, geometry
+        )
+    build.link(reflectance, outputs.inputs["Reflectance"])
+    build.link(colours["transmittance"], outputs.inputs["Transmittance"])
 
-    glossy = build.node("ShaderNodeBsdfGlossy", 9.5, -1, label="film reflection", distribution="GGX")
-    build.link(colours["reflectance"], glossy.inputs["Color"])
-    build.link(inputs.outputs["Roughness"], glossy.inputs["Roughness"])
+    glossy = build.node("ShaderNodeBsdfGlossy", 11.5, -1, label="film reflection", distribution="GGX")
+    build.link(reflectance, glossy.inputs["Color"])
+    _set_roughness(build, glossy, roughness)
     build.link(normal, glossy.inputs["Normal"])
     build.link(glossy.outputs["BSDF"], outputs.inputs["Reflection"])
     if ior is None:
@@ -495,16 +742,89 @@ def _build_group(group, export, images, ior):
     # substrate the light refracts into the ambient, and past the critical
     # angle it does not (where the back side's transmittance is 0).
     refraction = build.node(
-        "ShaderNodeBsdfRefraction", 9.5, 1, label="film transmission", distribution="GGX"
+        "ShaderNodeBsdfRefraction", 11.5, 1, label="film transmission", distribution="GGX"
     )
     refraction.inputs["IOR"].default_value = float(ior)
     build.link(colours["transmittance"], refraction.inputs["Color"])
-    build.link(inputs.outputs["Roughness"], refraction.inputs["Roughness"])
+    _set_roughness(build, refraction, roughness)
     build.link(normal, refraction.inputs["Normal"])
-    add = build.node("ShaderNodeAddShader", 10, -1)
+    add = build.node("ShaderNodeAddShader", 12, -1)
     build.link(glossy.outputs["BSDF"], add.inputs[0])
     build.link(refraction.outputs["BSDF"], add.inputs[1])
     build.link(add.outputs["Shader"], outputs.inputs["BSDF"])
+
+
+def _set_roughness(build, bsdf, roughness):
+    """The lobe's GGX roughness: the group's Roughness input, or 0 (mirror)
+    in a group without one."""
+    if roughness is None:
+        bsdf.inputs["Roughness"].default_value = 0.0
+    else:
+        build.link(roughness, bsdf.inputs["Roughness"])
+
+
+def _image_node(build, image, column, row, label):
+    """An Image Texture node sampling like the GPU: bilinear, clamp to edge."""
+    tex = build.node(
+        "ShaderNodeTexImage",
+        column,
+        row,
+        label=label,
+        interpolation="Linear",
+        extension="EXTEND",
+        projection="FLAT",
+    )
+    tex.image = image
+    return tex
+
+
+def _blend(build, a, b, weight, column, row, label):
+    """a + weight · (b − a) for vector (or colour) sockets and a float socket
+    weight: b where weight is 1, exactly a where it is 0."""
+    step = build.node("ShaderNodeVectorMath", column, row, label="b − a", operation="SUBTRACT")
+    build.link(b, step.inputs[0])
+    build.link(a, step.inputs[1])
+    scale = build.node("ShaderNodeVectorMath", column + 0.5, row, label="× weight", operation="SCALE")
+    build.link(step.outputs["Vector"], scale.inputs[0])
+    build.link(weight, scale.inputs["Scale"])
+    total = build.node("ShaderNodeVectorMath", column + 1, row, label=label, operation="ADD")
+    build.link(a, total.inputs[0])
+    build.link(scale.outputs["Vector"], total.inputs[1])
+    return total.outputs["Vector"]
+
+
+def _rough_reflectance(build, export, image, x, cos, roughness, smooth, geometry):
+    """The reflection lobe's colour: F_eff from the rough table where the
+    roughness is above 0, exactly the smooth film's reflectance (`smooth`)
+    where it is 0. As irid_film_rough (shaders/irid_film_rough.wgsl): slice
+    position s = √roughness · (S − 1), one bilinear lookup in each of the two
+    slices around it, blended linearly. The table holds light from the
+    ambient: a back face of a film with a distinct back side keeps the back
+    chart's smooth reflectance at the view angle (docs/blender.md)."""
+    rough = export.rough
+    top = 10
+    # Blender's square root is 0 below 0; the clamp takes a roughness above 1 to 1.
+    root = build.math("SQRT", 1, top, roughness, label="√roughness, clamped")
+    root.node.use_clamp = True
+    s = build.math("MULTIPLY", 2, top, root, float(rough.slices - 1), label="slice position")
+    s0 = build.math("MINIMUM", 3, top, build.math("FLOOR", 2.5, top, s), float(rough.slices - 2),
+                    label="slice below")
+    weight = build.math("SUBTRACT", 3.5, top, s, s0, label="weight of the slice above")
+    xy = _mapping_xy(build, rough.mapping, x, cos, top + 2)
+    below = _slice_uv(build, rough, xy, s0, top + 6)
+    s1 = build.math("ADD", 3.5, top + 9, s0, 1.0, label="slice above")
+    above = _slice_uv(build, rough, xy, s1, top + 9)
+    colours = []
+    for k, uv in enumerate((below, above)):
+        tex = _image_node(build, image, 9, top + 6 + 3 * k, f"rough slice {'above' if k else 'below'}")
+        build.link(uv, tex.inputs["Vector"])
+        colours.append(tex.outputs["Color"])
+    f_eff = _blend(build, colours[0], colours[1], weight, 9.5, top + 8, "F_eff")
+    use = build.math("GREATER_THAN", 9.5, top, roughness, 0.0, label="rough")
+    if not export.rough_applies_to_back_faces():
+        front = build.math("SUBTRACT", 9.5, top + 1, 1.0, geometry.outputs["Backfacing"])
+        use = build.math("MULTIPLY", 10, top + 1, use, front, label="rough, front face")
+    return _blend(build, smooth, f_eff, use, 10.5, top + 4, "reflectance of the lobe")
 
 
 def _group_interface(iface, export):
@@ -522,9 +842,14 @@ def _group_interface(iface, export):
         f"Film thickness in nm, clamped to {export.thickness_min_nm:g}-"
         f"{export.thickness_max_nm:g} nm; below 0 (the default), the 0-1 Thickness input is used"
     )
-    sock = iface.new_socket("Roughness", in_out="INPUT", socket_type="NodeSocketFloat")
-    sock.subtype = "FACTOR"
-    sock.min_value, sock.max_value, sock.default_value = 0.0, 1.0, 0.0
+    if export.rough is not None:
+        sock = iface.new_socket("Roughness", in_out="INPUT", socket_type="NodeSocketFloat")
+        sock.subtype = "FACTOR"
+        sock.min_value, sock.max_value, sock.default_value = 0.0, 1.0, 0.0
+        sock.description = (
+            "GGX roughness of both lobes; above 0 the reflection's colour is the film's "
+            "F_eff from the export's rough table"
+        )
     sock = iface.new_socket("Normal", in_out="INPUT", socket_type="NodeSocketVector")
     sock.hide_value = True
     sock.description = (
@@ -575,55 +900,188 @@ def _shading_normal(build, inputs, geometry):
     return normal.outputs["Vector"]
 
 
-def _chart_uv(build, chart, atlas_size, x, cos, row):
-    """The image coordinates of (thickness fraction x, cos θ) in one chart of
-    the atlas: the export's mapping (docs/gpu.md) in math nodes, with the
-    chart's numbers written into them. Returns the vector socket."""
-    width, height = atlas_size
-    x0, y0, w, h = chart.rect
-    # u: thickness fraction, square-rooted when the chart's thickness nodes
-    # crowd towards the minimum (thickness power 2), onto the chart's texel
-    # centres: u = (x0 + 0.5 + x (w - 1)) / W.
-    if chart.thickness_power == 2.0:
+def _mapping_xy(build, mapping, x, cos, row):
+    """Where (thickness fraction x, cos θ) lies in a rectangle of nodes with
+    this mapping, (x, y) in [0, 1]² (docs/gpu.md, "The mapping"), in math
+    nodes with the mapping's numbers written into them."""
+    # x: square-rooted when the thickness nodes crowd towards the minimum
+    # (thickness power 2).
+    if mapping.thickness_power == 2.0:
         x = build.math("SQRT", 1.5, row, x, label="x = sqrt(x)")
-    u = build.math("MULTIPLY_ADD", 2, row, x, (w - 1) / width, (x0 + 0.5) / width, label="u")
     clamp = build.node("ShaderNodeClamp", 3, row + 2, label="clamp to the chart")
     build.link(cos, clamp.inputs["Value"])
-    clamp.inputs["Min"].default_value = chart.cos_min
-    clamp.inputs["Max"].default_value = chart.cos_max
+    clamp.inputs["Min"].default_value = mapping.cos_min
+    clamp.inputs["Max"].default_value = mapping.cos_max
     c = clamp.outputs["Result"]
 
-    # y: the chart's angle warp, linear in cos θ or square-root on each side
-    # of cos_crit (a branch-free form: one of the two roots is zero; with
+    # y: the angle warp, linear in cos θ or square-root on each side of
+    # cos_crit (a branch-free form: one of the two roots is zero; with
     # cos_crit = cos_min there is no side below).
-    if chart.cos_max == chart.cos_min:
+    if mapping.cos_max == mapping.cos_min:
         y = build.math("MULTIPLY", 4, row + 2, c, 0.0, label="y = 0 (one angle)")
-    elif chart.cos_crit < 0.0:
-        span = chart.cos_max - chart.cos_min
-        y = build.math("MULTIPLY_ADD", 4, row + 2, c, 1.0 / span, -chart.cos_min / span, label="y")
+    elif mapping.cos_crit < 0.0:
+        span = mapping.cos_max - mapping.cos_min
+        y = build.math("MULTIPLY_ADD", 4, row + 2, c, 1.0 / span, -mapping.cos_min / span, label="y")
     else:
-        cc, yc = chart.cos_crit, chart.y_crit
+        cc, yc = mapping.cos_crit, mapping.y_crit
         above = build.math(
-            "MULTIPLY_ADD", 4, row + 2, c, 1.0 / (chart.cos_max - cc), -cc / (chart.cos_max - cc)
+            "MULTIPLY_ADD", 4, row + 2, c, 1.0 / (mapping.cos_max - cc), -cc / (mapping.cos_max - cc)
         )
         above = build.math("SQRT", 5, row + 2, build.math("MAXIMUM", 4.5, row + 2, above, 0.0))
         y = build.math("MULTIPLY_ADD", 5.5, row + 2, above, 1.0 - yc, yc, label="y")
-        if cc > chart.cos_min:
+        if cc > mapping.cos_min:
             below = build.math(
-                "MULTIPLY_ADD", 4, row + 3, c, -1.0 / (cc - chart.cos_min), cc / (cc - chart.cos_min)
+                "MULTIPLY_ADD", 4, row + 3, c, -1.0 / (cc - mapping.cos_min), cc / (cc - mapping.cos_min)
             )
             below = build.math("SQRT", 5, row + 3, build.math("MAXIMUM", 4.5, row + 3, below, 0.0))
             y = build.math("MULTIPLY_ADD", 6, row + 2, below, -yc, y, label="y")
-    # v in the file's row order is (y0 + 0.5 + y (h - 1)) / H; Blender puts
-    # the file's first row at v = 1, so the texture is read at 1 - v.
-    v = build.math(
-        "MULTIPLY_ADD", 6.5, row + 1, y, -(h - 1) / height, 1.0 - (y0 + 0.5) / height,
-        label="v (Blender)",
-    )
+    return x, y
+
+
+def _uv(build, x, y, origin, size, texture_size, row):
+    """The image coordinates of chart point (x, y) in the rectangle of nodes
+    whose first node is texel `origin` (numbers or float sockets) and whose
+    size is `size` texels: node i at the centre of texel origin + i, so
+    u = (x0 + 0.5 + x (w − 1)) / W; Blender puts an image file's first row at
+    v = 1, so the texture is read at 1 − v."""
+    width, height = texture_size
+    (x0, y0), (w, h) = origin, size
+    if isinstance(x0, (int, float)):
+        u = build.math("MULTIPLY_ADD", 6.5, row, x, (w - 1) / width, (x0 + 0.5) / width, label="u")
+        v = build.math(
+            "MULTIPLY_ADD", 6.5, row + 1, y, -(h - 1) / height, 1.0 - (y0 + 0.5) / height,
+            label="v (Blender)",
+        )
+    else:
+        u0 = build.math("MULTIPLY_ADD", 6, row, x0, 1.0 / width, 0.5 / width)
+        u = build.math("MULTIPLY_ADD", 6.5, row, x, (w - 1) / width, u0, label="u")
+        v0 = build.math("MULTIPLY_ADD", 6, row + 1, y0, -1.0 / height, 1.0 - 0.5 / height)
+        v = build.math("MULTIPLY_ADD", 6.5, row + 1, y, -(h - 1) / height, v0, label="v (Blender)")
     uv = build.node("ShaderNodeCombineXYZ", 7, row, label="uv")
     build.link(u, uv.inputs["X"])
     build.link(v, uv.inputs["Y"])
     return uv.outputs["Vector"]
+
+
+def _chart_uv(build, chart, atlas_size, x, cos, row):
+    """The image coordinates of (thickness fraction x, cos θ) in one chart of
+    the atlas: the export's mapping (docs/gpu.md) in math nodes, with the
+    chart's numbers written into them. Returns the vector socket."""
+    x, y = _mapping_xy(build, chart, x, cos, row)
+    x0, y0, w, h = chart.rect
+    return _uv(build, x, y, (x0, y0), (w, h), atlas_size, row)
+
+
+def _atlas_uv(build, charts, atlas_size, d, c, row):
+    """Version 3: the image coordinates of thickness d (nm, inside the
+    range) at cos θ c (in [0, 1]) in the chart of `charts` (one side's, in
+    the choice rule's order) that serves them. Every chart's (u, v) is
+    computed, then chosen in closed form as the shader does: the first
+    chart that serves (d, c), else the side's last band; one image lookup
+    follows."""
+    found = []
+    for k, chart in enumerate(charts):
+        at = row + 6 * k
+        if chart.kind == "corner":
+            x, y, serves = _corner_xy(build, chart, d, c, at)
+        else:
+            x, y = _band_xy(build, chart, d, c, at)
+            serves = build.math("SUBTRACT", 4, at + 5, 1.0, build.math(
+                "GREATER_THAN", 3.5, at + 5, c, chart.cos_hi), label=f"c ≤ {chart.cos_hi:.4g}")
+        found.append((chart, serves, _uv(build, x, y, chart.rect[:2], chart.rect[2:], atlas_size, at)))
+    last = max(k for k, (chart, _, _) in enumerate(found) if chart.kind == "band")
+    uv = found[last][2]
+    # From the last chart back to the first, each that serves replaces what
+    # follows it: the first that serves wins.
+    for k in reversed(range(last)):
+        uv = _blend(build, uv, found[k][2], found[k][1], 8, row + 6 * k + 3, f"chart {k} serves")
+    return uv
+
+
+def _optical(build, chart, d, c, column, row):
+    """p = d · s(c), s(c) = √max(1 − a (1 − c²), floor²): the optical
+    thickness along which a band's fringes run."""
+    if chart.a == 0.0:
+        return d  # s = 1 (floor ≤ 1)
+    t = build.math("MULTIPLY_ADD", column, row, build.math("MULTIPLY", column - 0.5, row, c, c),
+                   chart.a, 1.0 - chart.a, label="1 − a (1 − c²)")
+    s = build.math("SQRT", column + 1, row, build.math("MAXIMUM", column + 0.5, row, t,
+                                                      chart.floor ** 2), label="s(c)")
+    return build.math("MULTIPLY", column + 1.5, row, d, s, label="p = d s(c)")
+
+
+def _log_e(build, value, column, row, label=None):
+    """ln(value) (Blender's logarithm: 0 for value ≤ 0)."""
+    return build.math("LOGARITHM", column, row, value, math.e, label=label)
+
+
+def _band_xy(build, chart, d, c, row):
+    """A band's (x, y): p on its log (or uniform) axis, cos θ (clamped to
+    the band) on its warped axis, both clamped to [0, 1]."""
+    clamp = build.node("ShaderNodeClamp", 3, row + 2, label="clamp to the band")
+    build.link(c, clamp.inputs["Value"])
+    clamp.inputs["Min"].default_value = chart.cos_lo
+    clamp.inputs["Max"].default_value = chart.cos_hi
+    ck = clamp.outputs["Result"]
+    p = _optical(build, chart, d, ck, 4, row)
+    u0, u1 = chart.p_warp(chart.p_lo_nm), chart.p_warp(chart.p_hi_nm)
+    if u1 > u0:
+        w = p
+        if chart.p0_nm > 0.0:
+            w = _log_e(build, build.math("MULTIPLY_ADD", 5.5, row, p, 1.0 / chart.p0_nm, 1.0), 6, row,
+                       label="ln(1 + p / p0)")
+        x = build.math("MULTIPLY_ADD", 6.5, row, w, 1.0 / (u1 - u0), -u0 / (u1 - u0), label="x")
+        x.node.use_clamp = True
+    else:
+        x = build.math("MULTIPLY", 6.5, row, p, 0.0, label="x = 0 (one thickness)")
+    v0, v1 = chart.c_warp(chart.cos_lo), chart.c_warp(chart.cos_hi)
+    if v1 > v0:
+        sign = chart.sign()
+        t = build.math("MULTIPLY_ADD", 4, row + 1, ck, sign, -sign * chart.anchor, label="|c − anchor|")
+        t = build.math("MAXIMUM", 4.5, row + 1, t, 0.0)
+        if chart.offset > 0.0:
+            g = _log_e(build, build.math("ADD", 5, row + 1, t, chart.offset), 5.5, row + 1)
+        elif chart.offset == 0.0:
+            g = build.math("SQRT", 5.5, row + 1, t)
+        else:
+            g = t
+        # y = (σ g − W(lo)) / (W(hi) − W(lo))
+        y = build.math("MULTIPLY_ADD", 6.5, row + 1, g, sign / (v1 - v0), -v0 / (v1 - v0), label="y")
+        y.node.use_clamp = True
+    else:
+        y = build.math("MULTIPLY", 6.5, row + 1, ck, 0.0, label="y = 0 (one angle)")
+    return x, y
+
+
+def _corner_xy(build, chart, d, c, row):
+    """The corner's polar (x, y) about zero thickness at grazing incidence,
+    P = p / scale, ρ = √(P² + c²), φ = atan2(P, c): x = φ / (π/2), y = ρ /
+    radius; and whether it serves (ρ < radius)."""
+    pp = build.math("MULTIPLY", 5.5, row, _optical(build, chart, d, c, 4, row), 1.0 / chart.scale_nm,
+                    label="P")
+    rho = build.math("SQRT", 6.5, row + 1, build.math(
+        "MULTIPLY_ADD", 6, row + 1, c, c, build.math("MULTIPLY", 5.5, row + 1, pp, pp)), label="ρ")
+    phi = build.math("ARCTAN2", 6, row, pp, c, label="φ")
+    x = build.math("MULTIPLY", 6.5, row, phi, 2.0 / math.pi, label="x")
+    x.node.use_clamp = True
+    y = build.math("MULTIPLY", 7, row + 1, rho, 1.0 / chart.radius, label="y")
+    y.node.use_clamp = True
+    serves = build.math("LESS_THAN", 7, row + 2, rho, chart.radius, label="ρ < radius")
+    return x, y, serves
+
+
+def _slice_uv(build, rough, xy, slice_, row):
+    """The image coordinates of chart point xy in rough slice `slice_` (a
+    float socket holding a whole number): slices lie in rows of `columns`,
+    slice s at (gutter + (s mod columns) · pitch_x, gutter + ⌊s / columns⌋ ·
+    pitch_y); the half keeps the row off a rounding edge, as in the shader."""
+    columns = float(rough.columns)
+    slice_row = build.math("FLOOR", 4, row, build.math("DIVIDE", 3.5, row, build.math(
+        "ADD", 3, row, slice_, 0.5), columns), label="slice row")
+    column = build.math("MULTIPLY_ADD", 4.5, row, slice_row, -columns, slice_, label="slice column")
+    x0 = build.math("MULTIPLY_ADD", 5, row, column, float(rough.pitch[0]), float(rough.gutter))
+    y0 = build.math("MULTIPLY_ADD", 5, row + 1, slice_row, float(rough.pitch[1]), float(rough.gutter))
+    return _uv(build, xy[0], xy[1], (x0, y0), rough.slice_size, rough.size, row)
 
 
 def add_film_layer(material, export_dir, thickness_nm=None, coat=False, name=None):
@@ -642,8 +1100,12 @@ def add_film_layer(material, export_dir, thickness_nm=None, coat=False, name=Non
     set to 0 (the film replaces the coat) and the film takes its Coat Normal
     and Coat Roughness.
 
+    The film's roughness follows the Principled's: above 0 (or driven by a
+    node) the export needs the rough table (`irid export --rough`).
+
     Raises ValueError when the material's output is not fed by a Principled
-    BSDF, ExportError for a bad export; the material is unchanged then."""
+    BSDF, ExportError for a bad export or a rough base with an export without
+    the rough table; the material is unchanged then."""
     tree = material.node_tree
     outputs = [n for n in tree.nodes if n.bl_idname == "ShaderNodeOutputMaterial"] if tree else []
     out = next((n for n in outputs if n.is_active_output), outputs[0] if outputs else None)
@@ -654,6 +1116,13 @@ def add_film_layer(material, export_dir, thickness_nm=None, coat=False, name=Non
     export = Export(export_dir)
     if thickness_nm is not None:
         export.thickness_fraction(thickness_nm)  # refuses one outside the range
+    normal, roughness = ("Coat Normal", "Coat Roughness") if coat else ("Normal", "Roughness")
+    if base.inputs[roughness].links:
+        export.require_rough(f"the Principled BSDF's {roughness} is driven by a node")
+    elif base.inputs[roughness].default_value > 0.0:
+        export.require_rough(
+            f"the Principled BSDF's {roughness} is {base.inputs[roughness].default_value:g}"
+        )
     group = make_node_group(export, name=name or f"{material.name} film")
     build = _Builder(tree)
     x, y = base.location
@@ -663,10 +1132,11 @@ def add_film_layer(material, export_dir, thickness_nm=None, coat=False, name=Non
     film.location = (x - 500.0, y + 300.0)
     if thickness_nm is not None:
         film.inputs["Thickness nm"].default_value = float(thickness_nm)
-    normal, roughness = ("Coat Normal", "Coat Roughness") if coat else ("Normal", "Roughness")
     if base.inputs[normal].links:
         build.link(base.inputs[normal].links[0].from_socket, film.inputs["Normal"])
-    if base.inputs[roughness].links:
+    if export.rough is None:
+        pass  # the base's roughness is 0 (checked above): the film is a mirror too
+    elif base.inputs[roughness].links:
         build.link(base.inputs[roughness].links[0].from_socket, film.inputs["Roughness"])
     else:
         film.inputs["Roughness"].default_value = base.inputs[roughness].default_value

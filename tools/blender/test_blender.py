@@ -78,6 +78,7 @@ from colour_exr import (  # noqa: E402
     expected_x,
     expected_y,
     write_exr,
+    write_synthetic_atlas,
     write_synthetic_export,
 )
 from cycles_scene import (  # noqa: E402
@@ -295,6 +296,16 @@ def test_addon(results, workdir):
                       "No mesh is selected" in str(done) and len(bpy.data.materials) == count,
                       f"(operator: {done}; materials {count} -> {len(bpy.data.materials)})")
         obj.select_set(True)
+        try:
+            done = bpy.ops.import_scene.irid_film(
+                filepath=str(directory / "film.json"), thickness_nm=500.0, roughness=0.3
+            )
+        except RuntimeError as e:
+            done = str(e)
+        results.check("add-on: a roughness above 0 with an export without the rough table is "
+                      "refused, naming --rough",
+                      "--rough" in str(done) and len(bpy.data.materials) == count,
+                      f"(operator: {done}; materials {count} -> {len(bpy.data.materials)})")
         done = bpy.ops.import_scene.irid_film(
             filepath=str(directory / "film.json"), thickness_nm=500.0
         )
@@ -334,6 +345,54 @@ def test_back_side_mapping(results, bench, workdir):
                   f"(largest |rendered - closed form| {worst:.1e})")
 
 
+# A synthetic version 3 atlas: on the front, a polar corner, a band near
+# grazing incidence (log cos θ axis about 0, log p axis) and a band above it
+# (square-root cos θ axis about its own minimum, uniform p); on the back,
+# one band of another optical factor with a uniform cos θ axis.
+A_SOAP = (1.0 / 1.33) ** 2
+SYNTHETIC_ATLAS = [
+    {"side": 0, "kind": 1, "a": A_SOAP, "floor": 0.2, "scale_nm": 40.0, "radius": 0.25,
+     "size": (9, 7)},
+    {"side": 0, "kind": 0, "a": A_SOAP, "floor": 0.2, "p0_nm": 150.0, "p_lo_nm": 0.0,
+     "p_hi_nm": 600.0, "cos_lo": 0.0, "cos_hi": 0.35, "anchor": 0.0, "offset": 0.02,
+     "size": (11, 8)},
+    {"side": 0, "kind": 0, "a": A_SOAP, "floor": 0.2, "p0_nm": 0.0, "p_lo_nm": 100.0,
+     "p_hi_nm": 600.0, "cos_lo": 0.35, "cos_hi": 1.0, "anchor": 0.35, "offset": 0.0,
+     "size": (10, 9)},
+    {"side": 1, "kind": 0, "a": 0.5, "floor": 0.3, "p0_nm": 80.0, "p_lo_nm": 0.0,
+     "p_hi_nm": 600.0, "cos_lo": 0.0, "cos_hi": 1.0, "anchor": 0.0, "offset": -1.0,
+     "size": (8, 6)},
+]
+
+
+def test_atlas_mapping(results, bench, workdir):
+    """Version 3: a synthetic atlas whose texels hold their own chart
+    coordinates and chart number, rendered through the node group, gives
+    back the chart the closed-form choice picks and its (x, y), at
+    thicknesses and angles that reach every chart, front and back faces."""
+    directory = workdir / "synthetic-atlas"
+    write_synthetic_atlas(directory, SYNTHETIC_ATLAS, {"front": [0, 1, 2], "back": [3]},
+                          (0.0, 600.0), False)
+    export = irid_blender.Export(directory)
+    group = irid_blender.make_node_group(export, name="synthetic atlas")
+    worst, picked = 0.0, set()
+    for fraction in (0.0, 0.01, 0.05, 0.3, 0.8, 1.0):
+        material = emission_material(f"R atlas {fraction}", group, "Reflectance", fraction)
+        d = 600.0 * fraction
+        for angle in (0.0, 30.0, 60.0, 75.0, 82.0, 87.0, 89.5):
+            c = math.cos(math.radians(angle))
+            for below, charts in ((False, export.front), (True, export.back)):
+                chart = irid_blender.atlas_chart_for(charts, d, c)
+                k = export.charts.index(chart)
+                picked.add(k)
+                x, y = chart.xy(d, c)
+                got = bench.render(material, angle, below=below)
+                worst = max(worst, np.abs(got - np.array([x, y, (k + 1) / 16])).max())
+    results.check("version 3 atlas: the chart chosen in closed form and its (x, y), both sides",
+                  worst < 2e-3 and picked == {0, 1, 2, 3},
+                  f"(largest |rendered - closed form| {worst:.1e}; charts read {sorted(picked)})")
+
+
 def test_inputs(results, bench, workdir):
     """The Normal input sets the angle (a constant normal 60° from the
     surface's, seen at 0°, gives the film at 60°); Thickness nm, when 0 or
@@ -357,6 +416,112 @@ def test_inputs(results, bench, workdir):
         worst = max(worst, abs(float(got[..., 0].mean()) - x))
     results.check("Thickness nm sets the thickness (clamped; below 0 the 0-1 input does)",
                   worst < 2e-3, f"(largest |rendered x - expected| {worst:.1e})")
+
+
+# A synthetic rough table: 5 slices in rows of 2 (so slices 2-4 sit in later
+# rows), on a mapping of its own (critical-angle warp, square-root thickness),
+# unlike the front chart's (uniform), so the test sees which one is used.
+SYNTHETIC_ROUGH = {"slices": 5, "columns": 2, "size_u": 7, "size_v": 9,
+                   "cos_range": (math.cos(math.radians(89.0)), 1.0), "cos_crit": 0.6,
+                   "y_crit": 0.5, "thickness_power": 2}
+
+
+def test_rough_mapping(results, bench, workdir):
+    """The group's Reflectance through the rough table: at roughness r > 0
+    the two-slice blend of the synthetic slices gives back the rough
+    mapping's (x, y) and √r (clamped to 1); at roughness 0 exactly the front
+    chart (blue 0.25). A back face of a film with its own back chart keeps
+    the back chart's smooth reflectance (blue 0.5); a free-standing film's
+    back face (one chart for both sides) reads the rough table too."""
+    cos_range = SYNTHETIC_ROUGH["cos_range"]
+    back = {"size_u": 5, "size_v": 9, "cos_range": cos_range, "cos_crit": -1.0, "y_crit": 0.0}
+    rough = SYNTHETIC_ROUGH
+    directory = workdir / "synthetic-rough"
+    write_synthetic_export(directory, 9, 7, cos_range, -1.0, 0.0, False, 1, back=back, rough=rough)
+    group = irid_blender.make_node_group(directory, name="synthetic rough")
+    fraction = 0.37
+    worst = 0.0
+    for r in (0.0, 0.01, 0.3, 0.5, 0.8, 1.0, 1.5):
+        material = emission_material(f"R rough {r}", group, "Reflectance", fraction, Roughness=r)
+        for angle in (0.0, 30.0, 60.0, 89.5):
+            c = math.cos(math.radians(angle))
+            if r == 0.0:
+                want = [expected_x(fraction, 1), expected_y(c, *cos_range, -1.0, 0.0), 0.25]
+            else:
+                want = [expected_x(fraction, rough["thickness_power"]),
+                        expected_y(c, *rough["cos_range"], rough["cos_crit"], rough["y_crit"]),
+                        math.sqrt(min(r, 1.0))]
+            worst = max(worst, np.abs(bench.render(material, angle) - np.array(want)).max())
+    results.check("rough table: the two slices around √roughness, blended, on the table's "
+                  "own mapping; roughness 0 the smooth chart", worst < 2e-3,
+                  f"(largest |rendered - closed form| {worst:.1e})")
+    material = emission_material("R rough back", group, "Reflectance", fraction, Roughness=0.5)
+    worst = 0.0
+    for angle in (0.0, 30.0, 60.0):
+        y = expected_y(math.cos(math.radians(angle)), *cos_range, -1.0, 0.0)
+        got = bench.render(material, angle, below=True)
+        worst = max(worst, np.abs(got - np.array([expected_x(fraction, 1), y, 0.5])).max())
+    results.check("rough table: a back face with its own chart keeps the smooth back chart",
+                  worst < 2e-3, f"(largest |rendered - closed form| {worst:.1e})")
+    one = workdir / "synthetic-rough-one-chart"
+    write_synthetic_export(one, 9, 7, cos_range, -1.0, 0.0, True, 1, rough=rough)
+    material = emission_material("R rough opaque back", irid_blender.make_node_group(one),
+                                 "Reflectance", fraction, Roughness=0.5)
+    worst = 0.0
+    for angle in (0.0, 60.0):
+        c = math.cos(math.radians(angle))
+        want = [expected_x(fraction, 2), expected_y(c, *cos_range, 0.6, 0.5), math.sqrt(0.5)]
+        worst = max(worst, np.abs(bench.render(material, angle, below=True) - np.array(want)).max())
+    results.check("rough table: a back face of a film with no back chart reads it too",
+                  worst < 2e-3, f"(largest |rendered - closed form| {worst:.1e})")
+
+
+def test_rough_refused(results, workdir):
+    """Without the rough table a roughness above 0, a node-driven one
+    (roughness=None) and a rough Principled base under add_film_layer are
+    each one ExportError naming --rough, leaving nothing behind; the group
+    of such an export has no Roughness input. A rough layout whose slices
+    do not lie where the closed form puts them is refused."""
+    smooth = workdir / "synthetic-linear"
+    before = (len(bpy.data.images), len(bpy.data.node_groups), len(bpy.data.materials))
+    for roughness in (0.3, None):
+        try:
+            irid_blender.make_material(smooth, roughness=roughness)
+            ok, detail = False, "(accepted)"
+        except irid_blender.ExportError as e:
+            ok = "--rough" in str(e) and "\n" not in str(e)
+            detail = f"({e})"
+        after = (len(bpy.data.images), len(bpy.data.node_groups), len(bpy.data.materials))
+        results.check(f"no rough table: make_material(roughness={roughness}) raises",
+                      ok and after == before, detail)
+    material = bpy.data.materials.new("rough base")
+    if material.node_tree is None:
+        material.use_nodes = True
+    nodes = len(material.node_tree.nodes)
+    try:
+        irid_blender.add_film_layer(material, smooth)  # a new Principled has roughness 0.5
+        ok, detail = False, "(accepted)"
+    except irid_blender.ExportError as e:
+        ok, detail = "--rough" in str(e) and "Roughness is 0.5" in str(e), f"({e})"
+    results.check("no rough table: add_film_layer over a rough Principled raises, material unchanged",
+                  ok and len(material.node_tree.nodes) == nodes, detail)
+    bpy.data.materials.remove(material)
+    group = irid_blender.make_node_group(smooth, name="no rough")
+    names = [s.name for s in group.interface.items_tree if getattr(s, "in_out", "") == "INPUT"]
+    results.check("no rough table: the group has no Roughness input", "Roughness" not in names,
+                  f"(inputs {names})")
+    bpy.data.node_groups.remove(group)
+    moved = workdir / "bad-rough-layout"
+    write_synthetic_export(moved, 3, 3, (0.1, 1.0), -1.0, 0.0, True, rough=SYNTHETIC_ROUGH)
+    film = json.loads((moved / "film.json").read_text())
+    film["rough"]["layout"]["columns"] = 3
+    (moved / "film.json").write_text(json.dumps(film))
+    try:
+        irid_blender.Export(moved)
+        ok, detail = False, "(accepted)"
+    except irid_blender.ExportError as e:
+        ok, detail = "closed form" in str(e), f"({e})"
+    results.check("a rough layout that disagrees with its slice rectangles is refused", ok, detail)
 
 
 def test_white(results, irid, workdir):
@@ -483,10 +648,12 @@ def test_layering(results, bench, irid, workdir):
         results.check(f"layering recipe: the film {what}",
                       errors.mean() <= MEAN_BOUND and errors.max() <= MAX_BOUND,
                       f"(ΔE00 mean {errors.mean():.3f}, max {errors.max():.3f})")
-    # The recipe as docs/blender.md shows it, run as it is written.
+    # The recipe as docs/blender.md shows it, run as it is written: its
+    # Principled keeps the default roughness 0.5, so its export has the rough table.
     snippet = next(b for b in re.findall(r"```python\n(.*?)```", (REPO / "docs/blender.md").read_text(),
                                          re.S) if "add_film_layer" in b)
-    exec(snippet.replace('"glass-film"', repr(str(directory))), {})
+    rough = irid.export(stack, workdir / "export-glass-rough", case["layer"], case["range"], rough=True)
+    exec(snippet.replace('"glass-film"', repr(str(rough))), {})
     material = bpy.data.materials["coated paint"]
     out = next(n for n in material.node_tree.nodes if n.bl_idname == "ShaderNodeOutputMaterial")
     feeds = out.inputs["Surface"].links[0].from_node.bl_idname
@@ -672,6 +839,9 @@ def main():
         test_addon(results, workdir)
         test_back_side_mapping(results, bench, workdir)
         test_inputs(results, bench, workdir)
+        test_rough_mapping(results, bench, workdir)
+        test_atlas_mapping(results, bench, workdir)
+        test_rough_refused(results, workdir)
         test_white(results, irid, workdir)
         test_docs_snippets(results)
         table = measure(results, bench, irid, workdir)

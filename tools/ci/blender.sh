@@ -4,8 +4,8 @@
 # with bpy 5.0, numpy < 2 and OpenEXR, the irid binary), then runs
 # tools/blender/test_blender.py: Cycles renders of irid exports against
 # `irid color`, and tools/blender/test_rough_cycles.py: Cycles' rough thin
-# film against `irid color --roughness`. Idempotent; exits non-zero on any
-# failure.
+# film and irid's material on `irid export --rough` exports against `irid
+# color --roughness`. Idempotent; exits non-zero on any failure.
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 
@@ -43,5 +43,6 @@ fi
 cargo build --release --quiet --bin irid
 "$venv/bin/python" tools/blender/test_blender.py --irid target/release/irid \
     --table "$(mktemp -d)/blender-table.md"
-# Cycles' own rough thin film against `irid color --roughness` (docs/rough.md).
+# Cycles' own rough thin film (docs/rough.md) and irid's material with the
+# rough table (docs/blender.md) against `irid color --roughness`.
 "$venv/bin/python" tools/blender/test_rough_cycles.py --irid target/release/irid
