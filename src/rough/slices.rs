@@ -828,24 +828,25 @@ mod tests {
     use crate::atlas::search::{self, Goal, SideRequest};
     use crate::color::White;
 
-    pub(super) fn slices_of(path: &str, thickness_nm: (f64, f64), max_error: f64) -> RoughSlices {
+    fn slices_of(path: &str, thickness_nm: (f64, f64), max_error: f64) -> RoughSlices {
         let mut stack = Stack::load(std::path::Path::new(path)).expect("stack");
         stack.layers[0].thickness_nm = thickness_nm.0;
         let integrator = SpectralIntegrator::with_white(crate::color::Sampling::Exact, White::D65);
         let film = Film::new(&stack, 1, integrator.clone()).expect("film");
-        let sides = [SideRequest {
-            film: &film,
-            side: 0,
-            cos: (0.0, 1.0),
-        }];
-        let points = search::random_points(thickness_nm, (0.0, 1.0), 2000, 7);
         let goal = Goal {
             max_abs: Some(1e-3),
             max_de: None,
             half: false,
         };
-        let built = search::build(&sides, thickness_nm, goal, 8192, &[points], &|_| {})
-            .expect("smooth atlas");
+        let sides = [SideRequest {
+            film: &film,
+            side: 0,
+            cos: (0.0, 1.0),
+            goal,
+        }];
+        let points = search::random_points(thickness_nm, (0.0, 1.0), 2000, 7);
+        let built =
+            search::build(&sides, thickness_nm, 8192, &[points], &|_| {}).expect("smooth atlas");
         let req = SliceRequest {
             film: &film,
             atlas: &built.atlas,
