@@ -59,13 +59,18 @@ fn rough_table_meets_its_stated_error_and_is_smooth_at_roughness_zero() {
                 for n in 0..3 {
                     worst[n] = worst[n].max((f64::from(got[n]) - want[n]).abs());
                 }
-                // At roughness 0 the rough lookup is the smooth one, up to
-                // the f32 texel coordinates of two textures of other sizes.
+                // At roughness 0 the rough lookup and the smooth one sample
+                // the same film on their own grids: they agree within their
+                // two targets.
                 if k == 0 {
                     let (smooth, _) = e.sample(ti, cj, Side::Front);
                     let zero = rough.sample(ti, cj, 0.0);
+                    let both = e.spec.max_error + 2e-3;
                     for n in 0..3 {
-                        assert!((zero[n] - smooth[n]).abs() <= 2e-6, "{zero:?} {smooth:?}");
+                        assert!(
+                            f64::from((zero[n] - smooth[n]).abs()) <= both,
+                            "{zero:?} {smooth:?}"
+                        );
                     }
                 }
             }
