@@ -237,7 +237,8 @@ fn irid_film_on_vulkan_matches_emulation_and_solver() {
 }
 
 /// Which sides an export has and how its charts are laid out: a dense
-/// side's critical angle (inside the range) is the edge of its bands; a
+/// side's critical angle (inside the range, or the band a dispersive
+/// substrate moves it over) is the edge of its bands; a
 /// lossless substrate gets a back side, the reversed stack's own charts
 /// unless the stack reads the same from both sides; past a lossless back
 /// side's critical angle the exact response is total reflection.
@@ -258,9 +259,13 @@ fn check_charts(case: &Case) {
         let charts: Vec<&irid::atlas::Chart> =
             side.charts.iter().map(|&k| &e.atlas.charts[k]).collect();
         if let Some(cc) = critical_cos(&seen.stack).filter(|&cc| cc > c0 && cc < c1) {
+            // A dispersive substrate moves the critical angle over a band of
+            // cos θ, whose ends the bands are cut at.
+            let (lo, hi) = critical_band(&seen.stack, cc);
             let on_edge = charts.iter().any(|c| match c.coords {
                 irid::atlas::Coords::Band { c: a, .. } => {
-                    (a.lo - cc).abs() < 1e-9 || (a.hi - cc).abs() < 1e-9
+                    (a.lo >= lo - 1e-9 && a.lo <= hi + 1e-9)
+                        || (a.hi >= lo - 1e-9 && a.hi <= hi + 1e-9)
                 }
                 _ => false,
             });
@@ -298,4 +303,20 @@ fn check_charts(case: &Case) {
             );
         }
     }
+}
+
+/// The cos θ the critical angle of `stack` (`cc` at 550 nm) moves over
+/// from 380 to 780 nm.
+fn critical_band(stack: &irid::optics::Stack, cc: f64) -> (f64, f64) {
+    let (mut lo, mut hi) = (cc, cc);
+    for nm in [380.0, 780.0] {
+        if let (Ok(n0), Ok(ns)) = (stack.ambient.index_at(nm), stack.substrate.index_at(nm)) {
+            if ns.re < n0.re {
+                let c = (1.0 - (ns.re / n0.re).powi(2)).sqrt();
+                lo = lo.min(c);
+                hi = hi.max(c);
+            }
+        }
+    }
+    (lo, hi)
 }
