@@ -210,9 +210,12 @@ fn a_film_on_one_face_of_a_thick_sheet() {
     // spectral, and its nodes are the solver's values.
     let spec = quick_spec(coated_sheet(), (0.0, 400.0), 1e-3);
     bake_and_check("coated sheet", &spec, 1e-3);
+    // On a grid, whose nodes are the solver's values (the atlas reads its
+    // wavelength nodes at scaled thicknesses).
     let mut spec = quick_spec(coated_sheet(), (0.0, 300.0), 2e-3);
     spec.kind = Kind::Spectral;
     spec.wavelength_nm = (400.0, 700.0);
+    spec.layout = Layout::Grid;
     let lut = bake(&spec).unwrap();
     let h = lut.header();
     let (t, c, w) = (h.axes[0].nodes[5], h.axes[1].nodes[3], h.axes[2].nodes[2]);

@@ -22,7 +22,7 @@ fn fake_export(dir: &Path, name: &str, exr: bool) {
     let png =
         r#"{"reflectance": "reflectance.png", "transmittance": "transmittance.png", "scale": 1.0}"#;
     let film = format!(
-        r#"{{"format": "irid-film", "version": 2, "texture": {{"width": 2, "height": 2, "files": {files}, "png": {png}}}}}"#
+        r#"{{"format": "irid-film", "version": 3, "texture": {{"width": 2, "height": 2, "files": {files}, "png": {png}}}}}"#
     );
     fs::write(d.join("film.json"), film).unwrap();
     fs::write(
@@ -150,11 +150,11 @@ fn bad_exports_and_destinations_are_one_line_errors() {
     let film = fs::read_to_string(d.join("old/film.json")).unwrap();
     fs::write(
         d.join("old/film.json"),
-        film.replace("\"version\": 2", "\"version\": 1"),
+        film.replace("\"version\": 3", "\"version\": 1"),
     )
     .unwrap();
     irid_in(d, ["preview", "old", "-o", "out"])
-        .assert_one_line_error("version 1", &["old/film.json", "version 1", "version 2"]);
+        .assert_one_line_error("version 1", &["old/film.json", "version 1", "version 3"]);
 
     fake_export(d, "escape", true);
     let film = fs::read_to_string(d.join("escape/film.json")).unwrap();
