@@ -541,31 +541,7 @@ fn aliasing_floor(req: &SideRequest, thickness_nm: (f64, f64), goal: Goal) -> Re
         }
         Ok(false)
     };
-    // Scan from grazing incidence up (fringes widen with cos θ), then
-    // bisect the last step.
-    let lowest = c0.max(1e-4);
-    let ratio = (c1 / lowest).max(1.0);
-    let (mut below, mut above) = (None, None);
-    for k in 0..=40 {
-        let c = lowest * ratio.powf(f64::from(k) / 40.0);
-        if !aliased(c)? {
-            above = Some(c);
-            break;
-        }
-        below = Some(c);
-    }
-    let (Some(mut lo), Some(mut hi)) = (below, above) else {
-        return Ok(below.map_or(0.0, |_| c1));
-    };
-    for _ in 0..12 {
-        let mid = 0.5 * (lo + hi);
-        if aliased(mid)? {
-            lo = mid;
-        } else {
-            hi = mid;
-        }
-    }
-    Ok(hi)
+    aliased_edge((c0, c1), &aliased)
 }
 
 /// Per probe row: how dense each band over it must be (see [`cut_bands`]).
@@ -1398,4 +1374,36 @@ pub fn random_points(
     let mut rng = rand_pcg::Pcg64::seed_from_u64(seed);
     let mut draw = |(lo, hi): (f64, f64)| (lo + rng.random::<f64>() * (hi - lo)) as f32;
     (0..n).map(|_| [draw(thickness_nm), draw(cos)]).collect()
+}
+
+/// The cos θ in [c0, c1] below which `aliased` holds (aliasing only grows
+/// towards grazing incidence): 0 when nowhere, c1 when everywhere. Scans
+/// geometrically from grazing incidence up, then bisects the last step.
+pub(super) fn aliased_edge(
+    (c0, c1): (f64, f64),
+    aliased: &dyn Fn(f64) -> Result<bool>,
+) -> Result<f64> {
+    let lowest = c0.max(1e-4);
+    let ratio = (c1 / lowest).max(1.0);
+    let (mut below, mut above) = (None, None);
+    for k in 0..=40 {
+        let c = lowest * ratio.powf(f64::from(k) / 40.0);
+        if !aliased(c)? {
+            above = Some(c);
+            break;
+        }
+        below = Some(c);
+    }
+    let (Some(mut lo), Some(mut hi)) = (below, above) else {
+        return Ok(below.map_or(0.0, |_| c1));
+    };
+    for _ in 0..12 {
+        let mid = 0.5 * (lo + hi);
+        if aliased(mid)? {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    Ok(hi)
 }

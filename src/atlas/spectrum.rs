@@ -23,6 +23,7 @@
 //! is not sought there, as for the colour of an rgb table.
 
 use super::eval::Film;
+use super::search::aliased_edge;
 use crate::error::{Error, Result};
 use crate::optics::Stack;
 
@@ -267,31 +268,7 @@ pub fn fringe_floor(
         }
         Ok(false)
     };
-    // Scan from grazing incidence up (fringes widen with cos θ), then
-    // bisect the last step.
-    let lowest = c0.max(1e-4);
-    let ratio = (c1 / lowest).max(1.0);
-    let (mut below, mut above) = (None, None);
-    for k in 0..=40 {
-        let c = lowest * ratio.powf(f64::from(k) / 40.0);
-        if !aliased(c)? {
-            above = Some(c);
-            break;
-        }
-        below = Some(c);
-    }
-    let (Some(mut lo), Some(mut hi)) = (below, above) else {
-        return Ok(below.map_or(0.0, |_| c1));
-    };
-    for _ in 0..12 {
-        let mid = 0.5 * (lo + hi);
-        if aliased(mid)? {
-            lo = mid;
-        } else {
-            hi = mid;
-        }
-    }
-    Ok(hi)
+    aliased_edge((c0, c1), &aliased)
 }
 
 #[cfg(test)]
