@@ -110,12 +110,15 @@ class _TableResponse:
         self.atlas = "atlas" in self.lut.header
         self.warned = False
         self.eta_per_nm = setup.eta_per_nm
+        if self.jit:
+            # The substrate side's angle needs η on every path, the
+            # atlas's sampled one too.
+            self.eta_nodes = mi.Float(self.eta_per_nm)
         if self.jit and not self.atlas:
             self.nodes = [mi.Float(np.asarray(a["nodes"], dtype=np.float32)) for a in axes]
             data = self.lut.data
             self.reflectance = mi.Float(np.ascontiguousarray(data[..., 0]).ravel())
             self.transmittance = mi.Float(np.ascontiguousarray(data[..., 1]).ravel())
-            self.eta_nodes = mi.Float(self.eta_per_nm)
 
     def _eta(self, wavelength):
         """n_substrate / n_ambient at ``wavelength`` (1 nm nodes, linear)."""
