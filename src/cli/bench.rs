@@ -84,9 +84,9 @@ pub fn run(args: Args) -> Result<ExitCode> {
     Ok(ExitCode::SUCCESS)
 }
 
-fn run_tables(args: &Args) -> Result<()> {
-    let points = args.points.unwrap_or(20_000);
-    check_count("--points", points, irid::lut::MAX_VALIDATION_POINTS)?;
+/// The command line as run, this machine, and the run's folder (`--out`,
+/// else a dated one under the results folder).
+fn run_setting(args: &Args) -> (String, Machine, std::path::PathBuf) {
     let command = std::iter::once("irid".to_string())
         .chain(std::env::args().skip(1))
         .collect::<Vec<_>>()
@@ -96,6 +96,13 @@ fn run_tables(args: &Args) -> Result<()> {
         .out
         .clone()
         .unwrap_or_else(|| Path::new(RESULTS_DIR).join(run_dir_name(&machine)));
+    (command, machine, out)
+}
+
+fn run_tables(args: &Args) -> Result<()> {
+    let points = args.points.unwrap_or(20_000);
+    check_count("--points", points, irid::lut::MAX_VALIDATION_POINTS)?;
+    let (command, machine, out) = run_setting(args);
     eprintln!(
         "irid bench --tables: {points} points per table on {}",
         machine.summary()
@@ -128,15 +135,7 @@ fn run_report(args: &Args) -> Result<()> {
         check_count("--points", points, irid::lut::MAX_VALIDATION_POINTS)?;
         options.points = points;
     }
-    let command = std::iter::once("irid".to_string())
-        .chain(std::env::args().skip(1))
-        .collect::<Vec<_>>()
-        .join(" ");
-    let machine = Machine::current();
-    let out = args
-        .out
-        .clone()
-        .unwrap_or_else(|| Path::new(RESULTS_DIR).join(run_dir_name(&machine)));
+    let (command, machine, out) = run_setting(args);
     eprintln!(
         "irid bench: {} points per stack on {}",
         options.points,
