@@ -4,11 +4,11 @@
 //! host reads it (rough.exr, film.json's `rough.uniform_f32`); a compute
 //! shader calls irid_film_rough at the export's own rough measurement
 //! points (every combination of 40 random thicknesses, cosines and
-//! roughnesses), from the WGSL and the generated GLSL 4.50 and GLSL ES
+//! roughnesses, and the grazing strip's 10 cosines below 0.02), from the WGSL and the generated GLSL 4.50 and GLSL ES
 //! 3.00, and the results are compared with the CPU emulation (float
 //! precision: this proves the slice layout, the roughness mapping and the
 //! blend) and with `irid::rough`'s F_eff (within the error film.json
-//! states). Without a Vulkan adapter the test passes with a note, unless
+//! states, the grazing strip's apart). Without a Vulkan adapter the test passes with a note, unless
 //! IRID_REQUIRE_GPU=1 (CI).
 
 mod harness;
@@ -141,8 +141,12 @@ fn glsl_source(generated: &str) -> Source {
     ))
 }
 
-/// Float precision of the filtered, blended result.
-const EMULATION_TOLERANCE: f64 = 2e-6;
+/// Float precision of the filtered, blended result: as irid_film's (see
+/// gpu/tests/gpu.rs), the chart lookup's log and atan2 need not be
+/// correctly rounded on a GPU (WGSL allows log an absolute error of 2^-21
+/// near 1), which moves a texel coordinate by a small fraction of a texel,
+/// times the step between neighbouring texels.
+const EMULATION_TOLERANCE: f64 = 5e-5;
 
 fn check(
     gpu: &Gpu,
