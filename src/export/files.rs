@@ -253,7 +253,7 @@ fn errors_json(export: &Export) -> serde_json::Value {
 
 /// film.json's `row_check` of one texture (see [`Texture::row_check`]):
 /// f16 values, written exactly.
-fn row_check_json(texture: &Texture) -> serde_json::Value {
+pub(super) fn row_check_json(texture: &Texture) -> serde_json::Value {
     match texture.row_check() {
         Some(c) => json!({
             "x": c.x,

@@ -530,6 +530,7 @@ pub(super) fn rough_json(rough: &RoughExport) -> serde_json::Value {
             "height": rough.texture.height,
             "format": "rgba16f",
             "alpha": "1 everywhere: WebGPU has no 3-channel 16-bit float format (docs/gpu.md)",
+            "row_check": super::files::row_check_json(&rough.texture),
         },
         "light_from": "ambient",
         "quantity": "F_eff: reflectance pre-integrated over a GGX lobe (docs/rough.md), linear RGB in the export's white",
