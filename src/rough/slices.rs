@@ -49,7 +49,7 @@ use rayon::prelude::*;
 
 use super::kernel::{Kernel, Rules};
 use super::{rough_reflectance, MuGrid, Quadrature};
-use crate::atlas::{pack, Atlas, Chart, Film, Image};
+use crate::atlas::{pack, Atlas, Chart, Coords, Film, Image};
 use crate::color::{delta_e2000_rgb, SpectralIntegrator};
 use crate::error::{Error, Result};
 use crate::lut::rgb_at_nodes;
@@ -863,28 +863,42 @@ fn measure(
         stack,
         layer,
         integrator,
-        slices.atlas.thickness_nm,
+        (slices.atlas.thickness_nm, cos_span(&slices.atlas)),
         MEASURE_SEED,
         &|d, c, r| slices.sample(d, c, r),
     )
 }
 
+/// The cos θ range the side-0 charts of `atlas` serve (a corner from 0).
+pub fn cos_span(atlas: &Atlas) -> (f64, f64) {
+    atlas
+        .charts
+        .iter()
+        .filter(|c| c.side == 0)
+        .map(|c| match c.coords {
+            Coords::Band { c, .. } => (c.lo, c.hi),
+            Coords::Corner { radius, .. } => (0.0, radius.min(1.0)),
+        })
+        .fold((1.0f64, 0.0f64), |(lo, hi), (a, b)| (lo.min(a), hi.max(b)))
+}
+
 /// `sample` (F_eff at thickness nm, cos θ, roughness) against
 /// [`rough_reflectance`] of the film `stack` (layer `layer` varying) at
-/// every combination of [`MEASURE_THICKNESSES`] random thicknesses over
-/// `thickness_nm` and [`MEASURE_AXIS_POINTS`] random cosines (≥
-/// [`GRAZING_COS`]) and roughnesses, drawn from the PCG64 stream of
-/// `seed`; then with [`GRAZING_AXIS_POINTS`] cosines below it.
+/// every combination of [`MEASURE_THICKNESSES`] random thicknesses and
+/// [`MEASURE_AXIS_POINTS`] random cosines (≥ [`GRAZING_COS`]) and
+/// roughnesses, over `domain` (the thickness and the cos θ range), drawn
+/// from the PCG64 stream of `seed`; then with [`GRAZING_AXIS_POINTS`]
+/// cosines below [`GRAZING_COS`] where the range reaches there.
 pub fn measure_sampler(
     stack: &Stack,
     layer: usize,
     integrator: &SpectralIntegrator,
-    thickness_nm: (f64, f64),
+    domain: ((f64, f64), (f64, f64)),
     seed: u64,
     sample: &(dyn Fn(f64, f64, f64) -> [f64; 3] + Sync),
 ) -> Result<(SliceError, SliceError)> {
     let mut rng = rand_pcg::Pcg64::seed_from_u64(seed);
-    let (t0, t1) = thickness_nm;
+    let ((t0, t1), (c0, c1)) = domain;
     let mut draw = |lo: f64, hi: f64, n: usize| -> Vec<f64> {
         let mut v: Vec<f64> = (0..n)
             .map(|_| lo + rng.random::<f64>() * (hi - lo))
@@ -895,9 +909,20 @@ pub fn measure_sampler(
     };
     let thickness = draw(t0, t1, MEASURE_THICKNESSES);
     let roughness = draw(0.0, 1.0, MEASURE_AXIS_POINTS);
-    let cos = draw(GRAZING_COS, 1.0, MEASURE_AXIS_POINTS);
-    let grazing = draw(0.0, GRAZING_COS, GRAZING_AXIS_POINTS);
+    let cos = if c1 > GRAZING_COS {
+        draw(c0.max(GRAZING_COS), c1, MEASURE_AXIS_POINTS)
+    } else {
+        Vec::new()
+    };
+    let grazing = if c0 < GRAZING_COS {
+        draw(c0, c1.min(GRAZING_COS), GRAZING_AXIS_POINTS)
+    } else {
+        Vec::new()
+    };
     let all_cos: Vec<f64> = cos.iter().chain(&grazing).copied().collect();
+    if all_cos.is_empty() {
+        return Ok((SliceError::default(), SliceError::default()));
+    }
     let exact = rough_reflectance(
         stack,
         layer,
@@ -980,7 +1005,12 @@ mod tests {
     use crate::atlas::search::{self, Goal, SideRequest};
     use crate::color::White;
 
-    fn slices_of(path: &str, thickness_nm: (f64, f64), max_error: f64) -> RoughSlices {
+    fn slices_of(
+        path: &str,
+        thickness_nm: (f64, f64),
+        cos: (f64, f64),
+        max_error: f64,
+    ) -> RoughSlices {
         let mut stack = Stack::load(std::path::Path::new(path)).expect("stack");
         stack.layers[0].thickness_nm = thickness_nm.0;
         let integrator = SpectralIntegrator::with_white(crate::color::Sampling::Exact, White::D65);
@@ -993,10 +1023,10 @@ mod tests {
         let sides = [SideRequest {
             film: &film,
             side: 0,
-            cos: (0.0, 1.0),
+            cos,
             goal,
         }];
-        let points = search::random_points(thickness_nm, (0.0, 1.0), 2000, 7);
+        let points = search::random_points(thickness_nm, cos, 2000, 7);
         let built =
             search::build(&sides, thickness_nm, 8192, &[points], &|_| {}).expect("smooth atlas");
         let req = SliceRequest {
@@ -1026,7 +1056,7 @@ mod tests {
 
     #[test]
     fn soap_film_slices_meet_their_target() {
-        let s = slices_of("luts/soap-film.toml", (0.0, 1000.0), 2e-3);
+        let s = slices_of("luts/soap-film.toml", (0.0, 1000.0), (0.0, 1.0), 2e-3);
         assert!(s.measured.max_all() <= 2e-3, "{:?}", s.measured);
         assert!(s.blend_error <= 2e-3);
         // The grazing strip is measured and finite (its figure is stated,
@@ -1049,5 +1079,23 @@ mod tests {
         for ch in 0..3 {
             assert!((got[ch] - f64::from(t[ch])).abs() < 1e-5, "{got:?} {t:?}");
         }
+    }
+
+    /// Charts over part of the angles are measured over those angles only
+    /// (cos θ 0.5–1: no grazing points at all).
+    #[test]
+    fn restricted_angles_are_measured_where_the_charts_serve() {
+        let s = slices_of("luts/soap-film.toml", (300.0, 400.0), (0.5, 1.0), 2e-3);
+        assert!(
+            s.measured.points > 0 && s.measured.max_all() <= 2e-3,
+            "{:?}",
+            s.measured
+        );
+        assert_eq!(s.grazing.points, 0);
+        let (lo, hi) = cos_span(&s.atlas);
+        assert!(
+            (lo - 0.5).abs() < 1e-9 && (hi - 1.0).abs() < 1e-9,
+            "{lo} {hi}"
+        );
     }
 }
