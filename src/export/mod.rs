@@ -366,20 +366,7 @@ pub fn export(spec: &ExportSpec, progress: &dyn Fn(&str)) -> Result<Export> {
     for film in &films {
         check_lasing(spec, film)?;
     }
-    let requests: Vec<SideRequest> = charted
-        .iter()
-        .zip(&films)
-        .map(|(&side, film)| SideRequest {
-            film,
-            side: side_index(side),
-            cos: spec.cos_theta,
-            goal: Goal {
-                max_abs: Some(spec.target(side)),
-                max_de: None,
-                half: true,
-            },
-        })
-        .collect();
+    let requests = side_requests(spec, &charted, &films);
     let points = measurement_points(spec);
     let all_points = vec![points; requests.len()];
     let built = build(
@@ -417,49 +404,20 @@ pub fn export(spec: &ExportSpec, progress: &dyn Fn(&str)) -> Result<Export> {
             .map(|v| [v[at], v[at + 1], v[at + 2], 1.0])
             .collect(),
     });
-    let atlas = built.atlas;
-    let mut sides = Vec::new();
-    let measured_side = |side: Side| {
-        // A side without charts of its own reads the front's, measured on
-        // its own stack (the same stack, read from the other side).
-        let own = charted.iter().position(|&s| s == side).unwrap_or(0);
-        (own, &built.measured[own])
-    };
     let mut listed = vec![Side::Front];
     if !absorbs && !spec.front_only {
         listed.push(Side::Back);
     }
-    for side in listed {
-        let (own, m) = measured_side(side);
-        let chart_side = side_index(charted[own]);
-        let charts: Vec<usize> = (0..atlas.charts.len())
-            .filter(|&k| atlas.charts[k].side == chart_side)
-            .collect();
-        let step = charts
-            .iter()
-            .map(|&k| {
-                let r = atlas.charts[k].rect;
-                let rect = [r.x, r.y, r.width, r.height];
-                reflectance
-                    .max_neighbour_step(rect)
-                    .max(transmittance.max_neighbour_step(rect))
-            })
-            .fold(0.0f32, f32::max);
-        sides.push(SideExport {
-            side,
-            charts,
-            aliased_below: built.sides[own].aliased_below,
-            error: export_error(&m.all),
-            aliased_error: aliased_error(m),
-            weights_8bit_extra: f64::from(step) / 256.0,
-            png_error: None,
-        });
-    }
+    let sides = listed
+        .into_iter()
+        .map(|side| side_export(side, &charted, &built, [&reflectance, &transmittance]))
+        .collect();
     let opaque = absorbs
         || transmittance
             .texels
             .iter()
             .all(|t| t[..3].iter().all(|&x| x == 0.0));
+    let atlas = built.atlas;
     let uniform = atlas.uniform_f32();
     let mut export = Export {
         spec: spec.clone(),
@@ -476,6 +434,67 @@ pub fn export(spec: &ExportSpec, progress: &dyn Fn(&str)) -> Result<Export> {
         png_errors(&mut export)?;
     }
     Ok(export)
+}
+
+/// What the atlas search is asked for each charted side.
+fn side_requests<'a>(
+    spec: &ExportSpec,
+    charted: &[Side],
+    films: &'a [Film],
+) -> Vec<SideRequest<'a>> {
+    charted
+        .iter()
+        .zip(films)
+        .map(|(&side, film)| SideRequest {
+            film,
+            side: side_index(side),
+            cos: spec.cos_theta,
+            goal: Goal {
+                max_abs: Some(spec.target(side)),
+                max_de: None,
+                half: true,
+            },
+        })
+        .collect()
+}
+
+/// The record of `side` in the built atlas: its charts (a side without
+/// charts of its own reads the front's, measured on its own stack: the
+/// same stack, read from the other side), its errors and the 8-bit filter
+/// bound over both `textures`.
+fn side_export(
+    side: Side,
+    charted: &[Side],
+    built: &crate::atlas::search::Built,
+    textures: [&Texture; 2],
+) -> SideExport {
+    let own = charted.iter().position(|&s| s == side).unwrap_or(0);
+    let m = &built.measured[own];
+    let atlas = &built.atlas;
+    let chart_side = side_index(charted[own]);
+    let charts: Vec<usize> = (0..atlas.charts.len())
+        .filter(|&k| atlas.charts[k].side == chart_side)
+        .collect();
+    let step = charts
+        .iter()
+        .map(|&k| {
+            let r = atlas.charts[k].rect;
+            let rect = [r.x, r.y, r.width, r.height];
+            textures
+                .iter()
+                .map(|t| t.max_neighbour_step(rect))
+                .fold(0.0f32, f32::max)
+        })
+        .fold(0.0f32, f32::max);
+    SideExport {
+        side,
+        charts,
+        aliased_below: built.sides[own].aliased_below,
+        error: export_error(&m.all),
+        aliased_error: aliased_error(m),
+        weights_8bit_extra: f64::from(step) / 256.0,
+        png_error: None,
+    }
 }
 
 /// An [`ExportError`] from the atlas search's measurement.

@@ -213,10 +213,14 @@ impl RoughPoints {
         thickness.sort_by(f32::total_cmp);
         thickness.dedup();
         let (c0, c1) = spec.cos_theta;
-        let cos = axis(
-            (c0.max(GRAZING_COS), c1.max(GRAZING_COS)),
-            ROUGH_AXIS_POINTS,
-        );
+        // Angles that stay below the grazing cosine have no points at or
+        // above it.
+        let main = if c1 >= GRAZING_COS {
+            ROUGH_AXIS_POINTS
+        } else {
+            0
+        };
+        let cos = axis((c0.max(GRAZING_COS), c1), main);
         let roughness = axis((0.0, 1.0), ROUGH_AXIS_POINTS);
         let grazing_cos = if c0 < GRAZING_COS {
             axis((c0, c1.min(GRAZING_COS)), ROUGH_GRAZING_POINTS)
@@ -435,10 +439,15 @@ pub(super) fn rough_export(
     target: f64,
     progress: &dyn Fn(&str),
 ) -> Result<RoughExport> {
+    let start = std::time::Instant::now();
     let integrator = SpectralIntegrator::with_white(spec.sampling, spec.white);
     let points = RoughPoints::of(spec);
     let exact = rough_exact_at(spec, &points)?;
     let reference = Reference { points, exact };
+    progress(&format!(
+        "rough: F_eff at the measurement's points ({:.1} s)",
+        start.elapsed().as_secs_f64()
+    ));
     let mut asked = target;
     for build in 1..=MAX_BUILDS {
         let request = SliceRequest {
@@ -460,8 +469,12 @@ pub(super) fn rough_export(
         (rough.error, rough.grazing_error) = reference.measure(&rough);
         let measured = rough.error.max_all();
         progress(&format!(
-            "rough: {} slices tiled into {}×{} texels; through f16 at {} random points: max {measured:.2e} (target {target:.1e})",
-            rough.slices, rough.texture.width, rough.texture.height, rough.error.points
+            "rough: {} slices tiled into {}×{} texels; through f16 at {} random points: max {measured:.2e} (target {target:.1e}) ({:.1} s)",
+            rough.slices,
+            rough.texture.width,
+            rough.texture.height,
+            rough.error.points,
+            start.elapsed().as_secs_f64()
         ));
         if measured <= target {
             return Ok(rough);
