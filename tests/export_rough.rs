@@ -1,10 +1,12 @@
 //! `irid export --rough`: the rough table (F_eff over thickness × cos θ ×
-//! roughness slices, docs/gpu.md). Slice 0 is the smooth front chart texel
-//! for texel and `irid_film_rough` at roughness 0 is `irid_film`'s front
-//! reflectance; the error film.json states is what the emulated GPU lookup
-//! gives against `irid::rough` at the stated points, and within the target;
-//! the folder holds the texture, the four shaders and film.json's `rough`;
-//! bad input is one line and exit 2 with nothing written.
+//! roughness: slices of the rough atlas tiled into one texture,
+//! docs/gpu.md). `irid_film_rough` at roughness 0 agrees with `irid_film`'s
+//! front reflectance; the error film.json states (and its grazing strip's)
+//! is what the emulated GPU lookup gives against `irid::rough` at the
+//! stated points, and within the target; the folder holds the texture, the
+//! four shaders and film.json's `rough` (the tiling, the rough atlas's
+//! charts in the smooth charts' form, the uniform array); bad input is one
+//! line and exit 2 with nothing written.
 
 mod common;
 
@@ -12,8 +14,8 @@ use std::path::Path;
 
 use common::{irid_in, Scratch};
 use irid::export::{
-    export, rough_exact_at, rough_measurement_axes, write_dir, Export, ExportSpec, Side,
-    ROUGH_SHADERS, ROUGH_VEC4,
+    export, rough_exact_at, write_dir, Export, ExportSpec, RoughPoints, Side, GRAZING_COS,
+    ROUGH_SHADERS, ROUGH_VEC4, TILING_VEC4,
 };
 use irid::optics::Stack;
 
@@ -39,6 +41,30 @@ fn make_soap_rough() -> Export {
     export(&spec, &|_| {}).unwrap()
 }
 
+/// The largest error per channel of the emulated lookup against `exact`
+/// over the cosines `cos_range` of `points.all_cos()`.
+fn worst_over(
+    rough: &irid::export::RoughExport,
+    points: &RoughPoints,
+    exact: &irid::rough::RoughTable,
+    cos_range: std::ops::Range<usize>,
+) -> [f64; 3] {
+    let cos = points.all_cos();
+    let mut worst = [0.0f64; 3];
+    for (k, &rk) in points.roughness.iter().enumerate() {
+        for j in cos_range.clone() {
+            for (i, &ti) in points.thickness.iter().enumerate() {
+                let got = rough.sample(ti, cos[j], rk);
+                let want = exact.at(i, j, k);
+                for n in 0..3 {
+                    worst[n] = worst[n].max((f64::from(got[n]) - want[n]).abs());
+                }
+            }
+        }
+    }
+    worst
+}
+
 #[test]
 fn rough_table_meets_its_stated_error_and_is_smooth_at_roughness_zero() {
     let e = soap_rough();
@@ -46,46 +72,52 @@ fn rough_table_meets_its_stated_error_and_is_smooth_at_roughness_zero() {
     let nodes = rough.roughness_nodes();
     assert_eq!((nodes[0], nodes[rough.slices - 1]), (0.0, 1.0));
     // The stated error, recomputed from the public pieces: the emulated
-    // lookup at every combination of the stated axes against irid::rough.
-    let axes = rough_measurement_axes(&e.spec);
-    let exact = rough_exact_at(&e.spec, &axes).unwrap();
-    let [t, c, r] = &axes;
-    let mut worst = [0.0f64; 3];
-    for (k, &rk) in r.iter().enumerate() {
-        for (j, &cj) in c.iter().enumerate() {
-            for (i, &ti) in t.iter().enumerate() {
-                let got = rough.sample(ti, cj, rk);
-                let want = exact.at(i, j, k);
-                for n in 0..3 {
-                    worst[n] = worst[n].max((f64::from(got[n]) - want[n]).abs());
-                }
-                // At roughness 0 the rough lookup and the smooth one sample
-                // the same film on their own grids: they agree within their
-                // two targets.
-                if k == 0 {
-                    let (smooth, _) = e.sample(ti, cj, Side::Front);
-                    let zero = rough.sample(ti, cj, 0.0);
-                    let both = e.spec.max_error + 2e-3;
-                    for n in 0..3 {
-                        assert!(
-                            f64::from((zero[n] - smooth[n]).abs()) <= both,
-                            "{zero:?} {smooth:?}"
-                        );
-                    }
-                }
+    // lookup at every combination of the stated points against
+    // irid::rough, apart below the grazing cosine.
+    let points = RoughPoints::of(&e.spec);
+    assert!(points.cos.iter().all(|&c| f64::from(c) >= GRAZING_COS));
+    assert!(points
+        .grazing_cos
+        .iter()
+        .all(|&c| f64::from(c) < GRAZING_COS));
+    let exact = rough_exact_at(&e.spec, &points).unwrap();
+    let (n_cos, n_all) = (points.cos.len(), points.all_cos().len());
+    let main = worst_over(rough, &points, &exact, 0..n_cos);
+    assert_eq!(main, rough.error.max_abs);
+    let grazing = rough.grazing_error.as_ref().expect("angles reach grazing");
+    assert_eq!(
+        worst_over(rough, &points, &exact, n_cos..n_all),
+        grazing.max_abs
+    );
+    let per_slice = points.thickness.len() * points.roughness.len();
+    assert_eq!(rough.error.points, n_cos * per_slice);
+    assert_eq!(grazing.points, (n_all - n_cos) * per_slice);
+    assert!(rough.error.max_all() <= 2e-3, "{:?}", rough.error);
+    // At roughness 0 the rough lookup and irid_film's front reflectance read
+    // the same film (slice 0 is the smooth atlas's texels where a chart kept
+    // its size): they agree within their two targets, and exactly on the
+    // smooth atlas's nodes of charts that kept their size.
+    for &c in &points.all_cos() {
+        for &t in &points.thickness {
+            let (smooth, _) = e.sample(t, c, Side::Front);
+            let zero = rough.sample(t, c, 0.0);
+            let both = e.spec.max_error + 2e-3;
+            for n in 0..3 {
+                assert!(
+                    f64::from((zero[n] - smooth[n]).abs()) <= both,
+                    "{t} nm, cos {c}: {zero:?} {smooth:?}"
+                );
             }
         }
     }
-    assert_eq!(worst, rough.error.max_abs);
-    assert_eq!(rough.error.points, t.len() * c.len() * r.len());
-    assert!(rough.error.max_all() <= 2e-3, "{:?}", rough.error);
     eprintln!(
-        "soap 200-400 nm: {} slices of {}x{}, error max {:.2e} mean {:.2e}",
+        "soap 200-400 nm: {} slices of {}x{}, error max {:.2e} mean {:.2e}, grazing max {:.2e}",
         rough.slices,
-        rough.mapping.size_u,
-        rough.mapping.size_v,
+        rough.atlas.width,
+        rough.atlas.height,
         rough.error.max_all(),
-        rough.error.mean_abs.iter().sum::<f64>() / 3.0
+        rough.error.mean_abs.iter().sum::<f64>() / 3.0,
+        grazing.max_all(),
     );
 }
 
@@ -112,17 +144,82 @@ fn rough_folder_holds_texture_shaders_and_film_json_rough() {
         serde_json::from_str(&std::fs::read_to_string(dir.join("film.json")).unwrap()).unwrap();
     let j = &film["rough"];
     assert_eq!(j["texture"]["file"], "rough.exr");
-    assert_eq!(j["layout"]["slices"], rough.slices);
+    assert_eq!(j["slices"], rough.slices);
     assert_eq!(j["uniform_vec4"], ROUGH_VEC4);
-    let uniform: Vec<f32> = j["uniform_f32"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|v| v.as_f64().unwrap() as f32)
-        .collect();
+    let floats = |v: &serde_json::Value| -> Vec<f32> {
+        v.as_array()
+            .unwrap()
+            .iter()
+            .map(|v| v.as_f64().unwrap() as f32)
+            .collect()
+    };
+    let uniform = floats(&j["uniform_f32"]);
     assert_eq!(uniform, rough.uniform_f32());
+    // The tiling numbers, then the rough atlas's own uniform array, laid out
+    // as the smooth one.
+    let offset = 4 * j["atlas_uniform_offset_vec4"].as_u64().unwrap() as usize;
+    assert_eq!(offset, 4 * TILING_VEC4);
+    assert_eq!(uniform[offset..], rough.atlas.uniform_f32()[..]);
+    let t = &j["tiling"];
+    let tiling = [
+        rough.texture.width,
+        rough.texture.height,
+        rough.slices,
+        t["columns"].as_u64().unwrap() as usize,
+        t["pitch"][0].as_u64().unwrap() as usize,
+        t["pitch"][1].as_u64().unwrap() as usize,
+        t["gutter"].as_u64().unwrap() as usize,
+        0,
+    ];
+    assert_eq!(uniform[..offset], tiling.map(|v| v as f32));
+    // slice_rects: the rule, and each slice holds its image, its gutter the
+    // edge texels.
+    let rects = t["slice_rects"].as_array().unwrap();
+    assert_eq!(rects.len(), rough.slices);
+    for (s, rect) in rects.iter().enumerate() {
+        let r: Vec<usize> = rect
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|v| v.as_u64().unwrap() as usize)
+            .collect();
+        assert_eq!(r, rough.slice_rect(s));
+        let (columns, [px, py], g) = (tiling[3], [tiling[4], tiling[5]], tiling[6]);
+        assert_eq!(
+            (r[0], r[1]),
+            (g + (s % columns) * px, g + (s / columns) * py)
+        );
+        assert_eq!((r[2], r[3]), (rough.atlas.width, rough.atlas.height));
+        let at = |x: usize, y: usize| rough.texture.texels[y * rough.texture.width + x];
+        assert_eq!(at(r[0] - 1, r[1] - 1), at(r[0], r[1]));
+        assert_eq!(
+            at(r[0] + r[2], r[1] + r[3]),
+            at(r[0] + r[2] - 1, r[1] + r[3] - 1)
+        );
+    }
+    // The rough atlas's charts in exactly the smooth charts' form.
+    let charts = j["charts"].as_array().unwrap();
+    assert_eq!(charts.len(), rough.atlas.charts.len());
+    let keys = |c: &serde_json::Value| c.as_object().unwrap().keys().cloned().collect::<Vec<_>>();
+    for (c, chart) in charts.iter().zip(&rough.atlas.charts) {
+        assert_eq!(keys(c), keys(&film["charts"][0]));
+        assert_eq!(c["side"], 0);
+        let r = chart.rect;
+        assert_eq!(c["rect"], serde_json::json!([r.x, r.y, r.width, r.height]));
+        assert_eq!(c["params"]["width"], r.width as f64);
+    }
+    let check = &j["texture"]["row_check"];
+    let (x, y) = (
+        check["x"].as_u64().unwrap() as usize,
+        check["y"].as_u64().unwrap() as usize,
+    );
+    let texel = rough.texture.texels[y * rough.texture.width + x];
+    assert_eq!(floats(&check["value"]), texel[..3]);
     assert_eq!(j["error"]["max_abs"][0], rough.error.max_abs[0]);
     assert_eq!(j["error"]["target_max_abs"], 2e-3);
+    assert_eq!(j["error"]["grazing_below_cos"], GRAZING_COS);
+    let grazing = rough.grazing_error.as_ref().unwrap();
+    assert_eq!(j["error"]["grazing"]["max_abs"][0], grazing.max_abs[0]);
     assert_eq!(
         j["nodes"]["roughness"].as_array().unwrap().len(),
         rough.slices

@@ -141,40 +141,15 @@ function dataTexture(pixels, flipped) {
 }
 
 /**
- * Whether the loaded rough texture's rows are flipped. film.json's rough
- * texture has a row check of its own when the export gives one; otherwise
- * its slice 0 is the front chart's reflectance texel for texel
- * (docs/gpu.md), so the slice is compared, in both row orders, with the
- * front chart of the reflectance texture loaded by the same route (rows
- * already known); it must equal it in exactly one. An export that gives
- * neither is read in the reflectance texture's row order, the same loader
- * on the same kind of file.
+ * Whether the loaded rough texture's rows are flipped, by film.json's
+ * rough.texture.row_check (as the reflectance texture's own). An export
+ * that gives none is read in the reflectance texture's row order, the same
+ * loader on the same kind of file.
  */
 function roughRowsFlipped(film, rough, reflectance, where) {
   const check = film.rough.texture.row_check;
-  if (check !== undefined) return rowsFlipped(rough, check, where);
-  const slice = film.rough.layout?.slice_rects?.[0];
-  const chart = film.charts?.[film.sides?.front?.chart]?.params;
-  // Version 3 exports spread a side over several charts, none of them slice 0.
-  if (!slice || !chart || slice[2] !== chart.width || slice[3] !== chart.height) return reflectance.flipped;
-  const [sx, sy, w, h] = slice;
-  const refl = reflectance.pixels;
-  const matches = (flipped) => {
-    const row = (y, height) => (flipped ? height - 1 - y : y);
-    for (let y = 0; y < h; y++) {
-      for (let x = 0; x < w; x++) {
-        const a = rgbAt(rough, sx + x, row(sy + y, rough.height));
-        const b = rgbAt(refl, chart.x0 + x, reflectance.flipped ? refl.height - 1 - (chart.y0 + y) : chart.y0 + y);
-        if (distance(a, b) > 0) return false;
-      }
-    }
-    return true;
-  };
-  const inFileOrder = matches(false);
-  const inFlippedOrder = matches(true);
-  if (inFileOrder !== inFlippedOrder) return inFlippedOrder;
-  if (inFileOrder) return reflectance.flipped; // a slice symmetric about the texture's middle row
-  throw fail(where, 'slice 0 is not the front chart of the reflectance texture in either row order: not this export\'s rough texture');
+  if (check !== undefined && check !== null) return rowsFlipped(rough, check, where);
+  return reflectance.flipped;
 }
 
 /**

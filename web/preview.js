@@ -1004,11 +1004,15 @@ void main() {
     }
     if (exp.rough) {
       const e = exp.rough.error;
-      const slices = f.rough.layout && f.rough.layout.slices;
-      rows.push(['rough table', `${exp.rough.file}, ${exp.rough.width} × ${exp.rough.height}${isNumber(slices) ? `, ${slices} roughness slices` : ''}`]);
+      const slices = f.rough.slices;
+      const charts = Array.isArray(f.rough.charts) ? f.rough.charts.length : null;
+      rows.push(['rough table', `${exp.rough.file}, ${exp.rough.width} × ${exp.rough.height}${isNumber(slices) ? `, ${slices} roughness slices` : ''}${isNumber(charts) ? ` of ${charts} charts` : ''}`]);
       if (e) {
         rows.push(['rough: max |error|', formatList(e.max_abs, 5)]);
         rows.push(['rough: max / mean ΔE00', `${isNumber(e.max_delta_e00) ? e.max_delta_e00.toFixed(3) : '—'} / ${isNumber(e.mean_delta_e00) ? e.mean_delta_e00.toFixed(4) : '—'}`]);
+        if (e.grazing && isNumber(e.grazing_below_cos)) {
+          rows.push([`rough: max |error| below cos θ ${e.grazing_below_cos}`, formatList(e.grazing.max_abs, 5)]);
+        }
       }
     } else {
       rows.push(['rough table', 'none (export with --rough)']);

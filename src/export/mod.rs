@@ -15,7 +15,6 @@
 //! solver as the shader reads it.
 
 mod files;
-mod mapping;
 mod measure;
 mod rough;
 mod texture;
@@ -24,8 +23,8 @@ pub use crate::atlas::{Atlas, Chart, HEADER_VEC4, MAX_CHARTS, PARAMS_PER_CHART, 
 pub use files::{declare_dir, fill_dir, film_json, write_dir, FILM_FORMAT, FILM_VERSION};
 pub use measure::{measurement_points, ExportError, DEFAULT_POINTS, POINTS_SEED};
 pub use rough::{
-    rough_exact_at, rough_measurement_axes, RoughError, RoughExport, ROUGH_AXIS_POINTS, ROUGH_SEED,
-    ROUGH_SHADERS, ROUGH_VEC4,
+    rough_exact_at, RoughError, RoughExport, RoughPoints, GRAZING_COS, ROUGH_AXIS_POINTS,
+    ROUGH_GRAZING_POINTS, ROUGH_SEED, ROUGH_SHADERS, ROUGH_VEC4, TILING_VEC4,
 };
 pub use texture::{RowCheck, Texture};
 
@@ -367,20 +366,7 @@ pub fn export(spec: &ExportSpec, progress: &dyn Fn(&str)) -> Result<Export> {
     for film in &films {
         check_lasing(spec, film)?;
     }
-    let requests: Vec<SideRequest> = charted
-        .iter()
-        .zip(&films)
-        .map(|(&side, film)| SideRequest {
-            film,
-            side: side_index(side),
-            cos: spec.cos_theta,
-            goal: Goal {
-                max_abs: Some(spec.target(side)),
-                max_de: None,
-                half: true,
-            },
-        })
-        .collect();
+    let requests = side_requests(spec, &charted, &films);
     let points = measurement_points(spec);
     let all_points = vec![points; requests.len()];
     let built = build(
@@ -396,6 +382,18 @@ pub fn export(spec: &ExportSpec, progress: &dyn Fn(&str)) -> Result<Export> {
         _ => e,
     })?;
     check_representable(spec, &built.image)?;
+    // The rough table reads the front side's charts and texels.
+    let rough = match spec.rough_max_error {
+        Some(target) => {
+            let source = rough::RoughSource {
+                film: &films[0],
+                atlas: &built.atlas,
+                image: &built.image,
+            };
+            Some(rough::rough_export(spec, &source, target, progress)?)
+        }
+        None => None,
+    };
     let [reflectance, transmittance] = [0, 3].map(|at| Texture {
         width: built.image.width,
         height: built.image.height,
@@ -406,49 +404,20 @@ pub fn export(spec: &ExportSpec, progress: &dyn Fn(&str)) -> Result<Export> {
             .map(|v| [v[at], v[at + 1], v[at + 2], 1.0])
             .collect(),
     });
-    let atlas = built.atlas;
-    let mut sides = Vec::new();
-    let measured_side = |side: Side| {
-        // A side without charts of its own reads the front's, measured on
-        // its own stack (the same stack, read from the other side).
-        let own = charted.iter().position(|&s| s == side).unwrap_or(0);
-        (own, &built.measured[own])
-    };
     let mut listed = vec![Side::Front];
     if !absorbs && !spec.front_only {
         listed.push(Side::Back);
     }
-    for side in listed {
-        let (own, m) = measured_side(side);
-        let chart_side = side_index(charted[own]);
-        let charts: Vec<usize> = (0..atlas.charts.len())
-            .filter(|&k| atlas.charts[k].side == chart_side)
-            .collect();
-        let step = charts
-            .iter()
-            .map(|&k| {
-                let r = atlas.charts[k].rect;
-                let rect = [r.x, r.y, r.width, r.height];
-                reflectance
-                    .max_neighbour_step(rect)
-                    .max(transmittance.max_neighbour_step(rect))
-            })
-            .fold(0.0f32, f32::max);
-        sides.push(SideExport {
-            side,
-            charts,
-            aliased_below: built.sides[own].aliased_below,
-            error: export_error(&m.all),
-            aliased_error: aliased_error(m),
-            weights_8bit_extra: f64::from(step) / 256.0,
-            png_error: None,
-        });
-    }
+    let sides = listed
+        .into_iter()
+        .map(|side| side_export(side, &charted, &built, [&reflectance, &transmittance]))
+        .collect();
     let opaque = absorbs
         || transmittance
             .texels
             .iter()
             .all(|t| t[..3].iter().all(|&x| x == 0.0));
+    let atlas = built.atlas;
     let uniform = atlas.uniform_f32();
     let mut export = Export {
         spec: spec.clone(),
@@ -458,16 +427,74 @@ pub fn export(spec: &ExportSpec, progress: &dyn Fn(&str)) -> Result<Export> {
         sides,
         png_scale: None,
         opaque,
-        rough: None,
+        rough,
         uniform,
     };
     if spec.png {
         png_errors(&mut export)?;
     }
-    if let Some(target) = spec.rough_max_error {
-        export.rough = Some(rough::rough_export(spec, target, progress)?);
-    }
     Ok(export)
+}
+
+/// What the atlas search is asked for each charted side.
+fn side_requests<'a>(
+    spec: &ExportSpec,
+    charted: &[Side],
+    films: &'a [Film],
+) -> Vec<SideRequest<'a>> {
+    charted
+        .iter()
+        .zip(films)
+        .map(|(&side, film)| SideRequest {
+            film,
+            side: side_index(side),
+            cos: spec.cos_theta,
+            goal: Goal {
+                max_abs: Some(spec.target(side)),
+                max_de: None,
+                half: true,
+            },
+        })
+        .collect()
+}
+
+/// The record of `side` in the built atlas: its charts (a side without
+/// charts of its own reads the front's, measured on its own stack: the
+/// same stack, read from the other side), its errors and the 8-bit filter
+/// bound over both `textures`.
+fn side_export(
+    side: Side,
+    charted: &[Side],
+    built: &crate::atlas::search::Built,
+    textures: [&Texture; 2],
+) -> SideExport {
+    let own = charted.iter().position(|&s| s == side).unwrap_or(0);
+    let m = &built.measured[own];
+    let atlas = &built.atlas;
+    let chart_side = side_index(charted[own]);
+    let charts: Vec<usize> = (0..atlas.charts.len())
+        .filter(|&k| atlas.charts[k].side == chart_side)
+        .collect();
+    let step = charts
+        .iter()
+        .map(|&k| {
+            let r = atlas.charts[k].rect;
+            let rect = [r.x, r.y, r.width, r.height];
+            textures
+                .iter()
+                .map(|t| t.max_neighbour_step(rect))
+                .fold(0.0f32, f32::max)
+        })
+        .fold(0.0f32, f32::max);
+    SideExport {
+        side,
+        charts,
+        aliased_below: built.sides[own].aliased_below,
+        error: export_error(&m.all),
+        aliased_error: aliased_error(m),
+        weights_8bit_extra: f64::from(step) / 256.0,
+        png_error: None,
+    }
 }
 
 /// An [`ExportError`] from the atlas search's measurement.

@@ -21,11 +21,21 @@
 //! interpolate the film's colour cubically), and interpolated to each node
 //! cubically in both.
 //!
-//! The slice count is 2^k + 1, so a finer count keeps every slice of a
-//! coarser one: from the second differences between slices at every node
-//! the h² law predicts the count a linear blend needs for its share of the
-//! target; the result is then measured against [`rough_reflectance`] at
-//! random points, and doubled while that misses the target.
+//! The slice count S is found from the second differences between slices
+//! at every node: 5, 9 and 17 slices (each keeping the slices of the one
+//! before), and from the blend errors of the last two (the error taken to
+//! fall as a power of the spacing, the power they show) the count a linear
+//! blend needs for its share of the target, rounded so that (S − 1) is a
+//! multiple of 16 and those slices are kept too. The result is then measured
+//! against [`rough_reflectance`] at random points, and the intervals doubled
+//! while that misses the target.
+//!
+//! Each slice's table is a matrix product: one kernel per cos θ node (its
+//! weights on the μ nodes) times the film's colour on μ nodes × dense
+//! thicknesses; the kernels, deterministic quadratures of the GGX lobe, are
+//! most of the cost. The slices' μ grid has half the intervals of the
+//! reference ([`Quadrature::default`]'s), which the measurement shows to
+//! cost nothing visible.
 //!
 //! Near grazing incidence (cos θ below [`GRAZING_COS`]) F_eff changes with
 //! roughness on the scale of cos θ itself (the lobe's width α = roughness²
@@ -39,11 +49,12 @@ use rayon::prelude::*;
 
 use super::kernel::{Kernel, Rules};
 use super::{rough_reflectance, MuGrid, Quadrature};
-use crate::atlas::{pack, Atlas, Chart, Film, Image};
+use crate::atlas::{pack, Atlas, Chart, Coords, Film, Image};
 use crate::color::{delta_e2000_rgb, SpectralIntegrator};
 use crate::error::{Error, Result};
 use crate::lut::rgb_at_nodes;
 use crate::optics::Stack;
+use crate::simd::simd_dispatch;
 
 /// Slices of the first count tried.
 const START_SLICES: usize = 5;
@@ -57,20 +68,31 @@ const THICKNESS_SCALE_NM: f64 = 20.0;
 /// The dense grid's least thickness (nm).
 const MIN_THICKNESS_NM: f64 = 1e-6;
 /// The dense grid's spacing near zero thickness (nm).
-const FINEST_SPACING_NM: f64 = 0.1;
+const FINEST_SPACING_NM: f64 = 0.4;
 /// Dense-grid intervals per shortest fringe period at the top of the range.
-const INTERVALS_PER_FRINGE: f64 = 12.0;
+const INTERVALS_PER_FRINGE: f64 = 8.0;
 /// The shortest wavelength of the colour integration (nm): it sets the
 /// shortest fringe period.
 const SHORTEST_WAVELENGTH_NM: f64 = 380.0;
+/// Intervals of the slices' μ grid: half the reference's
+/// ([`Quadrature::default`]), the film's colour interpolated cubically
+/// between its nodes all the same; the measurement against the reference
+/// shows what that costs (nothing visible for the soap film).
+const SLICE_MU_INTERVALS: usize = 64;
 /// Share of the target the slice blend may use (the charts' own
 /// interpolation takes the rest).
 const BLEND_SHARE: f64 = 0.5;
+/// Times the first slice count is doubled (if its blend misses) before the
+/// last two blend errors predict the count.
+const DOUBLINGS_BEFORE_PREDICTION: usize = 2;
 /// Rounds of doubling the slices after the first measurement.
 const MAX_DOUBLINGS: usize = 2;
-/// Random values per axis of the measurement: every combination of that
-/// many thicknesses, cosines and roughnesses.
-pub const MEASURE_AXIS_POINTS: usize = 40;
+/// Random cosines and roughnesses of the measurement: it takes every
+/// combination of them and [`MEASURE_THICKNESSES`] thicknesses (each cosine
+/// and roughness costs a kernel, each thickness little).
+pub const MEASURE_AXIS_POINTS: usize = 24;
+/// Random thicknesses of the measurement.
+pub const MEASURE_THICKNESSES: usize = 112;
 /// The seed of the measurement's PCG64 stream.
 pub const MEASURE_SEED: u64 = 29;
 
@@ -177,9 +199,9 @@ struct Dense {
     lo_nm: f64,
     step: f64,
     count: usize,
-    /// R, G, B at (thickness t, μ node m): `values[(t * mus + m) * 3 + ch]`.
+    /// R, G, B at (μ node m, thickness t): `values[(m * count + t) * 3 + ch]`
+    /// (one row of `3 * count` values per μ node, what the weighing sums).
     values: Vec<f64>,
-    mus: usize,
 }
 
 impl Dense {
@@ -208,30 +230,55 @@ impl Dense {
         ([idx(-1), idx(0), idx(1), idx(2)], w)
     }
 
-    /// F_eff at every dense thickness for `kernel`.
-    fn weigh(&self, kernel: &Kernel) -> Vec<[f64; 3]> {
+    /// `out` (R, G, B at every dense thickness) = F_eff for `kernel`: the
+    /// kernel's weighted sum of the μ rows, a row of the matrix product
+    /// kernels × values, summed a cache-sized block of the row at a time.
+    fn weigh(&self, kernel: &Kernel, out: &mut [f64]) {
+        const BLOCK: usize = 1024;
         let (first, weights) = kernel.weights();
-        (0..self.count)
-            .map(|t| {
-                let column = &self.values[(t * self.mus + first) * 3..];
-                let mut sum = [0.0; 3];
-                for (j, &w) in weights.iter().enumerate() {
-                    for (ch, s) in sum.iter_mut().enumerate() {
-                        *s = w.mul_add(column[j * 3 + ch], *s);
-                    }
-                }
-                sum
-            })
-            .collect()
+        let len = 3 * self.count;
+        out.fill(0.0);
+        for start in (0..len).step_by(BLOCK) {
+            let end = (start + BLOCK).min(len);
+            for (j, &w) in weights.iter().enumerate() {
+                let row = (first + j) * len;
+                add_scaled(
+                    w,
+                    &self.values[row + start..row + end],
+                    &mut out[start..end],
+                );
+            }
+        }
     }
 }
 
-/// F_eff at one roughness on the dense tensor grid: `[m * n_t + t]` for μ
-/// node m (as cos θ) and dense thickness t.
-type Table = Vec<[f64; 3]>;
+simd_dispatch! {
+    /// `y += w x`, element by element (unfused: every copy rounds alike).
+    fn add_scaled(w: f64, x: &[f64], y: &mut [f64]) {
+        for (y, x) in y.iter_mut().zip(x) {
+            *y += w * *x;
+        }
+    }
+}
 
-/// What computes F_eff: the dense grid, the μ grid whose nodes are the
-/// tables' cos θ, and the quadrature's rules.
+/// F_eff at one roughness on the dense tensor grid:
+/// `[(c * n_t + t) * 3 + ch]` for cos θ node c of the tables' grid, dense
+/// thickness t and channel ch.
+type Table = Vec<f64>;
+
+/// Where a point (thickness, cos θ) lies in the tables: the four dense
+/// thicknesses and four cos θ nodes around it and their weights, found once
+/// and applied to every slice's table.
+#[derive(Clone, Copy)]
+struct Stencil {
+    thickness: [usize; 4],
+    thickness_weights: [f64; 4],
+    first_cos: usize,
+    cos_weights: [f64; 4],
+}
+
+/// What computes F_eff: the dense grid, the μ grid (its nodes are the μ of
+/// the film's colour and the tables' cos θ), and the quadrature's rules.
 struct Filler<'a> {
     dense: &'a Dense,
     grid: &'a MuGrid,
@@ -239,42 +286,67 @@ struct Filler<'a> {
 }
 
 impl Filler<'_> {
-    /// F_eff at roughness `r` on the dense tensor grid.
-    fn table(&self, r: f64) -> Table {
-        self.grid
-            .nodes()
-            .par_iter()
-            .flat_map_iter(|&c| {
-                let kernel = Kernel::with_rules(self.grid, c, r, self.rules);
-                self.dense.weigh(&kernel)
+    /// F_eff at every roughness of `roughness` on the dense tensor grid:
+    /// one kernel per (roughness, cos θ node), each weighing the μ rows.
+    fn tables(&self, roughness: &[f64]) -> Vec<Table> {
+        let len = 3 * self.dense.count;
+        let cos = self.grid.nodes();
+        roughness
+            .iter()
+            .map(|&r| {
+                let mut table = vec![0.0; cos.len() * len];
+                table
+                    .par_chunks_mut(len)
+                    .zip(cos.par_iter())
+                    .for_each(|(out, &c)| {
+                        let kernel = Kernel::with_rules(self.grid, c, r, self.rules);
+                        self.dense.weigh(&kernel, out);
+                    });
+                table
             })
             .collect()
     }
 
-    /// F_eff at (`d` nm, cos θ `c`) from `table`: cubic in both.
-    fn at(&self, table: &Table, d: f64, c: f64) -> [f64; 3] {
+    /// The stencil of (`d` nm, cos θ `c`): cubic in both.
+    fn stencil(&self, d: f64, c: f64) -> Stencil {
+        let (thickness, thickness_weights) = self.dense.stencil(d);
+        let (first_cos, cos_weights) = self.grid.interpolation(c);
+        Stencil {
+            thickness,
+            thickness_weights,
+            first_cos,
+            cos_weights,
+        }
+    }
+
+    /// F_eff from `table` at the point of `at`.
+    fn at(&self, table: &Table, at: &Stencil) -> [f64; 3] {
         let n_t = self.dense.count;
-        let (idx, wd) = self.dense.stencil(d);
-        let (first, wc) = self.grid.interpolation(c);
         let mut v = [0.0; 3];
-        for (j, wcj) in wc.iter().enumerate() {
-            let row = &table[(first + j) * n_t..];
-            for (i, wdi) in idx.iter().zip(wd) {
-                let w = wcj * wdi;
-                for (ch, o) in v.iter_mut().enumerate() {
-                    *o = w.mul_add(row[*i][ch], *o);
+        for (j, wc) in at.cos_weights.iter().enumerate() {
+            let row = &table[(at.first_cos + j) * n_t * 3..];
+            for (&i, wd) in at.thickness.iter().zip(at.thickness_weights) {
+                let w = wc * wd;
+                let texel = &row[i * 3..i * 3 + 3];
+                for (o, x) in v.iter_mut().zip(texel) {
+                    *o += w * x;
                 }
             }
         }
         v
     }
 
-    /// F_eff from `table` at every node of `chart` (its rectangle's size),
+    /// F_eff from `table` at each point of `at`.
+    fn values(&self, table: &Table, at: &[Stencil]) -> Vec<[f64; 3]> {
+        at.iter().map(|s| self.at(table, s)).collect()
+    }
+
+    /// The stencils of every node of `chart` (its rectangle's size),
     /// row-major.
-    fn chart(&self, table: &Table, chart: &Chart) -> Vec<[f64; 3]> {
+    fn chart_stencils(&self, chart: &Chart) -> Vec<Stencil> {
         chart_nodes(chart)
             .into_iter()
-            .map(|(d, c)| self.at(table, d, c))
+            .map(|(d, c)| self.stencil(d, c))
             .collect()
     }
 }
@@ -327,12 +399,13 @@ pub fn build(
             "the atlas has no chart of light from the ambient",
         ));
     }
-    let grid = MuGrid::for_stack(stack, Quadrature::default().mu_intervals);
+    let grid = MuGrid::for_stack(stack, SLICE_MU_INTERVALS);
     let nodes: Vec<(f64, f64)> = smooth_charts.iter().flat_map(chart_nodes).collect();
     let dense = dense_grid(stack, layer, integrator, &nodes, &grid)?;
     say(format!(
-        "F_eff from {} thicknesses x {} cos θ",
-        dense.count, dense.mus
+        "F_eff from {} thicknesses x {} μ nodes",
+        dense.count,
+        grid.nodes().len(),
     ));
     let rules = Rules::new(&Quadrature::default());
     let filler = Filler {
@@ -341,18 +414,8 @@ pub fn build(
         rules: &rules,
     };
     let smooth0 = smooth_values(req, &smooth_charts);
-    let mut tables: Vec<Table> = Vec::new();
-    grow_tables(&mut tables, START_SLICES, &filler);
-    let mut blend_error = second_difference_error(&filler, &tables, req.atlas, &smooth0);
-    let predicted = predicted_count(tables.len() + 1, blend_error, BLEND_SHARE * req.max_error);
-    if predicted > tables.len() + 1 {
-        say(format!(
-            "{} slices blend to {blend_error:.2e}; {predicted} predicted",
-            tables.len() + 1
-        ));
-        grow_tables(&mut tables, predicted, &filler);
-        blend_error = second_difference_error(&filler, &tables, req.atlas, &smooth0);
-    }
+    let (mut tables, mut blend_error) =
+        predicted_tables(&filler, req, &smooth0, BLEND_SHARE * req.max_error, &say);
     let mut doublings = 0;
     loop {
         let count = tables.len() + 1;
@@ -402,6 +465,7 @@ pub fn build(
         }
         doublings += 1;
         grow_tables(&mut tables, 2 * count - 1, &filler);
+        say(format!("{} slices", tables.len() + 1));
         blend_error = second_difference_error(&filler, &tables, req.atlas, &smooth0);
     }
 }
@@ -424,9 +488,9 @@ fn smooth_values(req: &SliceRequest, charts: &[Chart]) -> Vec<Vec<[f64; 3]>> {
         .collect()
 }
 
-/// Makes `tables` (slices 1.. of 2^k + 1, uniform in √roughness; slice 0
-/// is the smooth film's) those of `count` (2^j + 1, j ≥ k) slices: the old
-/// ones keep their places, the new ones are computed.
+/// Makes `tables` (slices 1.. of S, uniform in √roughness; slice 0 is the
+/// smooth film's) those of `count` slices, (count − 1) a multiple of
+/// (S − 1): the old ones keep their places, the new ones are computed.
 fn grow_tables(tables: &mut Vec<Table>, count: usize, filler: &Filler) {
     let old_count = tables.len() + 1;
     let stride = if old_count > 1 {
@@ -434,16 +498,57 @@ fn grow_tables(tables: &mut Vec<Table>, count: usize, filler: &Filler) {
     } else {
         1
     };
+    let kept = |s: usize| old_count > 1 && s.is_multiple_of(stride);
+    let new: Vec<usize> = (1..count).filter(|&s| !kept(s)).collect();
+    let roughness: Vec<f64> = new.iter().map(|&s| slice_roughness(s, count)).collect();
+    let mut computed = filler.tables(&roughness).into_iter();
     let mut old = std::mem::take(tables).into_iter();
     for s in 1..count {
-        if old_count > 1 && s % stride == 0 {
-            if let Some(kept) = old.next() {
-                tables.push(kept);
-                continue;
-            }
-        }
-        tables.push(filler.table(slice_roughness(s, count)));
+        let next = if kept(s) { old.next() } else { computed.next() };
+        tables.push(next.expect("a table for every slice"));
     }
+}
+
+/// The first tables: [`START_SLICES`] slices, then twice and four times as
+/// many intervals until the blend meets `target`; from the blend errors of
+/// the last two the count whose blend meets it (the error falling as a
+/// power of the spacing, the power measured), a multiple of the last one's
+/// intervals so that its slices are kept.
+fn predicted_tables(
+    filler: &Filler,
+    req: &SliceRequest,
+    smooth0: &[Vec<[f64; 3]>],
+    target: f64,
+    say: &dyn Fn(String),
+) -> (Vec<Table>, f64) {
+    let mut tables = Vec::new();
+    let mut finer = START_SLICES;
+    grow_tables(&mut tables, finer, filler);
+    let mut errors = vec![second_difference_error(filler, &tables, req.atlas, smooth0)];
+    for _ in 0..DOUBLINGS_BEFORE_PREDICTION {
+        if errors[errors.len() - 1] <= target {
+            break;
+        }
+        finer = 2 * finer - 1;
+        grow_tables(&mut tables, finer, filler);
+        errors.push(second_difference_error(filler, &tables, req.atlas, smooth0));
+    }
+    let fine = errors[errors.len() - 1];
+    if fine <= target || errors.len() < 2 {
+        return (tables, fine);
+    }
+    let coarse = errors[errors.len() - 2];
+    let predicted = predicted_count(finer, coarse, fine, target);
+    say(format!(
+        "{} and {finer} slices blend to {coarse:.2e} and {fine:.2e}; {predicted} predicted",
+        finer / 2 + 1
+    ));
+    if predicted == finer {
+        return (tables, fine);
+    }
+    grow_tables(&mut tables, predicted, filler);
+    let blend = second_difference_error(filler, &tables, req.atlas, smooth0);
+    (tables, blend)
 }
 
 /// The linear blend's largest error halfway between slices, estimated as
@@ -466,8 +571,9 @@ fn second_difference_error(
         .zip(smooth)
         .map(|(&(owner, chart), slice0)| {
             let nodes = chart_nodes(chart);
+            let stencils = filler.chart_stencils(chart);
             let mut values: Vec<Vec<[f64; 3]>> = vec![slice0.clone()];
-            values.extend(tables.iter().map(|t| filler.chart(t, chart)));
+            values.extend(tables.iter().map(|t| filler.values(t, &stencils)));
             let mut worst = 0.0f64;
             for (k, &(d, c)) in nodes.iter().enumerate() {
                 if c < GRAZING_COS || atlas.chart_for(d, c, 0) != Some(owner) {
@@ -485,16 +591,20 @@ fn second_difference_error(
         .reduce(|| 0.0, f64::max)
 }
 
-/// The slice count (2^j + 1) whose blend error, falling as the square of
-/// the spacing from `error` at `count` slices, meets `target`.
-fn predicted_count(count: usize, error: f64, target: f64) -> usize {
-    let mut next = count;
-    let mut predicted = error;
-    while predicted > target && 2 * next - 1 <= MAX_SLICES {
-        next = 2 * next - 1;
-        predicted /= 4.0;
+/// The slice count whose blend error meets `target`, from its errors
+/// `coarse` and `fine` at (`count` − 1) / 2 and `count` − 1 intervals: the
+/// error taken to fall as the spacing to the power the two show (between 1
+/// and 2, the linear blend's own order), the count rounded up to a
+/// multiple of `count` − 1 intervals, at most [`MAX_SLICES`].
+fn predicted_count(count: usize, coarse: f64, fine: f64, target: f64) -> usize {
+    if fine <= target {
+        return count;
     }
-    next
+    let order = (coarse / fine).log2().clamp(1.0, 2.0);
+    let factor = (fine / target).powf(1.0 / order);
+    let step = count - 1;
+    let multiple = (factor.ceil() as usize).max(1);
+    (step * multiple + 1).min((MAX_SLICES - 1) / step * step + 1)
 }
 
 /// Rounds of growing the charts.
@@ -556,40 +666,57 @@ fn midpoint_errors(
         let (d, c) = chart.point(x, y);
         (d.max(0.0), c.clamp(0.0, 1.0))
     };
+    let nodes: Vec<Stencil> = (0..h)
+        .flat_map(|j| (0..w).map(move |i| (i, j)))
+        .map(|(i, j)| {
+            let (d, c) = point(frac(i as f64, w), frac(j as f64, h));
+            filler.stencil(d, c)
+        })
+        .collect();
+    // (node, its neighbour, the midpoint's stencil, along u) for every
+    // midpoint a reader may fetch.
+    let mut checks: Vec<(usize, usize, Stencil, bool)> = Vec::new();
+    for j in 0..h {
+        for i in 0..w {
+            if point(frac(i as f64, w), frac(j as f64, h)).1 < GRAZING_COS {
+                continue;
+            }
+            let k = j * w + i;
+            let mut check = |(d, c): (f64, f64), next: usize, along_u: bool| {
+                if serves(d, c) {
+                    checks.push((k, next, filler.stencil(d, c), along_u));
+                }
+            };
+            if i + 1 < w {
+                check(
+                    point(frac(i as f64 + 0.5, w), frac(j as f64, h)),
+                    k + 1,
+                    true,
+                );
+            }
+            if j + 1 < h {
+                check(
+                    point(frac(i as f64, w), frac(j as f64 + 0.5, h)),
+                    k + w,
+                    false,
+                );
+            }
+        }
+    }
+    let off = |mid: [f64; 3], a: [f64; 3], b: [f64; 3]| {
+        (0..3)
+            .map(|ch| (mid[ch] - 0.5 * (a[ch] + b[ch])).abs())
+            .fold(0.0, f64::max)
+    };
     let (mut eu, mut ev) = (0.0f64, 0.0f64);
     for table in tables {
-        let node = |i: usize, j: usize| {
-            let (d, c) = point(frac(i as f64, w), frac(j as f64, h));
-            (filler.at(table, d, c), c)
-        };
-        let nodes: Vec<([f64; 3], f64)> = (0..h)
-            .flat_map(|j| (0..w).map(move |i| (i, j)))
-            .map(|(i, j)| node(i, j))
-            .collect();
-        let at = |i: usize, j: usize| nodes[j * w + i];
-        let off = |mid: [f64; 3], a: [f64; 3], b: [f64; 3]| {
-            (0..3)
-                .map(|ch| (mid[ch] - 0.5 * (a[ch] + b[ch])).abs())
-                .fold(0.0, f64::max)
-        };
-        for j in 0..h {
-            for i in 0..w {
-                let (a, c) = at(i, j);
-                if c < GRAZING_COS {
-                    continue;
-                }
-                if i + 1 < w {
-                    let (d, cm) = point(frac(i as f64 + 0.5, w), frac(j as f64, h));
-                    if serves(d, cm) {
-                        eu = eu.max(off(filler.at(table, d, cm), a, at(i + 1, j).0));
-                    }
-                }
-                if j + 1 < h {
-                    let (d, cm) = point(frac(i as f64, w), frac(j as f64 + 0.5, h));
-                    if serves(d, cm) {
-                        ev = ev.max(off(filler.at(table, d, cm), a, at(i, j + 1).0));
-                    }
-                }
+        let values = filler.values(table, &nodes);
+        for (a, b, mid, along_u) in &checks {
+            let e = off(filler.at(table, mid), values[*a], values[*b]);
+            if *along_u {
+                eu = eu.max(e);
+            } else {
+                ev = ev.max(e);
             }
         }
     }
@@ -657,7 +784,11 @@ fn images(
             }
         };
         put(&mut slices[0], &zero);
-        let rest: Vec<Vec<[f64; 3]>> = tables.par_iter().map(|t| filler.chart(t, chart)).collect();
+        let stencils = filler.chart_stencils(chart);
+        let rest: Vec<Vec<[f64; 3]>> = tables
+            .par_iter()
+            .map(|t| filler.values(t, &stencils))
+            .collect();
         for (img, values) in slices[1..].iter_mut().zip(rest) {
             put(img, &values);
         }
@@ -705,38 +836,69 @@ fn dense_grid(
         &format!("F_eff over {count} thicknesses x {mus} μ nodes"),
         crate::limits::product(&[count as u64, mus as u64], 72),
     )?;
-    let on_grid = rgb_at_nodes(stack, layer, integrator.clone(), &thickness, grid.nodes())?;
-    // rgb_at_nodes gives μ-major rows; the weighing reads thickness-major.
-    let mut values = vec![0.0; count * mus * 3];
-    for m in 0..mus {
-        for t in 0..count {
-            let v = &on_grid[m * count + t];
-            values[(t * mus + m) * 3..(t * mus + m) * 3 + 3].copy_from_slice(&v[..3]);
-        }
-    }
+    // μ-major rows of thickness × RGB, as the weighing reads them.
+    let values = rgb_at_nodes(stack, layer, integrator.clone(), &thickness, grid.nodes())?
+        .into_iter()
+        .flat_map(|v| [v[0], v[1], v[2]])
+        .collect();
     Ok(Dense {
         lo_nm: lo,
         step,
         count,
         values,
-        mus,
     })
 }
 
 /// Random cosines of the measurement below [`GRAZING_COS`].
-const GRAZING_AXIS_POINTS: usize = 10;
+const GRAZING_AXIS_POINTS: usize = 6;
 
-/// The slices against [`rough_reflectance`] at every combination of
-/// [`MEASURE_AXIS_POINTS`] random thicknesses, cosines (≥ [`GRAZING_COS`])
-/// and roughnesses; then with [`GRAZING_AXIS_POINTS`] cosines below it.
+/// The slices against [`rough_reflectance`] (see [`measure_sampler`]).
 fn measure(
     stack: &Stack,
     layer: usize,
     integrator: &SpectralIntegrator,
     slices: &RoughSlices,
 ) -> Result<(SliceError, SliceError)> {
-    let mut rng = rand_pcg::Pcg64::seed_from_u64(MEASURE_SEED);
-    let (t0, t1) = slices.atlas.thickness_nm;
+    measure_sampler(
+        stack,
+        layer,
+        integrator,
+        (slices.atlas.thickness_nm, cos_span(&slices.atlas)),
+        MEASURE_SEED,
+        &|d, c, r| slices.sample(d, c, r),
+    )
+}
+
+/// The cos θ range the side-0 charts of `atlas` serve (a corner from 0).
+pub fn cos_span(atlas: &Atlas) -> (f64, f64) {
+    atlas
+        .charts
+        .iter()
+        .filter(|c| c.side == 0)
+        .map(|c| match c.coords {
+            Coords::Band { c, .. } => (c.lo, c.hi),
+            Coords::Corner { radius, .. } => (0.0, radius.min(1.0)),
+        })
+        .fold((1.0f64, 0.0f64), |(lo, hi), (a, b)| (lo.min(a), hi.max(b)))
+}
+
+/// `sample` (F_eff at thickness nm, cos θ, roughness) against
+/// [`rough_reflectance`] of the film `stack` (layer `layer` varying) at
+/// every combination of [`MEASURE_THICKNESSES`] random thicknesses and
+/// [`MEASURE_AXIS_POINTS`] random cosines (≥ [`GRAZING_COS`]) and
+/// roughnesses, over `domain` (the thickness and the cos θ range), drawn
+/// from the PCG64 stream of `seed`; then with [`GRAZING_AXIS_POINTS`]
+/// cosines below [`GRAZING_COS`] where the range reaches there.
+pub fn measure_sampler(
+    stack: &Stack,
+    layer: usize,
+    integrator: &SpectralIntegrator,
+    domain: ((f64, f64), (f64, f64)),
+    seed: u64,
+    sample: &(dyn Fn(f64, f64, f64) -> [f64; 3] + Sync),
+) -> Result<(SliceError, SliceError)> {
+    let mut rng = rand_pcg::Pcg64::seed_from_u64(seed);
+    let ((t0, t1), (c0, c1)) = domain;
     let mut draw = |lo: f64, hi: f64, n: usize| -> Vec<f64> {
         let mut v: Vec<f64> = (0..n)
             .map(|_| lo + rng.random::<f64>() * (hi - lo))
@@ -745,11 +907,22 @@ fn measure(
         v.dedup();
         v
     };
-    let thickness = draw(t0, t1, MEASURE_AXIS_POINTS);
+    let thickness = draw(t0, t1, MEASURE_THICKNESSES);
     let roughness = draw(0.0, 1.0, MEASURE_AXIS_POINTS);
-    let cos = draw(GRAZING_COS, 1.0, MEASURE_AXIS_POINTS);
-    let grazing = draw(0.0, GRAZING_COS, GRAZING_AXIS_POINTS);
+    let cos = if c1 > GRAZING_COS {
+        draw(c0.max(GRAZING_COS), c1, MEASURE_AXIS_POINTS)
+    } else {
+        Vec::new()
+    };
+    let grazing = if c0 < GRAZING_COS {
+        draw(c0, c1.min(GRAZING_COS), GRAZING_AXIS_POINTS)
+    } else {
+        Vec::new()
+    };
     let all_cos: Vec<f64> = cos.iter().chain(&grazing).copied().collect();
+    if all_cos.is_empty() {
+        return Ok((SliceError::default(), SliceError::default()));
+    }
     let exact = rough_reflectance(
         stack,
         layer,
@@ -760,19 +933,23 @@ fn measure(
         &Quadrature::default(),
     )?;
     let errors_over = |cs: std::ops::Range<usize>| -> SliceError {
-        let mut errors: Vec<([f64; 3], f64, [f64; 3])> = Vec::new();
-        for (r, &rv) in roughness.iter().enumerate() {
-            for c in cs.clone() {
-                for (t, &tv) in thickness.iter().enumerate() {
-                    let want = exact.at(t, c, r);
-                    let got = slices.sample(tv, all_cos[c], rv);
-                    let abs = std::array::from_fn(|k| (got[k] - want[k]).abs());
-                    let de = delta_e2000_rgb(got, want);
-                    let de = if de.is_nan() { f64::INFINITY } else { de };
-                    errors.push((abs, de, [tv, all_cos[c], rv]));
-                }
-            }
-        }
+        let errors: Vec<([f64; 3], f64, [f64; 3])> = roughness
+            .par_iter()
+            .enumerate()
+            .flat_map_iter(|(r, &rv)| {
+                let (exact, all_cos, thickness) = (&exact, &all_cos, &thickness);
+                cs.clone().flat_map(move |c| {
+                    thickness.iter().enumerate().map(move |(t, &tv)| {
+                        let want = exact.at(t, c, r);
+                        let got = sample(tv, all_cos[c], rv);
+                        let abs = std::array::from_fn(|k| (got[k] - want[k]).abs());
+                        let de = delta_e2000_rgb(got, want);
+                        let de = if de.is_nan() { f64::INFINITY } else { de };
+                        (abs, de, [tv, all_cos[c], rv])
+                    })
+                })
+            })
+            .collect();
         summarize(&errors)
     };
     Ok((
@@ -828,7 +1005,12 @@ mod tests {
     use crate::atlas::search::{self, Goal, SideRequest};
     use crate::color::White;
 
-    fn slices_of(path: &str, thickness_nm: (f64, f64), max_error: f64) -> RoughSlices {
+    fn slices_of(
+        path: &str,
+        thickness_nm: (f64, f64),
+        cos: (f64, f64),
+        max_error: f64,
+    ) -> RoughSlices {
         let mut stack = Stack::load(std::path::Path::new(path)).expect("stack");
         stack.layers[0].thickness_nm = thickness_nm.0;
         let integrator = SpectralIntegrator::with_white(crate::color::Sampling::Exact, White::D65);
@@ -841,10 +1023,10 @@ mod tests {
         let sides = [SideRequest {
             film: &film,
             side: 0,
-            cos: (0.0, 1.0),
+            cos,
             goal,
         }];
-        let points = search::random_points(thickness_nm, (0.0, 1.0), 2000, 7);
+        let points = search::random_points(thickness_nm, cos, 2000, 7);
         let built =
             search::build(&sides, thickness_nm, 8192, &[points], &|_| {}).expect("smooth atlas");
         let req = SliceRequest {
@@ -874,7 +1056,7 @@ mod tests {
 
     #[test]
     fn soap_film_slices_meet_their_target() {
-        let s = slices_of("luts/soap-film.toml", (0.0, 1000.0), 2e-3);
+        let s = slices_of("luts/soap-film.toml", (0.0, 1000.0), (0.0, 1.0), 2e-3);
         assert!(s.measured.max_all() <= 2e-3, "{:?}", s.measured);
         assert!(s.blend_error <= 2e-3);
         // The grazing strip is measured and finite (its figure is stated,
@@ -897,5 +1079,23 @@ mod tests {
         for ch in 0..3 {
             assert!((got[ch] - f64::from(t[ch])).abs() < 1e-5, "{got:?} {t:?}");
         }
+    }
+
+    /// Charts over part of the angles are measured over those angles only
+    /// (cos θ 0.5–1: no grazing points at all).
+    #[test]
+    fn restricted_angles_are_measured_where_the_charts_serve() {
+        let s = slices_of("luts/soap-film.toml", (300.0, 400.0), (0.5, 1.0), 2e-3);
+        assert!(
+            s.measured.points > 0 && s.measured.max_all() <= 2e-3,
+            "{:?}",
+            s.measured
+        );
+        assert_eq!(s.grazing.points, 0);
+        let (lo, hi) = cos_span(&s.atlas);
+        assert!(
+            (lo - 0.5).abs() < 1e-9 && (hi - 1.0).abs() < 1e-9,
+            "{lo} {hi}"
+        );
     }
 }
