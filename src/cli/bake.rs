@@ -195,10 +195,15 @@ pub fn run(args: Args) -> Result<ExitCode> {
     }
     outputs.write(table, |tmp| lut.write_to(tmp, &args.output))?;
     outputs.commit()?;
-    let bytes = std::fs::metadata(&args.output)
-        .with_context(|| args.output.display().to_string())?
+    print_written(&args.output)
+}
+
+/// Prints the written file's path and size.
+fn print_written(path: &std::path::Path) -> Result<ExitCode> {
+    let bytes = std::fs::metadata(path)
+        .with_context(|| path.display().to_string())?
         .len();
-    println!("wrote {} ({} bytes)", args.output.display(), bytes);
+    println!("wrote {} ({} bytes)", path.display(), bytes);
     Ok(ExitCode::SUCCESS)
 }
 
@@ -230,11 +235,7 @@ fn run_rough(args: &Args, spec: &BakeSpec) -> Result<ExitCode> {
     super::info::print_rough_error(rough.header());
     outputs.write(table, |tmp| rough.write_to(tmp, &args.output))?;
     outputs.commit()?;
-    let bytes = std::fs::metadata(&args.output)
-        .with_context(|| args.output.display().to_string())?
-        .len();
-    println!("wrote {} ({} bytes)", args.output.display(), bytes);
-    Ok(ExitCode::SUCCESS)
+    print_written(&args.output)
 }
 
 /// The rough table's error target without --rough-max-error or --max-error

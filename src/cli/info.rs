@@ -160,10 +160,15 @@ fn spacing(nodes: &[f64]) -> String {
 }
 
 fn say_stack(out: &mut String, h: &Header) {
+    say_stack_of(out, &h.stack, h.layer);
+}
+
+/// The stack's media and layers, `layer` marked as the thickness axis.
+fn say_stack_of(out: &mut String, stack: &irid::optics::Stack, layer: usize) {
     super::say!(out, "stack:");
-    super::say!(out, "  ambient    {}", h.stack.ambient.name);
-    for (i, l) in h.stack.layers.iter().enumerate() {
-        let varying = if i + 1 == h.layer {
+    super::say!(out, "  ambient    {}", stack.ambient.name);
+    for (i, l) in stack.layers.iter().enumerate() {
+        let varying = if i + 1 == layer {
             "   <- thickness axis"
         } else {
             ""
@@ -177,7 +182,7 @@ fn say_stack(out: &mut String, h: &Header) {
             l.thickness_nm
         );
     }
-    super::say!(out, "  substrate  {}", h.stack.substrate.name);
+    super::say!(out, "  substrate  {}", stack.substrate.name);
 }
 
 /// Prints `out` followed by the error section. The validation statistics
@@ -243,23 +248,7 @@ fn run_rough(args: &Args) -> Result<ExitCode> {
         h.atlas.thickness_nm.0,
         h.atlas.thickness_nm.1
     );
-    super::say!(out, "stack:");
-    super::say!(out, "  ambient    {}", h.stack.ambient.name);
-    for (i, l) in h.stack.layers.iter().enumerate() {
-        let varying = if i + 1 == h.layer {
-            "   <- thickness axis"
-        } else {
-            ""
-        };
-        super::say!(
-            out,
-            "  layer {:<4} {} {} nm{varying}",
-            i + 1,
-            l.material.name,
-            l.thickness_nm
-        );
-    }
-    super::say!(out, "  substrate  {}", h.stack.substrate.name);
+    say_stack_of(&mut out, &h.stack, h.layer);
     super::say!(
         out,
         "colour: {}, {}, {}, sampling {}",

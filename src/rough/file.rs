@@ -8,10 +8,9 @@
 
 use std::path::Path;
 
-use exr::meta::MetaData;
 use exr::prelude::{
-    read, AnyChannel, AnyChannels, AttributeValue, Encoding, FlatSamples, Image as ExrImage, Layer,
-    LayerAttributes, ReadChannels, ReadLayers, SampleType, SmallVec, Text, Vec2, WritableImage,
+    AnyChannel, AnyChannels, AttributeValue, Encoding, FlatSamples, Layer, LayerAttributes,
+    SampleType, SmallVec, Text, Vec2,
 };
 use serde::{Deserialize, Serialize};
 
@@ -19,6 +18,7 @@ use super::slices::{slice_roughness, RoughSlices, SliceError, GRAZING_COS};
 use crate::atlas::{Atlas, Coords, Image};
 use crate::color::{Sampling, SpectralIntegrator, White};
 use crate::error::{Error, Result};
+use crate::lut::file::{ascii_json, attribute_text, first_header, read_planes, write_layer};
 use crate::lut::ColorInfo;
 use crate::optics::Stack;
 
@@ -185,7 +185,7 @@ impl RoughLut {
         let mut attributes = LayerAttributes::default();
         attributes.other.insert(
             Text::from(ATTRIBUTE),
-            AttributeValue::Text(Text::from(json.escape_unicode_non_ascii().as_str())),
+            AttributeValue::Text(Text::from(ascii_json(&json).as_str())),
         );
         let layer = Layer::new(
             (w, h * self.header.slices),
@@ -193,13 +193,7 @@ impl RoughLut {
             Encoding::UNCOMPRESSED,
             AnyChannels::sort(list),
         );
-        ExrImage::from_layer(layer)
-            .write()
-            .to_file(tmp)
-            .map_err(|e| match e {
-                exr::error::Error::Io(io) => Error::io(path, io),
-                other => Error::malformed(path, format!("cannot write OpenEXR: {other}")),
-            })
+        write_layer(layer, tmp, path)
     }
 
     /// Reads and checks a rough table: the header (format, version, slice
@@ -209,32 +203,8 @@ impl RoughLut {
     /// error naming the file, never a panic.
     pub fn load(path: &Path) -> Result<RoughLut> {
         let bad = |why: String| Error::malformed(path, why);
-        if let Err(e) = std::fs::metadata(path) {
-            return Err(Error::io(path, e));
-        }
-        let meta = MetaData::read_from_file(path, false).map_err(|e| match e {
-            exr::error::Error::Io(io) if io.kind() != std::io::ErrorKind::UnexpectedEof => {
-                Error::io(path, io)
-            }
-            e => bad(format!("not a readable OpenEXR file: {e}")),
-        })?;
-        let exr_header = meta
-            .headers
-            .first()
-            .ok_or_else(|| bad("an OpenEXR file without an image".into()))?;
-        let text = exr_header
-            .own_attributes
-            .other
-            .get(&Text::from(ATTRIBUTE))
-            .ok_or_else(|| {
-                bad(format!(
-                    "no '{ATTRIBUTE}' header attribute: not an irid table"
-                ))
-            })?;
-        let AttributeValue::Text(text) = text else {
-            return Err(bad(format!("the '{ATTRIBUTE}' attribute is not text")));
-        };
-        let json: String = text.bytes().iter().map(|&b| b as char).collect();
+        let exr_header = first_header(path)?;
+        let json = attribute_text(&exr_header).map_err(bad)?;
         let header = parse_header(&json).map_err(bad)?;
         let (w, h, s) = (header.atlas.width, header.atlas.height, header.slices);
         let size = exr_header.layer_size;
@@ -277,48 +247,11 @@ impl RoughLut {
 /// rough table (what `irid info` and `irid validate` dispatch on); false
 /// for anything unreadable, which the smooth table's loader then reports.
 pub fn is_rough_table(path: &Path) -> bool {
-    let Ok(meta) = MetaData::read_from_file(path, false) else {
-        return false;
-    };
-    let Some(AttributeValue::Text(text)) = meta
-        .headers
-        .first()
-        .and_then(|h| h.own_attributes.other.get(&Text::from(ATTRIBUTE)))
-    else {
-        return false;
-    };
-    let json: String = text.bytes().iter().map(|&b| b as char).collect();
-    serde_json::from_str::<serde_json::Value>(&json)
+    first_header(path)
         .ok()
-        .and_then(|v| {
-            v.get("format")
-                .and_then(|f| f.as_str())
-                .map(|f| f == ROUGH_FORMAT)
-        })
-        .unwrap_or(false)
-}
-
-/// ASCII JSON: every non-ASCII character as a `\u` escape, so every
-/// reader decodes the EXR text the same way.
-trait EscapeNonAscii {
-    fn escape_unicode_non_ascii(&self) -> String;
-}
-
-impl EscapeNonAscii for str {
-    fn escape_unicode_non_ascii(&self) -> String {
-        let mut out = String::with_capacity(self.len());
-        for c in self.chars() {
-            if c.is_ascii() {
-                out.push(c);
-            } else {
-                let mut buf = [0u16; 2];
-                for unit in c.encode_utf16(&mut buf) {
-                    out.push_str(&format!("\\u{unit:04x}"));
-                }
-            }
-        }
-        out
-    }
+        .and_then(|h| attribute_text(&h).ok())
+        .and_then(|json: String| serde_json::from_str::<serde_json::Value>(&json).ok())
+        .is_some_and(|v| v.get("format").and_then(|f| f.as_str()) == Some(ROUGH_FORMAT))
 }
 
 /// The header from its JSON, checked: format and version first (so
@@ -404,30 +337,10 @@ fn check_atlas(atlas: &Atlas) -> std::result::Result<(), String> {
 /// The slices' images from the file (sizes checked before).
 fn read_slices(path: &Path, header: &RoughHeader) -> std::result::Result<Vec<Image>, String> {
     let (w, h, s) = (header.atlas.width, header.atlas.height, header.slices);
-    let image = read()
-        .no_deep_data()
-        .largest_resolution_level()
-        .all_channels()
-        .first_valid_layer()
-        .all_attributes()
-        .from_file(path)
-        .map_err(|e| format!("not a readable OpenEXR file: {e}"))?;
-    let layer = &image.layer_data;
-    if (layer.size.0, layer.size.1) != (w, h * s) {
-        return Err("the image's size changed while it was read".into());
-    }
+    let planes = read_planes(path, (w, h * s), &ROUGH_CHANNELS)?;
     let mut slices = vec![Image::new(w, h, 3); s];
-    for (k, name) in ROUGH_CHANNELS.iter().enumerate() {
-        let channel = layer
-            .channel_data
-            .list
-            .iter()
-            .find(|c| c.name == **name)
-            .ok_or_else(|| format!("missing channel '{name}'"))?;
-        if channel.sample_data.len() != w * h * s {
-            return Err(format!("channel '{name}' holds too few samples"));
-        }
-        for (p, v) in channel.sample_data.values_as_f32().enumerate() {
+    for (k, (name, plane)) in ROUGH_CHANNELS.iter().zip(&planes).enumerate() {
+        for (p, &v) in plane.iter().enumerate() {
             if !v.is_finite() {
                 return Err(format!(
                     "channel '{name}' holds {v} at texel ({}, {}) of slice {}",
