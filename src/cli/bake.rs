@@ -10,6 +10,7 @@ use irid::lut::{
     bake_with_progress, validate, BakeSpec, Kind, Layout, Resolution, VALIDATION_SEED,
 };
 use irid::optics::Stack;
+use irid::rough::file::bake_rough;
 
 use super::args::{parse_choice, parse_range, FilmArgs};
 
@@ -69,6 +70,15 @@ pub struct Args {
     /// must meet --max-error); the figures go into the header (0: none).
     #[arg(long, default_value_t = 20_000)]
     pub validate_points: usize,
+    /// Write the rough table instead: the front side's reflectance
+    /// pre-integrated over a GGX lobe, roughness 0 to 1 as slices of the
+    /// atlas (docs/lut-format.md, "Rough tables"; docs/rough.md).
+    #[arg(long)]
+    pub rough: bool,
+    /// The rough table's error target (largest absolute error per channel)
+    /// against irid's rough reflectance [default: --max-error, else 2e-3].
+    #[arg(long, requires = "rough")]
+    pub rough_max_error: Option<f64>,
 }
 
 pub fn run(args: Args) -> Result<ExitCode> {
@@ -110,6 +120,9 @@ pub fn run(args: Args) -> Result<ExitCode> {
     // Flag errors first; what fails after them comes from the stack (a
     // material undefined at some wavelength), so name its file.
     spec.validate()?;
+    if args.rough {
+        return run_rough(&args, &spec);
+    }
     // The table's path is checked before the bake, not after it.
     let mut outputs = OutputSet::new();
     outputs.input(&args.film.stack);
@@ -182,12 +195,52 @@ pub fn run(args: Args) -> Result<ExitCode> {
     }
     outputs.write(table, |tmp| lut.write_to(tmp, &args.output))?;
     outputs.commit()?;
-    let bytes = std::fs::metadata(&args.output)
-        .with_context(|| args.output.display().to_string())?
+    print_written(&args.output)
+}
+
+/// Prints the written file's path and size.
+fn print_written(path: &std::path::Path) -> Result<ExitCode> {
+    let bytes = std::fs::metadata(path)
+        .with_context(|| path.display().to_string())?
         .len();
-    println!("wrote {} ({} bytes)", args.output.display(), bytes);
+    println!("wrote {} ({} bytes)", path.display(), bytes);
     Ok(ExitCode::SUCCESS)
 }
+
+/// `irid bake --rough`: the rough table, written atomically.
+fn run_rough(args: &Args, spec: &BakeSpec) -> Result<ExitCode> {
+    let target = args
+        .rough_max_error
+        .or(args.max_error)
+        .unwrap_or(DEFAULT_ROUGH_MAX_ERROR);
+    if args.half {
+        bail!("--half: a rough table is stored in f32");
+    }
+    let mut outputs = OutputSet::new();
+    outputs.input(&args.film.stack);
+    let table = outputs.file(&args.output);
+    let mut outputs = outputs.prepare()?;
+    let started = Instant::now();
+    let rough = bake_rough(spec, target, &|line| log::info!("{line}"))
+        .with_context(|| args.film.stack.display().to_string())?;
+    let s = rough.slices();
+    println!(
+        "baked rough table: {} slices (roughness (s/(S-1))^2) of {}×{} texels, {} chart(s), in {:.3} s",
+        s.slices.len(),
+        s.atlas.width,
+        s.atlas.height,
+        s.atlas.charts.len(),
+        started.elapsed().as_secs_f64()
+    );
+    super::info::print_rough_error(rough.header());
+    outputs.write(table, |tmp| rough.write_to(tmp, &args.output))?;
+    outputs.commit()?;
+    print_written(&args.output)
+}
+
+/// The rough table's error target without --rough-max-error or --max-error
+/// (the issue's: 2e-3).
+const DEFAULT_ROUGH_MAX_ERROR: f64 = 2e-3;
 
 fn parse_resolution(spec: &str, kind: Kind) -> Result<Resolution> {
     let counts: Vec<usize> = spec

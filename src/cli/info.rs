@@ -5,6 +5,8 @@ use std::process::ExitCode;
 
 use anyhow::Result;
 use irid::lut::{Header, Lut};
+use irid::rough::file::{is_rough_table, RoughHeader, RoughLut};
+use irid::rough::slices::SliceError;
 
 #[derive(clap::Args)]
 pub struct Args {
@@ -13,6 +15,9 @@ pub struct Args {
 }
 
 pub fn run(args: Args) -> Result<ExitCode> {
+    if is_rough_table(&args.lut) {
+        return run_rough(&args);
+    }
     let lut = Lut::load(&args.lut)?;
     let h = lut.header();
     let mut out = String::new();
@@ -155,10 +160,15 @@ fn spacing(nodes: &[f64]) -> String {
 }
 
 fn say_stack(out: &mut String, h: &Header) {
+    say_stack_of(out, &h.stack, h.layer);
+}
+
+/// The stack's media and layers, `layer` marked as the thickness axis.
+fn say_stack_of(out: &mut String, stack: &irid::optics::Stack, layer: usize) {
     super::say!(out, "stack:");
-    super::say!(out, "  ambient    {}", h.stack.ambient.name);
-    for (i, l) in h.stack.layers.iter().enumerate() {
-        let varying = if i + 1 == h.layer {
+    super::say!(out, "  ambient    {}", stack.ambient.name);
+    for (i, l) in stack.layers.iter().enumerate() {
+        let varying = if i + 1 == layer {
             "   <- thickness axis"
         } else {
             ""
@@ -172,7 +182,7 @@ fn say_stack(out: &mut String, h: &Header) {
             l.thickness_nm
         );
     }
-    super::say!(out, "  substrate  {}", h.stack.substrate.name);
+    super::say!(out, "  substrate  {}", stack.substrate.name);
 }
 
 /// Prints `out` followed by the error section. The validation statistics
@@ -212,4 +222,84 @@ fn print_with_error(out: &mut String, h: &Header) {
         );
         super::print_escaped(out);
     }
+}
+
+/// `irid info` on a rough table (`irid bake --rough`).
+fn run_rough(args: &Args) -> Result<ExitCode> {
+    let rough = RoughLut::load(&args.lut)?;
+    let h = rough.header();
+    let mut out = String::new();
+    super::say!(out, "{}", args.lut.display());
+    super::say!(
+        out,
+        "  {} v{}, rough table (F_eff, f32 R G B), written by {}",
+        h.format,
+        h.version,
+        h.tool
+    );
+    super::say!(
+        out,
+        "slices: {} ({}), each {}x{} texels, {} front chart(s), thickness {} .. {} nm",
+        h.slices,
+        h.slice_rule,
+        h.atlas.width,
+        h.atlas.height,
+        h.atlas.charts.len(),
+        h.atlas.thickness_nm.0,
+        h.atlas.thickness_nm.1
+    );
+    say_stack_of(&mut out, &h.stack, h.layer);
+    super::say!(
+        out,
+        "colour: {}, {}, {}, sampling {}",
+        h.color.space,
+        h.color.illuminant,
+        h.color.observer,
+        h.color.sampling
+    );
+    super::print_escaped(&out);
+    print_rough_error(h);
+    Ok(ExitCode::SUCCESS)
+}
+
+/// A rough table's error section: the target, the measured figures above
+/// and below the grazing strip, the blend's predicted error.
+pub fn print_rough_error(h: &RoughHeader) {
+    let e = &h.error;
+    let mut out = String::new();
+    super::say!(
+        out,
+        "error: target {:.1e} (max abs per channel against irid's rough reflectance, cos θ ≥ {}); slice blend predicted {:.2e}",
+        e.target_max_abs,
+        e.grazing_cos,
+        e.blend_error
+    );
+    say_slice_error(&mut out, &format!("cos θ ≥ {}", e.grazing_cos), &e.measured);
+    say_slice_error(
+        &mut out,
+        &format!("cos θ < {} (not sought)", e.grazing_cos),
+        &e.grazing,
+    );
+    super::print_escaped(&out);
+}
+
+/// One line of measured figures.
+pub fn say_slice_error(out: &mut String, name: &str, e: &SliceError) {
+    if e.points == 0 {
+        super::say!(out, "  {name}: no points");
+        return;
+    }
+    let [t, c, r] = e.worst_point;
+    super::say!(
+        out,
+        "  {name}: {} points, max abs {:.3e} {:.3e} {:.3e} (R G B), p99 {:.3e}, mean {:.3e}; ΔE00 max {:.3} mean {:.4}; worst at {t:.1} nm, cos θ {c:.4}, roughness {r:.3}",
+        e.points,
+        e.max_abs[0],
+        e.max_abs[1],
+        e.max_abs[2],
+        e.p99_abs.iter().fold(0.0f64, |a, &b| a.max(b)),
+        e.mean_abs.iter().fold(0.0f64, |a, &b| a.max(b)),
+        e.max_delta_e00,
+        e.mean_delta_e00
+    );
 }

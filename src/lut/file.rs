@@ -85,11 +85,7 @@ impl Lut {
             encoding(half),
             AnyChannels::sort(list),
         );
-        let image = Image::from_layer(layer);
-        image.write().to_file(tmp).map_err(|e| match e {
-            exr::error::Error::Io(io) => Error::io(path, io),
-            other => Error::malformed(path, format!("cannot write OpenEXR: {other}")),
-        })
+        write_layer(layer, tmp, path)
     }
 
     /// Reads and checks a table: the `irid` header's format name and
@@ -100,24 +96,8 @@ impl Lut {
     /// file, never a panic.
     pub fn load(path: &Path) -> Result<Lut> {
         let bad = |why: String| Error::malformed(path, why);
-        if let Err(e) = std::fs::metadata(path) {
-            return Err(Error::io(path, e));
-        }
-        let meta = MetaData::read_from_file(path, false).map_err(|e| match e {
-            // The system refusing the file (a folder, no permission) is an
-            // I/O error; a file that ends too soon is malformed.
-            exr::error::Error::Io(io) if io.kind() != std::io::ErrorKind::UnexpectedEof => {
-                Error::io(path, io)
-            }
-            e => bad(format!("not a readable OpenEXR file: {e}")),
-        })?;
-        let exr_header = meta
-            .headers
-            .first()
-            .ok_or_else(|| bad("an OpenEXR file without an image".into()))?;
-        if exr_header.deep {
-            return Err(bad("a deep OpenEXR image is not an irid table".into()));
-        }
+        let exr_header = first_header(path)?;
+        let exr_header = &exr_header;
         let header = parse_header(exr_header).map_err(bad)?;
         let (width, height) = check_header(&header).map_err(bad)?;
         let sample_type = check_image(exr_header, &header, width, height).map_err(bad)?;
@@ -127,10 +107,48 @@ impl Lut {
     }
 }
 
-/// The `irid` attribute as a [`Header`]. The format name and version are
-/// checked on the raw JSON first, so a table from another format or a
-/// newer irid is named as such rather than as a field serde cannot parse.
-fn parse_header(exr_header: &ExrHeader) -> std::result::Result<Header, String> {
+/// Writes one OpenEXR layer at `tmp`; errors name `path`, the output.
+pub(crate) fn write_layer(
+    layer: Layer<AnyChannels<FlatSamples>>,
+    tmp: &Path,
+    path: &Path,
+) -> Result<()> {
+    Image::from_layer(layer)
+        .write()
+        .to_file(tmp)
+        .map_err(|e| match e {
+            exr::error::Error::Io(io) => Error::io(path, io),
+            other => Error::malformed(path, format!("cannot write OpenEXR: {other}")),
+        })
+}
+
+/// The first (flat) image's header of the OpenEXR file at `path`, read
+/// without its pixels. The system refusing the file (a folder, no
+/// permission) is an I/O error; a file that ends too soon is malformed.
+pub(crate) fn first_header(path: &Path) -> Result<ExrHeader> {
+    let bad = |why: String| Error::malformed(path, why);
+    if let Err(e) = std::fs::metadata(path) {
+        return Err(Error::io(path, e));
+    }
+    let meta = MetaData::read_from_file(path, false).map_err(|e| match e {
+        exr::error::Error::Io(io) if io.kind() != std::io::ErrorKind::UnexpectedEof => {
+            Error::io(path, io)
+        }
+        e => bad(format!("not a readable OpenEXR file: {e}")),
+    })?;
+    let exr_header = meta
+        .headers
+        .into_iter()
+        .next()
+        .ok_or_else(|| bad("an OpenEXR file without an image".into()))?;
+    if exr_header.deep {
+        return Err(bad("a deep OpenEXR image is not an irid table".into()));
+    }
+    Ok(exr_header)
+}
+
+/// The text of the header's `irid` attribute.
+pub(crate) fn attribute_text(exr_header: &ExrHeader) -> std::result::Result<String, String> {
     let text = exr_header
         .own_attributes
         .other
@@ -145,7 +163,14 @@ fn parse_header(exr_header: &ExrHeader) -> std::result::Result<Header, String> {
     let AttributeValue::Text(text) = text else {
         return Err(format!("the '{ATTRIBUTE}' attribute is not text"));
     };
-    let json: String = text.bytes().iter().map(|&b| b as char).collect();
+    Ok(text.bytes().iter().map(|&b| b as char).collect())
+}
+
+/// The `irid` attribute as a [`Header`]. The format name and version are
+/// checked on the raw JSON first, so a table from another format or a
+/// newer irid is named as such rather than as a field serde cannot parse.
+fn parse_header(exr_header: &ExrHeader) -> std::result::Result<Header, String> {
+    let json = attribute_text(exr_header)?;
     let value: serde_json::Value = serde_json::from_str(&json)
         .map_err(|e| format!("'{ATTRIBUTE}' header is not JSON: {e}"))?;
     if value.get("format").and_then(|f| f.as_str()) != Some(FORMAT_NAME) {
@@ -237,6 +262,23 @@ fn read_pixels(
     height: usize,
 ) -> std::result::Result<Vec<f32>, String> {
     let names = header.channel_names();
+    let planes = read_planes(path, (width, height), names)?;
+    let mut data = vec![0.0f32; width * height * names.len()];
+    for (k, plane) in planes.iter().enumerate() {
+        for (p, &v) in plane.iter().enumerate() {
+            data[p * names.len() + k] = v;
+        }
+    }
+    Ok(data)
+}
+
+/// The channels `names` of the file's first layer as f32 planes, the
+/// image `size` (checked on an earlier read of its headers).
+pub(crate) fn read_planes(
+    path: &Path,
+    size: (usize, usize),
+    names: &[&str],
+) -> std::result::Result<Vec<Vec<f32>>, String> {
     let image = read()
         .no_deep_data()
         .largest_resolution_level()
@@ -246,32 +288,29 @@ fn read_pixels(
         .from_file(path)
         .map_err(|e| format!("not a readable OpenEXR file: {e}"))?;
     let layer = &image.layer_data;
-    // The headers were checked on an earlier read of the file.
-    if (layer.size.0, layer.size.1) != (width, height) {
+    if (layer.size.0, layer.size.1) != size {
         return Err("the image's size changed while it was read".into());
     }
-    let pixels = width * height;
-    let mut data = vec![0.0f32; pixels * names.len()];
-    for (k, name) in names.iter().enumerate() {
-        let channel = layer
-            .channel_data
-            .list
-            .iter()
-            .find(|c| c.name == **name)
-            .ok_or_else(|| format!("missing channel '{name}'"))?;
-        if channel.sample_data.len() != pixels {
-            return Err(format!("channel '{name}' holds too few samples"));
-        }
-        for (p, v) in channel.sample_data.values_as_f32().enumerate() {
-            data[p * names.len() + k] = v;
-        }
-    }
-    Ok(data)
+    names
+        .iter()
+        .map(|name| {
+            let channel = layer
+                .channel_data
+                .list
+                .iter()
+                .find(|c| c.name == **name)
+                .ok_or_else(|| format!("missing channel '{name}'"))?;
+            if channel.sample_data.len() != size.0 * size.1 {
+                return Err(format!("channel '{name}' holds too few samples"));
+            }
+            Ok(channel.sample_data.values_as_f32().collect())
+        })
+        .collect()
 }
 
 /// EXR text is bytes; JSON allows any character as a \u escape, so the
 /// header is stored as plain ASCII that every reader decodes the same way.
-fn ascii_json(json: &str) -> String {
+pub(crate) fn ascii_json(json: &str) -> String {
     let mut out = String::with_capacity(json.len());
     for c in json.chars() {
         if c.is_ascii() {

@@ -7,7 +7,7 @@
 mod axis;
 mod bake;
 pub(crate) use bake::{critical_cos, rgb_at_nodes, Prepared, Row};
-mod file;
+pub(crate) mod file;
 mod header;
 mod sample;
 mod validate;

@@ -98,7 +98,7 @@ pub const MEASURE_SEED: u64 = 29;
 
 /// What the slices give against [`rough_reflectance`] at random points,
 /// per RGB channel of F_eff.
-#[derive(Clone, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct SliceError {
     /// Points measured.
     pub points: usize,
