@@ -200,15 +200,26 @@ fn band_p(skeleton: &Skeleton, p0_nm: f64, lo: f64, hi: f64) -> LogAxis {
     }
 }
 
+/// The error of one channel's value `got` against `exact`: absolute, and
+/// relative to the exact value where that exceeds 1 in magnitude. Values
+/// up to 1 (every passive film's R and T) are held to the target in
+/// absolute terms; the larger values of a gain film are stored as f16, a
+/// floating format whose rounding grows with the value, and are held to it
+/// relative to their size.
+pub fn scaled_error(got: f64, exact: f64) -> f64 {
+    (got - exact).abs() / exact.abs().max(1.0)
+}
+
 /// The error of the midpoint of two nodes' values `a`, `b` against the
 /// exact values there, as a fraction of what each target allows an axis
-/// (`shares`: absolute, ΔE00; ΔE00 for six colour channels only).
+/// (`shares`: absolute ([`scaled_error`]), ΔE00; ΔE00 for six colour
+/// channels only).
 fn normalized_error(a: &[f64], b: &[f64], exact: &[f64], shares: (f64, f64)) -> f64 {
     let got = |k: usize| 0.5 * (a[k] + b[k]);
     let mut e = 0.0f64;
     if shares.0.is_finite() {
         let abs = (0..exact.len())
-            .map(|k| (got(k) - exact[k]).abs())
+            .map(|k| scaled_error(got(k), exact[k]))
             .fold(0.0, f64::max);
         e = e.max(abs / shares.0);
     }
@@ -227,19 +238,21 @@ fn normalized_error(a: &[f64], b: &[f64], exact: &[f64], shares: (f64, f64)) -> 
 
 impl Goal {
     /// What one axis's interpolation may add: half of each target, less
-    /// what storage rounds values up to `largest` by.
-    fn shares(&self, largest: f64) -> Result<(f64, f64)> {
+    /// what storage rounds a value by, in the terms of [`scaled_error`]
+    /// (a floating format rounds a value above 1 by no more, relative to
+    /// it, than it rounds 1).
+    fn shares(&self) -> Result<(f64, f64)> {
         let rounding = if self.half {
-            f16_half_ulp(largest)
+            f16_half_ulp(1.0)
         } else {
-            f32::EPSILON as f64 * largest
+            f32::EPSILON as f64
         };
         let abs = match self.max_abs {
             Some(t) if rounding >= 0.9 * t => {
                 return Err(Error::invalid(
                     "max-error",
                     format!(
-                        "{t} cannot be met with {} texels: values reach {largest:.3}, which it rounds by up to {rounding:.2e}",
+                        "{t} cannot be met with {} texels, which round values near 1 (and larger ones relative to their size) by up to {rounding:.2e}",
                         if self.half { "f16" } else { "f32" }
                     ),
                 ))
@@ -695,7 +708,7 @@ fn probe(skeleton: &Skeleton, piece: &Piece, shares: Pair) -> Result<RowNeeds> {
 /// The bands of every piece of a side (and its corner), sized from the
 /// probes.
 fn layout(skeleton: &Skeleton, goal: Goal, progress: &dyn Fn(&str)) -> Result<Vec<Chart>> {
-    let shares = goal.shares(1.0)?;
+    let shares = goal.shares()?;
     let mut charts = Vec::new();
     if let Some(corner) = skeleton.corner {
         charts.push(size_corner(skeleton, corner, shares)?);
@@ -1034,7 +1047,7 @@ fn confirm(
         }
         let ch = skeleton.req.film.channels();
         within_budget(goal, w, h, ch)?;
-        let ((eu, ev), values) = chart_check(skeleton, &chart, w, h, goal.shares(1.0)?)?;
+        let ((eu, ev), values) = chart_check(skeleton, &chart, w, h, goal.shares()?)?;
         if let Some(k) = values.iter().position(|x| !x.is_finite()) {
             let v = &values[k - k % ch..k - k % ch + ch];
             return Err(Error::invalid(
@@ -1042,12 +1055,6 @@ fn confirm(
                 format!("R or T is not finite: {v:?}"),
             ));
         }
-        let largest = values.iter().fold(0.0f64, |a, &b| a.max(b.abs()));
-        // f16 rounds values above 1 more: the same errors are a larger
-        // fraction of what is left.
-        let scale = goal.shares(1.0)?.0 / goal.shares(largest.max(1.0))?.0;
-        let scale = if scale.is_finite() { scale } else { 1.0 };
-        let (eu, ev) = ((eu.0 * scale, eu.1 * scale), (ev.0 * scale, ev.1 * scale));
         progress(&format!(
             "  {} {w}×{h}: midpoint error {:.2} (u) {:.2} (v) of what is allowed",
             chart_name(&chart),
@@ -1188,7 +1195,8 @@ fn assemble(
 pub struct Measurement {
     /// Points measured.
     pub points: usize,
-    /// Largest absolute error per channel.
+    /// Largest error per channel: absolute, relative above 1
+    /// ([`scaled_error`]).
     pub max_abs: Vec<f64>,
     /// 99th percentile per channel.
     pub p99_abs: Vec<f64>,
@@ -1235,7 +1243,7 @@ impl Measurement {
             .par_chunks_exact(channels)
             .zip(exact.par_chunks_exact(channels))
             .map(|(g, e)| {
-                let abs = (0..channels).map(|k| (g[k] - e[k]).abs()).collect();
+                let abs = (0..channels).map(|k| scaled_error(g[k], e[k])).collect();
                 let de = |o: usize| {
                     if !colour {
                         return 0.0;

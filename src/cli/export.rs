@@ -136,7 +136,7 @@ fn report(result: &irid::export::Export, args: &Args, seconds: f64) {
             .map(|&k| atlas.charts[k].rect.width * atlas.charts[k].rect.height)
             .sum();
         println!(
-            "{name}: {} chart{} of {texels} texels; GPU error (f32 coordinates, bilinear, f16) at {} random points over cos θ {:.4}–{:.4}: max {:.2e} (target {:.0e}), p99 {:.2e}, mean {:.2e}; ΔE00 max {:.3} / {:.3}, mean {:.4} / {:.4} (R / T); 8-bit filter weights add at most {:.2e}",
+            "{name}: {} chart{} of {texels} texels; GPU error (f32 coordinates, bilinear, f16; relative above 1) at {} random points over cos θ {:.4}–{:.4}: max {:.2e} (target {:.0e}), p99 {:.2e}, mean {:.2e}; ΔE00 max {:.3} / {:.3}, mean {:.4} / {:.4} (R / T); 8-bit filter weights add at most {:.2e}",
             side.charts.len(),
             if side.charts.len() == 1 { "" } else { "s" },
             e.points,

@@ -226,7 +226,8 @@ fn refraction_json(export: &Export) -> serde_json::Value {
 fn errors_json(export: &Export) -> serde_json::Value {
     let mut error = json!({
         "channels": ["R.r", "R.g", "R.b", "T.r", "T.g", "T.b"],
-        "metric": "absolute difference between the bilinear filtering (f32 weights, clamp to edge) of the f16 \
+        "metric": "absolute difference (relative to the exact value where that exceeds 1 in magnitude: \
+         |got - exact| / max(1, |exact|), as f16 is a floating format) between the bilinear filtering (f32 weights, clamp to edge) of the f16 \
          texels at the shader's texture coordinates (f32) and irid's exact solver on the stack as seen from the \
          side, at random points uniform over the whole domain; delta_e00 is CIEDE2000 of the reflected [0] and \
          transmitted [1] colour; aliased: the same over the points below the side's aliased_below_cos, where \

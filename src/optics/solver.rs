@@ -96,6 +96,19 @@ pub fn normal_index(n: C64, beta_sq: f64) -> C64 {
     sqrt_upper(n * n - beta_sq)
 }
 
+/// [`normal_index`] for light arriving from a lossless ambient of index
+/// `n0` at cos θ0 `cos_theta0`: √((n² − n0²) + (n0 cos θ0)²), which is
+/// √(n² − β²) but keeps (n0 cos θ0)² where it is below the rounding of n0²
+/// (cos θ0 below about 1e-8). A medium of the ambient's own index then gets
+/// q = n0 cos θ0 exactly, as the ambient itself, instead of 0: near
+/// grazing incidence a free-standing film of zero thickness is the bare
+/// ambient, not a perfect mirror over 0/0.
+#[inline]
+pub fn normal_index_at(n: C64, n0: f64, cos_theta0: f64) -> C64 {
+    let q0 = n0 * cos_theta0;
+    sqrt_upper((n * n - n0 * n0) + q0 * q0)
+}
+
 /// Fresnel coefficients of one interface from medium `i` into medium `f`
 /// (Byrnes' convention), given each side's index n and q.
 #[derive(Clone, Copy, Debug)]

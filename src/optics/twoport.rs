@@ -20,7 +20,7 @@
 use num_complex::Complex64 as C64;
 
 use super::incoherent::{split, Coherence, Env, Parts};
-use super::solver::{normal_index, recurse_beta, Amplitudes, Response};
+use super::solver::{normal_index_at, recurse_beta, Amplitudes, Response};
 use crate::simd::simd_dispatch;
 
 /// |q|² / |n|² below which the layer counts as at its critical angle. The
@@ -75,17 +75,17 @@ impl VaryingLayer {
         let beta_sq = n0 * n0 * (1.0 - cos_theta0 * cos_theta0);
         let k0 = std::f64::consts::TAU / wavelength_nm;
         let n_layer = indices[layer];
-        let q_layer = normal_index(n_layer, beta_sq);
+        let q_layer = normal_index_at(n_layer, n0, cos_theta0);
 
         let n_sub = indices[indices.len() - 1];
-        let q_sub = normal_index(n_sub, beta_sq);
+        let q_sub = normal_index_at(n_sub, n0, cos_theta0);
         // Each medium the three sub-stacks share gets its q once, passed to
         // the recursion.
         let n_ambient = C64::new(n0, 0.0);
         let ambient = [
             n_ambient,
             n_ambient * n_ambient,
-            normal_index(n_ambient, beta_sq),
+            C64::new(n0 * cos_theta0, 0.0),
         ];
         let varying = [n_layer, n_layer * n_layer, q_layer];
 
@@ -622,6 +622,48 @@ mod tests {
                         assert!(
                             (g - w).abs() <= 1e-12 * (1.0 + w.abs()),
                             "{indices:?} layer {layer} λ {wl} cos {c} d {d}: {g} vs {w}"
+                        );
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn zero_thickness_near_grazing_is_the_bare_interface() {
+        // At thickness 0 the film is absent: what is left is the interface
+        // of the ambient and the substrate, in closed form. Near grazing
+        // incidence the film's interfaces reflect almost fully (r'_A r_B →
+        // 1), and below cos θ ≈ 1e-8 (n0 cos θ)² is lost against n0²: the
+        // split must still give the bare interface there, not 0/0.
+        let c = |n: f64, k: f64| C64::new(n, k);
+        let fresnel_r = |n0: f64, n1: f64, mu: f64| {
+            let q0 = n0 * mu;
+            let q1 = (n1 * n1 - n0 * n0 + q0 * q0).sqrt();
+            let rs = (q0 - q1) / (q0 + q1);
+            let rp = (n1 * n1 * q0 - n0 * n0 * q1) / (n1 * n1 * q0 + n0 * n0 * q1);
+            (rs * rs, rp * rp)
+        };
+        let mut scratch = Scratch::default();
+        for (n1, film) in [(1.0, c(1.33, 0.0)), (1.52, c(1.5, 0.0)), (1.0, c(1.5, 0.1))] {
+            let idx = [c(1.0, 0.0), film, c(n1, 0.0)];
+            // 1 − r'_A r_B ≈ 4 μ / q1 carries the rounding of r'_A r_B
+            // (1e-16) relative to μ: the response holds to about 1e-16 / μ.
+            for mu in [1e-6, 1e-8, 1e-9, 1e-10, 1e-11] {
+                let tolerance = 1e-9 + 1e-14 / mu;
+                for wl in [380.0, 550.0, 780.0] {
+                    let v = VaryingLayer::new(&idx, &[0.0], 1, wl, mu, &mut scratch);
+                    let got = v.response(v.phase(0.0));
+                    let (rs, rp) = fresnel_r(1.0, n1, mu);
+                    for (g, w) in [(got.rs, rs), (got.rp, rp)] {
+                        assert!((g - w).abs() <= tolerance, "{idx:?} cos {mu}: R {g} vs {w}");
+                    }
+                    // Lossless media: what is not reflected is transmitted.
+                    for (r, t) in [(got.rs, got.ts), (got.rp, got.tp)] {
+                        let sum = r + t;
+                        assert!(
+                            (sum - 1.0).abs() <= tolerance,
+                            "{idx:?} cos {mu}: R + T {sum}"
                         );
                     }
                 }

@@ -122,7 +122,8 @@ fn channel_meaning(name: &str) -> String {
 }
 
 /// The metric of an atlas table's bake check.
-const ATLAS_CHECK_METRIC: &str = "largest absolute difference, per channel, between the table \
+const ATLAS_CHECK_METRIC: &str = "largest absolute difference (relative to the exact value where \
+    that exceeds 1 in magnitude: |table - exact| / max(1, |exact|)), per channel, between the table \
     (bilinear in each chart's coordinates, f32 weights) and irid's solver at the bake's random \
     points where its target applies (cos θ at or above atlas.aliased_below_cos)";
 

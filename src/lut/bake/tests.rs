@@ -289,6 +289,32 @@ fn frustrated_tir_gap_at_its_critical_angle() {
     assert!(lut.data().iter().all(|v| v.is_finite()));
 }
 
+/// A free-standing film of thickness 0 is no film: the sweep gives R = 0
+/// and T = the colour of a flat spectrum at every angle, including cos θ
+/// 1e-9, where its interfaces reflect all but 5e-9 of the light and (n0
+/// cos θ)² is below the rounding of n0² (it once gave 0/0 there).
+#[test]
+fn a_film_of_no_thickness_is_no_film_at_grazing_incidence() {
+    let stack = crate::optics::Stack {
+        ambient: crate::optics::Material::constant(1.0, 0.0),
+        layers: vec![Layer::new(
+            crate::optics::Material::constant(1.33, 0.0),
+            0.0,
+        )],
+        substrate: crate::optics::Material::constant(1.0, 0.0),
+    };
+    let integrator = SpectralIntegrator::new(crate::color::Sampling::Exact);
+    let white = integrator.rgb(&vec![1.0; integrator.wavelengths_nm().len()]);
+    let cos = [1e-9, 1e-7, 1e-3, 0.5, 1.0];
+    let values = rgb_at_nodes(&stack, 1, integrator, &[0.0], &cos).unwrap();
+    for (v, c) in values.iter().zip(cos) {
+        for k in 0..3 {
+            assert!(v[k].abs() < 1e-5, "cos θ {c}: R {v:?}");
+            assert!((v[3 + k] - white[k]).abs() < 1e-5, "cos θ {c}: T {v:?}");
+        }
+    }
+}
+
 /// `rgb_at_nodes` (the sweep on caller-chosen nodes, as the GPU export uses
 /// it) against the solver and the integrator node by node, on a
 /// square-root thickness axis, an evenly spaced one and an uneven cos θ
