@@ -150,6 +150,40 @@ def _synthetic_rough(directory, rough):
     }
 
 
+def _write_film(directory, reflectance, transmittance, fields):
+    """Writes the two tables and a film.json of an export for the white E on
+    a made-up stack (n = 1 over n = 1.5): `fields` holds what differs between
+    the synthetic exports (version, domain, charts, sides, opaque, rough)."""
+    height, width = reflectance.shape[:2]
+    write_exr(directory / "reflectance.exr", reflectance)
+    write_exr(directory / "transmittance.exr", transmittance)
+    film = {
+        "format": "irid-film",
+        "version": fields["version"],
+        "texture": {
+            "width": width,
+            "height": height,
+            "format": "rgba16f",
+            "files": {"reflectance": "reflectance.exr", "transmittance": "transmittance.exr"},
+            "png": None,
+        },
+        "domain": fields["domain"],
+        "charts": fields["charts"],
+        "sides": fields["sides"],
+        "white": "e",
+        "stack": {
+            "ambient": {"name": "n=1", "dispersion": {"constant": {"n": 1.0, "k": 0.0}}},
+            "layers": [],
+            "substrate": {"name": "n=1.5", "dispersion": {"constant": {"n": 1.5, "k": 0.0}}},
+        },
+        "layer": 1,
+        "sampling": "exact",
+        "opaque": fields["opaque"],
+        "rough": fields["rough"],
+    }
+    (directory / "film.json").write_text(json.dumps(film, indent=1))
+
+
 def write_synthetic_export(
     directory, size_u, size_v, cos_range, cos_crit, y_crit, opaque, thickness_power=1, back=None,
     rough=None,
@@ -200,33 +234,14 @@ def write_synthetic_export(
         })
         sides[side] = {"index": k, "chart": k}
         row += nv + 2
-    write_exr(directory / "reflectance.exr", r)
-    write_exr(directory / "transmittance.exr", t)
-    film = {
-        "format": "irid-film",
+    _write_film(directory, r, t, {
         "version": 2,
-        "texture": {
-            "width": width,
-            "height": height,
-            "format": "rgba16f",
-            "files": {"reflectance": "reflectance.exr", "transmittance": "transmittance.exr"},
-            "png": None,
-        },
         "domain": {"thickness_nm": [100.0, 900.0], "cos_theta": list(cos_range)},
         "charts": charts,
         "sides": sides,
-        "white": "e",
-        "stack": {
-            "ambient": {"name": "n=1", "dispersion": {"constant": {"n": 1.0, "k": 0.0}}},
-            "layers": [],
-            "substrate": {"name": "n=1.5", "dispersion": {"constant": {"n": 1.5, "k": 0.0}}},
-        },
-        "layer": 1,
-        "sampling": "exact",
         "opaque": opaque,
         "rough": _synthetic_rough(directory, rough) if rough else None,
-    }
-    (directory / "film.json").write_text(json.dumps(film, indent=1))
+    })
 
 
 def write_synthetic_atlas(directory, charts, sides, thickness_range, opaque):
@@ -259,34 +274,15 @@ def write_synthetic_atlas(directory, charts, sides, thickness_range, opaque):
         row += nv + 2
     t = 1.0 - r
     t[..., 3] = 1.0
-    write_exr(directory / "reflectance.exr", r)
-    write_exr(directory / "transmittance.exr", t)
     side = lambda k, numbers: None if numbers is None else {"index": k, "charts": numbers}  # noqa: E731
-    film = {
-        "format": "irid-film",
+    _write_film(directory, r, t, {
         "version": 3,
-        "texture": {
-            "width": width,
-            "height": height,
-            "format": "rgba16f",
-            "files": {"reflectance": "reflectance.exr", "transmittance": "transmittance.exr"},
-            "png": None,
-        },
         "domain": {"thickness_nm": list(thickness_range), "cos_theta": [0.0, 1.0]},
         "charts": entries,
         "sides": {"front": side(0, sides["front"]), "back": side(1, sides.get("back"))},
-        "white": "e",
-        "stack": {
-            "ambient": {"name": "n=1", "dispersion": {"constant": {"n": 1.0, "k": 0.0}}},
-            "layers": [],
-            "substrate": {"name": "n=1.5", "dispersion": {"constant": {"n": 1.5, "k": 0.0}}},
-        },
-        "layer": 1,
-        "sampling": "exact",
         "opaque": opaque,
         "rough": None,
-    }
-    (directory / "film.json").write_text(json.dumps(film, indent=1))
+    })
 
 
 def expected_x(fraction, thickness_power):

@@ -52,7 +52,13 @@ REPO = HERE.parent.parent
 sys.path.insert(0, str(HERE))
 from colour_exr import delta_e2000_rgb  # noqa: E402
 import irid_blender  # noqa: E402
-from cycles_scene import Bench, Irid, render_rough_picture, stack_with_thickness  # noqa: E402
+from cycles_scene import (  # noqa: E402
+    Bench,
+    Irid,
+    node_material,
+    render_rough_picture,
+    stack_with_thickness,
+)
 
 STACK = "tests/blender/film-on-glass.toml"  # 300 nm, n = 1.38, on n = 1.5
 SUBSTRATE_IOR = 1.5
@@ -88,11 +94,7 @@ TRANSMITTING_FACTOR = 16
 
 def bsdf_material(name, node_type, inputs):
     """A material of one GGX BSDF node with these input values."""
-    material = bpy.data.materials.new(name)
-    if material.node_tree is None:
-        material.use_nodes = True
-    tree = material.node_tree
-    tree.nodes.clear()
+    material, tree = node_material(name)
     bsdf = tree.nodes.new(node_type)
     bsdf.distribution = "GGX"  # single scattering, not Multiscatter GGX
     for key, value in inputs.items():
