@@ -31,6 +31,34 @@ fn the_wgsl_mapping_is_the_generated_one() {
     assert!(wgsl.contains(&format!("array<vec4<f32>, {}>", irid::atlas::UNIFORM_VEC4)));
 }
 
+/// irid_film_rough's chart lookup is the same generated code, on the rough
+/// uniform array, whose atlas part starts behind the tiling numbers.
+#[test]
+fn the_rough_wgsl_mapping_is_the_generated_one() {
+    let wgsl = read("irid_film_rough.wgsl");
+    let lib = &irid_gpu::generate::ROUGH;
+    assert_eq!(
+        irid_gpu::generate::with_mapping(lib, &wgsl).unwrap(),
+        wgsl,
+        "shaders/irid_film_rough.wgsl: run `cargo run -p irid-gpu --bin gen-shaders`"
+    );
+    let mapping = irid_gpu::generate::mapping_wgsl(lib);
+    assert!(wgsl.contains(&mapping));
+    // The same text as irid_film's but for its names and where its atlas
+    // starts.
+    let film = irid_gpu::generate::mapping_wgsl(&irid_gpu::generate::FILM)
+        .replace("irid_film_", "irid_film_rough_")
+        .replace("irid_params.v", "irid_rough_params.v");
+    let base = irid::export::TILING_VEC4;
+    assert_eq!(
+        mapping,
+        film.replace("[0]", &format!("[{base}]"))
+            .replace("[0 + 1]", &format!("[{base} + 1]"))
+            .replace("= 0 + 2 + 4 * k", &format!("= {base} + 2 + 4 * k"))
+    );
+    assert!(wgsl.contains(&format!("array<vec4<f32>, {}>", irid::export::ROUGH_VEC4)));
+}
+
 #[test]
 fn committed_shaders_are_generated_from_the_wgsl() {
     let files = irid_gpu::generate::generate(&read("irid_film.wgsl")).unwrap();

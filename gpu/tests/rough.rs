@@ -20,7 +20,7 @@ use harness::{
     GLSL_HARNESS,
 };
 use irid::export::{
-    export, rough_exact_at, rough_measurement_axes, write_dir, Export, ExportSpec, Texture,
+    export, rough_exact_at, write_dir, Export, ExportSpec, RoughPoints, Texture, GRAZING_COS,
 };
 use irid::optics::Stack;
 use irid::rough::RoughTable;
@@ -148,23 +148,26 @@ fn check(
     gpu: &Gpu,
     e: &Export,
     bound: &Bound,
-    axes: &[Vec<f32>; 3],
+    points: &RoughPoints,
     exact: &RoughTable,
     language: &str,
     source: Source,
 ) {
     let rough = e.rough.as_ref().unwrap();
     let program = program(gpu, &bound.layout, source);
-    let [t, c, r] = axes;
-    let points: Vec<[f32; 2]> = c
+    let t = &points.thickness;
+    let cos = points.all_cos();
+    let at: Vec<[f32; 2]> = cos
         .iter()
         .flat_map(|&cj| t.iter().map(move |&ti| [ti, cj]))
         .collect();
-    let (mut emulation, mut worst) = (0.0f64, [0.0f64; 3]);
+    // Largest error per channel at cos θ at or above the grazing cosine, and
+    // below it.
+    let (mut emulation, mut worst) = (0.0f64, [[0.0f64; 3]; 2]);
     // Roughness 0 and 1 exactly, then the measurement's own roughnesses.
-    for (k, &rk) in [0.0f32, 1.0].iter().chain(r).enumerate() {
-        let (got, _) = run(gpu, &program, bound, &points, 1, rk.to_bits());
-        for (p, g) in points.iter().zip(&got) {
+    for (k, &rk) in [0.0f32, 1.0].iter().chain(&points.roughness).enumerate() {
+        let (got, _) = run(gpu, &program, bound, &at, 1, rk.to_bits());
+        for (p, g) in at.iter().zip(&got) {
             let cpu = rough.sample(p[0], p[1], rk);
             for n in 0..3 {
                 emulation = emulation.max(f64::from((g[n] - cpu[n]).abs()));
@@ -173,31 +176,44 @@ fn check(
         if k < 2 {
             continue;
         }
-        for (at, g) in got.iter().enumerate() {
-            let want = exact.at(at % t.len(), at / t.len(), k - 2);
+        for (i, g) in got.iter().enumerate() {
+            let (ti, cj) = (i % t.len(), i / t.len());
+            let want = exact.at(ti, cj, k - 2);
+            let strip = usize::from(cj >= points.cos.len());
             for n in 0..3 {
-                worst[n] = worst[n].max((f64::from(g[n]) - want[n]).abs());
+                worst[strip][n] = worst[strip][n].max((f64::from(g[n]) - want[n]).abs());
             }
         }
     }
+    let grazing = rough
+        .grazing_error
+        .as_ref()
+        .expect("the angles reach grazing");
+    let max = |v: &[f64; 3]| v.iter().fold(0.0f64, |a, &b| a.max(b));
     eprintln!(
-        "soap 200-400 nm rough [{language}, {} slices of {}×{}]: |GPU − CPU emulation| ≤ {emulation:.2e}; |GPU − irid::rough| max {:.2e} (film.json states {:.2e}, target {:.0e})",
+        "soap 200-400 nm rough [{language}, {} slices of {}×{}]: |GPU − CPU emulation| ≤ {emulation:.2e}; |GPU − irid::rough| max {:.2e} (film.json states {:.2e}, target {:.0e}); below cos θ {GRAZING_COS}: {:.2e} (states {:.2e})",
         rough.slices,
-        rough.mapping.size_u,
-        rough.mapping.size_v,
-        worst.iter().fold(0.0f64, |a, &b| a.max(b)),
+        rough.atlas.width,
+        rough.atlas.height,
+        max(&worst[0]),
         rough.error.max_all(),
         rough.target,
+        max(&worst[1]),
+        grazing.max_all(),
     );
     assert!(
         emulation <= EMULATION_TOLERANCE,
         "[{language}]: GPU differs from the CPU emulation by {emulation:e}"
     );
-    for (n, (&got, &stated)) in worst.iter().zip(&rough.error.max_abs).enumerate() {
-        assert!(
-            got <= stated + EMULATION_TOLERANCE,
-            "[{language}]: channel {n} error {got:e} above the stated {stated:e}"
-        );
+    for (strip, stated) in [&rough.error.max_abs, &grazing.max_abs].iter().enumerate() {
+        for n in 0..3 {
+            assert!(
+                worst[strip][n] <= stated[n] + EMULATION_TOLERANCE,
+                "[{language}]: channel {n} error {:e} above the stated {:e} (strip {strip})",
+                worst[strip][n],
+                stated[n]
+            );
+        }
     }
     assert!(rough.error.max_all() <= 2e-3);
 }
@@ -218,14 +234,14 @@ fn irid_film_rough_on_vulkan_matches_emulation_and_irid_rough() {
     assert_eq!(texture, rough.texture, "rough.exr");
     assert_eq!(uniform, rough.uniform_f32(), "film.json rough.uniform_f32");
     let Some(gpu) = gpu() else { return };
-    let axes = rough_measurement_axes(&spec);
-    let exact = rough_exact_at(&spec, &axes).unwrap();
+    let points = RoughPoints::of(&spec);
+    let exact = rough_exact_at(&spec, &points).unwrap();
     let bound = bind_rough(&gpu, &texture, &uniform);
     check(
         &gpu,
         &e,
         &bound,
-        &axes,
+        &points,
         &exact,
         "WGSL",
         wgsl_source(&shader("irid_film_rough.wgsl")),
@@ -238,7 +254,7 @@ fn irid_film_rough_on_vulkan_matches_emulation_and_irid_rough() {
             &gpu,
             &e,
             &bound,
-            &axes,
+            &points,
             &exact,
             language,
             glsl_source(&shader(file)),

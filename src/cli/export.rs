@@ -170,22 +170,39 @@ fn report(result: &irid::export::Export, args: &Args, seconds: f64) {
         }
     }
     if let Some(rough) = &result.rough {
-        let e = &rough.error;
+        report_rough(rough);
+    }
+}
+
+/// What an export printed about its rough table.
+fn report_rough(rough: &irid::export::RoughExport) {
+    let e = &rough.error;
+    println!(
+        "rough (light from the ambient): {} slices (roughness 0 to 1) of {}×{} texels, {} chart{}, tiled into {}×{} texels, {} KiB; GPU error (f32 coordinates, bilinear, f16, two slices blended) at {} random points with cos θ ≥ {}: max {:.2e} (target {:.0e}), p99 {:.2e}, mean {:.2e}; ΔE00 max {:.3}, mean {:.4}",
+        rough.slices,
+        rough.atlas.width,
+        rough.atlas.height,
+        rough.atlas.charts.len(),
+        if rough.atlas.charts.len() == 1 { "" } else { "s" },
+        rough.texture.width,
+        rough.texture.height,
+        rough.texture.width * rough.texture.height * 8 / 1024,
+        e.points,
+        irid::export::GRAZING_COS,
+        e.max_all(),
+        rough.target,
+        e.p99_abs.iter().fold(0.0f64, |a, &b| a.max(b)),
+        e.mean_abs.iter().sum::<f64>() / 3.0,
+        e.max_delta_e00,
+        e.mean_delta_e00,
+    );
+    if let Some(g) = &rough.grazing_error {
         println!(
-            "rough (light from the ambient): {} slices of {}×{} texels (roughness 0 to 1), {}×{} texels, {} KiB; GPU error at {} random points: max {:.2e} (target {:.0e}), p99 {:.2e}, mean {:.2e}; ΔE00 max {:.3}, mean {:.4}",
-            rough.slices,
-            rough.mapping.size_u,
-            rough.mapping.size_v,
-            rough.texture.width,
-            rough.texture.height,
-            rough.texture.width * rough.texture.height * 8 / 1024,
-            e.points,
-            e.max_all(),
-            rough.target,
-            e.p99_abs.iter().fold(0.0f64, |a, &b| a.max(b)),
-            e.mean_abs.iter().sum::<f64>() / 3.0,
-            e.max_delta_e00,
-            e.mean_delta_e00,
+            "rough: below cos θ {} the target is not sought: {} points there, max {:.2e}, ΔE00 max {:.3}",
+            irid::export::GRAZING_COS,
+            g.points,
+            g.max_all(),
+            g.max_delta_e00
         );
     }
 }

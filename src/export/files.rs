@@ -12,7 +12,7 @@ use exr::prelude::{
 use serde_json::json;
 
 use super::{side_index, Export, Side, Texture, HEADER_VEC4, SHADERS, UNIFORM_VEC4};
-use crate::atlas::{Chart, Coords, PARAMS_PER_CHART};
+use crate::atlas::{Atlas, Chart, Coords, PARAMS_PER_CHART};
 use crate::atomic::{Output, OutputSet, Prepared, Replace};
 use crate::error::{Error, Result};
 
@@ -148,13 +148,12 @@ pub fn chart_param_names(chart: &Chart) -> [&'static str; PARAMS_PER_CHART] {
     names
 }
 
-/// film.json's `charts`: each chart's side, kind, rectangle and named
-/// parameters (the values of the uniform array, as f32), and its
-/// coordinates in full precision.
-fn charts_json(export: &Export) -> serde_json::Value {
-    let uniform = export.uniform_f32();
-    let charts: Vec<serde_json::Value> = export
-        .atlas
+/// film.json's `charts` (and `rough.charts`): each chart of `atlas` with
+/// its side, kind, rectangle and named parameters (the values of the
+/// uniform array, as f32), and its coordinates in full precision.
+pub(super) fn charts_json(atlas: &Atlas) -> serde_json::Value {
+    let uniform = atlas.uniform_f32();
+    let charts: Vec<serde_json::Value> = atlas
         .charts
         .iter()
         .enumerate()
@@ -298,7 +297,7 @@ pub fn film_json(export: &Export) -> serde_json::Value {
         },
         "uniform_f32": export.uniform_f32(),
         "uniform_vec4": UNIFORM_VEC4,
-        "charts": charts_json(export),
+        "charts": charts_json(&export.atlas),
         "sides": sides_json(export),
         "white": spec.white.name(),
         "color": {

@@ -15,7 +15,6 @@
 //! solver as the shader reads it.
 
 mod files;
-mod mapping;
 mod measure;
 mod rough;
 mod texture;
@@ -24,8 +23,8 @@ pub use crate::atlas::{Atlas, Chart, HEADER_VEC4, MAX_CHARTS, PARAMS_PER_CHART, 
 pub use files::{declare_dir, fill_dir, film_json, write_dir, FILM_FORMAT, FILM_VERSION};
 pub use measure::{measurement_points, ExportError, DEFAULT_POINTS, POINTS_SEED};
 pub use rough::{
-    rough_exact_at, rough_measurement_axes, RoughError, RoughExport, ROUGH_AXIS_POINTS, ROUGH_SEED,
-    ROUGH_SHADERS, ROUGH_VEC4,
+    rough_exact_at, RoughError, RoughExport, RoughPoints, GRAZING_COS, ROUGH_AXIS_POINTS,
+    ROUGH_GRAZING_POINTS, ROUGH_SEED, ROUGH_SHADERS, ROUGH_VEC4, TILING_VEC4,
 };
 pub use texture::{RowCheck, Texture};
 
@@ -396,6 +395,18 @@ pub fn export(spec: &ExportSpec, progress: &dyn Fn(&str)) -> Result<Export> {
         _ => e,
     })?;
     check_representable(spec, &built.image)?;
+    // The rough table reads the front side's charts and texels.
+    let rough = match spec.rough_max_error {
+        Some(target) => {
+            let source = rough::RoughSource {
+                film: &films[0],
+                atlas: &built.atlas,
+                image: &built.image,
+            };
+            Some(rough::rough_export(spec, &source, target, progress)?)
+        }
+        None => None,
+    };
     let [reflectance, transmittance] = [0, 3].map(|at| Texture {
         width: built.image.width,
         height: built.image.height,
@@ -458,14 +469,11 @@ pub fn export(spec: &ExportSpec, progress: &dyn Fn(&str)) -> Result<Export> {
         sides,
         png_scale: None,
         opaque,
-        rough: None,
+        rough,
         uniform,
     };
     if spec.png {
         png_errors(&mut export)?;
-    }
-    if let Some(target) = spec.rough_max_error {
-        export.rough = Some(rough::rough_export(spec, target, progress)?);
     }
     Ok(export)
 }

@@ -6,7 +6,7 @@
 
 mod axis;
 mod bake;
-pub(crate) use bake::{critical_cos, rgb_at_nodes, with_varying_layer, Prepared, Row};
+pub(crate) use bake::{critical_cos, rgb_at_nodes, Prepared, Row};
 mod file;
 mod header;
 mod sample;

@@ -25,7 +25,6 @@ use check::{even_subgrid, measure, Check};
 use grid::{doubled, initial_axes, refine, Grid};
 use header::header;
 use store::{representable, stored};
-pub(crate) use sweep::with_varying_layer;
 pub(crate) use sweep::{Prepared, Row};
 
 /// Bakes a table (no progress output; see [`bake_with_progress`]).
