@@ -108,51 +108,115 @@ def _synthetic_chart(size_u, size_v, blue):
     )
 
 
+def _atlas_image(charts, blue):
+    """Charts stacked in one column, each inside a one-texel gutter, as a
+    reflectance image whose chart k's node (i, j) holds (i / (N_u - 1),
+    j / (N_v - 1), blue(k)), and their film.json entries (side, kind, rect,
+    params by name). charts: dicts of a chart's params by name (side, kind,
+    a, floor and the band's or corner's numbers) plus "size" (nodes along u,
+    v)."""
+    width = max(c["size"][0] for c in charts) + 2
+    height = sum(c["size"][1] + 2 for c in charts)
+    r = np.zeros((height, width, 4))
+    r[..., 3] = 1.0
+    entries, row = [], 0
+    for k, chart in enumerate(charts):
+        nu, nv = chart["size"]
+        cr, _ = _synthetic_chart(nu, nv, blue(k))
+        r[row:row + nv + 2, : nu + 2] = cr
+        params = {key: value for key, value in chart.items() if key != "size"}
+        params.update({"x0": 1, "y0": row + 1, "width": nu, "height": nv})
+        entries.append({
+            "side": params["side"],
+            "kind": "corner" if params["kind"] == 1 else "band",
+            "rect": [1, row + 1, nu, nv],
+            "params": params,
+        })
+        row += nv + 2
+    return r, entries
+
+
 def _synthetic_rough(directory, rough):
-    """A rough table (film.json "rough", docs/gpu.md) of `slices` slices in
-    rows of `columns`, each of size_u × size_v nodes inside a one-texel
-    gutter: slice s's node (i, j) holds (i / (N_u - 1), j / (N_v - 1),
-    s / (slices - 1)), so the two-slice blend at roughness r gives back the
-    chart coordinates (x, y) and √r. Returns film.json's "rough"."""
+    """A rough table (film.json "rough", docs/gpu.md) of `slices` slices of
+    an atlas of `charts` (the front side's, as _atlas_image takes them), in
+    rows of `columns`, each inside a one-texel gutter of edge copies: slice
+    s's chart k holds at node (i, j) (i / (N_u - 1), j / (N_v - 1), (k + 1)
+    / 16 + s / (2 (slices - 1))), so the two-slice blend at roughness r
+    gives back the chart's coordinates (x, y) and (k + 1) / 16 + √r / 2.
+    The atlas's thickness range is rough["thickness_nm"] (default 0-600 nm).
+    Returns film.json's "rough"."""
     slices, columns = rough["slices"], rough["columns"]
-    nu, nv = rough["size_u"], rough["size_v"]
-    pitch = (nu + 2, nv + 2)
+    images = []
+    for s in range(slices):
+        image, entries = _atlas_image(rough["charts"], lambda k: (k + 1) / 16 + s / (2 * (slices - 1)))
+        images.append(image)
+    size_v, size_u = images[0].shape[:2]
+    pitch = (size_u + 2, size_v + 2)
     rows = -(-slices // columns)
     texels = np.zeros((rows * pitch[1], columns * pitch[0], 4))
     rects = []
-    for s in range(slices):
+    for s, image in enumerate(images):
         x0, y0 = 1 + (s % columns) * pitch[0], 1 + (s // columns) * pitch[1]
-        chart, _ = _synthetic_chart(nu, nv, s / (slices - 1))
-        texels[y0 - 1:y0 + nv + 1, x0 - 1:x0 + nu + 1] = chart
-        rects.append([x0, y0, nu, nv])
+        rows_ = np.arange(-1, size_v + 1).clip(0, size_v - 1)
+        cols_ = np.arange(-1, size_u + 1).clip(0, size_u - 1)
+        texels[y0 - 1:y0 + size_v + 1, x0 - 1:x0 + size_u + 1] = image[rows_][:, cols_]
+        rects.append([x0, y0, size_u, size_v])
     write_exr(directory / "rough.exr", texels)
+    thickness = list(rough.get("thickness_nm", (0.0, 600.0)))
     return {
-        "texture": {"file": "rough.exr", "width": columns * pitch[0], "height": rows * pitch[1],
-                    "format": "rgba16f"},
+        "texture": {"file": "rough.exr", "width": texels.shape[1], "height": texels.shape[0],
+                    "format": "rgba16f", "alpha": 1.0},
+        "slices": slices,
+        "nodes": {"roughness": [(s / (slices - 1)) ** 2 for s in range(slices)]},
         "light_from": "ambient",
-        "layout": {
-            "slices": slices,
+        "tiling": {
             "columns": columns,
-            "slice_size": [nu, nv],
+            "slice_size": [size_u, size_v],
             "pitch": list(pitch),
             "gutter": 1,
             "slice_rects": rects,
-            "params": {
-                "thickness_min_nm": 100.0,
-                "thickness_max_nm": 900.0,
-                "cos_min": rough["cos_range"][0],
-                "cos_max": rough["cos_range"][1],
-                "cos_crit": rough["cos_crit"],
-                "y_crit": rough["y_crit"],
-                "thickness_power": rough["thickness_power"],
-            },
         },
+        "atlas": {"width": size_u, "height": size_v, "thickness_nm": thickness},
+        "charts": entries,
     }
+
+
+def _write_film(directory, reflectance, transmittance, fields):
+    """Writes the two tables and a film.json of an export for the white E on
+    a made-up stack (n = 1 over n = 1.5): `fields` holds what differs between
+    the synthetic exports (version, domain, charts, sides, opaque, rough)."""
+    height, width = reflectance.shape[:2]
+    write_exr(directory / "reflectance.exr", reflectance)
+    write_exr(directory / "transmittance.exr", transmittance)
+    film = {
+        "format": "irid-film",
+        "version": fields["version"],
+        "texture": {
+            "width": width,
+            "height": height,
+            "format": "rgba16f",
+            "files": {"reflectance": "reflectance.exr", "transmittance": "transmittance.exr"},
+            "png": None,
+        },
+        "domain": fields["domain"],
+        "charts": fields["charts"],
+        "sides": fields["sides"],
+        "white": "e",
+        "stack": {
+            "ambient": {"name": "n=1", "dispersion": {"constant": {"n": 1.0, "k": 0.0}}},
+            "layers": [],
+            "substrate": {"name": "n=1.5", "dispersion": {"constant": {"n": 1.5, "k": 0.0}}},
+        },
+        "layer": 1,
+        "sampling": "exact",
+        "opaque": fields["opaque"],
+        "rough": fields["rough"],
+    }
+    (directory / "film.json").write_text(json.dumps(film, indent=1))
 
 
 def write_synthetic_export(
     directory, size_u, size_v, cos_range, cos_crit, y_crit, opaque, thickness_power=1, back=None,
-    rough=None,
 ):
     """A film.json version 2 export for the mapping test, with a one-texel
     gutter around each chart as irid writes it. The front chart's node (i, j)
@@ -160,9 +224,7 @@ def write_synthetic_export(
     (1 - i / (N_u - 1), 1 - j / (N_v - 1), 0.75), so bilinear sampling gives
     back the continuous chart coordinates (x, y) the mapping produced. back,
     a dict (size_u, size_v, cos_range, cos_crit, y_crit), adds a back chart
-    above it whose blue channel is 0.5. rough, a dict (slices, columns,
-    size_u, size_v, cos_range, cos_crit, y_crit, thickness_power), adds a
-    rough table whose slices hold their own coordinates (_synthetic_rough)."""
+    above it whose blue channel is 0.5."""
     directory.mkdir(parents=True, exist_ok=True)
     specs = [("front", size_u, size_v, cos_range, cos_crit, y_crit, thickness_power, 0.25)]
     if back:
@@ -200,36 +262,17 @@ def write_synthetic_export(
         })
         sides[side] = {"index": k, "chart": k}
         row += nv + 2
-    write_exr(directory / "reflectance.exr", r)
-    write_exr(directory / "transmittance.exr", t)
-    film = {
-        "format": "irid-film",
+    _write_film(directory, r, t, {
         "version": 2,
-        "texture": {
-            "width": width,
-            "height": height,
-            "format": "rgba16f",
-            "files": {"reflectance": "reflectance.exr", "transmittance": "transmittance.exr"},
-            "png": None,
-        },
         "domain": {"thickness_nm": [100.0, 900.0], "cos_theta": list(cos_range)},
         "charts": charts,
         "sides": sides,
-        "white": "e",
-        "stack": {
-            "ambient": {"name": "n=1", "dispersion": {"constant": {"n": 1.0, "k": 0.0}}},
-            "layers": [],
-            "substrate": {"name": "n=1.5", "dispersion": {"constant": {"n": 1.5, "k": 0.0}}},
-        },
-        "layer": 1,
-        "sampling": "exact",
         "opaque": opaque,
-        "rough": _synthetic_rough(directory, rough) if rough else None,
-    }
-    (directory / "film.json").write_text(json.dumps(film, indent=1))
+        "rough": None,
+    })
 
 
-def write_synthetic_atlas(directory, charts, sides, thickness_range, opaque):
+def write_synthetic_atlas(directory, charts, sides, thickness_range, opaque, rough=None):
     """A film.json version 3 export (an atlas of band and corner charts,
     docs/gpu.md) for the mapping test. charts: dicts of a chart's params by
     name (film.json charts[k].params: side, kind, a, floor and the band's or
@@ -237,56 +280,22 @@ def write_synthetic_atlas(directory, charts, sides, thickness_range, opaque):
     one column, each inside a one-texel gutter. Chart k's node (i, j) holds
     reflectance (i / (N_u - 1), j / (N_v - 1), (k + 1) / 16) and
     transmittance (1 - the same), so a render names the chart and the point
-    in it. sides: {"front": [chart numbers], "back": [...] or None}."""
+    in it. sides: {"front": [chart numbers], "back": [...] or None}. rough,
+    a dict (slices, columns, charts), adds a rough table whose slices hold
+    their own coordinates (_synthetic_rough)."""
     directory.mkdir(parents=True, exist_ok=True)
-    width = max(c["size"][0] for c in charts) + 2
-    height = sum(c["size"][1] + 2 for c in charts)
-    r = np.zeros((height, width, 4))
-    r[..., 3] = 1.0
-    entries, row = [], 0
-    for k, chart in enumerate(charts):
-        nu, nv = chart["size"]
-        cr, _ = _synthetic_chart(nu, nv, (k + 1) / 16)
-        r[row:row + nv + 2, : nu + 2] = cr
-        params = {key: value for key, value in chart.items() if key != "size"}
-        params.update({"x0": 1, "y0": row + 1, "width": nu, "height": nv})
-        entries.append({
-            "side": params["side"],
-            "kind": "corner" if params["kind"] == 1 else "band",
-            "rect": [1, row + 1, nu, nv],
-            "params": params,
-        })
-        row += nv + 2
+    r, entries = _atlas_image(charts, lambda k: (k + 1) / 16)
     t = 1.0 - r
     t[..., 3] = 1.0
-    write_exr(directory / "reflectance.exr", r)
-    write_exr(directory / "transmittance.exr", t)
     side = lambda k, numbers: None if numbers is None else {"index": k, "charts": numbers}  # noqa: E731
-    film = {
-        "format": "irid-film",
+    _write_film(directory, r, t, {
         "version": 3,
-        "texture": {
-            "width": width,
-            "height": height,
-            "format": "rgba16f",
-            "files": {"reflectance": "reflectance.exr", "transmittance": "transmittance.exr"},
-            "png": None,
-        },
         "domain": {"thickness_nm": list(thickness_range), "cos_theta": [0.0, 1.0]},
         "charts": entries,
         "sides": {"front": side(0, sides["front"]), "back": side(1, sides.get("back"))},
-        "white": "e",
-        "stack": {
-            "ambient": {"name": "n=1", "dispersion": {"constant": {"n": 1.0, "k": 0.0}}},
-            "layers": [],
-            "substrate": {"name": "n=1.5", "dispersion": {"constant": {"n": 1.5, "k": 0.0}}},
-        },
-        "layer": 1,
-        "sampling": "exact",
         "opaque": opaque,
-        "rough": None,
-    }
-    (directory / "film.json").write_text(json.dumps(film, indent=1))
+        "rough": _synthetic_rough(directory, rough) if rough else None,
+    })
 
 
 def expected_x(fraction, thickness_power):

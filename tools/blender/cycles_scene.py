@@ -216,13 +216,19 @@ def _cube_mesh():
     return mesh
 
 
-def emission_black(name="mask"):
-    """A black emitter: the furnace's mask, the picture's labels."""
+def node_material(name):
+    """A new material whose node tree is empty; returns both."""
     material = bpy.data.materials.new(name)
-    if material.node_tree is None:
+    if material.node_tree is None:  # Blender before 5.0 creates it on request
         material.use_nodes = True
     tree = material.node_tree
     tree.nodes.clear()
+    return material, tree
+
+
+def emission_black(name="mask"):
+    """A black emitter: the furnace's mask, the picture's labels."""
+    material, tree = node_material(name)
     emission = tree.nodes.new("ShaderNodeEmission")
     emission.inputs["Color"].default_value = (0.0, 0.0, 0.0, 1.0)
     out = tree.nodes.new("ShaderNodeOutputMaterial")
@@ -247,11 +253,7 @@ def emission_material(name, group, output, thickness_fraction, normal=None, **in
     """A material showing one of a film group's colour outputs as emission.
     normal: a constant vector for the group's Normal input; inputs: other
     input values by name (a space in a name written as an underscore)."""
-    material = bpy.data.materials.new(name)
-    if material.node_tree is None:
-        material.use_nodes = True
-    tree = material.node_tree
-    tree.nodes.clear()
+    material, tree = node_material(name)
     film = tree.nodes.new("ShaderNodeGroup")
     film.node_tree = group
     film.inputs["Thickness"].default_value = thickness_fraction
@@ -274,11 +276,7 @@ def principled_material(name, base_color, metallic, ior, film_thickness_nm, film
     """Cycles' own thin film: a Principled BSDF with Thin Film inputs, no diffuse.
     The base colour (linear Rec.709) goes through a one-texel image tagged
     Linear Rec.709, so Blender converts it into the working space."""
-    material = bpy.data.materials.new(name)
-    if material.node_tree is None:
-        material.use_nodes = True
-    tree = material.node_tree
-    tree.nodes.clear()
+    material, tree = node_material(name)
     bsdf = tree.nodes.new("ShaderNodeBsdfPrincipled")
     path = Path(workdir) / f"base-{len(bpy.data.images)}.exr"
     texel = np.array([[[*base_color, 1.0]]], np.float32)
@@ -365,7 +363,80 @@ def stack_with_thickness(source_text, layer, thickness_nm):
     return source_text[: m.start(2)] + f"{thickness_nm!r}" + source_text[m.end(2) :]
 
 
-# ---------------------------------------------------------------- the docs' picture
+# ---------------------------------------------------------------- the docs' pictures
+
+
+def _picture_scene(samples, width, height):
+    """An empty Cycles scene (CPU, no denoising, Standard view) that writes an
+    RGB PNG of width × height pixels."""
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    scene = bpy.context.scene
+    scene.render.engine = "CYCLES"
+    scene.cycles.device = "CPU"
+    scene.cycles.samples = samples
+    scene.cycles.use_denoising = False
+    scene.view_settings.view_transform = "Standard"
+    scene.render.resolution_x, scene.render.resolution_y = width, height
+    scene.render.image_settings.file_format = "PNG"
+    scene.render.image_settings.color_mode = "RGB"
+    scene.render.image_settings.compression = 100
+    return scene
+
+
+def _picture_world(scene, name, colour):
+    """Gives the scene a new world: one Background node whose colour is the
+    socket that colour(tree) returns after adding its nodes to the world's tree."""
+    world = bpy.data.worlds.new(name)
+    scene.world = world
+    if world.node_tree is None:
+        world.use_nodes = True
+    tree = world.node_tree
+    tree.nodes.clear()
+    background = tree.nodes.new("ShaderNodeBackground")
+    tree.links.new(colour(tree), background.inputs["Color"])
+    out = tree.nodes.new("ShaderNodeOutputWorld")
+    tree.links.new(background.outputs[0], out.inputs["Surface"])
+
+
+def _sphere(x, z, material):
+    """A smooth UV sphere of radius 1 at (x, 0, z) with `material`."""
+    bpy.ops.mesh.primitive_uv_sphere_add(segments=96, ring_count=48, location=(x, 0, z))
+    sphere = bpy.context.active_object
+    bpy.ops.object.shade_smooth()
+    sphere.data.materials.append(material)
+    return sphere
+
+
+def _label(scene, body, x, z, size, material):
+    """Text facing the camera (which looks along +y), centred on x, hidden
+    from glossy rays so the spheres do not mirror it."""
+    curve = bpy.data.curves.new(body, "FONT")
+    curve.body = body
+    curve.size = size
+    curve.align_x = "CENTER"
+    text = bpy.data.objects.new(body, curve)
+    text.location = (x, 0, z)
+    text.rotation_euler = (math.radians(90), 0, 0)
+    text.data.materials.append(material)
+    text.visible_glossy = False
+    scene.collection.objects.link(text)
+
+
+def _render_front(scene, ortho_scale, png_path):
+    """An orthographic camera on -y looking at the origin; renders the PNG."""
+    camera = bpy.data.cameras.new("camera")
+    camera.type = "ORTHO"
+    camera.ortho_scale = ortho_scale
+    camera_object = bpy.data.objects.new("camera", camera)
+    camera_object.location = (0, -10, 0)
+    camera_object.rotation_euler = (math.radians(90), 0, 0)
+    scene.collection.objects.link(camera_object)
+    scene.camera = camera_object
+    png_path.parent.mkdir(parents=True, exist_ok=True)
+    scene.render.filepath = str(png_path)
+    with quiet_stdout():
+        bpy.ops.render.render(write_still=True)
+    print(f"wrote {png_path}")
 
 
 def render_picture(irid, case, stack, workdir, png_path):
@@ -379,34 +450,19 @@ def render_picture(irid, case, stack, workdir, png_path):
     bare.write_text(f'ambient = {{ n = 1.0 }}\nsubstrate = {{ material = "{case["cycles"]["metal"]}" }}\n')
     base, _ = irid.colours(bare, (0.0,))
 
-    bpy.ops.wm.read_factory_settings(use_empty=True)
-    scene = bpy.context.scene
-    scene.render.engine = "CYCLES"
-    scene.cycles.device = "CPU"
-    scene.cycles.samples = 32
-    scene.cycles.use_denoising = False
-    scene.view_settings.view_transform = "Standard"
-    scene.render.resolution_x, scene.render.resolution_y = 560, 320
-    scene.render.image_settings.file_format = "PNG"
-    scene.render.image_settings.color_mode = "RGB"
-    scene.render.image_settings.compression = 100
-    world = bpy.data.worlds.new("white")
-    scene.world = world
-    if world.node_tree is None:
-        world.use_nodes = True
-    tree = world.node_tree
-    tree.nodes.clear()
-    # White light on the spheres; a grey backdrop for the camera only.
-    background = tree.nodes.new("ShaderNodeBackground")
-    mix = tree.nodes.new("ShaderNodeMix")
-    mix.data_type = "RGBA"
-    mix.inputs["A"].default_value = (1.0, 1.0, 1.0, 1.0)
-    mix.inputs["B"].default_value = (0.45, 0.45, 0.45, 1.0)
-    path = tree.nodes.new("ShaderNodeLightPath")
-    tree.links.new(path.outputs["Is Camera Ray"], mix.inputs["Factor"])
-    tree.links.new(mix.outputs["Result"], background.inputs["Color"])
-    out = tree.nodes.new("ShaderNodeOutputWorld")
-    tree.links.new(background.outputs[0], out.inputs["Surface"])
+    scene = _picture_scene(32, 560, 320)
+
+    def white_lit_grey_seen(tree):
+        """White light on the spheres; a grey backdrop for the camera only."""
+        mix = tree.nodes.new("ShaderNodeMix")
+        mix.data_type = "RGBA"
+        mix.inputs["A"].default_value = (1.0, 1.0, 1.0, 1.0)
+        mix.inputs["B"].default_value = (0.45, 0.45, 0.45, 1.0)
+        path = tree.nodes.new("ShaderNodeLightPath")
+        tree.links.new(path.outputs["Is Camera Ray"], mix.inputs["Factor"])
+        return mix.outputs["Result"]
+
+    _picture_world(scene, "white", white_lit_grey_seen)
 
     def noise_fraction(tree):
         """A 0-1 thickness pattern over the sphere's own coordinates."""
@@ -446,100 +502,37 @@ def render_picture(irid, case, stack, workdir, png_path):
         (-1.15, irid_material, "irid export"),
         (1.15, cycles_material, "Cycles thin film"),
     ):
-        bpy.ops.mesh.primitive_uv_sphere_add(segments=96, ring_count=48, location=(x, 0, 0.15))
-        sphere = bpy.context.active_object
-        bpy.ops.object.shade_smooth()
-        sphere.data.materials.append(material)
+        sphere = _sphere(x, 0.15, material)
         sphere.visible_glossy = False  # each sphere shows the white world only
         sphere.visible_transmission = False
-        curve = bpy.data.curves.new(label, "FONT")
-        curve.body = label
-        curve.size = 0.2
-        curve.align_x = "CENTER"
-        text = bpy.data.objects.new(label, curve)
-        text.location = (x, 0, -1.2)
-        text.rotation_euler = (math.radians(90), 0, 0)
-        text.data.materials.append(label_material)
-        text.visible_glossy = False
-        scene.collection.objects.link(text)
-
-    camera = bpy.data.cameras.new("camera")
-    camera.type = "ORTHO"
-    camera.ortho_scale = 4.9
-    camera_object = bpy.data.objects.new("camera", camera)
-    camera_object.location = (0, -10, 0)
-    camera_object.rotation_euler = (math.radians(90), 0, 0)
-    scene.collection.objects.link(camera_object)
-    scene.camera = camera_object
-    png_path.parent.mkdir(parents=True, exist_ok=True)
-    scene.render.filepath = str(png_path)
-    bpy.ops.render.render(write_still=True)
-    print(f"wrote {png_path}")
+        _label(scene, label, x, -1.2, 0.2, label_material)
+    _render_front(scene, 4.9, png_path)
 
 
 def render_rough_picture(directory, thickness_nm, png_path, roughness=(0.0, 0.3, 0.6)):
     """Three spheres of irid's material from an export with the rough table
     (`directory`), at each roughness, under a sky that is bright above the
     horizon and dark below it, so the lobe's width shows; labelled."""
-    bpy.ops.wm.read_factory_settings(use_empty=True)
-    scene = bpy.context.scene
-    scene.render.engine = "CYCLES"
-    scene.cycles.device = "CPU"
-    scene.cycles.samples = 64
-    scene.cycles.use_denoising = False
-    scene.view_settings.view_transform = "Standard"
-    scene.render.resolution_x, scene.render.resolution_y = 600, 240
-    scene.render.image_settings.file_format = "PNG"
-    scene.render.image_settings.color_mode = "RGB"
-    scene.render.image_settings.compression = 100
-    world = bpy.data.worlds.new("sky")
-    scene.world = world
-    if world.node_tree is None:
-        world.use_nodes = True
-    tree = world.node_tree
-    tree.nodes.clear()
-    coords = tree.nodes.new("ShaderNodeTexCoord")
-    split = tree.nodes.new("ShaderNodeSeparateXYZ")
-    tree.links.new(coords.outputs["Generated"], split.inputs[0])
-    ramp = tree.nodes.new("ShaderNodeValToRGB")
-    ramp.color_ramp.elements[0].position = 0.45
-    ramp.color_ramp.elements[0].color = (0.05, 0.05, 0.05, 1.0)
-    ramp.color_ramp.elements[1].position = 0.55
-    ramp.color_ramp.elements[1].color = (1.5, 1.5, 1.5, 1.0)
-    tree.links.new(split.outputs["Z"], ramp.inputs[0])
-    background = tree.nodes.new("ShaderNodeBackground")
-    tree.links.new(ramp.outputs[0], background.inputs["Color"])
-    out = tree.nodes.new("ShaderNodeOutputWorld")
-    tree.links.new(background.outputs[0], out.inputs["Surface"])
+    scene = _picture_scene(64, 600, 240)
+
+    def sky(tree):
+        coords = tree.nodes.new("ShaderNodeTexCoord")
+        split = tree.nodes.new("ShaderNodeSeparateXYZ")
+        tree.links.new(coords.outputs["Generated"], split.inputs[0])
+        ramp = tree.nodes.new("ShaderNodeValToRGB")
+        ramp.color_ramp.elements[0].position = 0.45
+        ramp.color_ramp.elements[0].color = (0.05, 0.05, 0.05, 1.0)
+        ramp.color_ramp.elements[1].position = 0.55
+        ramp.color_ramp.elements[1].color = (1.5, 1.5, 1.5, 1.0)
+        tree.links.new(split.outputs["Z"], ramp.inputs[0])
+        return ramp.outputs[0]
+
+    _picture_world(scene, "sky", sky)
     label_material = emission_black("label")
     for k, r in enumerate(roughness):
         x = 2.2 * (k - (len(roughness) - 1) / 2)
         material = irid_blender.make_material(directory, thickness_nm=thickness_nm, roughness=r,
                                               name=f"irid roughness {r:g}")
-        bpy.ops.mesh.primitive_uv_sphere_add(segments=96, ring_count=48, location=(x, 0, 0.2))
-        sphere = bpy.context.active_object
-        bpy.ops.object.shade_smooth()
-        sphere.data.materials.append(material)
-        curve = bpy.data.curves.new(f"roughness {r:g}", "FONT")
-        curve.body = f"roughness {r:g}"
-        curve.size = 0.22
-        curve.align_x = "CENTER"
-        text = bpy.data.objects.new(curve.body, curve)
-        text.location = (x, 0, -1.25)
-        text.rotation_euler = (math.radians(90), 0, 0)
-        text.data.materials.append(label_material)
-        text.visible_glossy = False
-        scene.collection.objects.link(text)
-    camera = bpy.data.cameras.new("camera")
-    camera.type = "ORTHO"
-    camera.ortho_scale = 6.8
-    camera_object = bpy.data.objects.new("camera", camera)
-    camera_object.location = (0, -10, 0)
-    camera_object.rotation_euler = (math.radians(90), 0, 0)
-    scene.collection.objects.link(camera_object)
-    scene.camera = camera_object
-    png_path.parent.mkdir(parents=True, exist_ok=True)
-    scene.render.filepath = str(png_path)
-    with quiet_stdout():
-        bpy.ops.render.render(write_still=True)
-    print(f"wrote {png_path}")
+        _sphere(x, 0.2, material)
+        _label(scene, f"roughness {r:g}", x, -1.25, 0.22, label_material)
+    _render_front(scene, 6.8, png_path)

@@ -30,8 +30,10 @@ What is exact: at roughness 0 the colour of every reflected and transmitted
 ray is the table's bilinear interpolation of the exact film response at the
 ray's angle to the shading normal. At roughness > 0 the reflection lobe's
 colour is the film's reflectance pre-integrated over the GGX lobe, F_eff of
-docs/rough.md, from the export's rough table (`irid export --rough`; without
-it the material has no roughness: asking for one raises ExportError); the
+docs/rough.md, from the export's rough table (`irid export --rough`: slices
+over roughness, each an atlas of the front side's charts read by the same
+lookup as the smooth atlas; without it the material has no roughness:
+asking for one raises ExportError); the
 refraction lobe keeps the transmittance at the view angle, and a back face
 seen from a substrate with its own chart the smooth reflectance at the view
 angle (the rough table holds light from the ambient only).
@@ -71,12 +73,13 @@ class ExportError(ValueError):
     """An export directory that cannot be turned into a material."""
 
 
-class Mapping:
-    """The closed-form mapping of one rectangle of nodes (docs/gpu.md, "The
-    mapping"): the thickness and cos θ domain and the warps of both axes, as
-    a chart of the atlas and the rough table's slices have it."""
+class Chart:
+    """One chart of a version 2 export (docs/gpu.md, "The mapping"): the
+    thickness and cos θ domain, the warps of both axes, and the rectangle of
+    texels its nodes fill."""
 
-    def __init__(self, params, where):
+    def __init__(self, chart, where, atlas_size):
+        params = _object(chart, "params", where)
         number = lambda key: _number(params, key, f"{where}.params")  # noqa: E731
         self.thickness_min_nm = number("thickness_min_nm")
         self.thickness_max_nm = number("thickness_max_nm")
@@ -108,17 +111,7 @@ class Mapping:
                     f"irid export {where}: angle warp centre cos {self.cos_crit} (y {self.y_crit}) "
                     f"is not inside the cos θ range [{self.cos_min}, {self.cos_max})"
                 )
-
-
-class Chart(Mapping):
-    """One chart of the export's atlas (docs/gpu.md): its mapping and the
-    rectangle of texels its nodes fill."""
-
-    def __init__(self, chart, where, atlas_size):
-        params = _object(chart, "params", where)
-        super().__init__(params, where)
-        self.rect = _rect([_number(params, key, f"{where}.params") for key in ("x0", "y0", "width", "height")],
-                          where, atlas_size)
+        self.rect = _rect([number(key) for key in ("x0", "y0", "width", "height")], where, atlas_size)
 
 
 class AtlasChart:
@@ -229,54 +222,93 @@ def _rect(rect, where, atlas_size):
 
 class Rough:
     """The export's rough table (`irid export --rough`, film.json "rough";
-    docs/gpu.md "Rough films"): F_eff of light from the ambient in roughness
-    slices of one texture, slice s at roughness (s / (slices − 1))², each on
-    the same mapping, in rows of `columns` inside a gutter."""
+    docs/gpu.md "Rough films"): F_eff of light from the ambient in S
+    roughness slices of one texture, slice s at roughness (s / (S − 1))².
+    Each slice is an image of the rough atlas, the front side's charts in
+    the smooth atlas's form (AtlasChart, rectangles inside one slice),
+    chosen per lookup by the same closed form; slice s lies at its own
+    rectangle, in rows of `columns` a pitch apart inside a gutter."""
 
     def __init__(self, rough, directory, where):
+        where = f"{where}: rough"
+        if "layout" in rough and "tiling" not in rough:
+            raise ExportError(
+                f"irid export {where}: the rough table has the old layout (one mapping in "
+                "physical thickness, no charts): export it again with `irid export --rough`"
+            )
         texture = _object(rough, "texture", where)
-        layout = _object(rough, "layout", where)
+        tiling = _object(rough, "tiling", where)
+        atlas = _object(rough, "atlas", where)
         name = texture.get("file")
         if not isinstance(name, str) or not name or os.path.basename(name) != name:
-            raise ExportError(f"irid export {where}: rough.texture.file is not a file name")
+            raise ExportError(f"irid export {where}.texture.file is not a file name")
         self.path = os.path.join(directory, name)
         if not os.path.isfile(self.path):
             raise ExportError(f"irid export {directory}: {name} is missing")
-        self.size = (texture.get("width"), texture.get("height"))
         whole = lambda v: isinstance(v, int) and not isinstance(v, bool)  # noqa: E731
-        if not all(whole(v) and v >= 1 for v in self.size):
-            raise ExportError(f"irid export {where}: rough.texture.width and height must be sizes")
-        self.slices = layout.get("slices")
-        self.columns = layout.get("columns")
-        self.gutter = layout.get("gutter")
+        sizes = lambda v: isinstance(v, list) and len(v) == 2 and all(whole(n) and n >= 1 for n in v)  # noqa: E731
+        self.size = [texture.get("width"), texture.get("height")]
+        self.slice_size = [atlas.get("width"), atlas.get("height")]
+        if not (sizes(self.size) and sizes(self.slice_size)):
+            raise ExportError(f"irid export {where}: texture and atlas width and height must be sizes")
+        self.slices = rough.get("slices")
+        self.columns = tiling.get("columns")
+        self.gutter = tiling.get("gutter")
+        self.pitch = tiling.get("pitch")
         if not (whole(self.slices) and self.slices >= 2 and whole(self.columns)
-                and self.columns >= 1 and whole(self.gutter) and self.gutter >= 0):
+                and self.columns >= 1 and whole(self.gutter) and self.gutter >= 0
+                and sizes(self.pitch)):
             raise ExportError(
-                f"irid export {where}: rough.layout needs slices ≥ 2, columns ≥ 1 and a gutter"
+                f"irid export {where}: needs slices ≥ 2, and tiling.columns ≥ 1, a gutter and a pitch"
             )
-        pair = lambda key: layout.get(key) if isinstance(layout.get(key), list) else []  # noqa: E731
-        self.slice_size, self.pitch = pair("slice_size"), pair("pitch")
-        if not all(len(v) == 2 and all(whole(n) and n >= 1 for n in v)
-                   for v in (self.slice_size, self.pitch)):
-            raise ExportError(f"irid export {where}: rough.layout.slice_size and pitch must be sizes")
-        self.mapping = Mapping(_object(layout, "params", f"{where}: rough.layout"),
-                               f"{where}: rough.layout")
+        if tiling.get("slice_size") != self.slice_size:
+            raise ExportError(
+                f"irid export {where}: tiling.slice_size {tiling.get('slice_size')} is not the "
+                f"atlas's size {self.slice_size}"
+            )
+        nodes = rough.get("nodes")
+        roughness = nodes.get("roughness") if isinstance(nodes, dict) else None
+        rule = [(s / (self.slices - 1)) ** 2 for s in range(self.slices)]
+        if (not isinstance(roughness, list) or len(roughness) != self.slices
+                or any(not isinstance(r, (int, float)) or abs(r - want) > 1e-6
+                       for r, want in zip(roughness, rule))):
+            raise ExportError(
+                f"irid export {where}.nodes.roughness: expected slice s at roughness (s / "
+                f"{self.slices - 1})², as the node graph reads it"
+            )
+        self.thickness_min_nm, self.thickness_max_nm = _thickness_range(
+            atlas, f"{where}.atlas.thickness_nm"
+        )
+        charts = rough.get("charts")
+        if not isinstance(charts, list) or not charts:
+            raise ExportError(f"irid export {where}.charts is missing or empty")
+        # The charts' rectangles lie inside one slice; a lookup adds the
+        # slice's origin.
+        self.charts = tuple(
+            AtlasChart(c if isinstance(c, dict) else {}, f"{where}.charts[{k}]", self.slice_size)
+            for k, c in enumerate(charts)
+        )
+        if any(chart.side != 0 for chart in self.charts):
+            raise ExportError(f"irid export {where}.charts must all serve the front side")
+        if not any(chart.kind == "band" for chart in self.charts):
+            raise ExportError(f"irid export {where}.charts has no band chart")
         # The node graph places a slice by the closed form; the export's own
         # rectangles must agree with it.
-        rects = layout.get("slice_rects")
+        rects = tiling.get("slice_rects")
         if not isinstance(rects, list) or len(rects) != self.slices:
-            raise ExportError(f"irid export {where}: rough.layout.slice_rects must list every slice")
+            raise ExportError(f"irid export {where}.tiling.slice_rects must list every slice")
         for s, rect in enumerate(rects):
             placed = list(self.slice_origin(s)) + list(self.slice_size)
             if not isinstance(rect, list) or rect != placed:
                 raise ExportError(
-                    f"irid export {where}: rough slice {s} lies at {rect}, not at {placed} as "
-                    "the layout's closed form puts it"
+                    f"irid export {where}: slice {s} lies at {rect}, not at {placed} as "
+                    "the tiling's closed form puts it"
                 )
-            _rect(placed, f"{where}: rough slice {s}", self.size)
+            _rect(placed, f"{where}: slice {s}", self.size)
 
     def slice_origin(self, s):
-        """The texel of slice s's first node (docs/gpu.md)."""
+        """The texel of slice s's corner, where its charts' rectangles
+        start (docs/gpu.md)."""
         return (
             self.gutter + (s % self.columns) * self.pitch[0],
             self.gutter + (s // self.columns) * self.pitch[1],
@@ -345,12 +377,9 @@ class Export:
                 self.back = self._charts_of(sides, "back", where)
                 if self.back == self.front:
                     self.back = self.front
-            domain = _object(film, "domain", where).get("thickness_nm")
-            if (not isinstance(domain, list) or len(domain) != 2
-                    or not all(isinstance(v, (int, float)) and math.isfinite(v) for v in domain)
-                    or not 0.0 <= domain[0] <= domain[1]):
-                raise ExportError(f"irid export {where}: domain.thickness_nm is not a range")
-            self.thickness_min_nm, self.thickness_max_nm = map(float, domain)
+            self.thickness_min_nm, self.thickness_max_nm = _thickness_range(
+                _object(film, "domain", where), f"{where}: domain.thickness_nm"
+            )
         opaque = film.get("opaque")
         if not isinstance(opaque, bool):
             raise ExportError(f"irid export {where}: 'opaque' must be true or false")
@@ -474,6 +503,17 @@ def _number(parent, key, where):
     if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
         raise ExportError(f"irid export {where}.{key}: expected a finite number, got {value!r}")
     return float(value)
+
+
+def _thickness_range(parent, where):
+    """parent["thickness_nm"], [min, max] nm with 0 ≤ min ≤ max, as floats."""
+    value = parent.get("thickness_nm")
+    if (not isinstance(value, list) or len(value) != 2
+            or not all(isinstance(v, (int, float)) and not isinstance(v, bool)
+                       and math.isfinite(v) for v in value)
+            or not 0.0 <= value[0] <= value[1]):
+        raise ExportError(f"irid export {where} is not a thickness range in nm")
+    return float(value[0]), float(value[1])
 
 
 def _index_at(material, wavelength_nm):
@@ -702,12 +742,13 @@ def _build_group(group, export, images, ior):
     build.link(geometry.outputs["Incoming"], dot.inputs[0])
     build.link(normal, dot.inputs[1])
     cos = build.math("ABSOLUTE", 2.5, 4, dot.outputs["Value"])
+    # What an atlas's charts read: the thickness in nm, cos θ at most 1.
+    span = export.thickness_max_nm - export.thickness_min_nm
+    d = build.math("MULTIPLY_ADD", 2, -1, x, span, export.thickness_min_nm, label="thickness nm")
+    c = build.math("MINIMUM", 3, 4, cos, 1.0, label="cos θ ≤ 1")
     if export.version == 2:
         side_uv = lambda side, row: _chart_uv(build, side, export.size, x, cos, row)  # noqa: E731
     else:
-        span = export.thickness_max_nm - export.thickness_min_nm
-        d = build.math("MULTIPLY_ADD", 2, -1, x, span, export.thickness_min_nm, label="thickness nm")
-        c = build.math("MINIMUM", 3, 4, cos, 1.0, label="cos θ ≤ 1")
         side_uv = lambda side, row: _atlas_uv(build, side, export.size, d, c, row)  # noqa: E731
     uv = side_uv(export.front, 0)
     if export.back is not None and export.back is not export.front:
@@ -725,7 +766,7 @@ def _build_group(group, export, images, ior):
     reflectance = colours["reflectance"]
     if roughness is not None:
         reflectance = _rough_reflectance(
-            build, export, images["rough"], x, cos, roughness, reflectance, geometry
+            build, export, images["rough"], d, c, roughness, reflectance, geometry
         )
     build.link(reflectance, outputs.inputs["Reflectance"])
     build.link(colours["transmittance"], outputs.inputs["Transmittance"])
@@ -793,16 +834,19 @@ def _blend(build, a, b, weight, column, row, label):
     return total.outputs["Vector"]
 
 
-def _rough_reflectance(build, export, image, x, cos, roughness, smooth, geometry):
+def _rough_reflectance(build, export, image, d, c, roughness, smooth, geometry):
     """The reflection lobe's colour: F_eff from the rough table where the
     roughness is above 0, exactly the smooth film's reflectance (`smooth`)
-    where it is 0. As irid_film_rough (shaders/irid_film_rough.wgsl): slice
-    position s = √roughness · (S − 1), one bilinear lookup in each of the two
-    slices around it, blended linearly. The table holds light from the
-    ambient: a back face of a film with a distinct back side keeps the back
-    chart's smooth reflectance at the view angle (docs/blender.md)."""
+    where it is 0. As irid_film_rough (shaders/irid_film_rough.wgsl): the
+    rough atlas's chart lookup at thickness d nm and cos θ c (the smooth
+    atlas's closed form, _atlas_uv), the slice position s = √roughness ·
+    (S − 1), one bilinear lookup in each of the two slices around it (the
+    chart's coordinates moved to the slice's rectangle), blended linearly.
+    The table holds light from the ambient: a back face of a film with a
+    distinct back side keeps the back chart's smooth reflectance at the view
+    angle (docs/blender.md)."""
     rough = export.rough
-    top = 10
+    top = 14 + 6 * len(export.charts)  # below the smooth lookups' nodes
     # Blender's square root is 0 below 0; the clamp takes a roughness above 1 to 1.
     root = build.math("SQRT", 1, top, roughness, label="√roughness, clamped")
     root.node.use_clamp = True
@@ -810,21 +854,28 @@ def _rough_reflectance(build, export, image, x, cos, roughness, smooth, geometry
     s0 = build.math("MINIMUM", 3, top, build.math("FLOOR", 2.5, top, s), float(rough.slices - 2),
                     label="slice below")
     weight = build.math("SUBTRACT", 3.5, top, s, s0, label="weight of the slice above")
-    xy = _mapping_xy(build, rough.mapping, x, cos, top + 2)
-    below = _slice_uv(build, rough, xy, s0, top + 6)
-    s1 = build.math("ADD", 3.5, top + 9, s0, 1.0, label="slice above")
-    above = _slice_uv(build, rough, xy, s1, top + 9)
+    s1 = build.math("ADD", 3.5, top + 1, s0, 1.0, label="slice above")
+    # The rough atlas's own thickness range (irid_film_rough clamps to it).
+    clamp = build.node("ShaderNodeClamp", 2.5, top + 4, label="thickness in the rough atlas")
+    build.link(d, clamp.inputs["Value"])
+    clamp.inputs["Min"].default_value = rough.thickness_min_nm
+    clamp.inputs["Max"].default_value = rough.thickness_max_nm
+    uv = _atlas_uv(build, rough.charts, rough.size, clamp.outputs["Result"], c, top + 4)
     colours = []
-    for k, uv in enumerate((below, above)):
-        tex = _image_node(build, image, 9, top + 6 + 3 * k, f"rough slice {'above' if k else 'below'}")
-        build.link(uv, tex.inputs["Vector"])
+    for k, slice_ in enumerate((s0, s1)):
+        at = top + 2 + 2 * k
+        moved = build.node("ShaderNodeVectorMath", 8.5, at, label="uv in the slice", operation="ADD")
+        build.link(uv, moved.inputs[0])
+        build.link(_slice_offset(build, rough, slice_, at), moved.inputs[1])
+        tex = _image_node(build, image, 9, at, f"rough slice {'above' if k else 'below'}")
+        build.link(moved.outputs["Vector"], tex.inputs["Vector"])
         colours.append(tex.outputs["Color"])
-    f_eff = _blend(build, colours[0], colours[1], weight, 9.5, top + 8, "F_eff")
+    f_eff = _blend(build, colours[0], colours[1], weight, 9.5, top + 3, "F_eff")
     use = build.math("GREATER_THAN", 9.5, top, roughness, 0.0, label="rough")
     if not export.rough_applies_to_back_faces():
         front = build.math("SUBTRACT", 9.5, top + 1, 1.0, geometry.outputs["Backfacing"])
         use = build.math("MULTIPLY", 10, top + 1, use, front, label="rough, front face")
-    return _blend(build, smooth, f_eff, use, 10.5, top + 4, "reflectance of the lobe")
+    return _blend(build, smooth, f_eff, use, 10.5, top + 2, "reflectance of the lobe")
 
 
 def _group_interface(iface, export):
@@ -940,23 +991,17 @@ def _mapping_xy(build, mapping, x, cos, row):
 
 def _uv(build, x, y, origin, size, texture_size, row):
     """The image coordinates of chart point (x, y) in the rectangle of nodes
-    whose first node is texel `origin` (numbers or float sockets) and whose
-    size is `size` texels: node i at the centre of texel origin + i, so
-    u = (x0 + 0.5 + x (w − 1)) / W; Blender puts an image file's first row at
-    v = 1, so the texture is read at 1 − v."""
+    whose first node is texel `origin` and whose size is `size` texels:
+    node i at the centre of texel origin + i, so u = (x0 + 0.5 + x (w − 1))
+    / W; Blender puts an image file's first row at v = 1, so the texture is
+    read at 1 − v."""
     width, height = texture_size
     (x0, y0), (w, h) = origin, size
-    if isinstance(x0, (int, float)):
-        u = build.math("MULTIPLY_ADD", 6.5, row, x, (w - 1) / width, (x0 + 0.5) / width, label="u")
-        v = build.math(
-            "MULTIPLY_ADD", 6.5, row + 1, y, -(h - 1) / height, 1.0 - (y0 + 0.5) / height,
-            label="v (Blender)",
-        )
-    else:
-        u0 = build.math("MULTIPLY_ADD", 6, row, x0, 1.0 / width, 0.5 / width)
-        u = build.math("MULTIPLY_ADD", 6.5, row, x, (w - 1) / width, u0, label="u")
-        v0 = build.math("MULTIPLY_ADD", 6, row + 1, y0, -1.0 / height, 1.0 - 0.5 / height)
-        v = build.math("MULTIPLY_ADD", 6.5, row + 1, y, -(h - 1) / height, v0, label="v (Blender)")
+    u = build.math("MULTIPLY_ADD", 6.5, row, x, (w - 1) / width, (x0 + 0.5) / width, label="u")
+    v = build.math(
+        "MULTIPLY_ADD", 6.5, row + 1, y, -(h - 1) / height, 1.0 - (y0 + 0.5) / height,
+        label="v (Blender)",
+    )
     uv = build.node("ShaderNodeCombineXYZ", 7, row, label="uv")
     build.link(u, uv.inputs["X"])
     build.link(v, uv.inputs["Y"])
@@ -1070,18 +1115,26 @@ def _corner_xy(build, chart, d, c, row):
     return x, y, serves
 
 
-def _slice_uv(build, rough, xy, slice_, row):
-    """The image coordinates of chart point xy in rough slice `slice_` (a
-    float socket holding a whole number): slices lie in rows of `columns`,
-    slice s at (gutter + (s mod columns) · pitch_x, gutter + ⌊s / columns⌋ ·
-    pitch_y); the half keeps the row off a rounding edge, as in the shader."""
+def _slice_offset(build, rough, slice_, row):
+    """How far slice `slice_` (a float socket holding a whole number) lies
+    from the texture's corner, in image coordinates: slices lie in rows of
+    `columns`, slice s at (gutter + (s mod columns) · pitch_x, gutter +
+    ⌊s / columns⌋ · pitch_y) texels; the half keeps the row off a rounding
+    edge, as in the shader. Blender's v runs up the image, so the offset's
+    v is negative."""
     columns = float(rough.columns)
+    width, height = rough.size
     slice_row = build.math("FLOOR", 4, row, build.math("DIVIDE", 3.5, row, build.math(
         "ADD", 3, row, slice_, 0.5), columns), label="slice row")
     column = build.math("MULTIPLY_ADD", 4.5, row, slice_row, -columns, slice_, label="slice column")
-    x0 = build.math("MULTIPLY_ADD", 5, row, column, float(rough.pitch[0]), float(rough.gutter))
-    y0 = build.math("MULTIPLY_ADD", 5, row + 1, slice_row, float(rough.pitch[1]), float(rough.gutter))
-    return _uv(build, xy[0], xy[1], (x0, y0), rough.slice_size, rough.size, row)
+    du = build.math("MULTIPLY_ADD", 5, row, column, rough.pitch[0] / width, rough.gutter / width,
+                    label="slice u")
+    dv = build.math("MULTIPLY_ADD", 5, row + 1, slice_row, -rough.pitch[1] / height,
+                    -rough.gutter / height, label="slice v")
+    offset = build.node("ShaderNodeCombineXYZ", 5.5, row, label="slice offset")
+    build.link(du, offset.inputs["X"])
+    build.link(dv, offset.inputs["Y"])
+    return offset.outputs["Vector"]
 
 
 def add_film_layer(material, export_dir, thickness_nm=None, coat=False, name=None):

@@ -14,6 +14,10 @@ Checks, each counted as one test:
     without a critical angle;
   - both sides: a back face reads the export's back chart through its own
     mapping, a front face the front chart (synthetic two-chart atlas);
+  - rough table: synthetic slices, each an atlas of the front side's charts
+    holding their own coordinates, give back at roughness r > 0 the rough
+    chart the closed form picks, its (x, y) and √r (two slices blended),
+    and at roughness 0 the smooth chart; malformed rough tables are refused;
   - inputs: the Normal input sets the film's angle; Thickness nm, when 0 or
     more, sets the thickness in nanometres;
   - bad input: a missing file or damaged film.json raises ExportError with
@@ -419,69 +423,105 @@ def test_inputs(results, bench, workdir):
 
 
 # A synthetic rough table: 5 slices in rows of 2 (so slices 2-4 sit in later
-# rows), on a mapping of its own (critical-angle warp, square-root thickness),
-# unlike the front chart's (uniform), so the test sees which one is used.
-SYNTHETIC_ROUGH = {"slices": 5, "columns": 2, "size_u": 7, "size_v": 9,
-                   "cos_range": (math.cos(math.radians(89.0)), 1.0), "cos_crit": 0.6,
-                   "y_crit": 0.5, "thickness_power": 2}
+# rows), each an atlas of the front side's charts of its own (a corner of
+# another radius, the bands split at another cos θ, other sizes), unlike the
+# smooth atlas's, so the test sees which one is read.
+SYNTHETIC_ROUGH = {"slices": 5, "columns": 2, "charts": [
+    {"side": 0, "kind": 1, "a": A_SOAP, "floor": 0.2, "scale_nm": 30.0, "radius": 0.2,
+     "size": (7, 6)},
+    {"side": 0, "kind": 0, "a": A_SOAP, "floor": 0.2, "p0_nm": 100.0, "p_lo_nm": 0.0,
+     "p_hi_nm": 600.0, "cos_lo": 0.0, "cos_hi": 0.6, "anchor": 0.0, "offset": 0.05,
+     "size": (9, 7)},
+    {"side": 0, "kind": 0, "a": A_SOAP, "floor": 0.2, "p0_nm": 0.0, "p_lo_nm": 50.0,
+     "p_hi_nm": 600.0, "cos_lo": 0.6, "cos_hi": 1.0, "anchor": 0.6, "offset": 0.0,
+     "size": (8, 10)},
+]}
+
+
+def rough_expected(export, d, c, r):
+    """What the group's Reflectance gives on a front face of a synthetic
+    export at thickness d nm, cos θ c, roughness r: at 0 the smooth atlas's
+    chart (x, y, (k + 1) / 16); above 0 the rough atlas's chart chosen by
+    the same closed form at d clamped to the rough atlas's range, (x, y,
+    (k + 1) / 16 + √min(r, 1) / 2). Returns it and which (table, chart) it
+    read."""
+    if r == 0.0:
+        chart = irid_blender.atlas_chart_for(export.front, d, c)
+        k, blue = export.charts.index(chart), 0.0
+    else:
+        rough = export.rough
+        d = min(max(d, rough.thickness_min_nm), rough.thickness_max_nm)
+        chart = irid_blender.atlas_chart_for(rough.charts, d, c)
+        k, blue = export.rough.charts.index(chart), math.sqrt(min(r, 1.0)) / 2
+    x, y = chart.xy(d, c)
+    return np.array([x, y, (k + 1) / 16 + blue]), ("rough" if r else "smooth", k)
 
 
 def test_rough_mapping(results, bench, workdir):
     """The group's Reflectance through the rough table: at roughness r > 0
-    the two-slice blend of the synthetic slices gives back the rough
-    mapping's (x, y) and √r (clamped to 1); at roughness 0 exactly the front
-    chart (blue 0.25). A back face of a film with its own back chart keeps
-    the back chart's smooth reflectance (blue 0.5); a free-standing film's
-    back face (one chart for both sides) reads the rough table too."""
-    cos_range = SYNTHETIC_ROUGH["cos_range"]
-    back = {"size_u": 5, "size_v": 9, "cos_range": cos_range, "cos_crit": -1.0, "y_crit": 0.0}
-    rough = SYNTHETIC_ROUGH
+    the rough atlas's chart chosen in closed form, moved into the two slices
+    around √r (clamped to 1) and blended, gives back its (x, y) and √r; at
+    roughness 0 exactly the smooth atlas's chart. A back face of a film with
+    its own back side keeps the back chart's smooth reflectance; a film
+    whose back faces read the front side (no back side) reads the rough
+    table there too; a rough atlas of a narrower thickness range than the
+    export's is read at the thickness clamped to its range."""
     directory = workdir / "synthetic-rough"
-    write_synthetic_export(directory, 9, 7, cos_range, -1.0, 0.0, False, 1, back=back, rough=rough)
-    group = irid_blender.make_node_group(directory, name="synthetic rough")
-    fraction = 0.37
-    worst = 0.0
-    for r in (0.0, 0.01, 0.3, 0.5, 0.8, 1.0, 1.5):
-        material = emission_material(f"R rough {r}", group, "Reflectance", fraction, Roughness=r)
-        for angle in (0.0, 30.0, 60.0, 89.5):
-            c = math.cos(math.radians(angle))
-            if r == 0.0:
-                want = [expected_x(fraction, 1), expected_y(c, *cos_range, -1.0, 0.0), 0.25]
-            else:
-                want = [expected_x(fraction, rough["thickness_power"]),
-                        expected_y(c, *rough["cos_range"], rough["cos_crit"], rough["y_crit"]),
-                        math.sqrt(min(r, 1.0))]
-            worst = max(worst, np.abs(bench.render(material, angle) - np.array(want)).max())
-    results.check("rough table: the two slices around √roughness, blended, on the table's "
-                  "own mapping; roughness 0 the smooth chart", worst < 2e-3,
-                  f"(largest |rendered - closed form| {worst:.1e})")
-    material = emission_material("R rough back", group, "Reflectance", fraction, Roughness=0.5)
+    write_synthetic_atlas(directory, SYNTHETIC_ATLAS, {"front": [0, 1, 2], "back": [3]},
+                          (0.0, 600.0), False, rough=SYNTHETIC_ROUGH)
+    export = irid_blender.Export(directory)
+    group = irid_blender.make_node_group(export, name="synthetic rough")
+    worst, read = 0.0, set()
+    for fraction in (0.01, 0.37):
+        d = 600.0 * fraction
+        for r in (0.0, 0.01, 0.3, 0.5, 0.8, 1.0, 1.5):
+            material = emission_material(f"R rough {r} {fraction}", group, "Reflectance", fraction,
+                                         Roughness=r)
+            for angle in (0.0, 40.0, 75.0, 89.5):
+                want, which = rough_expected(export, d, math.cos(math.radians(angle)), r)
+                read.add(which)
+                worst = max(worst, np.abs(bench.render(material, angle) - want).max())
+    every = {("rough", k) for k in range(3)} | {("smooth", k) for k in range(3)}
+    results.check("rough table: the rough atlas's chart, in the two slices around √roughness, "
+                  "blended; roughness 0 the smooth atlas", worst < 2e-3 and read == every,
+                  f"(largest |rendered - closed form| {worst:.1e}; charts read {sorted(read)})")
+    material = emission_material("R rough back", group, "Reflectance", 0.37, Roughness=0.5)
     worst = 0.0
     for angle in (0.0, 30.0, 60.0):
-        y = expected_y(math.cos(math.radians(angle)), *cos_range, -1.0, 0.0)
-        got = bench.render(material, angle, below=True)
-        worst = max(worst, np.abs(got - np.array([expected_x(fraction, 1), y, 0.5])).max())
-    results.check("rough table: a back face with its own chart keeps the smooth back chart",
-                  worst < 2e-3, f"(largest |rendered - closed form| {worst:.1e})")
-    one = workdir / "synthetic-rough-one-chart"
-    write_synthetic_export(one, 9, 7, cos_range, -1.0, 0.0, True, 1, rough=rough)
-    material = emission_material("R rough opaque back", irid_blender.make_node_group(one),
-                                 "Reflectance", fraction, Roughness=0.5)
-    worst = 0.0
-    for angle in (0.0, 60.0):
         c = math.cos(math.radians(angle))
-        want = [expected_x(fraction, 2), expected_y(c, *cos_range, 0.6, 0.5), math.sqrt(0.5)]
-        worst = max(worst, np.abs(bench.render(material, angle, below=True) - np.array(want)).max())
-    results.check("rough table: a back face of a film with no back chart reads it too",
+        x, y = export.back[0].xy(222.0, c)
+        got = bench.render(material, angle, below=True)
+        worst = max(worst, np.abs(got - np.array([x, y, 4 / 16])).max())
+    results.check("rough table: a back face with its own back side keeps the smooth back chart",
                   worst < 2e-3, f"(largest |rendered - closed form| {worst:.1e})")
+    one = workdir / "synthetic-rough-front-only"
+    write_synthetic_atlas(one, SYNTHETIC_ATLAS[:3], {"front": [0, 1, 2], "back": None},
+                          (0.0, 600.0), True, rough=dict(SYNTHETIC_ROUGH, thickness_nm=(0.0, 300.0)))
+    export = irid_blender.Export(one)
+    group = irid_blender.make_node_group(export)
+    worst = {False: 0.0, True: 0.0}
+    for fraction in (0.37, 0.8):  # 222 nm, and 480 nm: read at 300 nm
+        material = emission_material(f"R rough opaque {fraction}", group, "Reflectance", fraction,
+                                     Roughness=0.5)
+        for below in (False, True):
+            for angle in (0.0, 60.0):
+                want, _ = rough_expected(export, 600.0 * fraction, math.cos(math.radians(angle)), 0.5)
+                got = bench.render(material, angle, below=below)
+                worst[below] = max(worst[below], np.abs(got - want).max())
+    results.check("rough table: a back face of a film with no back side reads it too",
+                  worst[True] < 2e-3, f"(largest |rendered - closed form| {worst[True]:.1e})")
+    results.check("rough table: the thickness clamped to the rough atlas's own range",
+                  worst[False] < 2e-3, f"(largest |rendered - closed form| {worst[False]:.1e})")
 
 
 def test_rough_refused(results, workdir):
     """Without the rough table a roughness above 0, a node-driven one
     (roughness=None) and a rough Principled base under add_film_layer are
     each one ExportError naming --rough, leaving nothing behind; the group
-    of such an export has no Roughness input. A rough layout whose slices
-    do not lie where the closed form puts them is refused."""
+    of such an export has no Roughness input. A rough table whose slices do
+    not lie (or hold the roughness) where the closed form puts them, whose
+    chart leaves its slice, or of the layout before the rough atlas is
+    refused with one line."""
     smooth = workdir / "synthetic-linear"
     before = (len(bpy.data.images), len(bpy.data.node_groups), len(bpy.data.materials))
     for roughness in (0.3, None):
@@ -511,17 +551,29 @@ def test_rough_refused(results, workdir):
     results.check("no rough table: the group has no Roughness input", "Roughness" not in names,
                   f"(inputs {names})")
     bpy.data.node_groups.remove(group)
-    moved = workdir / "bad-rough-layout"
-    write_synthetic_export(moved, 3, 3, (0.1, 1.0), -1.0, 0.0, True, rough=SYNTHETIC_ROUGH)
-    film = json.loads((moved / "film.json").read_text())
-    film["rough"]["layout"]["columns"] = 3
-    (moved / "film.json").write_text(json.dumps(film))
-    try:
-        irid_blender.Export(moved)
-        ok, detail = False, "(accepted)"
-    except irid_blender.ExportError as e:
-        ok, detail = "closed form" in str(e), f"({e})"
-    results.check("a rough layout that disagrees with its slice rectangles is refused", ok, detail)
+    bad = workdir / "bad-rough"
+    write_synthetic_atlas(bad, SYNTHETIC_ATLAS[:3], {"front": [0, 1, 2], "back": None},
+                          (0.0, 600.0), True, rough=SYNTHETIC_ROUGH)
+    good = json.loads((bad / "film.json").read_text())
+    for what, change, needle in (
+        ("a rough tiling that disagrees with its slice rectangles",
+         lambda rough: rough["tiling"].update(columns=3), "closed form"),
+        ("a rough table whose slices are not at roughness (s / (S - 1))²",
+         lambda rough: rough["nodes"].update(roughness=[0.0, 0.25, 0.5, 0.75, 1.0]), "nodes.roughness"),
+        ("a rough chart outside its slice",
+         lambda rough: rough["charts"][2]["params"].update(y0=40), "does not lie in"),
+        ("a rough table of the old form (one mapping, no charts)",
+         lambda rough: rough.update(layout=rough.pop("tiling")), "export it again"),
+    ):
+        film = json.loads(json.dumps(good))
+        change(film["rough"])
+        (bad / "film.json").write_text(json.dumps(film))
+        try:
+            irid_blender.Export(bad)
+            ok, detail = False, "(accepted)"
+        except irid_blender.ExportError as e:
+            ok, detail = needle in str(e) and "\n" not in str(e), f"({e})"
+        results.check(f"{what} is refused", ok, detail)
 
 
 def test_white(results, irid, workdir):

@@ -19,7 +19,10 @@ The same measure checks irid's own Blender material
 film on copper, at roughness 0.3 and 0.5 and 0-75 degrees, its render
 divided by the white Glossy's against `irid color --roughness` (mean
 CIEDE2000 <= 0.3, max <= 1 per film, issue #29's bound), and at roughness 0
-against the smooth film. --skip-principled runs only this part.
+against the smooth film; the group's Reflectance output on the same
+exports against rough.exr read in numpy at the texel positions
+irid_film_rough's formula gives (the lookup alone, without the table's own
+error). --skip-principled runs only this part.
 
 Runs with Blender as a Python module, as tools/ci/blender.sh installs it:
 
@@ -50,9 +53,16 @@ import bpy
 HERE = Path(__file__).resolve().parent
 REPO = HERE.parent.parent
 sys.path.insert(0, str(HERE))
-from colour_exr import delta_e2000_rgb  # noqa: E402
+from colour_exr import delta_e2000_rgb, read_exr_rgb  # noqa: E402
 import irid_blender  # noqa: E402
-from cycles_scene import Bench, Irid, render_rough_picture, stack_with_thickness  # noqa: E402
+from cycles_scene import (  # noqa: E402
+    Bench,
+    Irid,
+    emission_material,
+    node_material,
+    render_rough_picture,
+    stack_with_thickness,
+)
 
 STACK = "tests/blender/film-on-glass.toml"  # 300 nm, n = 1.38, on n = 1.5
 SUBSTRATE_IOR = 1.5
@@ -81,6 +91,11 @@ MATERIAL_ROUGHNESS = (0.3, 0.5)
 MATERIAL_ANGLES_DEG = (0.0, 30.0, 60.0, 75.0)
 MATERIAL_MEAN_BOUND = 0.3  # issue #29's done-when
 MATERIAL_MAX_BOUND = 1.0
+# The node graph's rough lookup against the texture read in numpy (f32
+# coordinates and weights in Cycles, f64 in numpy, the same f16 texels):
+# measured 3e-7 on the film on glass, 2e-5 on the brighter film on copper;
+# a wrong chart or slice is off by far more than the table's own error.
+LOOKUP_BOUND = 1e-4
 # A transmitting film's material has two lobes, and Cycles picks one per
 # sample: its renders take this many times the samples.
 TRANSMITTING_FACTOR = 16
@@ -88,11 +103,7 @@ TRANSMITTING_FACTOR = 16
 
 def bsdf_material(name, node_type, inputs):
     """A material of one GGX BSDF node with these input values."""
-    material = bpy.data.materials.new(name)
-    if material.node_tree is None:
-        material.use_nodes = True
-    tree = material.node_tree
-    tree.nodes.clear()
+    material, tree = node_material(name)
     bsdf = tree.nodes.new(node_type)
     bsdf.distribution = "GGX"  # single scattering, not Multiscatter GGX
     for key, value in inputs.items():
@@ -179,6 +190,58 @@ def principled_check(bench, irid, samples, check):
     return len(errors)
 
 
+def _bilinear(texels, tx, ty):
+    """texels (rows in file order) filtered bilinearly at texel position
+    (tx, ty), texel centres at i + 0.5, clamped to the edge (as the GPU and
+    Blender's Linear, Extend read)."""
+    height, width = texels.shape[:2]
+    x, y = tx - 0.5, ty - 0.5
+    i, j = math.floor(x), math.floor(y)
+    fx, fy = x - i, y - j
+    at = lambda i, j: texels[min(max(j, 0), height - 1), min(max(i, 0), width - 1)]  # noqa: E731
+    return ((1 - fy) * ((1 - fx) * at(i, j) + fx * at(i + 1, j))
+            + fy * ((1 - fx) * at(i, j + 1) + fx * at(i + 1, j + 1)))
+
+
+def rough_table_at(rough, texels, d, c, r):
+    """irid_film_rough (docs/gpu.md) read in numpy from rough.exr's texels:
+    the rough atlas's chart at d nm (clamped to its range) and cos θ c, its
+    texel position, moved into the two slices around √r · (S − 1) and
+    blended. The reference of the node graph's lookup on a real export."""
+    d = min(max(d, rough.thickness_min_nm), rough.thickness_max_nm)
+    chart = irid_blender.atlas_chart_for(rough.charts, d, c)
+    x, y = chart.xy(d, c)
+    x0, y0, w, h = chart.rect
+    tx, ty = x0 + 0.5 + x * (w - 1), y0 + 0.5 + y * (h - 1)
+    s = math.sqrt(min(max(r, 0.0), 1.0)) * (rough.slices - 1)
+    s0 = min(math.floor(s), rough.slices - 2)
+    colours = []
+    for slice_ in (s0, s0 + 1):
+        ox, oy = rough.slice_origin(slice_)
+        colours.append(_bilinear(texels, ox + tx, oy + ty))
+    return colours[0] + (s - s0) * (colours[1] - colours[0])
+
+
+def lookup_check(bench, directory, thickness_nm, name, check):
+    """The node group's Reflectance output (as emission: no noise) on a real
+    rough export against rough_table_at: what separates the node graph's
+    lookup from the table's own error."""
+    export = irid_blender.Export(directory)
+    texels = read_exr_rgb(export.rough.path)
+    group = irid_blender.make_node_group(export, name=f"{name} lookup")
+    worst = 0.0
+    for roughness in (0.05, 0.3, 0.5, 0.9):
+        material = emission_material(f"{name} lookup {roughness:g}", group, "Reflectance", 0.0,
+                                     Thickness_nm=thickness_nm, Roughness=roughness)
+        for angle in MATERIAL_ANGLES_DEG:
+            got = bench.render(material, angle).reshape(-1, 3).mean(0)
+            want = rough_table_at(export.rough, texels, thickness_nm,
+                                  math.cos(math.radians(angle)), roughness)
+            worst = max(worst, float(np.abs(got - want).max()))
+    check(f"{name}: the group's rough lookup against rough.exr read in numpy, largest difference",
+          worst < LOOKUP_BOUND, f"{worst:.1e} (bound {LOOKUP_BOUND:g})")
+
+
 def material_check(bench, irid, workdir, samples, check):
     """irid's Blender material (irid_blender.make_material on an `irid
     export --rough`) at each of MATERIAL_ROUGHNESS in the white world,
@@ -199,6 +262,7 @@ def material_check(bench, irid, workdir, samples, check):
         irid.run("export", source, "--thickness", f"{lo:g}:{hi:g}", "--white", "e", "--rough",
                  "-o", directory)
         smooth = irid_colours(irid, stack, angles=MATERIAL_ANGLES_DEG)
+        lookup_check(bench, directory, case["thickness_nm"], case["name"], check)
         opaque = irid_blender.Export(directory).opaque
         bench.set_world("white" if opaque else "reflection")
         n = samples if opaque else samples * TRANSMITTING_FACTOR
