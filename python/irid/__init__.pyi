@@ -146,6 +146,7 @@ def bake(
     half: bool = False,
     validation_points: int = 20000,
     check: bool = True,
+    layout: Optional[str] = None,  # "atlas" or "grid"; None: atlas, grid with a resolution
 ) -> Lut:
     """Bakes a lookup table over a layer's thickness and cos θ, as ``irid bake``."""
 

@@ -8,7 +8,9 @@ use pyo3::types::{PyString, PyTuple};
 use rayon::prelude::*;
 
 use irid::color::Sampling;
-use irid::lut::{validate, BakeSpec, Kind, Lut, Resolution, DEFAULT_COS_MIN, VALIDATION_SEED};
+use irid::lut::{
+    validate, BakeSpec, Kind, Layout, Lut, Resolution, DEFAULT_COS_MIN, VALIDATION_SEED,
+};
 
 use crate::arrays::{array, broadcast_reals, count, integer_in, json_to_py, position, real_list};
 use crate::budget::Footprint;
@@ -50,12 +52,15 @@ fn range(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<(f64, f64)> {
 /// spectral kind's range (an rgb table refuses it). half: store f16.
 /// validation_points: random points checked against the solver, recorded
 /// in the header (0: none; default 20000). check: with a fixed resolution,
-/// False skips the bake check.
+/// False skips the bake check. layout: "atlas" (charts in the layer's
+/// optical thickness, format version 4, sized for an error target) or
+/// "grid" (thickness × cos θ nodes, versions 2 and 3), as `irid bake
+/// --layout`; default "atlas", "grid" with a resolution.
 #[pyfunction]
 #[pyo3(signature = (
     stack, thickness_nm=None, layer=None, max_error=None, *, resolution=None, cos_theta=None,
     kind="rgb", sampling="exact", wavelengths_nm=None, half=false, validation_points=None,
-    check=true
+    check=true, layout=None
 ))]
 #[allow(clippy::too_many_arguments)]
 pub fn bake(
@@ -72,6 +77,7 @@ pub fn bake(
     half: bool,
     validation_points: Option<&Bound<'_, PyAny>>,
     check: bool,
+    layout: Option<&str>,
 ) -> PyResult<PyLut> {
     let mut spec = BakeSpec::new(stack.stack.clone());
     spec.layer = layer_number(&spec.stack, layer)?;
@@ -112,6 +118,17 @@ pub fn bake(
         (Some(r), None) => fixed_resolution(spec.kind, r)?,
         (None, e) => Resolution::MaxError(e.unwrap_or(1e-3)),
     };
+    spec.layout = match layout {
+        Some(l) => l.parse::<Layout>().map_err(py_error)?,
+        None if resolution.is_some() => Layout::Grid,
+        None => Layout::Atlas,
+    };
+    if resolution.is_some() && spec.layout == Layout::Atlas {
+        return Err(invalid(
+            "layout",
+            "an atlas is sized for an error target, not a resolution (layout=\"grid\" takes one)",
+        ));
+    }
     // Checks the memory a fixed resolution needs (an error target's
     // refinement checks each round's as it goes).
     spec.validate().map_err(py_error)?;

@@ -160,6 +160,33 @@ def test_error_target_is_met(soap):
     assert max(lut.validate(1000, seed=3)["max_abs"]) <= 1e-2
 
 
+@pytest.mark.parametrize("layout, version", [("grid", 2), ("atlas", 4)])
+def test_layout_chooses_the_table_as_the_cli(tmp_path, soap, luts, irid_cli, layout, version):
+    """layout= is `irid bake --layout`: the same table, header and data, from
+    either, and the error target met on both."""
+    lut = irid.bake(soap, thickness_nm=(0, 400), max_error=1e-2, cos_theta=(0.2, 1), layout=layout,
+                    validation_points=500)
+    header = lut.header
+    assert header["version"] == version and ("atlas" in header and header["atlas"]) == (layout == "atlas")
+    assert header["error"]["bake_check"]["max_abs_all"] <= 1e-2
+    path = tmp_path / "cli.exr"
+    run = irid_cli("bake", luts / "soap-film.toml", "--thickness", "0:400", "--max-error", "1e-2",
+                   "--angles", "0.2:1", "--layout", layout, "--validate-points", "500", "-o", path)
+    assert run.returncode == 0, run.stderr
+    cli = irid.Lut.load(path)
+    assert cli.header == header
+    np.testing.assert_array_equal(cli.data, lut.data)
+
+
+def test_layout_is_checked(soap):
+    with pytest.raises(ValueError, match=r"^layout 'cubes': expected atlas or grid"):
+        irid.bake(soap, thickness_nm=(0, 400), max_error=1e-2, layout="cubes")
+    with pytest.raises(ValueError, match=r"^layout: an atlas is sized for an error target"):
+        irid.bake(soap, thickness_nm=(0, 400), resolution=(16, 8), layout="atlas")
+    grid = irid.bake(soap, thickness_nm=(0, 400), resolution=(16, 8), validation_points=0)
+    assert grid.header["version"] == 2
+
+
 def test_spectral_atlas_table(soap):
     """An error target bakes a spectral table on the atlas (format version
     4): its data are the atlas image per wavelength node, and irid's
