@@ -8,6 +8,7 @@ pub mod machine;
 pub mod plot;
 pub mod renders;
 pub mod report;
+pub mod rough;
 pub mod run;
 pub mod stacks;
 pub mod tables;

@@ -63,6 +63,12 @@ pub struct Args {
     /// error to tables.md in the run directory (no other report).
     #[arg(long, conflicts_with_all = ["grid", "quick"])]
     pub tables: bool,
+    /// Bake each bench stack's rgb atlas and then its rough table
+    /// (`irid bake --rough`, 2e-3) in the same run and write their times and
+    /// the rough table's measured error to rough.md in the run directory
+    /// (no other report).
+    #[arg(long, conflicts_with_all = ["grid", "quick", "tables"])]
+    pub rough: bool,
     /// Write R then T as little-endian f64 arrays, [angle][thickness][wavelength],
     /// to this file instead of printing them in the JSON.
     #[arg(long, value_name = "PATH")]
@@ -71,6 +77,10 @@ pub struct Args {
 
 pub fn run(args: Args) -> Result<ExitCode> {
     check_threads(args.threads)?;
+    if args.rough {
+        with_threads(Some(args.threads), || run_rough_tables(&args))??;
+        return Ok(ExitCode::SUCCESS);
+    }
     if args.tables {
         with_threads(Some(args.threads), || run_tables(&args))??;
         return Ok(ExitCode::SUCCESS);
@@ -121,6 +131,22 @@ fn run_tables(args: &Args) -> Result<()> {
     );
     std::fs::create_dir_all(&out).with_context(|| out.display().to_string())?;
     irid::atomic::write(&out.join("tables.md"), doc.as_bytes())?;
+    print!("{doc}");
+    Ok(())
+}
+
+fn run_rough_tables(args: &Args) -> Result<()> {
+    let (command, machine, out) = run_setting(args);
+    eprintln!("irid bench --rough on {}", machine.summary());
+    let rows = irid::bench::rough::run(&stacks::fixed_stacks()?, &|line| eprintln!("{line}"))?;
+    let doc = format!(
+        "# Rough tables beside smooth ones\n\n`{command}` on {}, {} threads.\n\n{}",
+        machine.summary(),
+        args.threads,
+        irid::bench::rough::markdown(&rows)
+    );
+    std::fs::create_dir_all(&out).with_context(|| out.display().to_string())?;
+    irid::atomic::write(&out.join("rough.md"), doc.as_bytes())?;
     print!("{doc}");
     Ok(())
 }
