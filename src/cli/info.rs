@@ -208,7 +208,7 @@ fn print_with_error(out: &mut String, h: &Header) {
     if let Some(v) = &h.error.validation {
         super::say!(
             out,
-            "  validation            {} random points (seed {}) against the solver:",
+            "  validation            {} random points (seed {}) against the solver (relative above 1):",
             v.points,
             v.seed
         );

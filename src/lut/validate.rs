@@ -8,6 +8,7 @@ use serde::{Deserialize, Serialize};
 use super::bake::critical_cos;
 use super::sample::{channel_names, Lut};
 use super::Kind;
+use crate::atlas::search::scaled_error;
 use crate::color::refine::Refinement;
 use crate::color::{delta_e2000_rgb, Sampling, SpectralIntegrator};
 use crate::error::{Error, Result};
@@ -26,7 +27,9 @@ pub struct ErrorStats {
     pub seed: u64,
     /// The table's channel names, the order of every `*_abs` array.
     pub channels: Vec<String>,
-    /// Largest absolute error per channel over all points.
+    /// Largest absolute error per channel over all points (relative to
+    /// the exact value where that exceeds 1 in magnitude, as the bake's
+    /// target: [`scaled_error`]).
     pub max_abs: Vec<f64>,
     /// Mean absolute error per channel over all points.
     pub mean_abs: Vec<f64>,
@@ -255,8 +258,8 @@ impl<'a> PointChecker<'a> {
                 let table_t = sample.transmittance.map(f64::from);
                 let (r, tr, de) = self.exact_color(s, cos, &table_r, &table_t)?;
                 for k in 0..3 {
-                    abs[k] = (table_r[k] - r[k]).abs();
-                    abs[3 + k] = (table_t[k] - tr[k]).abs();
+                    abs[k] = scaled_error(table_r[k], r[k]);
+                    abs[3 + k] = scaled_error(table_t[k], tr[k]);
                 }
                 Some(de)
             }
@@ -270,8 +273,8 @@ impl<'a> PointChecker<'a> {
                     cos,
                 );
                 let (r, tr) = self.lut.sample_spectral(t, c, w);
-                abs[0] = (f64::from(r) - resp.r()).abs();
-                abs[1] = (f64::from(tr) - resp.t()).abs();
+                abs[0] = scaled_error(f64::from(r), resp.r());
+                abs[1] = scaled_error(f64::from(tr), resp.t());
                 if self.color_covered {
                     Some(self.spectral_color_error(s, t, c)?)
                 } else {
