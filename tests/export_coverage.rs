@@ -129,6 +129,7 @@ fn the_gain_film_exports_at_values_above_one() {
     assert!(largest > 2.5, "{largest}");
 }
 
+#[cfg(feature = "bench")]
 fn bench_spec(name: &str) -> ExportSpec {
     let b = irid::bench::stacks::find(name).unwrap().unwrap();
     ExportSpec {
@@ -144,6 +145,7 @@ fn bench_spec(name: &str) -> ExportSpec {
 /// Every bench stack over its thickness range but the mirror's back (see
 /// the module docs) and the gain film (see
 /// [`the_bench_gain_film_reaches_lasing_poles`]).
+#[cfg(feature = "bench")]
 #[test]
 fn every_bench_stack_exports_over_every_angle() {
     let names = irid::bench::stacks::names();
@@ -158,6 +160,7 @@ fn every_bench_stack_exports_over_every_angle() {
 /// Over 0–1000 nm the gain film reaches lasing poles, where R and T are
 /// unbounded (docs/limits.md#lasing-poles): the export refuses, naming
 /// the point, within seconds.
+#[cfg(feature = "bench")]
 #[test]
 fn the_bench_gain_film_reaches_lasing_poles() {
     let Err(e) = export(&bench_spec("gain-on-gold"), &|_| {}) else {
