@@ -65,8 +65,6 @@ pub const MAX_SLICES: usize = 129;
 pub const GRAZING_COS: f64 = 0.02;
 /// The scale d₀ (nm) of the dense thickness grid's warp ln(1 + d / d₀).
 const THICKNESS_SCALE_NM: f64 = 20.0;
-/// The dense grid's least thickness (nm).
-const MIN_THICKNESS_NM: f64 = 1e-6;
 /// The dense grid's spacing near zero thickness (nm).
 const FINEST_SPACING_NM: f64 = 0.4;
 /// Dense-grid intervals per shortest fringe period at the top of the range.
@@ -825,11 +823,8 @@ fn dense_grid(
     } else {
         (1, 1.0)
     };
-    // The sweep's 0/0 at zero thickness and μ → 0 (the film absent, its
-    // interfaces reflecting fully) is avoided by starting a hair above zero:
-    // only μ below about 1e-6 sees the difference.
     let thickness: Vec<f64> = (0..count)
-        .map(|k| (lo + THICKNESS_SCALE_NM * (k as f64 * step).exp_m1()).max(MIN_THICKNESS_NM))
+        .map(|k| lo + THICKNESS_SCALE_NM * (k as f64 * step).exp_m1())
         .collect();
     let mus = grid.nodes().len();
     crate::limits::check_allocation(
