@@ -298,34 +298,17 @@ impl Reference {
 }
 
 fn summarize(errors: &[([f64; 3], f64, [f64; 3])]) -> RoughError {
-    let n = errors.len();
-    let mut out = RoughError {
-        points: n,
+    let e = crate::rough::slices::summarize(errors);
+    RoughError {
+        max_abs: e.max_abs,
+        p99_abs: e.p99_abs,
+        mean_abs: e.mean_abs,
+        max_delta_e00: e.max_delta_e00,
+        mean_delta_e00: e.mean_delta_e00,
+        points: e.points,
         seed: ROUGH_SEED,
-        ..RoughError::default()
-    };
-    if n == 0 {
-        return out;
+        worst_point: e.worst_point,
     }
-    // NaN (a lookup gone wrong) counts as worst.
-    let finite = |x: f64| if x.is_nan() { f64::INFINITY } else { x };
-    for k in 0..3 {
-        let mut e: Vec<f64> = errors.iter().map(|x| finite(x.0[k])).collect();
-        e.sort_by(f64::total_cmp);
-        out.max_abs[k] = e[n - 1];
-        out.p99_abs[k] = e[((n as f64 * 0.99).ceil() as usize).clamp(1, n) - 1];
-        out.mean_abs[k] = e.iter().sum::<f64>() / n as f64;
-    }
-    out.max_delta_e00 = errors.iter().fold(0.0f64, |a, x| a.max(finite(x.1)));
-    out.mean_delta_e00 = errors.iter().map(|x| finite(x.1)).sum::<f64>() / n as f64;
-    let worst = |x: &[f64; 3]| x.iter().fold(0.0f64, |a, &b| a.max(finite(b)));
-    if let Some(w) = errors
-        .iter()
-        .max_by(|a, b| worst(&a.0).total_cmp(&worst(&b.0)))
-    {
-        out.worst_point = w.2;
-    }
-    out
 }
 
 /// The slices per row for `slices` slices of `pitch` texels: the fewest

@@ -953,9 +953,9 @@ pub fn measure_sampler(
     ))
 }
 
-/// Figures of (absolute error per channel, ΔE00, point) triples; a NaN
-/// error counts as infinite.
-fn summarize(errors: &[([f64; 3], f64, [f64; 3])]) -> SliceError {
+/// The figures of per-point errors (absolute error per channel, ΔE00,
+/// the point): a NaN (a lookup gone wrong) counts as the worst.
+pub(crate) fn summarize(errors: &[([f64; 3], f64, [f64; 3])]) -> SliceError {
     let n = errors.len();
     if n == 0 {
         return SliceError::default();
@@ -964,32 +964,20 @@ fn summarize(errors: &[([f64; 3], f64, [f64; 3])]) -> SliceError {
         points: n,
         ..SliceError::default()
     };
+    let finite = |x: f64| if x.is_nan() { f64::INFINITY } else { x };
     for k in 0..3 {
-        let mut e: Vec<f64> = errors
-            .iter()
-            .map(|x| {
-                if x.0[k].is_nan() {
-                    f64::INFINITY
-                } else {
-                    x.0[k]
-                }
-            })
-            .collect();
+        let mut e: Vec<f64> = errors.iter().map(|x| finite(x.0[k])).collect();
         e.sort_by(f64::total_cmp);
         out.max_abs[k] = e[n - 1];
         out.p99_abs[k] = e[((n as f64 * 0.99).ceil() as usize).clamp(1, n) - 1];
         out.mean_abs[k] = e.iter().sum::<f64>() / n as f64;
     }
-    out.max_delta_e00 = errors.iter().map(|x| x.1).fold(0.0, f64::max);
-    out.mean_delta_e00 = errors.iter().map(|x| x.1).sum::<f64>() / n as f64;
-    let largest = |x: &[f64; 3]| {
-        x.iter().fold(0.0f64, |p, &q| {
-            p.max(if q.is_nan() { f64::INFINITY } else { q })
-        })
-    };
+    out.max_delta_e00 = errors.iter().fold(0.0f64, |a, x| a.max(finite(x.1)));
+    out.mean_delta_e00 = errors.iter().map(|x| finite(x.1)).sum::<f64>() / n as f64;
+    let worst = |x: &[f64; 3]| x.iter().fold(0.0f64, |a, &b| a.max(finite(b)));
     out.worst_point = errors
         .iter()
-        .max_by(|a, b| largest(&a.0).total_cmp(&largest(&b.0)))
+        .max_by(|a, b| worst(&a.0).total_cmp(&worst(&b.0)))
         .map_or([0.0; 3], |x| x.2);
     out
 }
