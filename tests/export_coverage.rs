@@ -5,9 +5,11 @@
 //! its aliased strip), re-measured here through `Export::sample` against
 //! the solver at points of our own.
 //!
-//! The mirror seen from its glass side takes minutes (its colour near and
-//! beyond the critical angle integrates at up to 64 points per nanometre):
-//! it is exported over every angle, and checked on the GPU, by
+//! The mirror seen from its glass side takes many minutes, in the band of
+//! cos θ over which fused silica's dispersion moves its critical angle
+//! (docs/limits.md#the-mirror-from-its-glass-side). A 6-layer mirror of
+//! non-dispersive indices (one critical angle) is exported from its glass
+//! side over every angle, and checked on the GPU, by
 //! `cargo test -p irid-gpu --test gpu` (tools/ci/gpu.sh).
 
 use std::path::Path;
