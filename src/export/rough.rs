@@ -15,15 +15,12 @@
 //! two slices) is measured against `irid::rough` at random points; cos θ
 //! below [`GRAZING_COS`] is measured and stated apart.
 
-use rand::{Rng, SeedableRng};
-use rayon::prelude::*;
-
 use super::texture::{to_f16, Texture};
 use super::{ExportSpec, F16_MAX, MAX_SIZE};
 use crate::atlas::{locate_f32, Atlas, Film, Image};
-use crate::color::{delta_e2000_rgb, SpectralIntegrator};
+use crate::color::SpectralIntegrator;
 use crate::error::{Error, Result};
-use crate::rough::slices::{self, RoughSlices, SliceRequest};
+use crate::rough::slices::{self, MeasurePoints, Reference, RoughSlices, SliceError, SliceRequest};
 use crate::rough::{rough_reflectance, Quadrature, RoughTable};
 
 pub use crate::rough::slices::GRAZING_COS;
@@ -203,38 +200,21 @@ pub struct RoughPoints {
 impl RoughPoints {
     /// The points of `spec`'s rough measurement.
     pub fn of(spec: &ExportSpec) -> RoughPoints {
-        let mut rng = rand_pcg::Pcg64::seed_from_u64(ROUGH_SEED);
-        let mut axis = |(lo, hi): (f64, f64), n: usize| -> Vec<f32> {
-            (0..n)
-                .map(|_| (lo + rng.random::<f64>() * (hi - lo)) as f32)
-                .collect()
-        };
-        let mut thickness = axis(spec.thickness_nm, ROUGH_AXIS_POINTS);
-        thickness.sort_by(f32::total_cmp);
+        let drawn = MeasurePoints::draw(
+            (spec.thickness_nm, spec.cos_theta),
+            ROUGH_SEED,
+            [ROUGH_AXIS_POINTS, ROUGH_AXIS_POINTS, ROUGH_GRAZING_POINTS],
+        );
+        let f32s = |v: &[f64]| v.iter().map(|&x| x as f32).collect::<Vec<f32>>();
+        let mut thickness = f32s(&drawn.thickness);
         thickness.dedup();
-        let (c0, c1) = spec.cos_theta;
-        // Angles that stay below the grazing cosine have no points at or
-        // above it.
-        let main = if c1 >= GRAZING_COS {
-            ROUGH_AXIS_POINTS
-        } else {
-            0
-        };
-        let cos = axis((c0.max(GRAZING_COS), c1), main);
-        let roughness = axis((0.0, 1.0), ROUGH_AXIS_POINTS);
-        let grazing_cos = if c0 < GRAZING_COS {
-            axis((c0, c1.min(GRAZING_COS)), ROUGH_GRAZING_POINTS)
-                .into_iter()
-                .filter(|&c| f64::from(c) < GRAZING_COS)
-                .collect()
-        } else {
-            Vec::new()
-        };
+        let mut grazing_cos = f32s(&drawn.grazing_cos);
+        grazing_cos.retain(|&c| f64::from(c) < GRAZING_COS);
         RoughPoints {
             thickness,
-            cos,
+            cos: f32s(&drawn.cos),
             grazing_cos,
-            roughness,
+            roughness: f32s(&drawn.roughness),
         }
     }
 
@@ -262,44 +242,12 @@ pub fn rough_exact_at(spec: &ExportSpec, points: &RoughPoints) -> Result<RoughTa
     )
 }
 
-/// The random points and F_eff at each.
-struct Reference {
-    points: RoughPoints,
-    exact: RoughTable,
-}
-
-impl Reference {
-    /// What `rough` gives against the reference: over the cosines at or
-    /// above [`GRAZING_COS`], and over those below.
-    fn measure(&self, rough: &RoughExport) -> (RoughError, Option<RoughError>) {
-        let p = &self.points;
-        let cos = p.all_cos();
-        let over = |cs: std::ops::Range<usize>| -> RoughError {
-            let errors: Vec<([f64; 3], f64, [f64; 3])> = (0..p.roughness.len())
-                .into_par_iter()
-                .flat_map_iter(|k| {
-                    cs.clone()
-                        .flat_map(move |j| (0..p.thickness.len()).map(move |i| (i, j, k)))
-                })
-                .map(|(i, j, k)| {
-                    let (t, c, r) = (p.thickness[i], cos[j], p.roughness[k]);
-                    let got = rough.sample(t, c, r).map(f64::from);
-                    let exact = self.exact.at(i, j, k);
-                    let abs = std::array::from_fn(|n| (got[n] - exact[n]).abs());
-                    let point = [t, c, r].map(f64::from);
-                    (abs, delta_e2000_rgb(got, exact), point)
-                })
-                .collect();
-            summarize(&errors)
-        };
-        let grazing = (!p.grazing_cos.is_empty()).then(|| over(p.cos.len()..cos.len()));
-        (over(0..p.cos.len()), grazing)
-    }
-}
-
-fn summarize(errors: &[([f64; 3], f64, [f64; 3])]) -> RoughError {
-    let e = crate::rough::slices::summarize(errors);
-    RoughError {
+/// What `rough` gives against `reference`: over the cosines at or above
+/// [`GRAZING_COS`], and over those below (`None` when there are none).
+fn measure(reference: &Reference, rough: &RoughExport) -> (RoughError, Option<RoughError>) {
+    let (main, grazing) =
+        reference.errors(&|t, c, r| rough.sample(t as f32, c as f32, r as f32).map(f64::from));
+    let with_seed = |e: SliceError| RoughError {
         max_abs: e.max_abs,
         p99_abs: e.p99_abs,
         mean_abs: e.mean_abs,
@@ -308,7 +256,9 @@ fn summarize(errors: &[([f64; 3], f64, [f64; 3])]) -> RoughError {
         points: e.points,
         seed: ROUGH_SEED,
         worst_point: e.worst_point,
-    }
+    };
+    let grazing = (grazing.points > 0).then(|| with_seed(grazing));
+    (with_seed(main), grazing)
 }
 
 /// The slices per row for `slices` slices of `pitch` texels: the fewest
@@ -425,8 +375,10 @@ pub(super) fn rough_export(
     let start = std::time::Instant::now();
     let integrator = SpectralIntegrator::with_white(spec.sampling, spec.white);
     let points = RoughPoints::of(spec);
-    let exact = rough_exact_at(spec, &points)?;
-    let reference = Reference { points, exact };
+    let reference = Reference {
+        exact: rough_exact_at(spec, &points)?,
+        main_cos: points.cos.len(),
+    };
     progress(&format!(
         "rough: F_eff at the measurement's points ({:.1} s)",
         start.elapsed().as_secs_f64()
@@ -439,6 +391,7 @@ pub(super) fn rough_export(
             image: source.image,
             max_error: asked,
             max_side: MAX_SIZE - 2 * GUTTER,
+            reference: Some(&reference),
         };
         let built = slices::build(
             source.film.stack(),
@@ -449,7 +402,7 @@ pub(super) fn rough_export(
         )?;
         check_representable(&built)?;
         let mut rough = pack(&built, target)?;
-        (rough.error, rough.grazing_error) = reference.measure(&rough);
+        (rough.error, rough.grazing_error) = measure(&reference, &rough);
         let measured = rough.error.max_all();
         progress(&format!(
             "rough: {} slices tiled into {}×{} texels; through f16 at {} random points: max {measured:.2e} (target {target:.1e}) ({:.1} s)",
