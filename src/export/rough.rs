@@ -185,19 +185,9 @@ fn pitch(atlas: &Atlas) -> [usize; 2] {
 /// roughnesses over [0, 1]; and [`ROUGH_GRAZING_POINTS`] cosines of the
 /// export's angles below [`GRAZING_COS`] (none when they do not reach
 /// there).
-#[derive(Clone, Debug, PartialEq)]
-pub struct RoughPoints {
-    /// Thicknesses (nm), ascending.
-    pub thickness: Vec<f32>,
-    /// cos θ at or above [`GRAZING_COS`].
-    pub cos: Vec<f32>,
-    /// cos θ below [`GRAZING_COS`].
-    pub grazing_cos: Vec<f32>,
-    /// Roughnesses.
-    pub roughness: Vec<f32>,
-}
+pub type RoughPoints = MeasurePoints<f32>;
 
-impl RoughPoints {
+impl MeasurePoints<f32> {
     /// The points of `spec`'s rough measurement.
     pub fn of(spec: &ExportSpec) -> RoughPoints {
         let drawn = MeasurePoints::draw(
@@ -210,17 +200,12 @@ impl RoughPoints {
         thickness.dedup();
         let mut grazing_cos = f32s(&drawn.grazing_cos);
         grazing_cos.retain(|&c| f64::from(c) < GRAZING_COS);
-        RoughPoints {
+        MeasurePoints {
             thickness,
             cos: f32s(&drawn.cos),
             grazing_cos,
             roughness: f32s(&drawn.roughness),
         }
-    }
-
-    /// Every cosine: `cos`, then `grazing_cos`.
-    pub fn all_cos(&self) -> Vec<f32> {
-        self.cos.iter().chain(&self.grazing_cos).copied().collect()
     }
 }
 

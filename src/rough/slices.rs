@@ -934,17 +934,24 @@ pub fn measure_sampler(
 
 /// Random points of a rough measurement: every combination of the
 /// thicknesses, the cosines (at or above [`GRAZING_COS`], then below) and
-/// the roughnesses.
+/// the roughnesses; as f64, or as f32 where they are what a shader gets.
 #[derive(Clone, Debug, PartialEq)]
-pub struct MeasurePoints {
+pub struct MeasurePoints<T = f64> {
     /// Thicknesses (nm), ascending, distinct.
-    pub thickness: Vec<f64>,
+    pub thickness: Vec<T>,
     /// cos θ at or above [`GRAZING_COS`], ascending.
-    pub cos: Vec<f64>,
+    pub cos: Vec<T>,
     /// cos θ below [`GRAZING_COS`], ascending.
-    pub grazing_cos: Vec<f64>,
+    pub grazing_cos: Vec<T>,
     /// Roughnesses, ascending.
-    pub roughness: Vec<f64>,
+    pub roughness: Vec<T>,
+}
+
+impl<T: Copy> MeasurePoints<T> {
+    /// Every cosine: `cos`, then `grazing_cos`.
+    pub fn all_cos(&self) -> Vec<T> {
+        self.cos.iter().chain(&self.grazing_cos).copied().collect()
+    }
 }
 
 impl MeasurePoints {
@@ -983,11 +990,6 @@ impl MeasurePoints {
             grazing_cos,
             roughness,
         }
-    }
-
-    /// Every cosine: `cos`, then `grazing_cos`.
-    pub fn all_cos(&self) -> Vec<f64> {
-        self.cos.iter().chain(&self.grazing_cos).copied().collect()
     }
 }
 
