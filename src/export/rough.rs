@@ -72,7 +72,7 @@ pub const ROUGH_SHADERS: [(&str, &str); 4] = [
 
 /// Error of what the GPU computes from the rough table against
 /// `irid::rough` (default quadrature), per RGB channel of F_eff.
-#[derive(Clone, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
 pub struct RoughError {
     /// Largest absolute error per channel.
     pub max_abs: [f64; 3],
@@ -426,26 +426,13 @@ pub(super) fn fill(rough: &RoughExport, tmp: &std::path::Path) -> Result<()> {
     super::files::write_texts(tmp, &ROUGH_SHADERS)
 }
 
-fn error_json(e: &RoughError) -> serde_json::Value {
-    serde_json::json!({
-        "max_abs": e.max_abs,
-        "p99_abs": e.p99_abs,
-        "mean_abs": e.mean_abs,
-        "max_delta_e00": e.max_delta_e00,
-        "mean_delta_e00": e.mean_delta_e00,
-        "points": e.points,
-        "seed": e.seed,
-        "worst_point": e.worst_point,
-    })
-}
-
 /// film.json's `rough`: the texture, its tiling, the rough atlas's charts
 /// (as film.json's `charts`), the uniform array, the nodes, and the error
 /// against `irid::rough`.
 pub(super) fn rough_json(rough: &RoughExport) -> serde_json::Value {
     let q = &rough.quadrature;
     let [pitch_x, pitch_y] = pitch(&rough.atlas);
-    let mut error = error_json(&rough.error);
+    let mut error = super::files::error_json(&rough.error);
     error["channels"] = serde_json::json!(["F_eff.r", "F_eff.g", "F_eff.b"]);
     error["metric"] = serde_json::json!(
         "absolute difference between irid_film_rough as the GPU computes it (f32 texture coordinates, bilinear with f32 weights, clamp to edge, f16 texels, linear blend of two slices) and irid::rough's F_eff (default quadrature) at every combination of random thicknesses, cosines at or above grazing_below_cos and roughnesses, each uniform over its range; grazing: the same with random cosines below grazing_below_cos, where the target is not sought (null when the export's angles do not reach there)"
@@ -453,10 +440,10 @@ pub(super) fn rough_json(rough: &RoughExport) -> serde_json::Value {
     error["target_max_abs"] = serde_json::json!(rough.target);
     error["axis_points"] = serde_json::json!(ROUGH_AXIS_POINTS);
     error["grazing_below_cos"] = serde_json::json!(GRAZING_COS);
-    error["grazing"] = rough
-        .grazing_error
-        .as_ref()
-        .map_or(serde_json::Value::Null, error_json);
+    error["grazing"] = rough.grazing_error.as_ref().map_or(
+        serde_json::Value::Null,
+        super::files::error_json::<RoughError>,
+    );
     serde_json::json!({
         "texture": {
             "file": ROUGH_FILE,
