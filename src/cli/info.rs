@@ -4,7 +4,7 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use anyhow::Result;
-use irid::lut::{Header, Lut};
+use irid::lut::{ColorInfo, Header, Lut};
 use irid::rough::file::{is_rough_table, RoughHeader, RoughLut};
 use irid::rough::slices::SliceError;
 
@@ -38,16 +38,21 @@ pub fn run(args: Args) -> Result<ExitCode> {
         super::say!(out, "  {:<16} {}", c.name, c.meaning);
     }
     say_stack(&mut out, h);
+    say_colour(&mut out, &h.color);
+    print_with_error(&mut out, h);
+    Ok(ExitCode::SUCCESS)
+}
+
+/// The colour integration's line, smooth and rough tables alike.
+fn say_colour(out: &mut String, c: &ColorInfo) {
     super::say!(
         out,
         "colour: {}, {}, {}, sampling {}",
-        h.color.space,
-        h.color.illuminant,
-        h.color.observer,
-        h.color.sampling
+        c.space,
+        c.illuminant,
+        c.observer,
+        c.sampling
     );
-    print_with_error(&mut out, h);
-    Ok(ExitCode::SUCCESS)
 }
 
 fn say_axes(out: &mut String, h: &Header) {
@@ -249,14 +254,7 @@ fn run_rough(args: &Args) -> Result<ExitCode> {
         h.atlas.thickness_nm.1
     );
     say_stack_of(&mut out, &h.stack, h.layer);
-    super::say!(
-        out,
-        "colour: {}, {}, {}, sampling {}",
-        h.color.space,
-        h.color.illuminant,
-        h.color.observer,
-        h.color.sampling
-    );
+    say_colour(&mut out, &h.color);
     super::print_escaped(&out);
     print_rough_error(h);
     Ok(ExitCode::SUCCESS)

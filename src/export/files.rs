@@ -111,17 +111,11 @@ fn write_png(texture: &Texture, scale: f64, path: &Path) -> Result<()> {
         .map_err(|e| Error::malformed(path, format!("cannot write PNG: {e}")))
 }
 
-fn error_json(e: &super::ExportError) -> serde_json::Value {
-    json!({
-        "max_abs": e.max_abs,
-        "p99_abs": e.p99_abs,
-        "mean_abs": e.mean_abs,
-        "max_delta_e00": e.max_delta_e00,
-        "mean_delta_e00": e.mean_delta_e00,
-        "points": e.points,
-        "seed": e.seed,
-        "worst_point": e.worst_point,
-    })
+/// An error's figures as film.json states them: its fields by name (a
+/// side's `ExportError`, the rough table's `RoughError`).
+pub(super) fn error_json<E: serde::Serialize>(e: &E) -> serde_json::Value {
+    // Numbers and arrays of numbers: nothing that can fail to serialize.
+    serde_json::to_value(e).unwrap_or(serde_json::Value::Null)
 }
 
 /// The name of a side in film.json.
@@ -242,11 +236,11 @@ fn errors_json(export: &Export) -> serde_json::Value {
         e["aliased"] = side
             .aliased_error
             .as_ref()
-            .map_or(serde_json::Value::Null, error_json);
+            .map_or(serde_json::Value::Null, error_json::<super::ExportError>);
         e["png"] = side
             .png_error
             .as_ref()
-            .map_or(serde_json::Value::Null, error_json);
+            .map_or(serde_json::Value::Null, error_json::<super::ExportError>);
         error[side_name(side.side)] = e;
     }
     error

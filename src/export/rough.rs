@@ -15,15 +15,12 @@
 //! two slices) is measured against `irid::rough` at random points; cos θ
 //! below [`GRAZING_COS`] is measured and stated apart.
 
-use rand::{Rng, SeedableRng};
-use rayon::prelude::*;
-
 use super::texture::{to_f16, Texture};
 use super::{ExportSpec, F16_MAX, MAX_SIZE};
 use crate::atlas::{locate_f32, Atlas, Film, Image};
-use crate::color::{delta_e2000_rgb, SpectralIntegrator};
+use crate::color::SpectralIntegrator;
 use crate::error::{Error, Result};
-use crate::rough::slices::{self, RoughSlices, SliceRequest};
+use crate::rough::slices::{self, MeasurePoints, Reference, RoughSlices, SliceError, SliceRequest};
 use crate::rough::{rough_reflectance, Quadrature, RoughTable};
 
 pub use crate::rough::slices::GRAZING_COS;
@@ -75,7 +72,7 @@ pub const ROUGH_SHADERS: [(&str, &str); 4] = [
 
 /// Error of what the GPU computes from the rough table against
 /// `irid::rough` (default quadrature), per RGB channel of F_eff.
-#[derive(Clone, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
 pub struct RoughError {
     /// Largest absolute error per channel.
     pub max_abs: [f64; 3],
@@ -188,59 +185,27 @@ fn pitch(atlas: &Atlas) -> [usize; 2] {
 /// roughnesses over [0, 1]; and [`ROUGH_GRAZING_POINTS`] cosines of the
 /// export's angles below [`GRAZING_COS`] (none when they do not reach
 /// there).
-#[derive(Clone, Debug, PartialEq)]
-pub struct RoughPoints {
-    /// Thicknesses (nm), ascending.
-    pub thickness: Vec<f32>,
-    /// cos θ at or above [`GRAZING_COS`].
-    pub cos: Vec<f32>,
-    /// cos θ below [`GRAZING_COS`].
-    pub grazing_cos: Vec<f32>,
-    /// Roughnesses.
-    pub roughness: Vec<f32>,
-}
+pub type RoughPoints = MeasurePoints<f32>;
 
-impl RoughPoints {
+impl MeasurePoints<f32> {
     /// The points of `spec`'s rough measurement.
     pub fn of(spec: &ExportSpec) -> RoughPoints {
-        let mut rng = rand_pcg::Pcg64::seed_from_u64(ROUGH_SEED);
-        let mut axis = |(lo, hi): (f64, f64), n: usize| -> Vec<f32> {
-            (0..n)
-                .map(|_| (lo + rng.random::<f64>() * (hi - lo)) as f32)
-                .collect()
-        };
-        let mut thickness = axis(spec.thickness_nm, ROUGH_AXIS_POINTS);
-        thickness.sort_by(f32::total_cmp);
+        let drawn = MeasurePoints::draw(
+            (spec.thickness_nm, spec.cos_theta),
+            ROUGH_SEED,
+            [ROUGH_AXIS_POINTS, ROUGH_AXIS_POINTS, ROUGH_GRAZING_POINTS],
+        );
+        let f32s = |v: &[f64]| v.iter().map(|&x| x as f32).collect::<Vec<f32>>();
+        let mut thickness = f32s(&drawn.thickness);
         thickness.dedup();
-        let (c0, c1) = spec.cos_theta;
-        // Angles that stay below the grazing cosine have no points at or
-        // above it.
-        let main = if c1 >= GRAZING_COS {
-            ROUGH_AXIS_POINTS
-        } else {
-            0
-        };
-        let cos = axis((c0.max(GRAZING_COS), c1), main);
-        let roughness = axis((0.0, 1.0), ROUGH_AXIS_POINTS);
-        let grazing_cos = if c0 < GRAZING_COS {
-            axis((c0, c1.min(GRAZING_COS)), ROUGH_GRAZING_POINTS)
-                .into_iter()
-                .filter(|&c| f64::from(c) < GRAZING_COS)
-                .collect()
-        } else {
-            Vec::new()
-        };
-        RoughPoints {
+        let mut grazing_cos = f32s(&drawn.grazing_cos);
+        grazing_cos.retain(|&c| f64::from(c) < GRAZING_COS);
+        MeasurePoints {
             thickness,
-            cos,
+            cos: f32s(&drawn.cos),
             grazing_cos,
-            roughness,
+            roughness: f32s(&drawn.roughness),
         }
-    }
-
-    /// Every cosine: `cos`, then `grazing_cos`.
-    pub fn all_cos(&self) -> Vec<f32> {
-        self.cos.iter().chain(&self.grazing_cos).copied().collect()
     }
 }
 
@@ -262,44 +227,12 @@ pub fn rough_exact_at(spec: &ExportSpec, points: &RoughPoints) -> Result<RoughTa
     )
 }
 
-/// The random points and F_eff at each.
-struct Reference {
-    points: RoughPoints,
-    exact: RoughTable,
-}
-
-impl Reference {
-    /// What `rough` gives against the reference: over the cosines at or
-    /// above [`GRAZING_COS`], and over those below.
-    fn measure(&self, rough: &RoughExport) -> (RoughError, Option<RoughError>) {
-        let p = &self.points;
-        let cos = p.all_cos();
-        let over = |cs: std::ops::Range<usize>| -> RoughError {
-            let errors: Vec<([f64; 3], f64, [f64; 3])> = (0..p.roughness.len())
-                .into_par_iter()
-                .flat_map_iter(|k| {
-                    cs.clone()
-                        .flat_map(move |j| (0..p.thickness.len()).map(move |i| (i, j, k)))
-                })
-                .map(|(i, j, k)| {
-                    let (t, c, r) = (p.thickness[i], cos[j], p.roughness[k]);
-                    let got = rough.sample(t, c, r).map(f64::from);
-                    let exact = self.exact.at(i, j, k);
-                    let abs = std::array::from_fn(|n| (got[n] - exact[n]).abs());
-                    let point = [t, c, r].map(f64::from);
-                    (abs, delta_e2000_rgb(got, exact), point)
-                })
-                .collect();
-            summarize(&errors)
-        };
-        let grazing = (!p.grazing_cos.is_empty()).then(|| over(p.cos.len()..cos.len()));
-        (over(0..p.cos.len()), grazing)
-    }
-}
-
-fn summarize(errors: &[([f64; 3], f64, [f64; 3])]) -> RoughError {
-    let e = crate::rough::slices::summarize(errors);
-    RoughError {
+/// What `rough` gives against `reference`: over the cosines at or above
+/// [`GRAZING_COS`], and over those below (`None` when there are none).
+fn measure(reference: &Reference, rough: &RoughExport) -> (RoughError, Option<RoughError>) {
+    let (main, grazing) =
+        reference.errors(&|t, c, r| rough.sample(t as f32, c as f32, r as f32).map(f64::from));
+    let with_seed = |e: SliceError| RoughError {
         max_abs: e.max_abs,
         p99_abs: e.p99_abs,
         mean_abs: e.mean_abs,
@@ -308,7 +241,9 @@ fn summarize(errors: &[([f64; 3], f64, [f64; 3])]) -> RoughError {
         points: e.points,
         seed: ROUGH_SEED,
         worst_point: e.worst_point,
-    }
+    };
+    let grazing = (grazing.points > 0).then(|| with_seed(grazing));
+    (with_seed(main), grazing)
 }
 
 /// The slices per row for `slices` slices of `pitch` texels: the fewest
@@ -425,8 +360,10 @@ pub(super) fn rough_export(
     let start = std::time::Instant::now();
     let integrator = SpectralIntegrator::with_white(spec.sampling, spec.white);
     let points = RoughPoints::of(spec);
-    let exact = rough_exact_at(spec, &points)?;
-    let reference = Reference { points, exact };
+    let reference = Reference {
+        exact: rough_exact_at(spec, &points)?,
+        main_cos: points.cos.len(),
+    };
     progress(&format!(
         "rough: F_eff at the measurement's points ({:.1} s)",
         start.elapsed().as_secs_f64()
@@ -439,6 +376,7 @@ pub(super) fn rough_export(
             image: source.image,
             max_error: asked,
             max_side: MAX_SIZE - 2 * GUTTER,
+            reference: Some(&reference),
         };
         let built = slices::build(
             source.film.stack(),
@@ -449,7 +387,7 @@ pub(super) fn rough_export(
         )?;
         check_representable(&built)?;
         let mut rough = pack(&built, target)?;
-        (rough.error, rough.grazing_error) = reference.measure(&rough);
+        (rough.error, rough.grazing_error) = measure(&reference, &rough);
         let measured = rough.error.max_all();
         progress(&format!(
             "rough: {} slices tiled into {}×{} texels; through f16 at {} random points: max {measured:.2e} (target {target:.1e}) ({:.1} s)",
@@ -488,26 +426,13 @@ pub(super) fn fill(rough: &RoughExport, tmp: &std::path::Path) -> Result<()> {
     super::files::write_texts(tmp, &ROUGH_SHADERS)
 }
 
-fn error_json(e: &RoughError) -> serde_json::Value {
-    serde_json::json!({
-        "max_abs": e.max_abs,
-        "p99_abs": e.p99_abs,
-        "mean_abs": e.mean_abs,
-        "max_delta_e00": e.max_delta_e00,
-        "mean_delta_e00": e.mean_delta_e00,
-        "points": e.points,
-        "seed": e.seed,
-        "worst_point": e.worst_point,
-    })
-}
-
 /// film.json's `rough`: the texture, its tiling, the rough atlas's charts
 /// (as film.json's `charts`), the uniform array, the nodes, and the error
 /// against `irid::rough`.
 pub(super) fn rough_json(rough: &RoughExport) -> serde_json::Value {
     let q = &rough.quadrature;
     let [pitch_x, pitch_y] = pitch(&rough.atlas);
-    let mut error = error_json(&rough.error);
+    let mut error = super::files::error_json(&rough.error);
     error["channels"] = serde_json::json!(["F_eff.r", "F_eff.g", "F_eff.b"]);
     error["metric"] = serde_json::json!(
         "absolute difference between irid_film_rough as the GPU computes it (f32 texture coordinates, bilinear with f32 weights, clamp to edge, f16 texels, linear blend of two slices) and irid::rough's F_eff (default quadrature) at every combination of random thicknesses, cosines at or above grazing_below_cos and roughnesses, each uniform over its range; grazing: the same with random cosines below grazing_below_cos, where the target is not sought (null when the export's angles do not reach there)"
@@ -515,10 +440,10 @@ pub(super) fn rough_json(rough: &RoughExport) -> serde_json::Value {
     error["target_max_abs"] = serde_json::json!(rough.target);
     error["axis_points"] = serde_json::json!(ROUGH_AXIS_POINTS);
     error["grazing_below_cos"] = serde_json::json!(GRAZING_COS);
-    error["grazing"] = rough
-        .grazing_error
-        .as_ref()
-        .map_or(serde_json::Value::Null, error_json);
+    error["grazing"] = rough.grazing_error.as_ref().map_or(
+        serde_json::Value::Null,
+        super::files::error_json::<RoughError>,
+    );
     serde_json::json!({
         "texture": {
             "file": ROUGH_FILE,

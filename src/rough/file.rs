@@ -406,6 +406,7 @@ pub fn bake_rough(
         image: &image,
         max_error,
         max_side: MAX_ATLAS_SIDE,
+        reference: None,
     };
     let built = super::slices::build(&spec.stack, spec.layer, &integrator, &request, progress)?;
     Ok(RoughLut::new(

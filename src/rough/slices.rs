@@ -48,7 +48,7 @@ use rand::{Rng, SeedableRng};
 use rayon::prelude::*;
 
 use super::kernel::{Kernel, Rules};
-use super::{rough_reflectance, MuGrid, Quadrature};
+use super::{rough_reflectance, MuGrid, Quadrature, RoughTable};
 use crate::atlas::{pack, Atlas, Chart, Coords, Film, Image};
 use crate::color::{delta_e2000_rgb, SpectralIntegrator};
 use crate::error::{Error, Result};
@@ -77,6 +77,21 @@ const SHORTEST_WAVELENGTH_NM: f64 = 380.0;
 /// between its nodes all the same; the measurement against the reference
 /// shows what that costs (nothing visible for the soap film).
 const SLICE_MU_INTERVALS: usize = 64;
+/// Gauss–Legendre points along the azimuth of the slices' kernels: half
+/// the reference's ([`Quadrature::default`]'s); the kernels are most of
+/// the slices' cost, and the measurement against the reference shows what
+/// the coarser rule costs.
+const SLICE_INNER_POINTS: usize = 8;
+
+/// The quadrature of the slices' kernels.
+fn slice_quadrature() -> Quadrature {
+    Quadrature {
+        mu_intervals: SLICE_MU_INTERVALS,
+        inner: SLICE_INNER_POINTS,
+        ..Quadrature::default()
+    }
+}
+
 /// Share of the target the slice blend may use (the charts' own
 /// interpolation takes the rest).
 const BLEND_SHARE: f64 = 0.5;
@@ -152,6 +167,9 @@ pub struct SliceRequest<'a> {
     pub max_error: f64,
     /// The largest texture side the slices' atlas may take.
     pub max_side: usize,
+    /// What to measure the slices against; `None`: points of their own
+    /// ([`measure_sampler`]'s).
+    pub reference: Option<&'a Reference>,
 }
 
 /// The roughness of slice `s` of `count`.
@@ -397,7 +415,8 @@ pub fn build(
             "the atlas has no chart of light from the ambient",
         ));
     }
-    let grid = MuGrid::for_stack(stack, SLICE_MU_INTERVALS);
+    let quadrature = slice_quadrature();
+    let grid = MuGrid::for_stack(stack, quadrature.mu_intervals);
     let nodes: Vec<(f64, f64)> = smooth_charts.iter().flat_map(chart_nodes).collect();
     let dense = dense_grid(stack, layer, integrator, &nodes, &grid)?;
     say(format!(
@@ -405,7 +424,7 @@ pub fn build(
         dense.count,
         grid.nodes().len(),
     ));
-    let rules = Rules::new(&Quadrature::default());
+    let rules = Rules::new(&quadrature);
     let filler = Filler {
         dense: &dense,
         grid: &grid,
@@ -425,7 +444,9 @@ pub fn build(
             req.max_side,
         );
         let atlas = packed(req.atlas.thickness_nm, charts, req.max_side)?;
+        say(format!("charts grown to {}x{}", atlas.width, atlas.height));
         let slices = images(req, &filler, &tables, &smooth_charts, &atlas)?;
+        say(format!("{count} images"));
         let mut built = RoughSlices {
             atlas,
             roughness: (0..count).map(|s| slice_roughness(s, count)).collect(),
@@ -434,7 +455,10 @@ pub fn build(
             measured: SliceError::default(),
             grazing: SliceError::default(),
         };
-        (built.measured, built.grazing) = measure(stack, layer, integrator, &built)?;
+        (built.measured, built.grazing) = match req.reference {
+            Some(reference) => reference.errors(&|d, c, r| built.sample(d, c, r)),
+            None => measure(stack, layer, integrator, &built)?,
+        };
         say(format!(
             "{count} slices of {}x{}, measured {:.2e} (cos θ ≥ {GRAZING_COS}), {:.2e} below",
             built.atlas.width,
@@ -892,65 +916,150 @@ pub fn measure_sampler(
     seed: u64,
     sample: &(dyn Fn(f64, f64, f64) -> [f64; 3] + Sync),
 ) -> Result<(SliceError, SliceError)> {
-    let mut rng = rand_pcg::Pcg64::seed_from_u64(seed);
-    let ((t0, t1), (c0, c1)) = domain;
-    let mut draw = |lo: f64, hi: f64, n: usize| -> Vec<f64> {
-        let mut v: Vec<f64> = (0..n)
-            .map(|_| lo + rng.random::<f64>() * (hi - lo))
-            .collect();
-        v.sort_by(f64::total_cmp);
-        v.dedup();
-        v
-    };
-    let thickness = draw(t0, t1, MEASURE_THICKNESSES);
-    let roughness = draw(0.0, 1.0, MEASURE_AXIS_POINTS);
-    let cos = if c1 > GRAZING_COS {
-        draw(c0.max(GRAZING_COS), c1, MEASURE_AXIS_POINTS)
-    } else {
-        Vec::new()
-    };
-    let grazing = if c0 < GRAZING_COS {
-        draw(c0, c1.min(GRAZING_COS), GRAZING_AXIS_POINTS)
-    } else {
-        Vec::new()
-    };
-    let all_cos: Vec<f64> = cos.iter().chain(&grazing).copied().collect();
-    if all_cos.is_empty() {
+    let points = MeasurePoints::draw(
+        domain,
+        seed,
+        [
+            MEASURE_THICKNESSES,
+            MEASURE_AXIS_POINTS,
+            GRAZING_AXIS_POINTS,
+        ],
+    );
+    if points.all_cos().is_empty() {
         return Ok((SliceError::default(), SliceError::default()));
     }
-    let exact = rough_reflectance(
-        stack,
-        layer,
-        integrator,
-        &thickness,
-        &all_cos,
-        &roughness,
-        &Quadrature::default(),
-    )?;
-    let errors_over = |cs: std::ops::Range<usize>| -> SliceError {
-        let errors: Vec<([f64; 3], f64, [f64; 3])> = roughness
-            .par_iter()
-            .enumerate()
-            .flat_map_iter(|(r, &rv)| {
-                let (exact, all_cos, thickness) = (&exact, &all_cos, &thickness);
-                cs.clone().flat_map(move |c| {
-                    thickness.iter().enumerate().map(move |(t, &tv)| {
-                        let want = exact.at(t, c, r);
-                        let got = sample(tv, all_cos[c], rv);
-                        let abs = std::array::from_fn(|k| (got[k] - want[k]).abs());
-                        let de = delta_e2000_rgb(got, want);
-                        let de = if de.is_nan() { f64::INFINITY } else { de };
-                        (abs, de, [tv, all_cos[c], rv])
+    let reference = Reference::new(stack, layer, integrator, &points)?;
+    Ok(reference.errors(sample))
+}
+
+/// Random points of a rough measurement: every combination of the
+/// thicknesses, the cosines (at or above [`GRAZING_COS`], then below) and
+/// the roughnesses; as f64, or as f32 where they are what a shader gets.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MeasurePoints<T = f64> {
+    /// Thicknesses (nm), ascending, distinct.
+    pub thickness: Vec<T>,
+    /// cos θ at or above [`GRAZING_COS`], ascending.
+    pub cos: Vec<T>,
+    /// cos θ below [`GRAZING_COS`], ascending.
+    pub grazing_cos: Vec<T>,
+    /// Roughnesses, ascending.
+    pub roughness: Vec<T>,
+}
+
+impl<T: Copy> MeasurePoints<T> {
+    /// Every cosine: `cos`, then `grazing_cos`.
+    pub fn all_cos(&self) -> Vec<T> {
+        self.cos.iter().chain(&self.grazing_cos).copied().collect()
+    }
+}
+
+impl MeasurePoints {
+    /// `[thicknesses, cosines and roughnesses, grazing cosines]` values
+    /// uniform over `domain` (thickness nm, cos θ), roughness over [0, 1],
+    /// from the PCG64 stream of `seed`, drawn in the order thicknesses,
+    /// cosines, roughnesses, grazing cosines; no cosines at or above [`GRAZING_COS`] when the range
+    /// stays below it, none below when it stays above.
+    pub fn draw(domain: ((f64, f64), (f64, f64)), seed: u64, counts: [usize; 3]) -> MeasurePoints {
+        let mut rng = rand_pcg::Pcg64::seed_from_u64(seed);
+        let ((t0, t1), (c0, c1)) = domain;
+        let [n_thickness, n_axis, n_grazing] = counts;
+        let mut draw = |lo: f64, hi: f64, n: usize| -> Vec<f64> {
+            let mut v: Vec<f64> = (0..n)
+                .map(|_| lo + rng.random::<f64>() * (hi - lo))
+                .collect();
+            v.sort_by(f64::total_cmp);
+            v.dedup();
+            v
+        };
+        let thickness = draw(t0, t1, n_thickness);
+        let cos = if c1 > GRAZING_COS {
+            draw(c0.max(GRAZING_COS), c1, n_axis)
+        } else {
+            Vec::new()
+        };
+        let roughness = draw(0.0, 1.0, n_axis);
+        let grazing_cos = if c0 < GRAZING_COS {
+            draw(c0, c1.min(GRAZING_COS), n_grazing)
+        } else {
+            Vec::new()
+        };
+        MeasurePoints {
+            thickness,
+            cos,
+            grazing_cos,
+            roughness,
+        }
+    }
+}
+
+/// F_eff from [`rough_reflectance`] (default quadrature) at every point of
+/// a [`MeasurePoints`]: what slices and the textures made of them are
+/// measured against, computed once.
+#[derive(Clone, Debug)]
+pub struct Reference {
+    /// The points' axes and F_eff at each (`cos_theta`: the points'
+    /// [`MeasurePoints::all_cos`]).
+    pub exact: RoughTable,
+    /// How many of `exact.cos_theta` are at or above [`GRAZING_COS`].
+    pub main_cos: usize,
+}
+
+impl Reference {
+    /// F_eff of the film `stack` (layer `layer` varying) at `points`.
+    pub fn new(
+        stack: &Stack,
+        layer: usize,
+        integrator: &SpectralIntegrator,
+        points: &MeasurePoints,
+    ) -> Result<Reference> {
+        let exact = rough_reflectance(
+            stack,
+            layer,
+            integrator,
+            &points.thickness,
+            &points.all_cos(),
+            &points.roughness,
+            &Quadrature::default(),
+        )?;
+        Ok(Reference {
+            exact,
+            main_cos: points.cos.len(),
+        })
+    }
+
+    /// `sample` (F_eff at thickness nm, cos θ, roughness) against the
+    /// reference: over the cosines at or above [`GRAZING_COS`], and over
+    /// those below (no points when there are none).
+    pub fn errors(
+        &self,
+        sample: &(dyn Fn(f64, f64, f64) -> [f64; 3] + Sync),
+    ) -> (SliceError, SliceError) {
+        let e = &self.exact;
+        let errors_over = |cs: std::ops::Range<usize>| -> SliceError {
+            let errors: Vec<([f64; 3], f64, [f64; 3])> = e
+                .roughness
+                .par_iter()
+                .enumerate()
+                .flat_map_iter(|(r, &rv)| {
+                    cs.clone().flat_map(move |c| {
+                        e.thickness_nm.iter().enumerate().map(move |(t, &tv)| {
+                            let cv = e.cos_theta[c];
+                            let want = e.at(t, c, r);
+                            let got = sample(tv, cv, rv);
+                            let abs = std::array::from_fn(|k| (got[k] - want[k]).abs());
+                            (abs, delta_e2000_rgb(got, want), [tv, cv, rv])
+                        })
                     })
                 })
-            })
-            .collect();
-        summarize(&errors)
-    };
-    Ok((
-        errors_over(0..cos.len()),
-        errors_over(cos.len()..all_cos.len()),
-    ))
+                .collect();
+            summarize(&errors)
+        };
+        (
+            errors_over(0..self.main_cos),
+            errors_over(self.main_cos..e.cos_theta.len()),
+        )
+    }
 }
 
 /// The figures of per-point errors (absolute error per channel, ΔE00,
@@ -1018,6 +1127,7 @@ mod tests {
             image: &built.image,
             max_error,
             max_side: 8192,
+            reference: None,
         };
         let t = std::time::Instant::now();
         let s = build(film.stack(), film.layer(), &integrator, &req, &|l| {
