@@ -179,6 +179,15 @@ CASES = [
     ("Lut.load junk", lambda f: irid.Lut.load(f.dir / "junk.exr"), ValueError),
     ("Lut.load truncated", lambda f: irid.Lut.load(f.dir / "truncated.exr"), ValueError),
     ("Lut.load a number", lambda f: irid.Lut.load(5), TypeError),
+    # RoughLut.load: the same file errors
+    ("RoughLut constructor", lambda f: irid.RoughLut(), TypeError),
+    ("RoughLut.load missing", lambda f: irid.RoughLut.load(f.missing), FileNotFoundError),
+    ("RoughLut.load folder", lambda f: irid.RoughLut.load(f.dir / "folder"), IsADirectoryError),
+    ("RoughLut.load junk", lambda f: irid.RoughLut.load(f.dir / "junk.exr"), ValueError),
+    ("RoughLut.load truncated", lambda f: irid.RoughLut.load(f.dir / "truncated.exr"), ValueError),
+    ("RoughLut.load a number", lambda f: irid.RoughLut.load(5), TypeError),
+    # RoughLut.sample's ValueErrors need a baked rough table: test_rough_lut.py
+    ("RoughLut.sample without a table", lambda f: irid.RoughLut.sample(None, 1.0, 1.0, 0.5), TypeError),
     ("Lut.save no folder", lambda f: f.rgb.save(f.dir / "no-such" / "t.exr"), FileNotFoundError),
     ("Lut.save onto a folder", lambda f: f.rgb.save(f.dir / "folder"), IsADirectoryError),
     # Lut.sample / validate
