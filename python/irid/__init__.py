@@ -12,6 +12,8 @@
   built-in library; ``.index(wavelengths_nm)``.
 - ``bake(stack, ...) -> Lut``: a lookup table over a layer's thickness and
   the angle, saved as OpenEXR; ``Lut.sample`` interpolates it as a renderer does.
+- ``RoughLut.load(path)``: the rough table of ``irid bake --rough``;
+  ``RoughLut.sample(thickness_nm, cos_theta, roughness)`` gives F_eff (RGB).
 - ``irid.mitsuba`` (imported on its own, needs the ``mitsuba`` package): the
   ``irid_film`` BSDF for Mitsuba 3's spectral variants.
 
@@ -27,6 +29,7 @@ memory budget (``IRID_MEMORY_LIMIT``, else half the machine's memory).
 from ._irid import (
     Lut,
     Material,
+    RoughLut,
     Stack,
     __version__,
     bake,
@@ -39,6 +42,7 @@ from ._irid import (
 __all__ = [
     "Lut",
     "Material",
+    "RoughLut",
     "Stack",
     "__version__",
     "bake",

@@ -173,3 +173,21 @@ class Lut:
         NaN raises ValueError."""
     def validate(self, points: int = 20000, seed: int = 1) -> Dict[str, Any]:
         """The table against the solver at random points, as ``irid validate --json``."""
+
+class RoughLut:
+    """A rough table of ``irid bake --rough``: F_eff over thickness, cos θ
+    and GGX roughness (OpenEXR with irid's "irid-rough" JSON header)."""
+
+    @staticmethod
+    def load(path: PathLike) -> RoughLut: ...
+    @property
+    def header(self) -> Dict[str, Any]: ...
+    def sample(
+        self,
+        thickness_nm: ArrayLike,
+        cos_theta: ArrayLike,
+        roughness: ArrayLike,
+    ) -> npt.NDArray[np.float32]:
+        """F_eff at broadcast points, (..., 3) linear sRGB. Thickness and
+        cos θ beyond the table take its end's value; NaN or a roughness
+        outside [0, 1] raises ValueError."""

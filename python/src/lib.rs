@@ -21,6 +21,7 @@ mod incoherent;
 mod lut;
 mod pool;
 mod response;
+mod rough_lut;
 mod stack;
 
 use std::io::ErrorKind;
@@ -81,5 +82,6 @@ fn _irid(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<stack::PyMaterial>()?;
     m.add_class::<stack::PyStack>()?;
     m.add_class::<lut::PyLut>()?;
+    m.add_class::<rough_lut::PyRoughLut>()?;
     Ok(())
 }

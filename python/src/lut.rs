@@ -269,6 +269,12 @@ impl PyLut {
     /// before a pixel is read.
     #[staticmethod]
     fn load(py: Python<'_>, path: PathBuf) -> PyResult<Self> {
+        if irid::rough::file::is_rough_table(&path) {
+            return Err(invalid(
+                path.display().to_string(),
+                "a rough table (irid bake --rough): irid.RoughLut.load reads it",
+            ));
+        }
         let lut = compute(py, true, || Lut::load(&path))?.map_err(py_error)?;
         Ok(PyLut { lut })
     }

@@ -173,12 +173,7 @@ CASES = [
     ("bake too large", lambda f: bake(f, resolution=(65536, 1024)), MemoryError),
     # Lut: made by bake and load only
     ("Lut constructor", lambda f: irid.Lut(), TypeError),
-    # Lut.load / save
-    ("Lut.load missing", lambda f: irid.Lut.load(f.missing), FileNotFoundError),
-    ("Lut.load folder", lambda f: irid.Lut.load(f.dir / "folder"), IsADirectoryError),
-    ("Lut.load junk", lambda f: irid.Lut.load(f.dir / "junk.exr"), ValueError),
-    ("Lut.load truncated", lambda f: irid.Lut.load(f.dir / "truncated.exr"), ValueError),
-    ("Lut.load a number", lambda f: irid.Lut.load(5), TypeError),
+    # Lut.save (Lut.load and RoughLut.load: loader_cases below)
     ("Lut.save no folder", lambda f: f.rgb.save(f.dir / "no-such" / "t.exr"), FileNotFoundError),
     ("Lut.save onto a folder", lambda f: f.rgb.save(f.dir / "folder"), IsADirectoryError),
     # Lut.sample / validate
@@ -195,6 +190,25 @@ CASES = [
     ("Lut.validate negative seed", lambda f: f.rgb.validate(10, seed=-1), ValueError),
     ("Lut.validate huge seed", lambda f: f.rgb.validate(10, seed=2**64), ValueError),
     ("Lut.validate float points", lambda f: f.rgb.validate(10.0), TypeError),
+]
+
+
+def loader_cases(name):
+    """The file errors every table loader (irid.Lut, irid.RoughLut) raises."""
+    load = getattr(irid, name).load
+    return [
+        (f"{name}.load missing", lambda f: load(f.missing), FileNotFoundError),
+        (f"{name}.load folder", lambda f: load(f.dir / "folder"), IsADirectoryError),
+        (f"{name}.load junk", lambda f: load(f.dir / "junk.exr"), ValueError),
+        (f"{name}.load truncated", lambda f: load(f.dir / "truncated.exr"), ValueError),
+        (f"{name}.load a number", lambda f: load(5), TypeError),
+    ]
+
+
+CASES += loader_cases("Lut") + loader_cases("RoughLut") + [
+    ("RoughLut constructor", lambda f: irid.RoughLut(), TypeError),
+    # RoughLut.sample's ValueErrors need a baked rough table: test_rough_lut.py
+    ("RoughLut.sample without a table", lambda f: irid.RoughLut.sample(None, 1.0, 1.0, 0.5), TypeError),
 ]
 
 
