@@ -160,6 +160,15 @@ fn report(result: &irid::export::Export, args: &Args, seconds: f64) {
                 a.max_all()
             );
         }
+        if let (Some((lo, hi)), Some(c)) = (side.critical_band, &side.critical_error) {
+            println!(
+                "{name}: over cos θ {lo:.4}–{hi:.4} the critical angle moves with the wavelength and the target is not sought: {} points there, max {:.2e}, ΔE00 max {:.3} / {:.3}",
+                c.points,
+                c.max_all(),
+                c.max_delta_e00[0],
+                c.max_delta_e00[1]
+            );
+        }
         if let (Some(scale), Some(png)) = (result.png_scale, &side.png_error) {
             println!(
                 "{name}: PNG (16-bit, scale {scale}): max error {:.2e}, ΔE00 max {:.3} / {:.3}",
