@@ -79,6 +79,14 @@ fn exports_within_target(name: &str, spec: &ExportSpec) -> Export {
             "{name} {:?}",
             side.side
         );
+        if let Some(sought) = &side.sought_error {
+            assert!(
+                sought.max_all() <= target,
+                "{name} {:?}: states {} where the target is sought (target {target})",
+                side.side,
+                sought.max_all()
+            );
+        }
         if side.aliased_error.is_none() && side.critical_error.is_none() {
             assert!(
                 e.max_all() <= target,

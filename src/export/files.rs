@@ -226,7 +226,8 @@ fn errors_json(export: &Export) -> serde_json::Value {
          texels at the shader's texture coordinates (f32) and irid's exact solver on the stack as seen from the \
          side, at random points uniform over the whole domain; delta_e00 is CIEDE2000 of the reflected [0] and \
          transmitted [1] colour; aliased: the same over the points below the side's aliased_below_cos, where \
-         the colour integration itself is aliased and the target is not sought (null when there are none);          critical_band: the same at points of its own uniform over the side's critical_band_cos, the band over          which a dispersive ambient's critical angle moves, where the target is not sought either (null when the          side has no such band)",
+         the colour integration itself is aliased and the target is not sought (null when there are none);          critical_band: the same at points of its own uniform over the side's critical_band_cos, the band over          which a dispersive ambient's critical angle moves, where the target is not sought either (null when the          side has no such band); sought: the same over the points where the target is sought (above \
+         aliased_below_cos, outside critical_band_cos; null when that is every point)",
         "front": null,
         "back": null,
     });
@@ -236,6 +237,10 @@ fn errors_json(export: &Export) -> serde_json::Value {
         e["weights_8bit_extra_max_abs"] = json!(side.weights_8bit_extra);
         e["aliased"] = side
             .aliased_error
+            .as_ref()
+            .map_or(serde_json::Value::Null, error_json::<super::ExportError>);
+        e["sought"] = side
+            .sought_error
             .as_ref()
             .map_or(serde_json::Value::Null, error_json::<super::ExportError>);
         e["critical_band"] = side

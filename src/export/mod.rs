@@ -243,6 +243,10 @@ pub struct SideExport {
     /// ([`crate::atlas::search::CRITICAL_BAND_TEXELS`]); none when the side
     /// has no such band.
     pub critical_band: Option<(f64, f64)>,
+    /// The error over the measured points where the target is sought
+    /// (above the aliased strip, outside the critical band), when the side
+    /// has either.
+    pub sought_error: Option<ExportError>,
     /// The error over points of the band's own
     /// ([`crate::atlas::search::CRITICAL_BAND_POINTS`], seed
     /// [`crate::atlas::search::CRITICAL_BAND_SEED`]), when it has one.
@@ -502,6 +506,8 @@ fn side_export(
         aliased_below: built.sides[own].aliased_below,
         error: export_error(&m.all),
         aliased_error: aliased_error(m),
+        sought_error: (m.aliased.points > 0 || m.critical.points > 0)
+            .then(|| export_error(&m.resolved)),
         critical_band: built.sides[own].unsought_band,
         critical_error: built.sides[own].unsought_band.map(|_| ExportError {
             seed: crate::atlas::search::CRITICAL_BAND_SEED,
