@@ -914,3 +914,39 @@ fn lossless_tables_sample_reflectance_only() {
         assert!(!bake(&spec).unwrap().samples_as_lossless(), "{name}");
     }
 }
+
+/// An atlas table's critical band (where a dispersive ambient moves the
+/// critical angle and the target is not sought) is its own validation
+/// region, apart from `resolved`; a band that is not one is refused.
+#[test]
+fn a_stated_critical_band_is_validated_apart() {
+    let dir = Scratch::new("lut-critical-band");
+    let stack = Stack::load(&luts_dir().join("soap-film.toml")).unwrap();
+    let mut spec = quick_spec(stack, (100.0, 300.0), 1e-3);
+    spec.cos_theta = (0.3, 1.0);
+    spec.validation_points = 0;
+    let good = dir.join("atlas.exr");
+    bake(&spec).unwrap().write(&good).unwrap();
+    let banded = dir.join("banded.exr");
+    rewrite_header(&good, &banded, |j| {
+        j["atlas"]["critical_band_cos"] = serde_json::json!([0.5, 0.6]);
+    });
+    let lut = Lut::load(&banded).unwrap();
+    let table = lut.header().atlas.as_ref().unwrap();
+    assert_eq!(table.critical_band_cos, Some([0.5, 0.6]));
+    let stats = validate(&lut, 3000, 5).unwrap();
+    let region = |name: &str| stats.regions.iter().find(|r| r.name == name).unwrap();
+    let (band, resolved) = (region("critical band"), region("resolved"));
+    // cos θ is uniform over 0.3..1: a seventh of the points in the band.
+    assert!((300..560).contains(&band.points), "{}", band.points);
+    assert_eq!(band.points + resolved.points, 3000);
+    assert!(band.description.contains("0.500000 to 0.600000"));
+    for bad in [[0.6, 0.5], [-0.1, 0.5], [0.5, 1.5]] {
+        let path = dir.join("bad-band.exr");
+        rewrite_header(&good, &path, |j| {
+            j["atlas"]["critical_band_cos"] = serde_json::json!(bad);
+        });
+        let err = Lut::load(&path).expect_err("must fail").to_string();
+        assert!(err.contains("critical_band_cos"), "{err}");
+    }
+}

@@ -183,7 +183,7 @@ fn fixed_resolution(kind: Kind, obj: &Bound<'_, PyAny>) -> PyResult<Resolution> 
 /// Points in one task of the samplers, and the fewest a call hands to the
 /// thread pool: below, sampling (nanoseconds a point) takes less than the
 /// handoff.
-const SAMPLE_BLOCK: usize = 4096;
+pub(crate) const SAMPLE_BLOCK: usize = 4096;
 
 /// An rgb table's R and T (three f32 each, interleaved) at every
 /// (thickness, cos θ): in blocks on the current thread pool when

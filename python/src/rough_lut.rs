@@ -4,10 +4,12 @@
 use std::path::PathBuf;
 
 use pyo3::prelude::*;
+use rayon::prelude::*;
 
 use irid::rough::{check_roughness, RoughLut};
 
 use crate::arrays::{array, broadcast_reals, json_to_py, position};
+use crate::lut::SAMPLE_BLOCK;
 use crate::pool::compute;
 use crate::{invalid, py_error};
 
@@ -67,16 +69,9 @@ impl PyRoughLut {
             let what = format!("roughness{}", position(i, &shape));
             check_roughness(&what, coordinates[2][i]).map_err(py_error)?;
         }
-        let [thickness, cos, rough] = [&coordinates[0], &coordinates[1], &coordinates[2]];
         let lut = &self.lut;
-        let rgb = compute(py, false, || {
-            thickness
-                .iter()
-                .zip(cos)
-                .zip(rough)
-                .flat_map(|((&d, &c), &r)| lut.sample(d, c, r).map(|x| x as f32))
-                .collect::<Vec<f32>>()
-        })?;
+        let parallel = coordinates[0].len() > SAMPLE_BLOCK;
+        let rgb = compute(py, parallel, || sample_rough(lut, &coordinates, parallel))?;
         let mut shape3 = shape;
         shape3.push(3);
         Ok(array(py, rgb, &shape3)?.into_any())
@@ -89,4 +84,36 @@ impl PyRoughLut {
             h.slices, h.atlas.thickness_nm.0, h.atlas.thickness_nm.1
         )
     }
+}
+
+/// F_eff (RGB, f32) at every (thickness, cos θ, roughness) of
+/// `coordinates`: in blocks on the current thread pool when `parallel`,
+/// else on this thread.
+fn sample_rough(lut: &RoughLut, coordinates: &[Vec<f64>], parallel: bool) -> Vec<f32> {
+    let [thickness, cos, rough] = coordinates else {
+        unreachable!("a rough table is sampled at three coordinates")
+    };
+    let mut rgb = vec![0f32; 3 * thickness.len()];
+    let fill = |out: &mut [f32], points: [&[f64]; 3]| {
+        let [thickness, cos, rough] = points;
+        let points = thickness.iter().zip(cos).zip(rough);
+        for (out, ((&d, &c), &r)) in out.chunks_exact_mut(3).zip(points) {
+            for (o, x) in out.iter_mut().zip(lut.sample(d, c, r)) {
+                *o = x as f32;
+            }
+        }
+    };
+    if parallel {
+        rgb.par_chunks_mut(3 * SAMPLE_BLOCK)
+            .zip(
+                thickness
+                    .par_chunks(SAMPLE_BLOCK)
+                    .zip(cos.par_chunks(SAMPLE_BLOCK))
+                    .zip(rough.par_chunks(SAMPLE_BLOCK)),
+            )
+            .for_each(|(out, ((d, c), r))| fill(out, [d, c, r]));
+    } else {
+        fill(&mut rgb, [thickness, cos, rough]);
+    }
+    rgb
 }

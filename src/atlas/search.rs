@@ -67,6 +67,10 @@ pub struct SideReport {
     /// The critical-angle band [lo, hi] (equal ends for a non-dispersive
     /// ambient), when the side has one inside its range.
     pub critical: Option<(f64, f64)>,
+    /// The critical band [lo, hi] of a dispersive ambient when the target
+    /// is not sought there (its layout for the target would take more than
+    /// [`CRITICAL_BAND_TEXELS`]).
+    pub unsought_band: Option<(f64, f64)>,
 }
 
 /// An atlas, its texels and what was found.
@@ -106,6 +110,21 @@ const ALIASING_STEPS: f64 = 1.5;
 const UNTARGETED_INTERVALS: f64 = 16.0;
 /// Rounds of growing a chart that misses its target.
 const MAX_GROWTH: usize = 6;
+/// The most texels of the band of cos θ over which a dispersive ambient's
+/// critical angle moves (light from a denser side). When the probe's layout
+/// for the target would take more, the target is not sought there: the
+/// layout is scaled down to this many texels and the band's measured error
+/// is stated apart. Each sampled wavelength
+/// has its own critical angle there, with a square-root branch in cos θ
+/// and leaky resonances of the layer whose widths vanish at it, so the
+/// integrated colour has features along thickness that a linear
+/// interpolation misses by an error falling only as h^0.8, on curves that
+/// move with the angle: the mirror-10 stack seen from its glass side asks
+/// for about a million texels in a band 0.6° wide
+/// (docs/limits.md#the-mirror-from-its-glass-side).
+pub const CRITICAL_BAND_TEXELS: usize = 1 << 16;
+/// A critical band narrower than this (in cos θ) is a single angle.
+const CRITICAL_BAND_MIN_WIDTH: f64 = 1e-7;
 
 /// A piece of a side's cos θ range and how its bands' nodes crowd.
 #[derive(Clone, Copy, Debug)]
@@ -113,6 +132,9 @@ struct Piece {
     lo: f64,
     hi: f64,
     warp: PieceWarp,
+    /// A dispersive critical band, where the target is sought only when
+    /// its layout fits in [`CRITICAL_BAND_TEXELS`].
+    capped: bool,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -295,32 +317,12 @@ pub fn build(
     let mut skeletons = Vec::new();
     for req in sides {
         let skeleton = skeleton(req, thickness_nm, req.goal)?;
-        progress(&format!(
-            "side {}: {} piece(s) of cos θ{}{}{}",
-            req.side,
-            skeleton.pieces.len(),
-            if skeleton.corner.is_some() {
-                ", a corner chart"
-            } else {
-                ""
-            },
-            match skeleton.critical {
-                Some((a, b)) => format!(", critical angle at cos θ {a:.4}–{b:.4}"),
-                None => String::new(),
-            },
-            if skeleton.aliased_below > 0.0 {
-                format!(
-                    ", fringes aliased below cos θ {:.4}",
-                    skeleton.aliased_below
-                )
-            } else {
-                String::new()
-            },
-        ));
+        progress(&describe(&skeleton));
         reports.push(SideReport {
             side: req.side,
             aliased_below: skeleton.aliased_below,
             critical: skeleton.critical,
+            unsought_band: None,
         });
         skeletons.push(skeleton);
     }
@@ -328,8 +330,13 @@ pub fn build(
     let mut owner = Vec::new();
     for (k, skeleton) in skeletons.iter().enumerate() {
         let goal = skeleton.req.goal;
-        for chart in layout(skeleton, goal, progress)? {
-            charts.push(confirm(skeleton, chart, goal, max_side, progress)?);
+        for planned in layout(skeleton, goal, progress)? {
+            charts.push(if planned.sought {
+                confirm(skeleton, planned.chart, goal, max_side, progress)?
+            } else {
+                reports[k].unsought_band = skeleton.critical;
+                evaluate_unsought(skeleton, planned.chart, goal, progress)?
+            });
             owner.push(k);
         }
     }
@@ -384,6 +391,32 @@ pub fn build(
     unreachable!("the loop returns")
 }
 
+/// One line on what was found about a side before its charts are sized.
+fn describe(skeleton: &Skeleton) -> String {
+    format!(
+        "side {}: {} piece(s) of cos θ{}{}{}",
+        skeleton.req.side,
+        skeleton.pieces.len(),
+        if skeleton.corner.is_some() {
+            ", a corner chart"
+        } else {
+            ""
+        },
+        match skeleton.critical {
+            Some((a, b)) => format!(", critical angle at cos θ {a:.4}–{b:.4}"),
+            None => String::new(),
+        },
+        if skeleton.aliased_below > 0.0 {
+            format!(
+                ", fringes aliased below cos θ {:.4}",
+                skeleton.aliased_below
+            )
+        } else {
+            String::new()
+        },
+    )
+}
+
 /// The pieces, corner and aliased strip of one side (see the module docs).
 fn skeleton<'a>(
     req: &'a SideRequest<'a>,
@@ -398,18 +431,21 @@ fn skeleton<'a>(
                 lo: c0,
                 hi: a,
                 warp: PieceWarp::Sqrt(a),
+                capped: false,
             }];
-            if b > a + 1e-7 {
+            if b > a + CRITICAL_BAND_MIN_WIDTH {
                 p.push(Piece {
                     lo: a,
                     hi: b,
                     warp: PieceWarp::Uniform,
+                    capped: true,
                 });
             }
             p.push(Piece {
                 lo: b,
                 hi: c1,
                 warp: PieceWarp::Sqrt(b),
+                capped: false,
             });
             p
         }
@@ -421,6 +457,7 @@ fn skeleton<'a>(
             } else {
                 PieceWarp::Uniform
             },
+            capped: false,
         }],
     };
     let corner = corner_chart(req, thickness_nm, goal)?;
@@ -709,13 +746,22 @@ fn probe(skeleton: &Skeleton, piece: &Piece, shares: Pair) -> Result<RowNeeds> {
     Ok(needs)
 }
 
+/// A chart the layout chose, and whether the target is sought on it.
+struct Planned {
+    chart: Chart,
+    sought: bool,
+}
+
 /// The bands of every piece of a side (and its corner), sized from the
 /// probes.
-fn layout(skeleton: &Skeleton, goal: Goal, progress: &dyn Fn(&str)) -> Result<Vec<Chart>> {
+fn layout(skeleton: &Skeleton, goal: Goal, progress: &dyn Fn(&str)) -> Result<Vec<Planned>> {
     let shares = goal.shares()?;
     let mut charts = Vec::new();
     if let Some(corner) = skeleton.corner {
-        charts.push(size_corner(skeleton, corner, shares)?);
+        charts.push(Planned {
+            chart: size_corner(skeleton, corner, shares)?,
+            sought: true,
+        });
     }
     let mut needs = Vec::new();
     for piece in &skeleton.pieces {
@@ -727,25 +773,56 @@ fn layout(skeleton: &Skeleton, goal: Goal, progress: &dyn Fn(&str)) -> Result<Ve
     }
     fill_untargeted(&skeleton.pieces, &mut needs);
     for (piece, needs) in skeleton.pieces.iter().zip(&needs) {
+        let mut sought = true;
         let Some(needs) = needs else {
-            charts.push(flat_band(skeleton, piece));
+            let chart = flat_band(skeleton, piece);
+            charts.push(Planned { chart, sought });
             continue;
         };
-        let bands = cut_bands(skeleton, piece, needs);
+        let mut bands = cut_bands(skeleton, piece, needs);
+        let predicted = texels(&bands);
+        if piece.capped && predicted > CRITICAL_BAND_TEXELS {
+            fit_budget(&mut bands, CRITICAL_BAND_TEXELS);
+            sought = false;
+        }
         progress(&format!(
-            "side {} cos θ {:.4}–{:.4}: {} band(s), {} texels predicted",
+            "side {} cos θ {:.4}–{:.4}: {} band(s), {predicted} texels predicted{}",
             skeleton.req.side,
             piece.lo,
             piece.hi,
             bands.len(),
-            bands
-                .iter()
-                .map(|b| b.rect.width * b.rect.height)
-                .sum::<usize>()
+            if sought {
+                String::new()
+            } else {
+                format!(
+                    "; the target is not sought in this critical band, which takes {}",
+                    texels(&bands)
+                )
+            }
         ));
-        charts.extend(bands);
+        charts.extend(bands.into_iter().map(|chart| Planned { chart, sought }));
     }
     Ok(charts)
+}
+
+fn texels(charts: &[Chart]) -> usize {
+    charts.iter().map(|b| b.rect.width * b.rect.height).sum()
+}
+
+/// Scales every chart down by one factor along both axes so that together
+/// they take at most about `budget` texels (at least two nodes per axis
+/// that had them).
+fn fit_budget(charts: &mut [Chart], budget: usize) {
+    let total = texels(charts);
+    if total <= budget {
+        return;
+    }
+    let scale = (budget as f64 / total as f64).sqrt();
+    let shrink = |n: usize| ((n as f64 * scale).round() as usize).max(n.min(2));
+    for chart in charts {
+        chart.rect.width = shrink(chart.rect.width);
+        chart.rect.height = shrink(chart.rect.height);
+    }
 }
 
 /// Gives the probe rows the target does not apply to (the aliased strip)
@@ -1052,13 +1129,7 @@ fn confirm(
         let ch = skeleton.req.film.channels();
         within_budget(goal, w, h, ch)?;
         let ((eu, ev), values) = chart_check(skeleton, &chart, w, h, goal.shares()?)?;
-        if let Some(k) = values.iter().position(|x| !x.is_finite()) {
-            let v = &values[k - k % ch..k - k % ch + ch];
-            return Err(Error::invalid(
-                "film",
-                format!("R or T is not finite: {v:?}"),
-            ));
-        }
+        finite(&values, ch)?;
         progress(&format!(
             "  {} {w}×{h}: midpoint error {:.2} (u) {:.2} (v) of what is allowed",
             chart_name(&chart),
@@ -1102,6 +1173,39 @@ fn confirm(
         }
     }
     Err(unreachable_target(skeleton, &chart, goal))
+}
+
+/// Refuses values that are not all finite, naming the first node's.
+fn finite(values: &[f64], channels: usize) -> Result<()> {
+    match values.iter().position(|x| !x.is_finite()) {
+        Some(k) => {
+            let v = &values[k - k % channels..k - k % channels + channels];
+            Err(Error::invalid(
+                "film",
+                format!("R or T is not finite: {v:?}"),
+            ))
+        }
+        None => Ok(()),
+    }
+}
+
+/// Evaluates a chart the target is not sought on at its planned size, its
+/// values as stored.
+fn evaluate_unsought(
+    skeleton: &Skeleton,
+    chart: Chart,
+    goal: Goal,
+    progress: &dyn Fn(&str),
+) -> Result<(Chart, Vec<f32>)> {
+    let (w, h) = (chart.rect.width, chart.rect.height);
+    let film = skeleton.req.film;
+    let values = film.chart_flat(&chart, w, h)?;
+    finite(&values, film.channels())?;
+    progress(&format!(
+        "  {} {w}×{h}: target not sought",
+        chart_name(&chart)
+    ));
+    Ok((chart, values.iter().map(|&x| goal.store(x)).collect()))
 }
 
 /// The most texels one chart may have.
@@ -1299,10 +1403,15 @@ pub struct SideMeasurement {
     pub side: u32,
     /// Every point of the side.
     pub all: Measurement,
-    /// The points at or above the aliased strip's edge.
+    /// The points the target applies to: at or above the aliased strip's
+    /// edge and outside a dispersive critical band.
     pub resolved: Measurement,
     /// The points in the aliased strip (none when there is no strip).
     pub aliased: Measurement,
+    /// [`CRITICAL_BAND_POINTS`] points of its own in the dispersive
+    /// critical band where the target is not sought
+    /// ([`SideReport::unsought_band`]); none when there is no such band.
+    pub critical: Measurement,
 }
 
 /// Measures `image` read through `atlas` (bilinear, f32, as a GPU, from a
@@ -1321,42 +1430,80 @@ pub fn measure(
         .zip(reports)
         .zip(points)
         .map(|((req, report), pts)| {
-            let exact = req.film.points_flat(
-                &pts.iter()
-                    .map(|p| (f64::from(p[0]), f64::from(p[1])))
-                    .collect::<Vec<_>>(),
-            )?;
             let ch = req.film.channels();
             let colour = !req.film.is_spectral();
-            let got: Vec<f64> = pts
-                .par_iter()
-                .flat_map_iter(|p| {
-                    let mut out = vec![0.0f32; ch];
-                    if let Some(t) = super::locate_f32(&uniform, p[0], p[1], req.side) {
-                        image.bilinear(gpu_round_trip(t, image), &mut out);
-                    }
-                    out.into_iter().map(f64::from)
-                })
-                .collect();
+            let (got, exact) = read_and_solve(&uniform, image, req, pts)?;
+            let pick = |idx: &[usize], v: &[f64]| -> Vec<f64> {
+                idx.iter()
+                    .flat_map(|&k| v[k * ch..(k + 1) * ch].iter().copied())
+                    .collect()
+            };
             let split = |keep: &dyn Fn(f32) -> bool| {
                 let idx: Vec<usize> = (0..pts.len()).filter(|&k| keep(pts[k][1])).collect();
-                let pick = |v: &[f64]| {
-                    idx.iter()
-                        .flat_map(|&k| v[k * ch..(k + 1) * ch].iter().copied())
-                        .collect::<Vec<_>>()
-                };
                 let p: Vec<[f32; 2]> = idx.iter().map(|&k| pts[k]).collect();
-                Measurement::of_flat(&p, &pick(&got), &pick(&exact), ch, colour)
+                Measurement::of_flat(&p, &pick(&idx, &got), &pick(&idx, &exact), ch, colour)
             };
+            let band = report.unsought_band;
+            let in_band =
+                |c: f32| band.is_some_and(|(a, b)| f64::from(c) >= a && f64::from(c) <= b);
             let floor = report.aliased_below as f32;
+            // The band is narrow (a hundredth of cos θ): its figures take
+            // points of their own.
+            let critical = match band {
+                None => split(&|_| false),
+                Some(band) => {
+                    let own = random_points(
+                        atlas.thickness_nm,
+                        band,
+                        CRITICAL_BAND_POINTS,
+                        CRITICAL_BAND_SEED,
+                    );
+                    let (got, exact) = read_and_solve(&uniform, image, req, &own)?;
+                    Measurement::of_flat(&own, &got, &exact, ch, colour)
+                }
+            };
             Ok(SideMeasurement {
                 side: req.side,
                 all: Measurement::of_flat(pts, &got, &exact, ch, colour),
-                resolved: split(&|c| c >= floor),
+                resolved: split(&|c| c >= floor && !in_band(c)),
                 aliased: split(&|c| c < floor),
+                critical,
             })
         })
         .collect()
+}
+
+/// Points of a dispersive critical band's own measurement, uniform over
+/// the band.
+pub const CRITICAL_BAND_POINTS: usize = 4000;
+/// The seed of their PCG64 stream.
+pub const CRITICAL_BAND_SEED: u64 = 16;
+
+/// What the atlas gives at `pts` (as a GPU reads it) and the solver's
+/// exact values there, [`Film::channels`] per point.
+fn read_and_solve(
+    uniform: &[f32],
+    image: &Image,
+    req: &SideRequest,
+    pts: &[[f32; 2]],
+) -> Result<(Vec<f64>, Vec<f64>)> {
+    let exact = req.film.points_flat(
+        &pts.iter()
+            .map(|p| (f64::from(p[0]), f64::from(p[1])))
+            .collect::<Vec<_>>(),
+    )?;
+    let ch = req.film.channels();
+    let got: Vec<f64> = pts
+        .par_iter()
+        .flat_map_iter(|p| {
+            let mut out = vec![0.0f32; ch];
+            if let Some(t) = super::locate_f32(uniform, p[0], p[1], req.side) {
+                image.bilinear(gpu_round_trip(t, image), &mut out);
+            }
+            out.into_iter().map(f64::from)
+        })
+        .collect();
+    Ok((got, exact))
 }
 
 /// A texel position as the filter of a GPU sees it: the shader divides it
@@ -1418,4 +1565,50 @@ pub(super) fn aliased_edge(
         }
     }
     Ok(hi)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::atlas::Optical;
+
+    fn band(width: usize, height: usize) -> Chart {
+        Chart {
+            side: 0,
+            optical: Optical { a: 0.5, floor: 0.5 },
+            coords: Coords::Band {
+                p: LogAxis {
+                    p0_nm: 0.0,
+                    lo_nm: 0.0,
+                    hi_nm: 100.0,
+                },
+                c: CosAxis::uniform(0.72, 0.74),
+            },
+            rect: Rect {
+                x: 0,
+                y: 0,
+                width,
+                height,
+            },
+        }
+    }
+
+    /// Over the budget, every chart shrinks by one factor on both axes to
+    /// about the budget, keeping two nodes on an axis that had them and a
+    /// single-thickness chart's one column; within it, nothing changes.
+    #[test]
+    fn fit_budget_scales_every_chart_alike() {
+        let mut charts = vec![band(2000, 400), band(600, 100), band(1, 50), band(3, 3)];
+        fit_budget(&mut charts, 1 << 16);
+        let total = texels(&charts);
+        assert!(total <= (1 << 16) + 100 && total > 60_000, "{total}");
+        let scale = charts[0].rect.width as f64 / 2000.0;
+        assert!((charts[0].rect.height as f64 / 400.0 - scale).abs() < 0.01);
+        assert!((charts[1].rect.width as f64 / 600.0 - scale).abs() < 0.01);
+        assert_eq!(charts[2].rect.width, 1);
+        assert_eq!((charts[3].rect.width, charts[3].rect.height), (2, 2));
+        let before: Vec<Rect> = charts.iter().map(|c| c.rect).collect();
+        fit_budget(&mut charts, 1 << 17);
+        assert_eq!(before, charts.iter().map(|c| c.rect).collect::<Vec<_>>());
+    }
 }

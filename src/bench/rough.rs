@@ -20,9 +20,10 @@ pub const ROUGH_TARGET: f64 = 2e-3;
 /// time learning it again.
 pub const NOT_TRIED: [(&str, &str); 1] = [(
     "mirror-back",
-    "not tried: its smooth rgb atlas at 1e-3 over every angle stops at the size limits \
-     at the critical angle (near 43° inside the silica), after 1607 s of trying \
-     (docs/performance.md), and the rough table is built on that atlas",
+    "not tried: its smooth atlas states the critical band (cos θ 0.7254-0.7352, where \
+     fused silica's dispersion moves the critical angle) apart, but the rough slices seek \
+     their target there too and miss it (3.41e-2 at cos θ 0.7300, roughness 0.041, with \
+     129 slices of 609x1397 texels) after 230 s (docs/limits.md)",
 )];
 
 /// The reason the bench does not try `stack`'s rough table, if it does not.

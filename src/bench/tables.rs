@@ -29,9 +29,10 @@ pub struct TableFigures {
     /// Wall time of the bake (its own validation included).
     pub build_s: f64,
     /// The largest absolute error at the bench's random points where the
-    /// table's target applies (above an atlas's aliased strip).
+    /// table's target applies (outside an atlas's aliased strip and
+    /// dispersive critical band).
     pub max_abs: f64,
-    /// The largest over every point, the aliased strip included.
+    /// The largest over every point, those regions included.
     pub max_abs_all: f64,
     /// cos θ below which the table does not follow the fringes (0: none).
     pub aliased_below: f64,

@@ -82,6 +82,46 @@ pub struct Args {
 }
 
 pub fn run(args: Args) -> Result<ExitCode> {
+    let spec = spec_of(&args)?;
+    if args.rough {
+        return run_rough(&args, &spec);
+    }
+    // The table's path is checked before the bake, not after it.
+    let mut outputs = OutputSet::new();
+    outputs.input(&args.film.stack);
+    let table = outputs.file(&args.output);
+    let mut outputs = outputs.prepare()?;
+    let bar = super::render::progress_bar("baking {bar:40} {percent:>3}% {elapsed}");
+    let started = Instant::now();
+    let mut lut = bake_with_progress(&spec, &|f| {
+        if let Some(bar) = &bar {
+            bar.set_position((f * 1000.0) as u64);
+        }
+    })
+    .with_context(|| args.film.stack.display().to_string())?;
+    let baked = started.elapsed();
+    if let Some(bar) = &bar {
+        bar.finish_and_clear();
+    }
+    print_baked(&lut, baked.as_secs_f64());
+    if lut.header().error.validation.is_none() && args.validate_points > 0 {
+        let stats = validate(&lut, args.validate_points, VALIDATION_SEED)?;
+        lut.set_validation(stats);
+    }
+    if let Some(stats) = &lut.header().error.validation {
+        println!(
+            "validation: {} random points (seed {}) against the solver:",
+            stats.points, stats.seed
+        );
+        super::validate::print_stats(stats);
+    }
+    outputs.write(table, |tmp| lut.write_to(tmp, &args.output))?;
+    outputs.commit()?;
+    print_written(&args.output)
+}
+
+/// The bake the flags ask for, checked.
+fn spec_of(args: &Args) -> Result<BakeSpec> {
     let stack = Stack::load(&args.film.stack)?;
     let mut spec = BakeSpec::new(stack);
     spec.layer = args.film.layer;
@@ -120,26 +160,11 @@ pub fn run(args: Args) -> Result<ExitCode> {
     // Flag errors first; what fails after them comes from the stack (a
     // material undefined at some wavelength), so name its file.
     spec.validate()?;
-    if args.rough {
-        return run_rough(&args, &spec);
-    }
-    // The table's path is checked before the bake, not after it.
-    let mut outputs = OutputSet::new();
-    outputs.input(&args.film.stack);
-    let table = outputs.file(&args.output);
-    let mut outputs = outputs.prepare()?;
-    let bar = super::render::progress_bar("baking {bar:40} {percent:>3}% {elapsed}");
-    let started = Instant::now();
-    let mut lut = bake_with_progress(&spec, &|f| {
-        if let Some(bar) = &bar {
-            bar.set_position((f * 1000.0) as u64);
-        }
-    })
-    .with_context(|| args.film.stack.display().to_string())?;
-    let baked = started.elapsed();
-    if let Some(bar) = &bar {
-        bar.finish_and_clear();
-    }
+    Ok(spec)
+}
+
+/// The bake's summary: the table's size and its bake check.
+fn print_baked(lut: &irid::lut::Lut, baked_s: f64) {
     let h = lut.header();
     let sizes: Vec<String> = h.axes.iter().map(|a| a.nodes.len().to_string()).collect();
     match &h.atlas {
@@ -151,15 +176,8 @@ pub fn run(args: Args) -> Result<ExitCode> {
             t.atlas.width,
             t.atlas.height,
             h.channels.len(),
-            if t.aliased_below_cos > 0.0 {
-                format!(
-                    "; the film's fringes are aliased below cos θ {:.4}, where the target is not sought",
-                    t.aliased_below_cos
-                )
-            } else {
-                String::new()
-            },
-            baked.as_secs_f64()
+            unsought_regions(t),
+            baked_s
         ),
         None => println!(
             "baked {} {} table, {} nodes ({}), in {:.3} s",
@@ -171,7 +189,7 @@ pub fn run(args: Args) -> Result<ExitCode> {
                 .map(|a| a.name.as_str())
                 .collect::<Vec<_>>()
                 .join(" × "),
-            baked.as_secs_f64()
+            baked_s
         ),
     }
     match &h.error.bake_check {
@@ -181,21 +199,6 @@ pub fn run(args: Args) -> Result<ExitCode> {
         ),
         None => println!("bake check: not made (--no-check)"),
     }
-    if h.error.validation.is_none() && args.validate_points > 0 {
-        let stats = validate(&lut, args.validate_points, VALIDATION_SEED)?;
-        lut.set_validation(stats);
-    }
-    let h = lut.header();
-    if let Some(stats) = &h.error.validation {
-        println!(
-            "validation: {} random points (seed {}) against the solver:",
-            stats.points, stats.seed
-        );
-        super::validate::print_stats(stats);
-    }
-    outputs.write(table, |tmp| lut.write_to(tmp, &args.output))?;
-    outputs.commit()?;
-    print_written(&args.output)
 }
 
 /// Prints the written file's path and size.
@@ -268,4 +271,22 @@ fn parse_resolution(spec: &str, kind: Kind) -> Result<Resolution> {
         (Kind::Rgb, _) => bail!("--resolution '{spec}': an rgb table takes T,A"),
         (Kind::Spectral, _) => bail!("--resolution '{spec}': a spectral table takes T,A,W"),
     }
+}
+
+/// Where an atlas table's target is not sought, as the end of the bake's
+/// summary line.
+fn unsought_regions(t: &irid::lut::TableAtlas) -> String {
+    let mut out = String::new();
+    if t.aliased_below_cos > 0.0 {
+        out += &format!(
+            "; the film's fringes are aliased below cos θ {:.4}, where the target is not sought",
+            t.aliased_below_cos
+        );
+    }
+    if let Some([a, b]) = t.critical_band_cos {
+        out += &format!(
+            "; over cos θ {a:.4}–{b:.4} the critical angle moves with the wavelength, where the target is not sought"
+        );
+    }
+    out
 }

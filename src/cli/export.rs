@@ -152,12 +152,30 @@ fn report(result: &irid::export::Export, args: &Args, seconds: f64) {
             e.mean_delta_e00[1],
             side.weights_8bit_extra,
         );
+        if let Some(s) = &side.sought_error {
+            println!(
+                "{name}: where the target is sought: {} points, max {:.2e}, ΔE00 max {:.3} / {:.3}",
+                s.points,
+                s.max_all(),
+                s.max_delta_e00[0],
+                s.max_delta_e00[1]
+            );
+        }
         if let Some(a) = &side.aliased_error {
             println!(
                 "{name}: below cos θ {:.6} the colour integration itself is aliased and the target is not sought: {} points there, max {:.2e}",
                 side.aliased_below,
                 a.points,
                 a.max_all()
+            );
+        }
+        if let (Some((lo, hi)), Some(c)) = (side.critical_band, &side.critical_error) {
+            println!(
+                "{name}: over cos θ {lo:.4}–{hi:.4} the critical angle moves with the wavelength and the target is not sought: {} points there, max {:.2e}, ΔE00 max {:.3} / {:.3}",
+                c.points,
+                c.max_all(),
+                c.max_delta_e00[0],
+                c.max_delta_e00[1]
             );
         }
         if let (Some(scale), Some(png)) = (result.png_scale, &side.png_error) {

@@ -107,10 +107,17 @@ fn say_atlas(out: &mut String, h: &Header, t: &irid::lut::TableAtlas) {
         },
         a.thickness_nm.0,
         a.thickness_nm.1,
-        if t.aliased_below_cos > 0.0 {
-            format!(" (fringes aliased below cos θ {:.6})", t.aliased_below_cos)
-        } else {
-            String::new()
+        match (t.aliased_below_cos > 0.0, t.critical_band_cos) {
+            (false, None) => String::new(),
+            (true, None) => format!(" (fringes aliased below cos θ {:.6})", t.aliased_below_cos),
+            (aliased, Some([a, b])) => format!(
+                " ({}critical band cos θ {a:.6} .. {b:.6}, target not sought)",
+                if aliased {
+                    format!("fringes aliased below cos θ {:.6}; ", t.aliased_below_cos)
+                } else {
+                    String::new()
+                }
+            ),
         },
         match t.lossless_white {
             Some(w) => format!(

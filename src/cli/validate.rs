@@ -132,7 +132,7 @@ pub fn print_stats(s: &ErrorStats) {
     for r in &s.regions {
         super::say!(
             out,
-            "  region {:<9} {:>6} points  max abs {:.3e}  mean {:.3e}  ({})",
+            "  region {:<13} {:>6} points  max abs {:.3e}  mean {:.3e}  ({})",
             r.name,
             r.points,
             r.max_abs,

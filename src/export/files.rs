@@ -177,8 +177,8 @@ pub(super) fn charts_json(atlas: &Atlas) -> serde_json::Value {
 }
 
 /// film.json's `sides`: for each side, its number in the shader, the
-/// charts it reads, the stack as seen from it and where its colour
-/// integration is aliased; `back` is null when light cannot arrive from
+/// charts it reads, the stack as seen from it, where its colour
+/// integration is aliased and its dispersive critical band; `back` is null when light cannot arrive from
 /// the substrate (its lookups then read the front's charts).
 fn sides_json(export: &Export) -> serde_json::Value {
     let spec = &export.spec;
@@ -194,6 +194,7 @@ fn sides_json(export: &Export) -> serde_json::Value {
                 "layer": if seen.stack.layers.is_empty() { 0 } else { seen.layer },
                 "critical_cos": super::critical_cos(&seen.stack),
                 "aliased_below_cos": s.aliased_below,
+                "critical_band_cos": s.critical_band.map(|(a, b)| [a, b]),
             })
         }
     };
@@ -225,7 +226,8 @@ fn errors_json(export: &Export) -> serde_json::Value {
          texels at the shader's texture coordinates (f32) and irid's exact solver on the stack as seen from the \
          side, at random points uniform over the whole domain; delta_e00 is CIEDE2000 of the reflected [0] and \
          transmitted [1] colour; aliased: the same over the points below the side's aliased_below_cos, where \
-         the colour integration itself is aliased and the target is not sought (null when there are none)",
+         the colour integration itself is aliased and the target is not sought (null when there are none);          critical_band: the same at points of its own uniform over the side's critical_band_cos, the band over          which a dispersive ambient's critical angle moves, where the target is not sought either (null when the          side has no such band); sought: the same over the points where the target is sought (above \
+         aliased_below_cos, outside critical_band_cos; null when that is every point)",
         "front": null,
         "back": null,
     });
@@ -235,6 +237,14 @@ fn errors_json(export: &Export) -> serde_json::Value {
         e["weights_8bit_extra_max_abs"] = json!(side.weights_8bit_extra);
         e["aliased"] = side
             .aliased_error
+            .as_ref()
+            .map_or(serde_json::Value::Null, error_json::<super::ExportError>);
+        e["sought"] = side
+            .sought_error
+            .as_ref()
+            .map_or(serde_json::Value::Null, error_json::<super::ExportError>);
+        e["critical_band"] = side
+            .critical_error
             .as_ref()
             .map_or(serde_json::Value::Null, error_json::<super::ExportError>);
         e["png"] = side

@@ -237,6 +237,20 @@ pub struct SideExport {
     pub error: ExportError,
     /// The same over the points below `aliased_below` (none when 0).
     pub aliased_error: Option<ExportError>,
+    /// The cos θ band over which a dispersive ambient's critical angle
+    /// moves (light from the denser side), where the target is not sought
+    /// and its charts take a fixed budget of texels
+    /// ([`crate::atlas::search::CRITICAL_BAND_TEXELS`]); none when the side
+    /// has no such band.
+    pub critical_band: Option<(f64, f64)>,
+    /// The error over the measured points where the target is sought
+    /// (above the aliased strip, outside the critical band), when the side
+    /// has either.
+    pub sought_error: Option<ExportError>,
+    /// The error over points of the band's own
+    /// ([`crate::atlas::search::CRITICAL_BAND_POINTS`], seed
+    /// [`crate::atlas::search::CRITICAL_BAND_SEED`]), when it has one.
+    pub critical_error: Option<ExportError>,
     /// The most a filter with 1/256 weight steps adds to `error.max_abs`:
     /// the largest neighbouring-texel step of its charts / 256.
     pub weights_8bit_extra: f64,
@@ -492,6 +506,13 @@ fn side_export(
         aliased_below: built.sides[own].aliased_below,
         error: export_error(&m.all),
         aliased_error: aliased_error(m),
+        sought_error: (m.aliased.points > 0 || m.critical.points > 0)
+            .then(|| export_error(&m.resolved)),
+        critical_band: built.sides[own].unsought_band,
+        critical_error: built.sides[own].unsought_band.map(|_| ExportError {
+            seed: crate::atlas::search::CRITICAL_BAND_SEED,
+            ..export_error(&m.critical)
+        }),
         weights_8bit_extra: f64::from(step) / 256.0,
         png_error: None,
     }

@@ -112,6 +112,11 @@ pub struct TableAtlas {
     /// cos θ below which the film's fringes are aliased (see
     /// docs/lut-format.md): the table's error target was not sought there.
     pub aliased_below_cos: f64,
+    /// The cos θ band over which a dispersive ambient's critical angle
+    /// moves (light from the denser side): the target was not sought there
+    /// either (see docs/lut-format.md).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub critical_band_cos: Option<[f64; 2]>,
     /// A lossless film (R + T the same colour at every node): only the
     /// reflectance channels are stored and T = this colour − R.
     #[serde(default, skip_serializing_if = "Option::is_none")]

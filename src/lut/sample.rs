@@ -298,6 +298,13 @@ fn check_atlas(header: &Header, table: &super::header::TableAtlas) -> Result<(),
             table.aliased_below_cos
         ));
     }
+    if let Some([a, b]) = table.critical_band_cos {
+        if !(0.0 <= a && a <= b && b <= 1.0) {
+            return Err(format!(
+                "header atlas critical_band_cos [{a:e}, {b:e}] is not a band of cos θ"
+            ));
+        }
+    }
     match table.lossless_white {
         Some(_) if header.kind != Kind::Rgb => {
             Err("only an rgb table stores reflectance alone (lossless_white)".into())

@@ -60,8 +60,9 @@ pub struct ErrorStats {
 pub struct RegionStats {
     /// `grazing` (incidence beyond 80°), `critical` (within ±0.02 in cos θ
     /// of the substrate's critical angle) or `other` (everything else); for
-    /// an atlas table with an aliased strip also `aliased` (below its edge)
-    /// and `resolved` (the rest, where the table's target applies).
+    /// an atlas table with an aliased strip or a dispersive critical band
+    /// also `aliased` (below the strip's edge), `critical band` (inside the
+    /// band) and `resolved` (the rest, where the table's target applies).
     pub name: String,
     /// The region's bounds in words, with the critical cos θ when there is
     /// one.
@@ -119,7 +120,8 @@ pub fn validate(lut: &Lut, points: usize, seed: u64) -> Result<ErrorStats> {
     let critical = critical_cos(&h.stack, h.kind, w_range)
         .filter(|&cc| cc >= c_range.0 - CRITICAL_BAND && cc <= c_range.1 + CRITICAL_BAND);
     let aliased_below = h.atlas.as_ref().map_or(0.0, |t| t.aliased_below_cos);
-    let mut totals = Totals::new(n_channels, critical, aliased_below);
+    let unsought_band = h.atlas.as_ref().and_then(|t| t.critical_band_cos);
+    let mut totals = Totals::new(n_channels, critical, aliased_below, unsought_band);
     // Points are drawn and evaluated a chunk at a time and folded into
     // running figures in draw order: memory stays the same for any count,
     // and the figures do not depend on the number of threads.
@@ -326,17 +328,26 @@ struct Totals {
     /// cos θ below which an atlas table's colour integration is aliased (0:
     /// nowhere).
     aliased_below: f64,
-    /// grazing, critical, other, aliased, resolved: points, largest error,
-    /// sum of errors.
-    regions: [(usize, f64, f64); 5],
+    /// The cos θ band over which an atlas table's critical angle moves with
+    /// the wavelength, where its target is not sought.
+    unsought_band: Option<[f64; 2]>,
+    /// grazing, critical, other, aliased, critical band, resolved: points,
+    /// largest error, sum of errors.
+    regions: [(usize, f64, f64); 6],
 }
 
 impl Totals {
-    fn new(channels: usize, critical: Option<f64>, aliased_below: f64) -> Totals {
+    fn new(
+        channels: usize,
+        critical: Option<f64>,
+        aliased_below: f64,
+        unsought_band: Option<[f64; 2]>,
+    ) -> Totals {
         Totals {
             channels,
             critical,
             aliased_below,
+            unsought_band,
             max: vec![0.0; channels],
             sum: vec![0.0; channels],
             quantile: (0..channels)
@@ -347,7 +358,7 @@ impl Totals {
             de_sum: [0.0; 2],
             de_count: 0,
             worst: None,
-            regions: [(0, 0.0, 0.0); 5],
+            regions: [(0, 0.0, 0.0); 6],
         }
     }
 
@@ -398,8 +409,15 @@ impl Totals {
         if c >= GRAZING_COS && !near_critical {
             count(2);
         }
-        if self.aliased_below > 0.0 {
-            count(if c < self.aliased_below { 3 } else { 4 });
+        if self.aliased_below > 0.0 || self.unsought_band.is_some() {
+            let in_band = self.unsought_band.is_some_and(|[a, b]| c >= a && c <= b);
+            count(if c < self.aliased_below {
+                3
+            } else if in_band {
+                4
+            } else {
+                5
+            });
         }
     }
 
@@ -454,8 +472,22 @@ impl Totals {
                 ),
             ),
             (
+                "critical band",
+                self.unsought_band.map_or(String::new(), |[a, b]| {
+                    format!(
+                        "cos θ {a:.6} to {b:.6}, over which the critical angle moves with the wavelength and the table's target is not sought"
+                    )
+                }),
+            ),
+            (
                 "resolved",
-                format!("cos θ from {:.6} up, where the target applies", self.aliased_below),
+                match self.unsought_band {
+                    None => format!("cos θ from {:.6} up, where the target applies", self.aliased_below),
+                    Some([a, b]) => format!(
+                        "cos θ from {:.6} up outside {a:.6} to {b:.6}, where the target applies",
+                        self.aliased_below
+                    ),
+                },
             ),
         ];
         for ((name, description), (count, max, sum)) in descriptions.into_iter().zip(self.regions) {

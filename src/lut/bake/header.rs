@@ -125,7 +125,8 @@ fn channel_meaning(name: &str) -> String {
 const ATLAS_CHECK_METRIC: &str = "largest absolute difference (relative to the exact value where \
     that exceeds 1 in magnitude: |table - exact| / max(1, |exact|)), per channel, between the table \
     (bilinear in each chart's coordinates, f32 weights) and irid's solver at the bake's random \
-    points where its target applies (cos θ at or above atlas.aliased_below_cos)";
+    points where its target applies (cos θ at or above atlas.aliased_below_cos and outside \
+    atlas.critical_band_cos)";
 
 /// The header of an atlas table of `spec` (layer `layer` of the evaluated
 /// stack), with the charts of `built` and their measurement; a spectral
@@ -160,6 +161,11 @@ pub(super) fn atlas_header(
         atlas: Some(TableAtlas {
             atlas: built.atlas.clone(),
             aliased_below_cos: built.sides.first().map_or(0.0, |s| s.aliased_below),
+            critical_band_cos: built
+                .sides
+                .first()
+                .and_then(|s| s.unsought_band)
+                .map(|(a, b)| [a, b]),
             lossless_white,
         }),
         ..common(spec)
