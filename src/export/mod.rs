@@ -399,6 +399,7 @@ pub fn export(spec: &ExportSpec, progress: &dyn Fn(&str)) -> Result<Export> {
     // The rough table reads the front side's charts and texels.
     let rough = match spec.rough_max_error {
         Some(target) => {
+            crate::rough::refuse_unsought_band(built.sides[0].unsought_band)?;
             let source = rough::RoughSource {
                 film: &films[0],
                 atlas: &built.atlas,
