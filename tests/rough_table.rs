@@ -183,6 +183,7 @@ fn bad_rough_bakes_are_one_line_errors() {
 /// the ambient): its smooth atlas states the critical band apart, so the
 /// rough table, whose smallest roughness is that atlas, is refused with one
 /// line naming the band, and nothing is written.
+#[cfg(feature = "cli")]
 #[test]
 fn a_rough_table_over_an_unsought_critical_band_is_refused() {
     let dir = common::Scratch::new("rough-band");
