@@ -179,6 +179,14 @@ fn the_mirror_exports_from_its_glass_side_over_every_angle() {
     assert_eq!(stated.points, irid::atlas::search::CRITICAL_BAND_POINTS);
     let front = result.side(irid::export::Side::Front).unwrap();
     assert!(front.critical_band.is_none());
+    // A range that starts inside the band keeps the band's part in it.
+    let partial = ExportSpec {
+        cos_theta: (0.73, 1.0),
+        ..spec
+    };
+    let result = export(&partial, &|_| {}).unwrap();
+    let back = result.side(irid::export::Side::Back).unwrap();
+    assert_eq!(back.critical_band.map(|(a, _)| a), Some(0.73));
 }
 
 /// A loose target still resolves the grazing corner of a free-standing

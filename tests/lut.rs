@@ -950,3 +950,22 @@ fn a_stated_critical_band_is_validated_apart() {
         assert!(err.contains("critical_band_cos"), "{err}");
     }
 }
+
+/// Over 0–1000 nm the gain film reaches lasing poles: an rgb or spectral
+/// atlas bake names the pole, as the export does, instead of a size limit.
+#[test]
+fn a_bake_over_a_lasing_pole_names_it() {
+    let stack = Stack::load(&luts_dir().join("gain-on-gold.toml")).unwrap();
+    for kind in [Kind::Rgb, Kind::Spectral] {
+        let mut spec = BakeSpec::new(stack.clone());
+        spec.kind = kind;
+        spec.thickness_nm = (0.0, 1000.0);
+        spec.cos_theta = (0.0, 1.0);
+        spec.resolution = Resolution::MaxError(if kind == Kind::Rgb { 1e-3 } else { 1e-2 });
+        let message = bake(&spec).expect_err("a lasing pole").to_string();
+        assert!(
+            message.contains("lasing pole") && message.contains("at thickness"),
+            "{kind:?}: {message}"
+        );
+    }
+}

@@ -178,3 +178,45 @@ fn bad_rough_bakes_are_one_line_errors() {
     common::irid(["info", junk.to_str().expect("utf-8")])
         .assert_one_line_error("junk", &["junk.exr"]);
 }
+
+/// The mirror seen from its glass side (the stack reversed, fused silica
+/// the ambient): its smooth atlas states the critical band apart, so the
+/// rough table, whose smallest roughness is that atlas, is refused with one
+/// line naming the band, and nothing is written.
+#[cfg(feature = "cli")]
+#[test]
+fn a_rough_table_over_an_unsought_critical_band_is_refused() {
+    let dir = common::Scratch::new("rough-band");
+    let layers: String = (0..5)
+        .map(|_| {
+            "[[layers]]\nmaterial = \"fused-silica\"\nthickness_nm = 94.18\n\n\
+             [[layers]]\nmaterial = \"TiO2\"\nthickness_nm = 56.45\n\n"
+        })
+        .collect();
+    let toml = dir.path().join("mirror-back.toml");
+    std::fs::write(
+        &toml,
+        format!(
+            "ambient = {{ material = \"fused-silica\" }}\nsubstrate = {{ n = 1.0 }}\n\n{layers}"
+        ),
+    )
+    .expect("write");
+    let out = dir.path().join("rough.exr");
+    let out = out.to_str().expect("utf-8");
+    let args = ["bake", toml.to_str().expect("utf-8"), "--layer", "10"];
+    common::irid(
+        args.iter()
+            .chain(&[
+                "--thickness",
+                "0:200",
+                "--rough",
+                "--validate-points",
+                "0",
+                "-o",
+                out,
+            ])
+            .copied(),
+    )
+    .assert_one_line_error("critical band", &["rough", "0.7254–0.7352", "--max-error"]);
+    assert!(!Path::new(out).exists());
+}

@@ -4,10 +4,18 @@ use rayon::prelude::*;
 
 use super::chart::{Chart, Coords, Optical};
 use crate::color::SpectralIntegrator;
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::lut::{Kind, Prepared, Row};
 use crate::optics::lanes::SpectralWeights;
 use crate::optics::Stack;
+
+/// |R| or |T| beyond which a gain film is taken to be at a lasing pole: a
+/// hundredfold amplification is no film a renderer shows, and near a pole
+/// the response is unbounded anyway.
+pub const LASING_BOUND: f64 = 100.0;
+
+/// Grid of the lasing check: thicknesses × cos θ.
+const LASING_GRID: (usize, usize) = (257, 129);
 
 /// One side of a film, with everything fixed for evaluating charts: exact
 /// linear-RGB R and T at rows of constant cos θ (the baker's split-stack
@@ -245,6 +253,41 @@ impl Film {
             )
             .collect::<Result<Vec<[f64; 6]>>>()
             .map(|v| v.concat())
+    }
+
+    /// For a gain film, fails when `thickness_nm` × `cos` reaches (or
+    /// crosses) a lasing pole: |R| or |T| beyond [`LASING_BOUND`], or not
+    /// finite, on a grid over the domain. Checked before a size search,
+    /// which would otherwise chase the pole's growing fringes to the size
+    /// limit and name the wrong cause.
+    pub fn check_lasing(&self, thickness_nm: (f64, f64), cos: (f64, f64)) -> Result<()> {
+        let stack = self.stack();
+        let gain = stack.layers.iter().any(|l| l.material.has_gain()) || stack.substrate.has_gain();
+        if !gain {
+            return Ok(());
+        }
+        let at =
+            |(lo, hi): (f64, f64), k: usize, n: usize| lo + (hi - lo) * k as f64 / (n - 1) as f64;
+        let (nt, nc) = LASING_GRID;
+        let points: Vec<(f64, f64)> = (0..nc)
+            .flat_map(|j| (0..nt).map(move |i| (i, j)))
+            .map(|(i, j)| (at(thickness_nm, i, nt), at(cos, j, nc)))
+            .collect();
+        let values = self.points_flat(&points)?;
+        let ch = self.channels();
+        match values
+            .chunks_exact(ch)
+            .position(|v| v.iter().any(|x| !x.is_finite() || x.abs() > LASING_BOUND))
+        {
+            None => Ok(()),
+            Some(k) => Err(Error::invalid(
+                "gain film",
+                format!(
+                    "R or T exceeds {LASING_BOUND} or is not finite at thickness {:.3} nm, cos θ {:.6}: the range reaches a lasing pole; narrow --thickness or --angles",
+                    points[k].0, points[k].1
+                ),
+            )),
+        }
     }
 
     /// Where the colour integration of [`Self::rows`] and [`Self::points`]

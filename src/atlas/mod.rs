@@ -18,7 +18,7 @@ pub mod spectrum;
 pub use chart::{
     texel_f32, Chart, Coords, CosAxis, LogAxis, Optical, Rect, OPTICAL_FLOOR, PARAMS_PER_CHART,
 };
-pub use eval::Film;
+pub use eval::{Film, LASING_BOUND};
 pub use pack::pack;
 
 use serde::{Deserialize, Serialize};

@@ -424,15 +424,18 @@ fn skeleton<'a>(
     goal: Goal,
 ) -> Result<Skeleton<'a>> {
     let (c0, c1) = req.cos;
-    let critical = critical_band(req.film)?.filter(|&(a, b)| a > c0 + 1e-6 && b < c1 - 1e-6);
+    let critical = critical_band(req.film)?.and_then(|(a, b)| within((c0, c1), (a, b)));
     let pieces = match critical {
         Some((a, b)) => {
-            let mut p = vec![Piece {
-                lo: c0,
-                hi: a,
-                warp: PieceWarp::Sqrt(a),
-                capped: false,
-            }];
+            let mut p = Vec::new();
+            if a > c0 + EDGE {
+                p.push(Piece {
+                    lo: c0,
+                    hi: a,
+                    warp: PieceWarp::Sqrt(a),
+                    capped: false,
+                });
+            }
             if b > a + CRITICAL_BAND_MIN_WIDTH {
                 p.push(Piece {
                     lo: a,
@@ -441,12 +444,14 @@ fn skeleton<'a>(
                     capped: true,
                 });
             }
-            p.push(Piece {
-                lo: b,
-                hi: c1,
-                warp: PieceWarp::Sqrt(b),
-                capped: false,
-            });
+            if b < c1 - EDGE {
+                p.push(Piece {
+                    lo: b,
+                    hi: c1,
+                    warp: PieceWarp::Sqrt(b),
+                    capped: false,
+                });
+            }
             p
         }
         None => vec![Piece {
@@ -470,6 +475,22 @@ fn skeleton<'a>(
         aliased_below,
         critical,
     })
+}
+
+/// How far inside the cos θ range a critical angle must be to cut it.
+const EDGE: f64 = 1e-6;
+
+/// The critical band `(a, b)` as it cuts the cos θ `range`: whole when it is
+/// inside, else a dispersive band's part inside the range (a range that
+/// starts or ends inside the band still has the band's charts, not a search
+/// through it); `None` when it does not cut the range.
+fn within(range: (f64, f64), (a, b): (f64, f64)) -> Option<(f64, f64)> {
+    let (c0, c1) = range;
+    if a > c0 + EDGE && b < c1 - EDGE {
+        return Some((a, b));
+    }
+    let (lo, hi) = (a.max(c0), b.min(c1));
+    (b > a + CRITICAL_BAND_MIN_WIDTH && hi > lo + CRITICAL_BAND_MIN_WIDTH).then_some((lo, hi))
 }
 
 /// The range of cos θ over which a lossless substrate optically thinner
@@ -1591,6 +1612,22 @@ mod tests {
                 height,
             },
         }
+    }
+
+    /// A critical band cuts the range where it lies inside it; a dispersive
+    /// band reaching past an end of the range keeps its part inside; a
+    /// single critical angle at an end, or a band outside, cuts nothing.
+    #[test]
+    fn the_critical_band_as_it_cuts_the_range() {
+        let band = (0.7254, 0.7352);
+        assert_eq!(within((0.0, 1.0), band), Some(band));
+        assert_eq!(within((0.73, 1.0), band), Some((0.73, 0.7352)));
+        assert_eq!(within((0.0, 0.73), band), Some((0.7254, 0.73)));
+        assert_eq!(within((0.728, 0.73), band), Some((0.728, 0.73)));
+        assert_eq!(within((0.8, 1.0), band), None);
+        assert_eq!(within((0.5, 0.7254), band), None);
+        assert_eq!(within((0.73, 1.0), (0.73, 0.73)), None);
+        assert_eq!(within((0.0, 1.0), (0.73, 0.73)), Some((0.73, 0.73)));
     }
 
     /// Over the budget, every chart shrinks by one factor on both axes to

@@ -15,33 +15,13 @@ use crate::rough::file::bake_rough;
 /// The rough tables' error target (the issue's: 2e-3).
 pub const ROUGH_TARGET: f64 = 2e-3;
 
-/// Bench stacks whose rough table the bench does not try, with the reason
-/// it states: decided before any bake, so the run does not spend the search's
-/// time learning it again.
-pub const NOT_TRIED: [(&str, &str); 1] = [(
-    "mirror-back",
-    "not tried: its smooth atlas states the critical band (cos θ 0.7254-0.7352, where \
-     fused silica's dispersion moves the critical angle) apart, but the rough slices seek \
-     their target there too and miss it (3.41e-2 at cos θ 0.7300, roughness 0.041, with \
-     129 slices of 609x1397 texels) after 230 s (docs/limits.md)",
-)];
-
-/// The reason the bench does not try `stack`'s rough table, if it does not.
-pub fn not_tried(stack: &str) -> Option<&'static str> {
-    NOT_TRIED
-        .iter()
-        .find(|(name, _)| *name == stack)
-        .map(|(_, why)| *why)
-}
-
 /// What one stack's smooth and rough bakes gave.
 #[derive(Clone, Debug, PartialEq)]
 pub struct RoughRow {
     /// The bench stack's name.
     pub stack: &'static str,
-    /// Wall time of the smooth rgb atlas bake (to [`RGB_TARGET`]); `None`
-    /// when the stack is [`NOT_TRIED`].
-    pub smooth_s: Option<f64>,
+    /// Wall time of the smooth rgb atlas bake (to [`RGB_TARGET`]).
+    pub smooth_s: f64,
     /// Wall time of the rough bake, its smooth atlas included, or why it
     /// stopped.
     pub rough: std::result::Result<RoughFigures, String>,
@@ -70,15 +50,6 @@ pub struct RoughFigures {
 pub fn run(stacks: &[BenchStack], progress: &dyn Fn(&str)) -> Result<Vec<RoughRow>> {
     let mut rows = Vec::new();
     for bench in stacks {
-        if let Some(why) = not_tried(bench.name) {
-            progress(&format!("  {}: rough table {why}", bench.name));
-            rows.push(RoughRow {
-                stack: bench.name,
-                smooth_s: None,
-                rough: Err(why.to_string()),
-            });
-            continue;
-        }
         let mut spec = spec(bench, Kind::Rgb, Layout::Atlas);
         spec.validation_points = 0;
         let started = Instant::now();
@@ -108,7 +79,7 @@ pub fn run(stacks: &[BenchStack], progress: &dyn Fn(&str)) -> Result<Vec<RoughRo
         });
         rows.push(RoughRow {
             stack: bench.name,
-            smooth_s: Some(smooth_s),
+            smooth_s,
             rough,
         });
     }
@@ -121,13 +92,13 @@ pub fn markdown(rows: &[RoughRow]) -> String {
         "| stack | smooth atlas s | rough table s | ratio | slices | texels per slice | rough max err | grazing max err |\n|---|---:|---:|---:|---:|---:|---:|---:|\n",
     );
     for r in rows {
-        let smooth = r.smooth_s.map_or("–".to_string(), |t| format!("{t:.2}"));
+        let smooth = format!("{:.2}", r.smooth_s);
         match &r.rough {
             Ok(f) => s.push_str(&format!(
                 "| {} | {smooth} | {:.2} | {:.1} | {} | {} | {:.2e} | {:.2e} |\n",
                 r.stack,
                 f.build_s,
-                f.build_s / r.smooth_s.unwrap_or(f64::NAN),
+                f.build_s / r.smooth_s,
                 f.slices,
                 f.texels,
                 f.max_abs,
@@ -166,7 +137,7 @@ mod tests {
         bench.thickness_range_nm = (0.0, 150.0);
         let rows = run(&[bench], &|_| {}).unwrap();
         let f = rows[0].rough.as_ref().unwrap();
-        assert!(rows[0].smooth_s > Some(0.0) && f.build_s > 0.0 && f.slices >= 2);
+        assert!(rows[0].smooth_s > 0.0 && f.build_s > 0.0 && f.slices >= 2);
         assert!(f.max_abs <= ROUGH_TARGET && f.points > 0, "{f:?}");
         let md = markdown(&rows);
         assert_eq!(
@@ -174,24 +145,5 @@ mod tests {
             1,
             "{md}"
         );
-    }
-
-    /// The mirror seen from its glass side is not tried: its row says why,
-    /// without a bake (the search it skips took 1607 s).
-    #[test]
-    fn mirror_back_is_not_tried_and_says_why() {
-        let bench = super::super::stacks::find("mirror-back").unwrap().unwrap();
-        let rows = run(&[bench], &|_| {}).unwrap();
-        // No smooth bake ran (it would have its time).
-        assert_eq!(rows[0].smooth_s, None);
-        let why = rows[0].rough.as_ref().unwrap_err();
-        assert!(
-            why.starts_with("not tried") && why.contains("critical angle"),
-            "{why}"
-        );
-        let md = markdown(&rows);
-        let row = md.lines().find(|l| l.starts_with("| mirror-back")).unwrap();
-        assert!(row.contains("| – | not made |"), "{row}");
-        assert!(md.contains("- mirror-back: not tried"), "{md}");
     }
 }

@@ -40,10 +40,7 @@ pub use crate::render::Side;
 pub const MAX_SIZE: usize = 8192;
 /// The largest finite f16 value: a table holding more is not representable.
 pub const F16_MAX: f64 = 65504.0;
-/// |R| or |T| beyond which a gain film is taken to be at a lasing pole: a
-/// hundredfold amplification is no film a renderer shows, and near a pole
-/// the response is unbounded anyway.
-pub const LASING_BOUND: f64 = 100.0;
+pub use crate::atlas::LASING_BOUND;
 
 /// The side's number in the shader: 0 front, 1 back.
 pub fn side_index(side: Side) -> u32 {
@@ -378,7 +375,7 @@ pub fn export(spec: &ExportSpec, progress: &dyn Fn(&str)) -> Result<Export> {
         .map(|&side| film_of(&spec.seen_from(side)))
         .collect::<Result<Vec<_>>>()?;
     for film in &films {
-        check_lasing(spec, film)?;
+        film.check_lasing(spec.thickness_nm, spec.cos_theta)?;
     }
     let requests = side_requests(spec, &charted, &films);
     let points = measurement_points(spec);
@@ -399,6 +396,7 @@ pub fn export(spec: &ExportSpec, progress: &dyn Fn(&str)) -> Result<Export> {
     // The rough table reads the front side's charts and texels.
     let rough = match spec.rough_max_error {
         Some(target) => {
+            crate::rough::refuse_unsought_band(built.sides[0].unsought_band)?;
             let source = rough::RoughSource {
                 film: &films[0],
                 atlas: &built.atlas,
@@ -555,41 +553,6 @@ fn check_representable(spec: &ExportSpec, image: &crate::atlas::Image) -> Result
     } else {
         Error::invalid("export", "R or T is not finite or exceeds the f16 range")
     })
-}
-
-/// Grid of the lasing check: thicknesses × cos θ.
-const LASING_GRID: (usize, usize) = (257, 129);
-
-/// For a gain film, fails when its range reaches (or crosses) a lasing
-/// pole: |R| or |T| beyond [`LASING_BOUND`], or not finite, on a grid over
-/// the domain. Checked before the search, which would otherwise chase the
-/// pole's growing fringes to the size limit.
-fn check_lasing(spec: &ExportSpec, film: &Film) -> Result<()> {
-    let stack = film.stack();
-    let gain = stack.layers.iter().any(|l| l.material.has_gain()) || stack.substrate.has_gain();
-    if !gain {
-        return Ok(());
-    }
-    let at = |(lo, hi): (f64, f64), k: usize, n: usize| lo + (hi - lo) * k as f64 / (n - 1) as f64;
-    let (nt, nc) = LASING_GRID;
-    let points: Vec<(f64, f64)> = (0..nc)
-        .flat_map(|j| (0..nt).map(move |i| (i, j)))
-        .map(|(i, j)| (at(spec.thickness_nm, i, nt), at(spec.cos_theta, j, nc)))
-        .collect();
-    let values = film.points(&points)?;
-    match values
-        .iter()
-        .position(|v| v.iter().any(|x| !x.is_finite() || x.abs() > LASING_BOUND))
-    {
-        None => Ok(()),
-        Some(k) => Err(Error::invalid(
-            "gain film",
-            format!(
-                "R or T exceeds {LASING_BOUND} or is not finite at thickness {:.3} nm, cos θ {:.6}: the range reaches a lasing pole; narrow --thickness or --angles",
-                points[k].0, points[k].1
-            ),
-        )),
-    }
 }
 
 /// A back side's failure says which side failed and how to do without it.

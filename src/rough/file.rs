@@ -391,6 +391,7 @@ pub fn bake_rough(
         .atlas
         .as_ref()
         .ok_or_else(|| Error::invalid("rough", "the smooth bake gave no atlas"))?;
+    super::refuse_unsought_band(table.critical_band_cos.map(|[lo, hi]| (lo, hi)))?;
     let channels = header.channel_names().len();
     let image = Image {
         width: table.atlas.width,

@@ -54,3 +54,22 @@ pub fn check_roughness(what: &str, roughness: f64) -> Result<()> {
         ))
     }
 }
+
+/// Refuses a rough table over a smooth atlas that does not seek its target
+/// over `band`, a dispersive critical band (cos θ lo, hi; see
+/// [`crate::atlas::search::CRITICAL_BAND_TEXELS`]): the table's smallest
+/// roughness is that atlas, texel for texel, and F_eff at small roughness
+/// has the band's features too, so no slice count or chart size meets a
+/// target there (the mirror seen from its glass side searched 230 s before
+/// failing).
+pub fn refuse_unsought_band(band: Option<(f64, f64)>) -> Result<()> {
+    match band {
+        None => Ok(()),
+        Some((lo, hi)) => Err(Error::invalid(
+            "rough",
+            format!(
+                "the smooth atlas does not seek its target over cos θ {lo:.4}–{hi:.4}, where the critical angle moves with the wavelength (docs/limits.md), and a rough table's smallest roughness is that atlas: a looser --max-error may let the band be sought"
+            ),
+        )),
+    }
+}

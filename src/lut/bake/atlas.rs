@@ -40,7 +40,13 @@ pub(super) fn bake_atlas(spec: &BakeSpec, progress: &dyn Fn(&str)) -> Result<Lut
                 charted: spec.thickness_nm,
             }
         }
-        Kind::Spectral => spectral_film(spec, max_abs, progress)?,
+        Kind::Spectral => {
+            // A lasing pole, named before the wavelength probe meets it.
+            let integrator = SpectralIntegrator::with_white(spec.sampling, spec.white);
+            Film::new(&spec.stack, spec.layer, integrator)?
+                .check_lasing(spec.thickness_nm, spec.cos_theta)?;
+            spectral_film(spec, max_abs, progress)?
+        }
     };
     let FilmPlan {
         film,
@@ -48,6 +54,7 @@ pub(super) fn bake_atlas(spec: &BakeSpec, progress: &dyn Fn(&str)) -> Result<Lut
         wavelengths,
         charted,
     } = plan;
+    film.check_lasing(charted, spec.cos_theta)?;
     let sides = [SideRequest {
         film: &film,
         side: 0,
