@@ -349,10 +349,11 @@ pub fn build(
             ),
         ));
     }
+    let exact = solve_points(sides, &reports, points, thickness_nm)?;
     for round in 0.. {
         let channels = sides.first().map_or(6, |s| s.film.channels());
         let (atlas, image) = assemble(&charts, thickness_nm, max_side, channels)?;
-        let measured = measure(&atlas, &image, sides, &reports, points)?;
+        let measured = measure(&atlas, &image, sides, &reports, &exact);
         let missed = measured
             .iter()
             .zip(&skeletons)
@@ -1435,25 +1436,67 @@ pub struct SideMeasurement {
     pub critical: Measurement,
 }
 
-/// Measures `image` read through `atlas` (bilinear, f32, as a GPU, from a
-/// normalized texture coordinate) at each
-/// side's `points` (thickness nm, cos θ) against the solver.
-pub fn measure(
-    atlas: &Atlas,
-    image: &Image,
+/// The solver's exact values at one side's measurement points (and at a
+/// critical band's own points when the target is not sought there),
+/// [`Film::channels`] per point: solved once, as the film does not change
+/// between rounds of growing the atlas.
+pub struct SideExact {
+    points: Vec<[f32; 2]>,
+    exact: Vec<f64>,
+    band: Option<(Vec<[f32; 2]>, Vec<f64>)>,
+}
+
+/// Solves each side's `points`, and [`CRITICAL_BAND_POINTS`] of its own in
+/// a band its report does not seek the target in (see [`measure`]).
+pub fn solve_points(
     sides: &[SideRequest],
     reports: &[SideReport],
     points: &[Vec<[f32; 2]>],
-) -> Result<Vec<SideMeasurement>> {
-    let uniform = atlas.uniform_f32();
+    thickness_nm: (f64, f64),
+) -> Result<Vec<SideExact>> {
     sides
         .iter()
         .zip(reports)
         .zip(points)
         .map(|((req, report), pts)| {
+            let band = match report.unsought_band {
+                None => None,
+                Some(band) => {
+                    let own =
+                        random_points(thickness_nm, band, CRITICAL_BAND_POINTS, CRITICAL_BAND_SEED);
+                    let exact = solve(req, &own)?;
+                    Some((own, exact))
+                }
+            };
+            Ok(SideExact {
+                points: pts.clone(),
+                exact: solve(req, pts)?,
+                band,
+            })
+        })
+        .collect()
+}
+
+/// Measures `image` read through `atlas` (bilinear, f32, as a GPU, from a
+/// normalized texture coordinate) at each side's points against the
+/// solver's values there (`exact`, from [`solve_points`]).
+pub fn measure(
+    atlas: &Atlas,
+    image: &Image,
+    sides: &[SideRequest],
+    reports: &[SideReport],
+    exact: &[SideExact],
+) -> Vec<SideMeasurement> {
+    let uniform = atlas.uniform_f32();
+    sides
+        .iter()
+        .zip(reports)
+        .zip(exact)
+        .map(|((req, report), solved)| {
             let ch = req.film.channels();
             let colour = !req.film.is_spectral();
-            let (got, exact) = read_and_solve(&uniform, image, req, pts)?;
+            let pts = &solved.points;
+            let got = read(&uniform, image, req, pts);
             let pick = |idx: &[usize], v: &[f64]| -> Vec<f64> {
                 idx.iter()
                     .flat_map(|&k| v[k * ch..(k + 1) * ch].iter().copied())
@@ -1462,7 +1505,13 @@ pub fn measure(
             let split = |keep: &dyn Fn(f32) -> bool| {
                 let idx: Vec<usize> = (0..pts.len()).filter(|&k| keep(pts[k][1])).collect();
                 let p: Vec<[f32; 2]> = idx.iter().map(|&k| pts[k]).collect();
-                Measurement::of_flat(&p, &pick(&idx, &got), &pick(&idx, &exact), ch, colour)
+                Measurement::of_flat(
+                    &p,
+                    &pick(&idx, &got),
+                    &pick(&idx, &solved.exact),
+                    ch,
+                    colour,
+                )
             };
             let band = report.unsought_band;
             let in_band =
@@ -1470,26 +1519,20 @@ pub fn measure(
             let floor = report.aliased_below as f32;
             // The band is narrow (a hundredth of cos θ): its figures take
             // points of their own.
-            let critical = match band {
+            let critical = match &solved.band {
                 None => split(&|_| false),
-                Some(band) => {
-                    let own = random_points(
-                        atlas.thickness_nm,
-                        band,
-                        CRITICAL_BAND_POINTS,
-                        CRITICAL_BAND_SEED,
-                    );
-                    let (got, exact) = read_and_solve(&uniform, image, req, &own)?;
-                    Measurement::of_flat(&own, &got, &exact, ch, colour)
+                Some((own, exact)) => {
+                    let got = read(&uniform, image, req, own);
+                    Measurement::of_flat(own, &got, exact, ch, colour)
                 }
             };
-            Ok(SideMeasurement {
+            SideMeasurement {
                 side: req.side,
-                all: Measurement::of_flat(pts, &got, &exact, ch, colour),
+                all: Measurement::of_flat(pts, &got, &solved.exact, ch, colour),
                 resolved: split(&|c| c >= floor && !in_band(c)),
                 aliased: split(&|c| c < floor),
                 critical,
-            })
+            }
         })
         .collect()
 }
@@ -1500,22 +1543,20 @@ pub const CRITICAL_BAND_POINTS: usize = 4000;
 /// The seed of their PCG64 stream.
 pub const CRITICAL_BAND_SEED: u64 = 16;
 
-/// What the atlas gives at `pts` (as a GPU reads it) and the solver's
-/// exact values there, [`Film::channels`] per point.
-fn read_and_solve(
-    uniform: &[f32],
-    image: &Image,
-    req: &SideRequest,
-    pts: &[[f32; 2]],
-) -> Result<(Vec<f64>, Vec<f64>)> {
-    let exact = req.film.points_flat(
+/// The solver's exact values at `pts`, [`Film::channels`] per point.
+fn solve(req: &SideRequest, pts: &[[f32; 2]]) -> Result<Vec<f64>> {
+    req.film.points_flat(
         &pts.iter()
             .map(|p| (f64::from(p[0]), f64::from(p[1])))
             .collect::<Vec<_>>(),
-    )?;
+    )
+}
+
+/// What the atlas gives at `pts`, as a GPU reads it, [`Film::channels`]
+/// per point.
+fn read(uniform: &[f32], image: &Image, req: &SideRequest, pts: &[[f32; 2]]) -> Vec<f64> {
     let ch = req.film.channels();
-    let got: Vec<f64> = pts
-        .par_iter()
+    pts.par_iter()
         .flat_map_iter(|p| {
             let mut out = vec![0.0f32; ch];
             if let Some(t) = super::locate_f32(uniform, p[0], p[1], req.side) {
@@ -1523,8 +1564,7 @@ fn read_and_solve(
             }
             out.into_iter().map(f64::from)
         })
-        .collect();
-    Ok((got, exact))
+        .collect()
 }
 
 /// A texel position as the filter of a GPU sees it: the shader divides it
