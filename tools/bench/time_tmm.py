@@ -10,7 +10,7 @@ thicknesses 100, 107, 114, ... nm, a gold-like substrate n = 0.27 + 2.9i;
 550 nm, cos θ0 = 0.8. One sample is unpolarized R and T: two coh_tmm calls
 (s and p), as irid's solve computes both polarizations at once.
 
-Usage: python3 tools/time_tmm.py   (after: cargo bench --bench tmm)
+Usage: python3 tools/bench/time_tmm.py   (after: cargo bench --bench tmm)
 The figure is the best of many short repeats (the machine is shared; the
 minimum is the least disturbed run).
 """
@@ -23,7 +23,7 @@ import timeit
 
 import tmm
 
-ROOT = pathlib.Path(__file__).resolve().parent.parent
+ROOT = pathlib.Path(__file__).resolve().parents[2]
 CRITERION = ROOT / "target" / "criterion"
 
 

@@ -3,7 +3,7 @@
 renders (out/*.png, written by `cargo run --release -- demo`) scaled to one
 height and set side by side.
 
-Usage: python3 tools/demo_strip.py [OUT_DIR] [PNG]   (needs Pillow: pip install pillow)
+Usage: python3 tools/gen/demo_strip.py [OUT_DIR] [PNG]   (needs Pillow: pip install pillow)
 """
 import sys
 

@@ -15,7 +15,7 @@ are the best of --repeat calls; Byrnes' tmm is timed on every 20th
 wavelength and scaled per point. A disagreement with Byrnes' tmm beyond 1e-9
 fails the run.
 
-Usage: python tools/bench_python.py [-o benches/results] [--quick]
+Usage: python tools/bench/bench_python.py [-o benches/results] [--quick]
 (with the package installed: pip install ./python)
 """
 
@@ -31,7 +31,7 @@ import peer_calls
 from peer_calls import best_of
 
 THREADS_DEFAULT = 2
-REPO = Path(__file__).resolve().parent.parent
+REPO = Path(__file__).resolve().parents[2]
 STACKS = [
     ("soap", "soap-film.toml", False),
     ("absorbing", "absorbing-film.toml", False),
@@ -187,7 +187,7 @@ def main():
         + ("; other work slows the peers unequally (tmm-faster's OpenMP threads spin while they wait), "
            "so an idle machine gives the fairer ratio" if load[0] > args.threads else ""),
         f"- Versions: {peers}",
-        f"- Command: `python tools/bench_python.py {' '.join(sys.argv[1:])}`",
+        f"- Command: `python tools/bench/bench_python.py {' '.join(sys.argv[1:])}`",
         "",
         "`irid.coherent(n, d, angles, wavelengths)` and `tmm_faster.calc_coherent` with the same "
         f"arguments, in one Python process: wavelengths {wavelengths[0]:g}:{wavelengths[-1]:g}:"

@@ -35,7 +35,7 @@ import numpy as np  # noqa: E402
 import OpenEXR  # noqa: E402
 import tmm  # noqa: E402
 
-REPO = Path(__file__).resolve().parent.parent
+REPO = Path(__file__).resolve().parents[2]
 NODES_CHECKED = 8
 
 

@@ -2,7 +2,7 @@
 """Cross-checks the built-in material library.
 
 1. src/optics/library_data.rs regenerates byte-identically from
-   tools/data/*.csv (tools/gen_materials.py).
+   tools/gen/data/*.csv (tools/gen/gen_materials.py).
 2. Each built-in material, put under an ambient of n = 1.5 as a substrate,
    reflects what Fresnel's equations give for the index computed here
    independently: the dielectrics from each publication's formula in its
@@ -27,8 +27,8 @@ import tempfile
 
 import numpy as np
 
-ROOT = pathlib.Path(__file__).resolve().parent.parent
-sys.path.insert(0, str(ROOT / "tools"))
+ROOT = pathlib.Path(__file__).resolve().parents[2]
+sys.path.insert(0, str(ROOT / "tools" / "gen"))
 import gen_materials  # noqa: E402
 
 N_AMBIENT = 1.5
@@ -53,7 +53,7 @@ def ciddor_air(um):
 
 
 def table(stem):
-    rows = [r for r in csv.reader(l for l in (ROOT / "tools" / "data" / f"{stem}.csv").read_text().splitlines()
+    rows = [r for r in csv.reader(l for l in (ROOT / "tools" / "gen" / "data" / f"{stem}.csv").read_text().splitlines()
                                   if l and l[0].isdigit())]
     wl_nm = np.array([float(r[0]) * 1000 for r in rows])
     n = np.array([float(r[1]) for r in rows])
@@ -95,7 +95,7 @@ def main():
         gen_materials.main(regenerated)
         committed = ROOT / "src" / "optics" / "library_data.rs"
         if regenerated.read_bytes() != committed.read_bytes():
-            failures.append("src/optics/library_data.rs differs from what tools/gen_materials.py generates")
+            failures.append("src/optics/library_data.rs differs from what tools/gen/gen_materials.py generates")
 
         binary = os.environ.get("IRID_BIN", "target/release/irid")
         wavelengths = sorted(set([300.0 + 25.0 * i for i in range(23)] + [381.5, 548.6, 659.5, 821.1, 333.3]))

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """One-thread CPU time of `irid bench --grid STACK` and of tmm-faster's
 `calc_coherent` on the same points (the indices irid reports), for every
-stack of tools/bench_peers.py. CPU time on one thread leaves out how each
+stack of tools/bench/bench_peers.py. CPU time on one thread leaves out how each
 side's threads fare on a loaded machine (OpenMP's waiting threads suffer far
 more than rayon's from other processes), so it checks the ratios of
 bench_peers.py, which are wall times on 2 threads.
@@ -11,7 +11,7 @@ irid's figure is the difference in process CPU time between a run of
 `irid bench`'s untimed warm-up cancel out. tmm-faster's is the best of 5
 calls' thread CPU time.
 
-Usage: IRID_BIN=target/release/irid python tools/bench_single_thread.py [REPEAT]
+Usage: IRID_BIN=target/release/irid python tools/bench/bench_single_thread.py [REPEAT]
 """
 
 import json

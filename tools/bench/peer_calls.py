@@ -1,4 +1,4 @@
-"""What tools/bench_peers.py and tools/bench_python.py both call: the best
+"""What tools/bench/bench_peers.py and tools/bench/bench_python.py both call: the best
 of several timed calls, and the unpolarized R and T of colour-science and of
 Byrnes' tmm (coh_tmm, and inc_tmm for stacks with incoherent layers) on a
 wavelength x angle grid, each as [wavelength][angle]."""

@@ -15,7 +15,7 @@ peers are fed exactly those indices, so every implementation solves the same
 problem. Times are the best of --repeat runs; process start-up and I/O are
 outside every timed region.
 
-Usage: IRID_BIN=target/release/irid python tools/bench_peers.py -o RUN_DIR [--quick]
+Usage: IRID_BIN=target/release/irid python tools/bench/bench_peers.py -o RUN_DIR [--quick]
 RUN_DIR is the run's directory under benches/results/ (the one `irid bench`
 just wrote, benches/results/DATE-MACHINE), so peers.md sits beside report.md.
 Exits non-zero if a peer disagrees with irid by more than 1e-9.
@@ -566,7 +566,7 @@ def main():
         args.byrnes_samples = 500
     # The binary as the reader would name it from the repository's root.
     shown_bin = os.path.relpath(irid_bin()) if os.path.isabs(irid_bin()) else irid_bin()
-    command = "IRID_BIN=" + shown_bin + " python tools/bench_peers.py " + " ".join(sys.argv[1:])
+    command = "IRID_BIN=" + shown_bin + " python tools/bench/bench_peers.py " + " ".join(sys.argv[1:])
     failures = []
     print("general evaluation:", flush=True)
     findings = []

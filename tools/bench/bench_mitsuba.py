@@ -1,7 +1,7 @@
 """irid_film in Mitsuba 3: the picture of docs/mitsuba.md, and its speed
 against Mitsuba's C++ `conductor` on the same scene, measured in one run.
 
-    .venv-mitsuba/bin/python tools/bench_mitsuba.py --picture docs/images/mitsuba.png
+    .venv-mitsuba/bin/python tools/bench/bench_mitsuba.py --picture docs/images/mitsuba.png
 
 (tools/ci/mitsuba.sh makes .venv-mitsuba.) The speed scene is a unit sphere
 of titanium dioxide on copper (bare copper for `conductor`) under the

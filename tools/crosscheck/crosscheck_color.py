@@ -14,7 +14,7 @@ tolerance: colour-science interpolates D65 (5 nm) with its own method and
 extrapolates it beyond 780 nm; its sRGB matrix uses the rounded white
 xy = (0.3127, 0.3290) while irid derives it from the tables' D65 white.
 
-Also regenerates src/color/cie_tables.rs with tools/gen_cie_tables.py and
+Also regenerates src/color/cie_tables.rs with tools/gen/gen_cie_tables.py and
 checks it is byte-identical to the committed file (nobody edited it by hand).
 
 Env: IRID_BIN (default target/release/irid). Exits non-zero on failure.
@@ -88,15 +88,15 @@ def run_json(cmd):
 
 
 def tables_are_generated():
-    repo = Path(__file__).resolve().parent.parent
+    repo = Path(__file__).resolve().parents[2]
     committed = repo / "src/color/cie_tables.rs"
     with tempfile.TemporaryDirectory() as tmp:
         fresh = Path(tmp) / "cie_tables.rs"
-        subprocess.run([sys.executable, str(repo / "tools/gen_cie_tables.py"), str(fresh)],
+        subprocess.run([sys.executable, str(repo / "tools/gen/gen_cie_tables.py"), str(fresh)],
                        check=True, capture_output=True)
         if fresh.read_bytes() != committed.read_bytes():
-            sys.exit(f"FAIL: {committed} differs from what tools/gen_cie_tables.py writes")
-    print(f"  {committed.relative_to(repo)} matches tools/gen_cie_tables.py output")
+            sys.exit(f"FAIL: {committed} differs from what tools/gen/gen_cie_tables.py writes")
+    print(f"  {committed.relative_to(repo)} matches tools/gen/gen_cie_tables.py output")
 
 
 def main():

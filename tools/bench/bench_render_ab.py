@@ -3,7 +3,7 @@
 prints the best wall and CPU time of each and their ratio. Interleaving puts
 both under the same load, so the ratio holds on a shared machine.
 
-Usage: python tools/bench_render_ab.py OLD_IRID NEW_IRID [REPEAT]
+Usage: python tools/bench/bench_render_ab.py OLD_IRID NEW_IRID [REPEAT]
 Renders `two-layer-noise --film direct --sampling uniform:41` at 500x500 on
 2 threads into a temporary PNG.
 """
