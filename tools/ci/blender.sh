@@ -2,8 +2,8 @@
 # CI: irid in Blender (docs/blender.md). Installs what is missing (the X
 # libraries Blender's Python module links against, a Python 3.11 virtualenv
 # with bpy 5.0, numpy < 2 and OpenEXR, the irid binary), then runs
-# tools/blender/test_blender.py: Cycles renders of irid exports against
-# `irid color`, and tools/blender/test_rough_cycles.py: Cycles' rough thin
+# blender/tests/test_blender.py: Cycles renders of irid exports against
+# `irid color`, and blender/tests/test_rough_cycles.py: Cycles' rough thin
 # film and irid's material on `irid export --rough` exports against `irid
 # color --roughness`. Idempotent; exits non-zero on any failure.
 set -euo pipefail
@@ -41,8 +41,8 @@ if ! "$venv/bin/python" -c 'import bpy, numpy, OpenEXR' 2>/dev/null; then
 fi
 
 cargo build --release --quiet --bin irid
-"$venv/bin/python" tools/blender/test_blender.py --irid target/release/irid \
+"$venv/bin/python" blender/tests/test_blender.py --irid target/release/irid \
     --table "$(mktemp -d)/blender-table.md"
 # Cycles' own rough thin film (docs/rough.md) and irid's material with the
 # rough table (docs/blender.md) against `irid color --roughness`.
-"$venv/bin/python" tools/blender/test_rough_cycles.py --irid target/release/irid
+"$venv/bin/python" blender/tests/test_rough_cycles.py --irid target/release/irid

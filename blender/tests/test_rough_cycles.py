@@ -14,7 +14,7 @@ Airy sum in its own colour integration), so this is an independent check
 for single dielectric films.
 
 The same measure checks irid's own Blender material
-(tools/blender/irid_blender.py) on exports made with the rough table
+(blender/irid_blender) on exports made with the rough table
 (`irid export --rough`): a film on glass, a free-standing soap film and a
 film on copper, at roughness 0.3 and 0.5 and 0-75 degrees, its render
 divided by the white Glossy's against `irid color --roughness` (mean
@@ -26,7 +26,7 @@ error). --skip-principled runs only this part.
 
 Runs with Blender as a Python module, as tools/ci/blender.sh installs it:
 
-    python tools/blender/test_rough_cycles.py --irid target/release/irid
+    python blender/tests/test_rough_cycles.py --irid target/release/irid
 
 Both renders of a case use the same seed, so Cycles draws the same
 microfacet normals for each and much of the noise cancels in the ratio. The
@@ -51,8 +51,9 @@ import numpy as np
 import bpy
 
 HERE = Path(__file__).resolve().parent
-REPO = HERE.parent.parent
+REPO = HERE.parents[1]
 sys.path.insert(0, str(HERE))
+sys.path.insert(0, str(HERE.parent))
 from colour_exr import delta_e2000_rgb, read_exr_rgb  # noqa: E402
 import irid_blender  # noqa: E402
 from cycles_scene import (  # noqa: E402
@@ -76,7 +77,7 @@ MEAN_BOUND = 0.1
 MAX_BOUND = 0.15
 NOISE_BOUND = 1e-3  # standard error of F_eff per channel
 
-# irid's own material (tools/blender/irid_blender.py) on exports with the
+# irid's own material (blender/irid_blender) on exports with the
 # rough table: a dielectric film on glass, a free-standing soap film and a
 # film on a metal, at the stack's thickness inside an exported range.
 MATERIAL_CASES = [

@@ -1,13 +1,13 @@
-"""Colour difference and EXR files for tools/blender/test_blender.py.
+"""Colour difference and EXR files for the Blender tests (test_blender.py,
+test_rough_cycles.py, test_eevee.py).
 
 CIEDE2000 as irid computes it, half-float EXR tables written with the
 OpenEXR package rather than with Blender (so the orientation check does not
-test Blender against itself), and the export's closed-form mapping that the
-synthetic tables check.
+test Blender against itself), and synthetic exports whose texels hold their
+own chart coordinates.
 """
 
 import json
-import math
 
 import numpy as np
 import OpenEXR
@@ -197,6 +197,9 @@ def _write_film(directory, reflectance, transmittance, fields):
             "format": "rgba16f",
             "files": {"reflectance": "reflectance.exr", "transmittance": "transmittance.exr"},
             "png": None,
+            # Row order is the module's to know (it samples at 1 - v); the
+            # reader rule asks only that the check is there.
+            "row_check": {"reflectance": None, "transmittance": None},
         },
         "domain": fields["domain"],
         "charts": fields["charts"],
@@ -213,63 +216,6 @@ def _write_film(directory, reflectance, transmittance, fields):
         "rough": fields["rough"],
     }
     (directory / "film.json").write_text(json.dumps(film, indent=1))
-
-
-def write_synthetic_export(
-    directory, size_u, size_v, cos_range, cos_crit, y_crit, opaque, thickness_power=1, back=None,
-):
-    """A film.json version 2 export for the mapping test, with a one-texel
-    gutter around each chart as irid writes it. The front chart's node (i, j)
-    holds reflectance (i / (N_u - 1), j / (N_v - 1), 0.25) and transmittance
-    (1 - i / (N_u - 1), 1 - j / (N_v - 1), 0.75), so bilinear sampling gives
-    back the continuous chart coordinates (x, y) the mapping produced. back,
-    a dict (size_u, size_v, cos_range, cos_crit, y_crit), adds a back chart
-    above it whose blue channel is 0.5."""
-    directory.mkdir(parents=True, exist_ok=True)
-    specs = [("front", size_u, size_v, cos_range, cos_crit, y_crit, thickness_power, 0.25)]
-    if back:
-        specs.append(
-            ("back", back["size_u"], back["size_v"], back["cos_range"], back["cos_crit"],
-             back["y_crit"], 1, 0.5)
-        )
-    width = max(s[1] for s in specs) + 2
-    height = sum(s[2] + 2 for s in specs)
-    r = np.zeros((height, width, 4))
-    t = np.zeros((height, width, 4))
-    r[..., 3] = t[..., 3] = 1.0
-    charts, sides, row = [], {"front": None, "back": None}, 0
-    for k, (side, nu, nv, cos, cc, yc, power, blue) in enumerate(specs):
-        cr, ct = _synthetic_chart(nu, nv, blue)
-        r[row:row + nv + 2, : nu + 2] = cr
-        t[row:row + nv + 2, : nu + 2] = ct
-        charts.append({
-            "sides": [k],
-            "role": "whole domain",
-            "rect": [1, row + 1, nu, nv],
-            "params": {
-                "thickness_min_nm": 100.0,
-                "thickness_max_nm": 900.0,
-                "cos_min": cos[0],
-                "cos_max": cos[1],
-                "cos_crit": cc,
-                "y_crit": yc,
-                "thickness_power": power,
-                "x0": 1,
-                "y0": row + 1,
-                "width": nu,
-                "height": nv,
-            },
-        })
-        sides[side] = {"index": k, "chart": k}
-        row += nv + 2
-    _write_film(directory, r, t, {
-        "version": 2,
-        "domain": {"thickness_nm": [100.0, 900.0], "cos_theta": list(cos_range)},
-        "charts": charts,
-        "sides": sides,
-        "opaque": opaque,
-        "rough": None,
-    })
 
 
 def write_synthetic_atlas(directory, charts, sides, thickness_range, opaque, rough=None):
@@ -298,17 +244,13 @@ def write_synthetic_atlas(directory, charts, sides, thickness_range, opaque, rou
     })
 
 
-def expected_x(fraction, thickness_power):
-    """The export's thickness warp (docs/gpu.md), written out directly."""
-    x = min(max(fraction, 0.0), 1.0)
-    return math.sqrt(x) if thickness_power == 2 else x
-
-
-def expected_y(c, cos_min, cos_max, cos_crit, y_crit):
-    """The export's angle warp (docs/gpu.md), written out directly."""
-    c = min(max(c, cos_min), cos_max)
-    if cos_crit < 0:
-        return (c - cos_min) / (cos_max - cos_min)
-    if c >= cos_crit:
-        return y_crit + (1 - y_crit) * math.sqrt((c - cos_crit) / (cos_max - cos_crit))
-    return y_crit - y_crit * math.sqrt((cos_crit - c) / (cos_crit - cos_min))
+def write_linear_band(directory, size=(9, 7), thickness_range=(100.0, 900.0), opaque=False):
+    """A version 3 export of one band chart over the whole domain with
+    uniform axes (a = 0, p0 = 0, offset < 0): node (i, j) at thickness
+    min + i / (N_u - 1) of the range and cos θ j / (N_v - 1), so a render of
+    its Reflectance is (x, y) = (the thickness fraction, cos θ)."""
+    low, high = thickness_range
+    band = {"side": 0, "kind": 0, "a": 0.0, "floor": 1.0, "p0_nm": 0.0, "p_lo_nm": low,
+            "p_hi_nm": high, "cos_lo": 0.0, "cos_hi": 1.0, "anchor": 0.0, "offset": -1.0,
+            "size": size}
+    write_synthetic_atlas(directory, [band], {"front": [0], "back": None}, thickness_range, opaque)

@@ -1,4 +1,4 @@
-"""Cycles helpers for tools/blender/test_blender.py: the measuring scene,
+"""Cycles helpers for blender/tests/test_blender.py: the measuring scene,
 the materials it renders beside irid's, the irid command line, and the
 spheres picture of docs/blender.md."""
 
