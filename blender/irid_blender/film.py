@@ -45,11 +45,13 @@ def check_film(film, where):
     if not isinstance(film, dict):
         raise ExportError(f"{where}: expected a JSON object")
     if film.get("format") != FILM_FORMAT:
-        raise ExportError(f"{where}: format {film.get('format')!r}, expected {FILM_FORMAT!r}")
+        found = "is missing" if "format" not in film else f"{film['format']!r}"
+        raise ExportError(f"{where}: format {found}, expected {FILM_FORMAT!r}")
     version = film.get("version")
     if not is_whole(version) or version != FILM_VERSION:
+        found = "is missing" if "version" not in film else f"{version!r}"
         raise ExportError(
-            f"{where}: version {version!r}; this add-on reads version {FILM_VERSION} only: "
+            f"{where}: version {found}; this add-on reads version {FILM_VERSION} only: "
             "export the film again with this irid"
         )
     texture = require_object(film, "texture", where)
@@ -70,7 +72,8 @@ def check_film(film, where):
     if not isinstance(film.get("opaque"), bool):
         raise ExportError(f"{where}: opaque {film.get('opaque')!r}, expected true or false")
     if film.get("white") not in WHITES:
-        raise ExportError(f"{where}: white {film.get('white')!r}, expected 'd65' or 'e'")
+        found = "is missing" if "white" not in film else f"{film['white']!r}"
+        raise ExportError(f"{where}: white {found}, expected 'd65' or 'e'")
     require_object(film, "stack", where)
     if film.get("rough") is not None and not isinstance(film["rough"], dict):
         raise ExportError(f"{where}: rough is neither null nor an object")
