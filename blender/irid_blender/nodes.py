@@ -64,11 +64,12 @@ def build_group(group, export, images, ior):
         back = _atlas_uv(build, export.back, export.size, d, c, 6 * len(export.front) + 2)
         uv = _blend(build, uv, back, geometry.outputs["Backfacing"], 7.5, 3, "uv of the side")
 
-    colours = {}
-    for row, table in enumerate(TABLES):
-        tex = _image_node(build, images[table], 9, 1 + 2 * row, table)
-        build.link(uv, tex.inputs["Vector"])
-        colours[table] = tex.outputs["Color"]
+    # Both tables share the mapping, hence the texels and their weights.
+    corners, weights = _texel_corners(build, uv, export.size, 8.5, 1)
+    colours = {
+        table: _bilinear(build, images[table], corners, weights, 9, 1 + 3 * row, table)
+        for row, table in enumerate(TABLES)
+    }
     roughness = inputs.outputs["Roughness"] if export.rough is not None else None
     reflectance = colours["reflectance"]
     if roughness is not None:
@@ -111,19 +112,60 @@ def _set_roughness(build, bsdf, roughness):
         build.link(roughness, bsdf.inputs["Roughness"])
 
 
-def _image_node(build, image, column, row, label):
-    """An Image Texture node sampling like the GPU: bilinear, clamp to edge."""
-    tex = build.node(
-        "ShaderNodeTexImage",
-        column,
-        row,
-        label=label,
-        interpolation="Linear",
-        extension="EXTEND",
-        projection="FLAT",
-    )
-    tex.image = image
-    return tex
+def _texel_corners(build, uv, texture_size, column, row):
+    """The centres of the four texels around image coordinates uv, and the
+    weights between them (fractions along u and v): the bilinear filter's
+    inputs, computed in nodes so that every engine reads the same texels.
+    A texture unit's own linear filter would be the same numbers in Cycles,
+    but EEVEE's samples a mip level and anisotropic footprint chosen from
+    the screen-space derivatives of uv, which jump where the lookup changes
+    charts and grow at grazing angles: a seam at chart borders and speckles
+    at a sphere's rim."""
+    split = build.node("ShaderNodeSeparateXYZ", column, row, label="u, v")
+    build.link(uv, split.inputs["Vector"])
+    centres, weights = [], []
+    for k, (axis, size) in enumerate(zip("XY", texture_size)):
+        at = row + 0.5 * k
+        # Texel coordinates with texel i's centre at i: t = u · size − ½.
+        t = build.math("MULTIPLY_ADD", column + 0.5, at, split.outputs[axis], float(size), -0.5)
+        weight = build.math("FRACT", column + 1, at, t, label=f"weight along {axis}")
+        first = build.math("SUBTRACT", column + 1.5, at, t, weight, label=f"first texel along {axis}")
+        low = build.math("MULTIPLY_ADD", column + 2, at, first, 1.0 / size, 0.5 / size)
+        high = build.math("ADD", column + 2.5, at, low, 1.0 / size)
+        centres.append((low, high))
+        weights.append(weight)
+    corners = []
+    for v in centres[1]:
+        for u in centres[0]:
+            corner = build.node("ShaderNodeCombineXYZ", column + 3, row + 0.5 * len(corners))
+            build.link(u, corner.inputs["X"])
+            build.link(v, corner.inputs["Y"])
+            corners.append(corner.outputs["Vector"])
+    return corners, weights
+
+
+def _bilinear(build, image, corners, weights, column, row, label):
+    """The image's bilinear interpolation from its four texels at `corners`
+    (from _texel_corners), each read at its centre with Closest
+    interpolation (no filtering, no mip level), blended in math nodes."""
+    reads = []
+    for k, corner in enumerate(corners):
+        tex = build.node(
+            "ShaderNodeTexImage",
+            column,
+            row + 0.5 * k,
+            label=f"{label} texel {k}",
+            interpolation="Closest",
+            extension="EXTEND",
+            projection="FLAT",
+        )
+        tex.image = image
+        build.link(corner, tex.inputs["Vector"])
+        reads.append(tex.outputs["Color"])
+    along_u, along_v = weights
+    low = _blend(build, reads[0], reads[1], along_u, column + 0.5, row, f"{label} lower row")
+    high = _blend(build, reads[2], reads[3], along_u, column + 0.5, row + 1, f"{label} upper row")
+    return _blend(build, low, high, along_v, column + 2, row + 0.5, label)
 
 
 def _blend(build, a, b, weight, column, row, label):
@@ -174,9 +216,9 @@ def _rough_reflectance(build, export, image, d, c, roughness, smooth, geometry):
         moved = build.node("ShaderNodeVectorMath", 8.5, at, label="uv in the slice", operation="ADD")
         build.link(uv, moved.inputs[0])
         build.link(_slice_offset(build, rough, slice_, at), moved.inputs[1])
-        tex = _image_node(build, image, 9, at, f"rough slice {'above' if k else 'below'}")
-        build.link(moved.outputs["Vector"], tex.inputs["Vector"])
-        colours.append(tex.outputs["Color"])
+        corners, weights = _texel_corners(build, moved.outputs["Vector"], rough.size, 6.5, at)
+        label = f"rough slice {'above' if k else 'below'}"
+        colours.append(_bilinear(build, image, corners, weights, 9, at, label))
     f_eff = _blend(build, colours[0], colours[1], weight, 9.5, top + 3, "F_eff")
     use = build.math("GREATER_THAN", 9.5, top, roughness, 0.0, label="rough")
     if not export.rough_applies_to_back_faces():

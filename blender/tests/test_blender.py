@@ -23,7 +23,6 @@ Checks, each counted as one test:
   - add-on: register() and File > Import > irid film put the material in the
     active slot of the selected meshes, keeping their other slots, and cancel
     with a message when no mesh is selected;
-  - docs: every Python snippet of docs/blender.md that uses bpy imports it;
   - accuracy: `irid export --white e` of several stacks, the material in
     Cycles (CPU) on a large plane under a uniform white world, orthographic
     camera at 0, 30, 60 and 75 degrees to the normal (every pixel sees one
@@ -557,15 +556,6 @@ def test_white(results, irid, workdir):
                       ok and after == before, detail)
 
 
-def test_docs_snippets(results):
-    """Every Python snippet of docs/blender.md that uses bpy imports it."""
-    text = (REPO / "docs" / "blender.md").read_text()
-    blocks = re.findall(r"```python\n(.*?)```", text, re.S)
-    missing = [b.splitlines()[0] for b in blocks if "bpy." in b and "import bpy" not in b]
-    results.check("docs/blender.md: each snippet using bpy imports it", blocks and not missing,
-                  f"({len(blocks)} snippets; without the import: {missing})")
-
-
 def reversed_stack(path, out):
     """A stack file's reversal (seen from its substrate): written to `out`.
     Handles the forms the test's stacks use (n, [n, k], material, cauchy)."""
@@ -853,7 +843,6 @@ def main():
         test_atlas_mapping(results, bench, workdir)
         test_rough_refused(results, workdir)
         test_white(results, irid, workdir)
-        test_docs_snippets(results)
         table = measure(results, bench, irid, workdir)
         test_glass_side(results, bench, irid, workdir)
         test_layering(results, bench, irid, workdir)
