@@ -33,8 +33,6 @@ from pathlib import Path
 
 import numpy as np
 
-import bpy
-
 HERE = Path(__file__).resolve().parent
 REPO = HERE.parents[1]
 sys.path.insert(0, str(HERE))
