@@ -22,7 +22,8 @@ Checks, each counted as one test:
     an export for another white than Blender's, naming `--white e`;
   - add-on: register() and File > Import > irid film put the material in the
     active slot of the selected meshes, keeping their other slots, and cancel
-    with a message when no mesh is selected;
+    with a message when no mesh is selected; given no thickness, it takes
+    the middle of the export's range;
   - accuracy: `irid export --white e` of several stacks, the material in
     Cycles (CPU) on a large plane under a uniform white world, orthographic
     camera at 0, 30, 60 and 75 degrees to the normal (every pixel sees one
