@@ -3,7 +3,7 @@
 //! over a wavelength × angle grid (scalar, and each copy of the lane kernel),
 //! and one point's whole spectrum integrated to a colour as the validation
 //! and the direct film do it, on each copy. The layered stacks are the ones
-//! `tools/time_tmm.py` times in Python `tmm`.
+//! `tools/bench/time_tmm.py` times in Python `tmm`.
 
 // Not an API: criterion's macros generate undocumented public functions.
 #![allow(missing_docs)]
@@ -19,7 +19,7 @@ use irid::optics::{solve, solve_batch, Response, Stack, StackGrid};
 
 /// Ambient air, `layers` films alternating lossless (n = 1.5) and absorbing
 /// (n = 2.3 + 0.05i) with thicknesses 100, 107, 114, ... nm, on a gold-like
-/// substrate (0.27 + 2.9i): the same stacks as `tools/time_tmm.py`.
+/// substrate (0.27 + 2.9i): the same stacks as `tools/bench/time_tmm.py`.
 fn bench_stack(layers: usize) -> (Vec<C64>, Vec<f64>) {
     let mut n = vec![C64::new(1.0, 0.0)];
     let mut d = Vec::new();
@@ -57,7 +57,7 @@ fn single(c: &mut Criterion) {
 /// The same single-sample solves, timed as the fastest of many short runs
 /// (256 solves each): on this shared 2-core machine, other work preempts a
 /// run now and then, and the minimum is the closest estimate of the cost on
-/// an otherwise idle core. `tools/time_tmm.py` times Python tmm the same way.
+/// an otherwise idle core. `tools/bench/time_tmm.py` times Python tmm the same way.
 fn single_least_disturbed(c: &mut Criterion) {
     let mut g = c.benchmark_group("solve_min");
     for layers in [1usize, 2, 10, 100] {

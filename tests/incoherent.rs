@@ -4,7 +4,7 @@
 //! (opaque and zero-thickness layers, grazing incidence, a layer at and
 //! beyond its critical angle), and the batched loops against the point
 //! solver. Byrnes' `tmm.inc_tmm` is the reference of
-//! tools/crosscheck_incoherent.py and the Python tests.
+//! tools/crosscheck/crosscheck_incoherent.py and the Python tests.
 
 // Not an API: a test crate has no public API to document.
 #![allow(missing_docs)]

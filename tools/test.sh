@@ -33,7 +33,7 @@ step "Python cross-checks"
 python3 -m venv .venv
 .venv/bin/pip install --quiet --disable-pip-version-check -r tools/requirements.txt
 export IRID_BIN="$PWD/target/release/irid"
-for check in tools/crosscheck_*.py tools/read_lut.py; do
+for check in tools/crosscheck/crosscheck_*.py tools/crosscheck/read_lut.py; do
     step "$check"
     .venv/bin/python "$check"
 done
@@ -41,8 +41,8 @@ done
 # irid against tmm, colour-science and tmm-faster on the same grids: fails if
 # irid and Byrnes' tmm disagree beyond 1e-9. The committed figures in
 # benches/results/ come from a developer's run; this one writes elsewhere.
-step "tools/bench_peers.py"
-OMP_NUM_THREADS=2 .venv/bin/python tools/bench_peers.py -o "$(mktemp -d)"
+step "tools/bench/bench_peers.py"
+OMP_NUM_THREADS=2 .venv/bin/python tools/bench/bench_peers.py -o "$(mktemp -d)"
 
 # The Python package's extension, compiled once for the scripts that
 # install it (python.sh, mitsuba.sh); each builds its own when run alone.

@@ -5,8 +5,8 @@
 //!
 //! The lossless dielectrics are published dispersion fits, typed in here
 //! with their sources; the metals and TiO2 are measured n, k tables,
-//! extracted by `tools/extract_materials.py` into `tools/data/*.csv` and
-//! generated into `library_data.rs` by `tools/gen_materials.py`. Every fit
+//! extracted by `tools/gen/extract_materials.py` into `tools/gen/data/*.csv` and
+//! generated into `library_data.rs` by `tools/gen/gen_materials.py`. Every fit
 //! here was made over a range that covers the bakers' 360–830 nm (given
 //! with each source); beyond it a formula extrapolates. Tables end where
 //! their data ends, and asking beyond it is an error naming the material.
@@ -95,7 +95,7 @@ fn sellmeier_resonances(terms: &[(f64, f64)]) -> Dispersion {
 /// n² = 1 + 2(n − 1) + (n − 1)²: a Sellmeier form for n² with the small
 /// (n − 1)² term taken at 550 nm (7.72·10⁻⁸) into the constant. That
 /// reproduces Ciddor's n to 4·10⁻⁹ over 0.3–0.85 µm and 10⁻⁸ over
-/// 0.23–1.69 µm (tools/crosscheck_materials.py compares).
+/// 0.23–1.69 µm (tools/crosscheck/crosscheck_materials.py compares).
 fn air() -> Dispersion {
     let terms = [(0.05792105, 238.0185), (0.00167917, 57.362)];
     sellmeier(
@@ -188,7 +188,7 @@ mod tests {
     }
 
     /// TiO2 absorbs at the violet end the bakers integrate: at 380 nm Siefke
-    /// et al. give k ≈ 0.004 (the two rows around it in tools/data/tio2.csv,
+    /// et al. give k ≈ 0.004 (the two rows around it in tools/gen/data/tio2.csv,
     /// interpolated), where the lossless DeVore fit it replaces gave 0 and
     /// was only fitted from 430 nm.
     #[test]
