@@ -10,9 +10,6 @@
 (function (ns) {
   'use strict';
 
-  // The film.json version this page reads (docs/gpu.md): the atlas of
-  // charts (bands and a grazing corner per side) and its uniform array.
-  const FILM_VERSION = 3;
   const ENVIRONMENTS = { sky: 0, studio: 1, white: 2 };
   // A chart view: the quantity (0 R, 1 T) and the side (0 light from the
   // ambient, 1 from the substrate).
@@ -97,46 +94,28 @@
 
   function isNumber(x) { return typeof x === 'number' && Number.isFinite(x); }
 
+  // film.json by the one reader rule (web/film-json.js), then the fields
+  // the page reads beyond it, in the same one-line form.
   function checkFilm(film, where) {
-    const fail = (why) => { throw new Error(`${where}film.json: ${why}`); };
-    if (!film || typeof film !== 'object') fail('not an object');
-    if (film.format !== 'irid-film') fail(`format is ${JSON.stringify(film.format)}, not "irid-film"`);
-    if (film.version !== FILM_VERSION) {
-      fail(`version ${JSON.stringify(film.version)}: this page reads version ${FILM_VERSION}; export the film again with the irid that wrote this page`);
-    }
-    const tex = film.texture;
-    if (!tex || !Number.isInteger(tex.width) || !Number.isInteger(tex.height) || tex.width < 1 || tex.height < 1) {
-      fail('texture.width and texture.height must be positive integers');
-    }
-    const d = film.domain;
-    if (!d || !Array.isArray(d.thickness_nm) || !Array.isArray(d.cos_theta)
-      || ![...d.thickness_nm, ...d.cos_theta].every(isNumber)
-      || d.thickness_nm.length !== 2 || d.cos_theta.length !== 2) {
-      fail('domain.thickness_nm and domain.cos_theta must be [min, max] pairs');
-    }
-    if (!(d.thickness_nm[0] <= d.thickness_nm[1]) || !(d.cos_theta[0] < d.cos_theta[1])
-      || d.cos_theta[0] < 0 || d.cos_theta[1] > 1) {
-      fail('domain ranges are empty or out of order');
-    }
+    const file = `${where}film.json`;
+    ns.checkFilmJson(film, file);
+    const fail = (why) => { throw new Error(`${file}: ${why}`); };
     const u = film.uniform_f32;
     if (!Array.isArray(u) || u.length === 0 || u.length % 4 !== 0 || !u.every(isNumber)) {
       fail('uniform_f32 must be an array of numbers, whole vec4s');
     }
-    if (!Array.isArray(film.charts) || film.charts.length === 0
-      || !film.charts.every((c) => c && c.params && Object.values(c.params).every(isNumber))) {
-      fail('charts must list the atlas\'s charts, each with numeric params');
+    if (!film.charts.every((c) => c && c.params && Object.values(c.params).every(isNumber))) {
+      fail('charts must each have numeric params');
     }
     const charts = (side) => side && Array.isArray(side.charts) && side.charts.length > 0
       && side.charts.every((k) => Number.isInteger(k) && k >= 0 && k < film.charts.length);
-    if (!film.sides || !charts(film.sides.front) || !(film.sides.back === null || charts(film.sides.back))) {
+    if (!charts(film.sides.front) || !(film.sides.back === null || charts(film.sides.back))) {
       fail('sides.front must list its charts, sides.back its charts or be null');
     }
-    if (typeof film.opaque !== 'boolean') fail('opaque must be true or false');
     if (!film.opaque && !(film.refraction && isNumber(film.refraction.substrate_over_ambient)
       && film.refraction.substrate_over_ambient > 0)) {
       fail('refraction.substrate_over_ambient must be a positive number for a film that is not opaque');
     }
-    if (typeof film.white !== 'string') fail('white must be a string');
   }
 
   /**
@@ -178,13 +157,7 @@
   }
 
   async function loadExport(source) {
-    const text = await source.text('film.json');
-    let film;
-    try {
-      film = JSON.parse(text);
-    } catch (e) {
-      throw new Error(`${source.name}film.json: not valid JSON (${e.message})`);
-    }
+    const film = ns.readFilmJson(await source.text('film.json'), `${source.name}film.json`);
     checkFilm(film, source.name);
     const sampler = await source.text('irid_film_es.glsl');
     if (!/irid_film\s*\(/.test(sampler)) throw new Error(`${source.name}irid_film_es.glsl: defines no irid_film()`);
