@@ -18,7 +18,7 @@ import fs from 'node:fs';
 import os from 'node:os';
 import path from 'node:path';
 import { srgb8ToLinear, linearSrgbToLab, deltaE00 } from './colour.mjs';
-import { iridColor, launchChromium, serve, stacksFromEnv, stackWithThickness } from './harness.mjs';
+import { iridColor, launchChromium, reversedStack, serve, stacksFromEnv, stackWithThickness } from './harness.mjs';
 
 const PREVIEW = process.env.IRID_PREVIEW;
 const STACKS = stacksFromEnv();
@@ -137,26 +137,6 @@ async function compareChart(page, film, quantity, stackFile, side = 'front', rou
   const mean = differences.reduce((s, d) => s + d, 0) / differences.length;
   const max = Math.max(...differences);
   return { mean, max, points: differences.length };
-}
-
-/**
- * The stack of film.json seen from its substrate (reversed), as a stack file
- * in `dir`: for stacks of constant indices, which every back-side export of
- * the test has.
- */
-function reversedStack(film, dir) {
-  const index = (m) => {
-    const c = m.dispersion && m.dispersion.constant;
-    if (!c) throw new Error(`${m.name}: the test writes constant indices only`);
-    return `[${c.n}, ${c.k}]`;
-  };
-  const lines = [`ambient = { n = ${index(film.stack.substrate)} }`, `substrate = { n = ${index(film.stack.ambient)} }`];
-  for (const layer of [...film.stack.layers].reverse()) {
-    lines.push('[[layers]]', `n = ${index(layer.material)}`, `thickness_nm = ${layer.thickness_nm}`);
-  }
-  const file = path.join(dir, 'reversed.toml');
-  fs.writeFileSync(file, `${lines.join('\n')}\n`);
-  return file;
 }
 
 function readFilm(dir) {
@@ -428,7 +408,7 @@ test('a missing export, damaged ones, and no WebGL2 each show a message', async 
   fs.cpSync(path.join(root, dir), badJson, { recursive: true });
   fs.writeFileSync(path.join(badJson, 'film.json'), '{"format": "irid-film", "version": 1,');
   page = await open('?export=../bad-json/');
-  assert.match(await page.textContent('#message'), /film\.json: not valid JSON/);
+  assert.match(await page.textContent('#message'), /film\.json: not JSON/);
   await page.close();
 
   const truncated = path.join(root, 'truncated');
