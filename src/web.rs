@@ -15,14 +15,35 @@ use serde_json::{json, Map, Value};
 use crate::atomic::{OutputSet, Replace};
 use crate::error::{Error, Result};
 
-/// The page's files, as `web/` holds them.
-const ASSETS: [(&str, &str); 6] = [
+/// The page's files, as `web/` holds them (index.html loads the scripts).
+const ASSETS: [(&str, &str); 12] = [
     ("index.html", include_str!("../web/index.html")),
     ("style.css", include_str!("../web/style.css")),
     ("png16.js", include_str!("../web/png16.js")),
     ("exr.js", include_str!("../web/exr.js")),
     ("film-json.js", include_str!("../web/film-json.js")),
-    ("preview.js", include_str!("../web/preview.js")),
+    (
+        "preview/sources.js",
+        include_str!("../web/preview/sources.js"),
+    ),
+    (
+        "preview/export.js",
+        include_str!("../web/preview/export.js"),
+    ),
+    (
+        "preview/meshes.js",
+        include_str!("../web/preview/meshes.js"),
+    ),
+    (
+        "preview/matrices.js",
+        include_str!("../web/preview/matrices.js"),
+    ),
+    (
+        "preview/shaders.js",
+        include_str!("../web/preview/shaders.js"),
+    ),
+    ("preview/ggx.js", include_str!("../web/preview/ggx.js")),
+    ("preview/page.js", include_str!("../web/preview/page.js")),
 ];
 
 /// The file a preview folder is recognised by (and may be replaced for).
@@ -316,6 +337,8 @@ fn assemble(exports: &[Export], staging: &Path) -> Result<()> {
     fs::create_dir(staging).map_err(|e| Error::io(staging, e))?;
     let write =
         |path: PathBuf, bytes: &[u8]| fs::write(&path, bytes).map_err(|e| Error::io(&path, e));
+    let scripts = staging.join("preview");
+    fs::create_dir(&scripts).map_err(|e| Error::io(&scripts, e))?;
     for (name, text) in ASSETS {
         write(staging.join(name), text.as_bytes())?;
     }

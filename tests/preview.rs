@@ -70,7 +70,13 @@ fn writes_the_page_the_exports_and_their_embedded_copy() {
         "png16.js",
         "exr.js",
         "film-json.js",
-        "preview.js",
+        "preview/sources.js",
+        "preview/export.js",
+        "preview/meshes.js",
+        "preview/matrices.js",
+        "preview/shaders.js",
+        "preview/ggx.js",
+        "preview/page.js",
     ] {
         let repo = Path::new(env!("CARGO_MANIFEST_DIR"))
             .join("web")
@@ -80,6 +86,17 @@ fn writes_the_page_the_exports_and_their_embedded_copy() {
             fs::read(repo).unwrap(),
             "{asset}"
         );
+    }
+    // Every script the page loads is there.
+    let index = fs::read_to_string(out.join("index.html")).unwrap();
+    let scripts: Vec<&str> = index
+        .split("<script src=\"")
+        .skip(1)
+        .map(|rest| &rest[..rest.find('"').unwrap()])
+        .collect();
+    assert!(scripts.len() >= 10, "{scripts:?}");
+    for script in scripts {
+        assert!(out.join(script).is_file(), "index.html loads {script}");
     }
     // Both exports, the second renamed, copied whole.
     for (name, source) in [("soap", "soap"), ("soap-2", "other/soap")] {

@@ -1,5 +1,5 @@
 // The one film.json reader rule (docs/gpu.md, "Reading film.json: the one
-// rule"), for the browser preview (web/preview.js) and the three.js module
+// rule"), for the browser preview (web/preview/) and the three.js module
 // (web/irid-three.mjs, which imports this file for its side effect).
 //
 // A classic script, so that the preview opens from file://; as a module it

@@ -18,7 +18,7 @@ import fs from 'node:fs';
 import os from 'node:os';
 import path from 'node:path';
 import { srgb8ToLinear, linearSrgbToLab, deltaE00 } from './colour.mjs';
-import { iridColor, launchChromium, reversedStack, serve, stacksFromEnv, stackWithThickness } from './harness.mjs';
+import { REPO, iridColor, launchChromium, reversedStack, serve, stacksFromEnv, stackWithThickness } from './harness.mjs';
 
 const PREVIEW = process.env.IRID_PREVIEW;
 const STACKS = stacksFromEnv();
@@ -395,6 +395,27 @@ test('screenshot', async (t) => {
   await page.close();
 });
 
+test('film.json: every file of tests/film-json by the one reader rule (docs/gpu.md)', async () => {
+  fs.cpSync(path.join(REPO, 'tests/film-json'), path.join(root, 'film-json'), { recursive: true });
+  const page = await ready();
+  const read = (name) => page.evaluate(async (url) => {
+    try {
+      window.IridWeb.preview.readPreviewFilm(await (await fetch(url)).text(), url);
+      return null;
+    } catch (e) {
+      return e.message;
+    }
+  }, `/film-json/${name}`);
+  const cases = JSON.parse(fs.readFileSync(path.join(REPO, 'tests/film-json/cases.json'), 'utf8'));
+  for (const name of cases.good) assert.equal(await read(name), null, name);
+  for (const [name, field] of Object.entries(cases.bad)) {
+    const message = await read(name);
+    assert.ok(message !== null, `${name}: accepted`);
+    assert.ok(message.startsWith(`/film-json/${name}: `) && message.includes(field) && !message.includes('\n'), `${name}: ${message}`);
+  }
+  await page.close();
+});
+
 test('a missing export, damaged ones, and no WebGL2 each show a message', async () => {
   const dir = firstExportDir();
   const film = readFilm(dir);
@@ -638,7 +659,7 @@ test('rough: without the rough table the control is disabled and says why', asyn
   await page.close();
 });
 
-/** The page's sky (web/preview.js, irid_environment with u_environment 0), restated: linear RGB towards unit d. */
+/** The page's sky (web/preview/shaders.js, irid_environment with u_environment 0), restated: linear RGB towards unit d. */
 function sky(d) {
   const sun = (() => { const v = [0.45, 0.55, 0.7]; const l = Math.hypot(...v); return v.map((x) => x / l); })();
   const s = Math.max(d[0] * sun[0] + d[1] * sun[1] + d[2] * sun[2], 0);
