@@ -15,13 +15,35 @@ use serde_json::{json, Map, Value};
 use crate::atomic::{OutputSet, Replace};
 use crate::error::{Error, Result};
 
-/// The page's files, as `web/` holds them.
-const ASSETS: [(&str, &str); 5] = [
+/// The page's files, as `web/` holds them (index.html loads the scripts).
+const ASSETS: [(&str, &str); 12] = [
     ("index.html", include_str!("../web/index.html")),
     ("style.css", include_str!("../web/style.css")),
     ("png16.js", include_str!("../web/png16.js")),
     ("exr.js", include_str!("../web/exr.js")),
-    ("preview.js", include_str!("../web/preview.js")),
+    ("film-json.js", include_str!("../web/film-json.js")),
+    (
+        "preview/sources.js",
+        include_str!("../web/preview/sources.js"),
+    ),
+    (
+        "preview/export.js",
+        include_str!("../web/preview/export.js"),
+    ),
+    (
+        "preview/meshes.js",
+        include_str!("../web/preview/meshes.js"),
+    ),
+    (
+        "preview/matrices.js",
+        include_str!("../web/preview/matrices.js"),
+    ),
+    (
+        "preview/shaders.js",
+        include_str!("../web/preview/shaders.js"),
+    ),
+    ("preview/ggx.js", include_str!("../web/preview/ggx.js")),
+    ("preview/page.js", include_str!("../web/preview/page.js")),
 ];
 
 /// The file a preview folder is recognised by (and may be replaced for).
@@ -95,27 +117,7 @@ fn replaceable(out: &Path) -> bool {
 
 fn read_export(dir: &Path) -> Result<Export> {
     let film_path = dir.join("film.json");
-    let text = fs::read_to_string(&film_path).map_err(|e| Error::io(&film_path, e))?;
-    let film: Value = serde_json::from_str(&text)
-        .map_err(|e| Error::malformed(&film_path, format!("not valid JSON: {e}")))?;
-    if film.get("format").and_then(Value::as_str) != Some("irid-film") {
-        return Err(Error::malformed(
-            &film_path,
-            "not an irid export (its \"format\" is not \"irid-film\")",
-        ));
-    }
-    let version = film.get("version").and_then(Value::as_u64);
-    if version != Some(u64::from(crate::export::FILM_VERSION)) {
-        return Err(Error::malformed(
-            &film_path,
-            format!(
-                "version {}: this irid previews version {} (export the film again with it)",
-                film.get("version")
-                    .map_or("none".to_string(), |v| v.to_string()),
-                crate::export::FILM_VERSION
-            ),
-        ));
-    }
+    let film = read_film_json(&film_path)?;
     let texture = film
         .get("texture")
         .ok_or_else(|| Error::malformed(&film_path, "no \"texture\""))?;
@@ -164,6 +166,132 @@ fn read_export(dir: &Path) -> Result<Export> {
     Ok(Export { name, files, used })
 }
 
+/// Reads the film.json at `film_path` and checks it by the one reader rule
+/// ([`check_film_json`]).
+pub fn read_film_json(film_path: &Path) -> Result<Value> {
+    let text = fs::read_to_string(film_path).map_err(|e| Error::io(film_path, e))?;
+    let film: Value = serde_json::from_str(&text)
+        .map_err(|e| Error::malformed(film_path, format!("not JSON ({e})")))?;
+    check_film_json(&film, film_path)?;
+    Ok(film)
+}
+
+/// Checks film.json by the one reader rule (docs/gpu.md, "Reading
+/// film.json: the one rule"), as web/film-json.js does for the page and the
+/// three.js module; the error names `film_path` and the field.
+pub fn check_film_json(film: &Value, film_path: &Path) -> Result<()> {
+    match film_json_violation(film) {
+        None => Ok(()),
+        Some(why) => Err(Error::malformed(film_path, why)),
+    }
+}
+
+/// The first way `film` breaks the rule, as "field: what".
+fn film_json_violation(film: &Value) -> Option<String> {
+    let is_object = |v: Option<&Value>| v.is_some_and(Value::is_object);
+    let is_size = |v: Option<&Value>| v.and_then(Value::as_u64).is_some_and(|n| n >= 1);
+    let null_or_object = |v: Option<&Value>| v.is_none_or(|v| v.is_null() || v.is_object());
+    let Some(top) = film.as_object() else {
+        return Some("not a JSON object".into());
+    };
+    let format = top.get("format");
+    if format.and_then(Value::as_str) != Some(crate::export::FILM_FORMAT) {
+        return Some(format!(
+            "format is {}, not \"{}\"",
+            shown(format),
+            crate::export::FILM_FORMAT
+        ));
+    }
+    let version = top.get("version");
+    if version.and_then(Value::as_u64) != Some(u64::from(crate::export::FILM_VERSION)) {
+        return Some(format!(
+            "version {}: readers take version {} only; export the film again with this irid",
+            shown(version),
+            crate::export::FILM_VERSION
+        ));
+    }
+    let texture = top.get("texture");
+    let domain = top.get("domain");
+    let sides = top.get("sides");
+    let checks: [(bool, &str); 15] = [
+        (is_object(texture), "texture must be an object"),
+        (
+            is_size(field(texture, "width")),
+            "texture.width must be a positive integer",
+        ),
+        (
+            is_size(field(texture, "height")),
+            "texture.height must be a positive integer",
+        ),
+        (
+            is_object(field(texture, "row_check")),
+            "texture.row_check must be an object (export the film again with this irid)",
+        ),
+        (is_object(domain), "domain must be an object"),
+        (
+            is_range(field(domain, "thickness_nm"), f64::INFINITY),
+            "domain.thickness_nm must be [min, max] with 0 ≤ min ≤ max",
+        ),
+        (
+            is_range(field(domain, "cos_theta"), 1.0),
+            "domain.cos_theta must be [min, max] with 0 ≤ min ≤ max ≤ 1",
+        ),
+        (
+            top.get("charts")
+                .and_then(Value::as_array)
+                .is_some_and(|c| !c.is_empty()),
+            "charts must be a non-empty array",
+        ),
+        (is_object(sides), "sides must be an object"),
+        (
+            is_object(field(sides, "front")),
+            "sides.front must be an object",
+        ),
+        (
+            null_or_object(field(sides, "back")),
+            "sides.back must be an object or null",
+        ),
+        (
+            top.get("opaque").is_some_and(Value::is_boolean),
+            "opaque must be true or false",
+        ),
+        (
+            matches!(top.get("white").and_then(Value::as_str), Some("d65" | "e")),
+            "white must be \"d65\" or \"e\"",
+        ),
+        (is_object(top.get("stack")), "stack must be an object"),
+        (
+            null_or_object(top.get("rough")),
+            "rough must be an object or null",
+        ),
+    ];
+    checks
+        .into_iter()
+        .find(|(ok, _)| !ok)
+        .map(|(_, why)| why.to_string())
+}
+
+/// `value`'s field `key`, when `value` is there and has it.
+fn field<'a>(value: Option<&'a Value>, key: &str) -> Option<&'a Value> {
+    value.and_then(|v| v.get(key))
+}
+
+/// Whether `pair` is [min, max] of numbers with 0 ≤ min ≤ max ≤ `hi`.
+fn is_range(pair: Option<&Value>, hi: f64) -> bool {
+    let Some([lo, up]) = pair.and_then(Value::as_array).map(Vec::as_slice) else {
+        return false;
+    };
+    match (lo.as_f64(), up.as_f64()) {
+        (Some(a), Some(b)) => 0.0 <= a && a <= b && b <= hi,
+        _ => false,
+    }
+}
+
+/// A field's value as film.json spells it, or "missing".
+fn shown(value: Option<&Value>) -> String {
+    value.map_or("missing".to_string(), Value::to_string)
+}
+
 /// `name` when it is a file beside film.json: film.json names files there,
 /// never elsewhere.
 fn plain_file_name(name: &str, film_path: &Path) -> Result<String> {
@@ -209,6 +337,8 @@ fn assemble(exports: &[Export], staging: &Path) -> Result<()> {
     fs::create_dir(staging).map_err(|e| Error::io(staging, e))?;
     let write =
         |path: PathBuf, bytes: &[u8]| fs::write(&path, bytes).map_err(|e| Error::io(&path, e));
+    let scripts = staging.join("preview");
+    fs::create_dir(&scripts).map_err(|e| Error::io(&scripts, e))?;
     for (name, text) in ASSETS {
         write(staging.join(name), text.as_bytes())?;
     }

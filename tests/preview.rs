@@ -8,22 +8,29 @@ use std::path::Path;
 
 use common::{irid_in, Scratch};
 
+/// The shared film.json fixture (tests/film-json/, docs/gpu.md's reader rule).
+fn fixture(name: &str) -> std::path::PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/film-json")
+        .join(name)
+}
+
 /// A folder shaped like an export: the preview copies files and reads only
-/// film.json's format and texture names, so the textures need not decode.
-/// Without `exr`, film.json lists the PNGs only.
+/// film.json (by the reader rule) and its texture names, so the textures
+/// need not decode. Without `exr`, film.json lists the PNGs only.
 fn fake_export(dir: &Path, name: &str, exr: bool) {
     let d = dir.join(name);
     fs::create_dir_all(&d).unwrap();
-    let files = if exr {
-        r#"{"reflectance": "reflectance.exr", "transmittance": "transmittance.exr"}"#
+    let mut film: serde_json::Value =
+        serde_json::from_str(&fs::read_to_string(fixture("good/soap-film.json")).unwrap()).unwrap();
+    film["texture"]["files"] = if exr {
+        serde_json::json!({"reflectance": "reflectance.exr", "transmittance": "transmittance.exr"})
     } else {
-        "null"
+        serde_json::Value::Null
     };
-    let png =
-        r#"{"reflectance": "reflectance.png", "transmittance": "transmittance.png", "scale": 1.0}"#;
-    let film = format!(
-        r#"{{"format": "irid-film", "version": 3, "texture": {{"width": 2, "height": 2, "files": {files}, "png": {png}}}}}"#
-    );
+    film["texture"]["png"] = serde_json::json!(
+        {"reflectance": "reflectance.png", "transmittance": "transmittance.png", "scale": 1.0});
+    let film = serde_json::to_string_pretty(&film).unwrap();
     fs::write(d.join("film.json"), film).unwrap();
     fs::write(
         d.join("irid_film_es.glsl"),
@@ -62,7 +69,14 @@ fn writes_the_page_the_exports_and_their_embedded_copy() {
         "style.css",
         "png16.js",
         "exr.js",
-        "preview.js",
+        "film-json.js",
+        "preview/sources.js",
+        "preview/export.js",
+        "preview/meshes.js",
+        "preview/matrices.js",
+        "preview/shaders.js",
+        "preview/ggx.js",
+        "preview/page.js",
     ] {
         let repo = Path::new(env!("CARGO_MANIFEST_DIR"))
             .join("web")
@@ -72,6 +86,17 @@ fn writes_the_page_the_exports_and_their_embedded_copy() {
             fs::read(repo).unwrap(),
             "{asset}"
         );
+    }
+    // Every script the page loads is there.
+    let index = fs::read_to_string(out.join("index.html")).unwrap();
+    let scripts: Vec<&str> = index
+        .split("<script src=\"")
+        .skip(1)
+        .map(|rest| &rest[..rest.find('"').unwrap()])
+        .collect();
+    assert!(scripts.len() >= 10, "{scripts:?}");
+    for script in scripts {
+        assert!(out.join(script).is_file(), "index.html loads {script}");
     }
     // Both exports, the second renamed, copied whole.
     for (name, source) in [("soap", "soap"), ("soap-2", "other/soap")] {
@@ -139,7 +164,7 @@ fn bad_exports_and_destinations_are_one_line_errors() {
     fs::create_dir_all(d.join("broken")).unwrap();
     fs::write(d.join("broken/film.json"), "{\"format\": \"irid-film\",").unwrap();
     irid_in(d, ["preview", "broken", "-o", "out"])
-        .assert_one_line_error("damaged film.json", &["broken/film.json", "not valid JSON"]);
+        .assert_one_line_error("damaged film.json", &["broken/film.json", "not JSON"]);
 
     fs::write(d.join("broken/film.json"), "{\"format\": \"irid-lut\"}").unwrap();
     irid_in(d, ["preview", "broken", "-o", "out"])
@@ -155,6 +180,15 @@ fn bad_exports_and_destinations_are_one_line_errors() {
     .unwrap();
     irid_in(d, ["preview", "old", "-o", "out"])
         .assert_one_line_error("version 1", &["old/film.json", "version 1", "version 3"]);
+
+    // One field of the reader rule, through the CLI (every field: below).
+    fake_export(d, "no-domain", true);
+    let mut film: serde_json::Value =
+        serde_json::from_str(&fs::read_to_string(d.join("no-domain/film.json")).unwrap()).unwrap();
+    film.as_object_mut().unwrap().remove("domain");
+    fs::write(d.join("no-domain/film.json"), film.to_string()).unwrap();
+    irid_in(d, ["preview", "no-domain", "-o", "out"])
+        .assert_one_line_error("no domain", &["no-domain/film.json", "domain"]);
 
     fake_export(d, "escape", true);
     let film = fs::read_to_string(d.join("escape/film.json")).unwrap();
@@ -184,4 +218,39 @@ fn bad_exports_and_destinations_are_one_line_errors() {
     fs::write(d.join("file"), "x").unwrap();
     irid_in(d, ["preview", "soap", "-o", "file"])
         .assert_one_line_error("a file", &["file", "not a folder"]);
+}
+
+/// Every file of the shared fixture: the good ones read, each bad one
+/// refused in one line naming the file and the field cases.json gives.
+#[test]
+fn film_json_follows_the_one_reader_rule() {
+    let cases: serde_json::Value =
+        serde_json::from_str(&fs::read_to_string(fixture("cases.json")).unwrap()).unwrap();
+    let good = cases["good"].as_array().unwrap();
+    assert!(good.len() >= 2);
+    for name in good {
+        let path = fixture(name.as_str().unwrap());
+        if let Err(e) = irid::web::read_film_json(&path) {
+            panic!("{}: refused: {e}", path.display());
+        }
+    }
+    let bad = cases["bad"].as_object().unwrap();
+    assert!(bad.len() >= 30);
+    for (name, field) in bad {
+        let path = fixture(name);
+        let message = match irid::web::read_film_json(&path) {
+            Ok(_) => panic!("{name}: accepted"),
+            Err(e) => e.to_string(),
+        };
+        let field = field.as_str().unwrap();
+        assert!(!message.contains('\n'), "{name}: {message}");
+        assert!(
+            message.contains(&path.display().to_string()),
+            "{name}: {message}"
+        );
+        assert!(
+            message.contains(field),
+            "{name}: names not {field}: {message}"
+        );
+    }
 }

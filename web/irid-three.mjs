@@ -3,7 +3,8 @@
 //
 // An ES module with no build step; it imports 'three' (and, for the default
 // loader, 'three/addons/loaders/EXRLoader.js') through the page's import map,
-// as three.js's own add-ons do. Documented in docs/web.md.
+// as three.js's own add-ons do, and film-json.js from beside it (the
+// film.json reader rule). Documented in docs/web.md.
 //
 // With { rough: true } and an export holding the rough table, the film is on
 // a rough surface: R at v·h for analytic lights, F_eff (irid_film_rough_es.glsl
@@ -21,12 +22,21 @@
 //   - cos θ from the view direction, (0, 0, 1) in view space under an
 //     orthographic camera, not from the direction to the camera position;
 //   - the sampler's uniform block turned into plain uniforms (three.js's
-//     built-in materials take no uniform blocks), filled from film.json.
+//     built-in materials take no uniform blocks), filled from film.json;
+//   - the side of the film from the facing of the surface, whatever the
+//     material's side (FrontSide, BackSide, DoubleSide);
+//   - the film kept by material.clone().
 
 import * as THREE from 'three';
+// The one film.json reader rule (docs/gpu.md), shared with the browser
+// preview: a classic script that adds readFilmJson and checkFilmJson to
+// globalThis.IridWeb.
+import './film-json.js';
 
-/** film.json versions this module knows (docs/gpu.md: version 3, the atlas of bands and corners). */
-export const FILM_VERSIONS = [3];
+const { readFilmJson, checkFilmJson } = globalThis.IridWeb;
+
+/** The film.json version this module reads (docs/gpu.md: version 3, the atlas of bands and corners). */
+export const FILM_VERSION = globalThis.IridWeb.FILM_VERSION;
 
 const BLOCK = /layout\s*\(\s*std140\s*\)\s*uniform\s+(\w+)\s*\{([^}]*)\}\s*;/;
 const SIGNATURE = /IridFilm\s+irid_film\s*\(([^)]*)\)/;
@@ -36,16 +46,17 @@ function fail(where, why) {
   return new Error(`${where}: ${why}`);
 }
 
-/** Checks film.json's format and version; returns it. */
+/**
+ * Checks a parsed film.json by the one reader rule (docs/gpu.md, "Reading
+ * film.json: the one rule"); returns it. Errors name `where` and the field.
+ */
 export function checkFilm(film, where = 'film.json') {
-  if (!film || film.format !== 'irid-film') throw fail(where, 'not an irid film (no "format": "irid-film")');
-  if (!FILM_VERSIONS.includes(film.version)) {
-    throw fail(where, `version ${film.version} is not one this module reads (${FILM_VERSIONS.join(', ')}); export the film again with this irid`);
-  }
-  if (!film.texture?.row_check) {
-    throw fail(where, 'has no texture.row_check, so the row order of a loaded texture cannot be checked; export it again with this irid');
-  }
-  return film;
+  return checkFilmJson(film, where);
+}
+
+/** film.json's text, parsed and checked by the rule; errors name `where`. */
+export function readFilm(text, where = 'film.json') {
+  return readFilmJson(text, where);
 }
 
 // ---------------------------------------------------------------------------
@@ -136,6 +147,7 @@ function dataTexture(pixels, flipped) {
   texture.generateMipmaps = false;
   texture.flipY = false;
   texture.colorSpace = THREE.NoColorSpace; // linear data
+  texture.userData.iridFilm = true; // made here: addIridFilm binds it as it is
   texture.needsUpdate = true;
   return texture;
 }
@@ -172,9 +184,18 @@ export function roughTexture(film, loaded, reflectance, where = film.rough?.text
 // Loading an export folder
 
 async function fetchOk(url) {
-  const response = await fetch(url);
+  let response;
+  try {
+    response = await fetch(url);
+  } catch (e) {
+    throw fail(url, `cannot be read (${e.message})`);
+  }
   if (!response.ok) throw fail(url, `HTTP ${response.status}`);
   return response;
+}
+
+async function fetchText(url) {
+  return (await fetchOk(url)).text();
 }
 
 /** A three.js EXRLoader (half float, its default), imported on first use. */
@@ -189,28 +210,43 @@ async function defaultLoader() {
 }
 
 /**
+ * The texture at `file`, through `decode` (bytes → {width, height, data})
+ * or else the three.js loader `source`. A failure of either (a truncated
+ * or damaged file: "unexpected EOF", "invalid distance") names the file.
+ */
+async function loadTextureFile(file, source, decode) {
+  try {
+    return decode
+      ? await decode(new Uint8Array(await (await fetchOk(file)).arrayBuffer()), file)
+      : await source.loadAsync(file);
+  } catch (e) {
+    const message = e instanceof Error ? e.message : String(e);
+    throw message.startsWith(`${file}:`) ? e : fail(file, message);
+  }
+}
+
+/**
  * Reads an export folder at `url` (ending in '/'): film.json, the GLSL ES
  * sampler and both EXR textures, and, when film.json has the rough table
  * (`irid export --rough`), irid_film_rough_es.glsl and rough.exr; returns
  * what `addIridFilm` takes ({film, sampler, reflectance, transmittance,
- * rough}, rough null without the table).
+ * rough}, rough null without the table). Every error names the file.
  *
  * options.loader: a three.js loader with loadAsync (default: EXRLoader,
  *   half float); options.decode: instead, an async function (bytes, name) →
  *   {width, height, data}, e.g. IridWeb.decodeExr from web/exr.js.
  */
 export async function loadIridFilm(url, { loader, decode } = {}) {
-  const film = checkFilm(await (await fetchOk(`${url}film.json`)).json(), `${url}film.json`);
-  const sampler = await (await fetchOk(`${url}irid_film_es.glsl`)).text();
+  const filmFile = `${url}film.json`;
+  const film = readFilm(await fetchText(filmFile), filmFile);
+  const sampler = await fetchText(`${url}irid_film_es.glsl`);
   const files = film.texture.files;
-  if (!files) throw fail(`${url}film.json`, 'lists no EXR textures');
+  if (!files) throw fail(filmFile, 'texture.files lists no EXR textures');
   const source = decode ? null : loader ?? (await defaultLoader());
   const load = async (quantity) => {
+    if (typeof files[quantity] !== 'string') throw fail(filmFile, `texture.files.${quantity} must name a file`);
     const file = `${url}${files[quantity]}`;
-    const loaded = decode
-      ? await decode(new Uint8Array(await (await fetchOk(file)).arrayBuffer()), file)
-      : await source.loadAsync(file);
-    return filmTexture(film, quantity, loaded, file);
+    return filmTexture(film, quantity, await loadTextureFile(file, source, decode), file);
   };
   const [reflectance, transmittance] = await Promise.all([load('reflectance'), load('transmittance')]);
   let rough = null;
@@ -218,11 +254,10 @@ export async function loadIridFilm(url, { loader, decode } = {}) {
     // The rough table (irid export --rough): F_eff and its sampler.
     const shaders = film.rough.shaders ?? [];
     const shaderFile = shaders.find((f) => typeof f === 'string' && f.endsWith('_es.glsl')) ?? 'irid_film_rough_es.glsl';
-    const roughSampler = await (await fetchOk(`${url}${shaderFile}`)).text();
+    const roughSampler = await fetchText(`${url}${shaderFile}`);
+    if (typeof film.rough.texture?.file !== 'string') throw fail(filmFile, 'rough.texture.file must name the rough table\'s texture');
     const file = `${url}${film.rough.texture.file}`;
-    const loaded = decode
-      ? await decode(new Uint8Array(await (await fetchOk(file)).arrayBuffer()), file)
-      : await source.loadAsync(file);
+    const loaded = await loadTextureFile(file, source, decode);
     rough = { sampler: roughSampler, ...roughTexture(film, loaded, reflectance, file) };
   }
   return { film, sampler, reflectance, transmittance, rough };
@@ -299,9 +334,8 @@ function literal(type, value) {
 /**
  * How the material's shader calls irid_film. A sampler that takes the side
  * of the film (0: light from the ambient, the front; 1: from the substrate)
- * gets it from the facing of the surface: a front face is seen from the
- * ambient, a back face (a DoubleSide material seen from inside) from the
- * substrate; three.js turns the normal towards the eye on both.
+ * gets it from IRID_FROM_AMBIENT (FACING, below): the film is seen from the
+ * ambient on a geometric front face, from the substrate on a back face.
  */
 function filmCall(sampler) {
   const m = sampler.match(SIGNATURE);
@@ -309,10 +343,24 @@ function filmCall(sampler) {
   const types = m[1].split(',').map((p) => p.trim().split(/\s+/).slice(-2, -1)[0]);
   if (types.length === 2) return 'irid_film(irid_thickness_nm, irid_cos)';
   if (types.length === 3) {
-    return `irid_film(irid_thickness_nm, irid_cos, gl_FrontFacing ? ${literal(types[2], 0)} : ${literal(types[2], 1)})`;
+    return `irid_film(irid_thickness_nm, irid_cos, IRID_FROM_AMBIENT ? ${literal(types[2], 0)} : ${literal(types[2], 1)})`;
   }
   throw fail('irid_film_es.glsl', `irid_film takes ${types.length} parameters; this module knows 2 (thickness, cos θ) and 3 (and the side)`);
 }
+
+// Whether the fragment is on a geometric front face (its mesh normal
+// towards the eye), the film seen from the ambient. For side: BackSide
+// three.js turns the GL front face round (gl.frontFace(CW), or back for a
+// mirrored object), so gl_FrontFacing is true on the back faces it draws,
+// and defines FLIP_SIDED; FrontSide and DoubleSide keep it, so there
+// gl_FrontFacing is the geometric facing. three.js turns the shading
+// normal towards the eye in all three.
+const FACING = `
+#ifdef FLIP_SIDED
+#define IRID_FROM_AMBIENT ( ! gl_FrontFacing )
+#else
+#define IRID_FROM_AMBIENT gl_FrontFacing
+#endif`;
 
 /**
  * three.js's physical lighting with the film as the Fresnel term of
@@ -342,16 +390,100 @@ function replaceChunk(text, chunk, replacement) {
   return text.replace(chunk, replacement);
 }
 
+// The materials that have a film, and what addIridFilm made for each:
+// {uniforms, given, options}. Not in userData, which material.copy() and
+// clone() copy as JSON: a copy has no film until addIridFilm gives it one.
+const FILMS = new WeakMap();
+
+/**
+ * The texture to bind for `quantity`: filmTexture's own ({texture,
+ * flipped}) as it is; a texture loaded any other way (a plain EXRLoader's
+ * DataTexture, whose rows are upside down, or {width, height, data})
+ * through filmTexture, which reads film.json's row check and puts flipped
+ * rows back. Returns {texture, flipped}.
+ */
+function boundTexture(film, quantity, given) {
+  if (given?.texture?.userData?.iridFilm) return given;
+  if (given?.userData?.iridFilm) return { texture: given, flipped: false };
+  return filmTexture(film, quantity, given);
+}
+
+/** The rough texture to bind, as boundTexture does for the film's own. */
+function boundRoughTexture(film, given, reflectance) {
+  if (given?.texture?.userData?.iridFilm) return given.texture;
+  if (given?.userData?.iridFilm) return given;
+  return roughTexture(film, given, reflectance).texture;
+}
+
+/** The rough sampler's code and uniforms (irid_film_rough and the material's roughness). */
+function roughProgram(film, rough, reflectance, material) {
+  const unblocked = unblock(rough.sampler, { ...film.rough, prefix: 'rough.', file: 'irid_film_rough_es.glsl' });
+  if (!/vec3\s+irid_film_rough\s*\(/.test(unblocked.code)) throw fail('irid_film_rough_es.glsl', 'declares no vec3 irid_film_rough(...)');
+  return {
+    code: `${unblocked.code}\nuniform float irid_roughness;`,
+    uniforms: {
+      ...unblocked.uniforms,
+      irid_rough: { value: boundRoughTexture(film, rough.texture, reflectance) },
+      // F_eff's roughness is the material's own, read at every draw.
+      irid_roughness: { get value() { return material.roughness; } },
+    },
+  };
+}
+
+/**
+ * What goes after #include <lights_fragment_end>: the specular light
+ * weighted by the film's R at the angle between the shading normal and the
+ * direction to the eye (smooth); with the rough table, the environment
+ * light by F_eff (the analytic lights took the film at v·h in BRDF_GGX). The
+ * rough table holds light from the ambient; seen from the substrate the
+ * environment light takes the smooth film's R at n·v.
+ */
+function filmLighting(call, useRough) {
+  const weight = useRough
+    ? `		reflectedLight.indirectSpecular *= IRID_FROM_AMBIENT
+			? irid_film_rough( irid_thickness_nm, irid_cos, irid_roughness )
+			: ${call}.reflectance;`
+    : `		IridFilm irid = ${call};
+		reflectedLight.directSpecular *= irid.reflectance;
+		reflectedLight.indirectSpecular *= irid.reflectance;`;
+  return `#include <lights_fragment_end>
+	{
+		// cos θ between the shading normal and the direction to the eye, in
+		// view space: (0, 0, 1) under an orthographic camera, towards the
+		// camera position under a perspective one.
+		vec3 irid_view = isOrthographic ? vec3( 0.0, 0.0, 1.0 ) : normalize( vViewPosition );
+		float irid_cos = saturate( dot( normal, irid_view ) );
+${weight}
+	}`;
+}
+
+/**
+ * material.clone() as three.js makes it (a new material, copy()), with the
+ * film added again: the same export and options, the thickness it has now.
+ */
+function keepFilmOnClone(material) {
+  material.clone = function cloneWithFilm() {
+    const copy = Object.getPrototypeOf(this).clone.call(this);
+    const { given, options, uniforms } = FILMS.get(this);
+    addIridFilm(copy, given, options).irid_thickness_nm.value = uniforms.irid_thickness_nm.value;
+    return copy;
+  };
+}
+
 /**
  * Puts a loaded export (from loadIridFilm, or {film, sampler, reflectance,
- * transmittance} with textures from filmTexture) on a MeshStandardMaterial
- * or MeshPhysicalMaterial: after the lights are summed, the specular light
- * (direct and from the environment) is multiplied by the film's R at the
- * material's thickness and the angle between the shading normal and the
- * direction to the eye. With a white metal base (color 0xffffff,
- * metalness 1) three.js's own Fresnel is 1 and what the material reflects is
- * R alone. Returns the uniforms; `irid_thickness_nm.value` is the thickness
- * in nm (starts at the middle of the export's range).
+ * transmittance} with textures from filmTexture or from any loader, rows in
+ * either order) on a MeshStandardMaterial or MeshPhysicalMaterial: after
+ * the lights are summed, the specular light (direct and from the
+ * environment) is multiplied by the film's R at the material's thickness
+ * and the angle between the shading normal and the direction to the eye,
+ * on the side of the film the eye sees (front faces: from the ambient; back
+ * faces, of side: THREE.BackSide or DoubleSide: from the substrate). With a
+ * white metal base (color 0xffffff, metalness 1) three.js's own Fresnel is
+ * 1 and what the material reflects is R alone. Returns the uniforms (also
+ * iridUniforms(material)); `irid_thickness_nm.value` is the thickness in nm
+ * (starts at the middle of the export's range). material.clone() keeps the
+ * film.
  *
  * options.rough (an export made with `irid export --rough`): the film on a
  * rough (GGX) surface of the material's roughness, as docs/rough.md says a
@@ -362,58 +494,45 @@ function replaceChunk(text, chunk, replacement) {
  * material.roughness). An export without the rough table is refused, never
  * replaced by the smooth film.
  */
-export function addIridFilm(material, { film, sampler, reflectance, transmittance, rough = null }, { rough: useRough = false } = {}) {
+export function addIridFilm(material, given, options = {}) {
+  const { film, sampler, transmittance, rough = null } = given;
+  const useRough = options.rough ?? false;
   checkFilm(film);
-  if (material.userData.iridFilm) throw new Error('addIridFilm: this material has a film already; make a new material');
+  if (FILMS.has(material)) throw new Error('addIridFilm: this material has a film already; make a new material');
   if (useRough && !rough) {
     throw fail('film.json', 'has no rough table, which addIridFilm(..., { rough: true }) needs; export the film with `irid export STACK --rough`');
   }
   const { code, uniforms: params } = unblock(sampler, { ...film, prefix: '', file: 'irid_film_es.glsl' });
   const call = filmCall(sampler);
+  const reflectance = boundTexture(film, 'reflectance', given.reflectance);
   const [tMin, tMax] = film.domain.thickness_nm;
   const uniforms = {
     ...params,
-    irid_reflectance: { value: reflectance.texture ?? reflectance },
-    irid_transmittance: { value: transmittance.texture ?? transmittance },
+    irid_reflectance: { value: reflectance.texture },
+    irid_transmittance: { value: boundTexture(film, 'transmittance', transmittance).texture },
     irid_thickness_nm: { value: (tMin + tMax) / 2 },
   };
-  let roughCode = '';
-  if (useRough) {
-    const unblocked = unblock(rough.sampler, { ...film.rough, prefix: 'rough.', file: 'irid_film_rough_es.glsl' });
-    if (!/vec3\s+irid_film_rough\s*\(/.test(unblocked.code)) throw fail('irid_film_rough_es.glsl', 'declares no vec3 irid_film_rough(...)');
-    roughCode = `${unblocked.code}\nuniform float irid_roughness;`;
-    Object.assign(uniforms, unblocked.uniforms, {
-      irid_rough: { value: rough.texture.texture ?? rough.texture },
-      // F_eff's roughness is the material's own, read at every draw.
-      irid_roughness: { get value() { return material.roughness; } },
-    });
-  }
+  const roughPart = useRough ? roughProgram(film, rough, reflectance, material) : { code: '', uniforms: {} };
+  Object.assign(uniforms, roughPart.uniforms);
   const before = material.onBeforeCompile;
   material.onBeforeCompile = (shader, renderer) => {
     before.call(material, shader, renderer);
     Object.assign(shader.uniforms, uniforms);
-    let fs = replaceChunk(shader.fragmentShader, '#include <common>', `#include <common>\n${code}\n${roughCode}\nuniform float irid_thickness_nm;`);
+    let fs = replaceChunk(shader.fragmentShader, '#include <common>',
+      `#include <common>\n${FACING}\n${code}\n${roughPart.code}\nuniform float irid_thickness_nm;`);
     if (useRough) fs = replaceChunk(fs, '#include <lights_physical_pars_fragment>', roughLights(call));
-    fs = replaceChunk(fs, '#include <lights_fragment_end>', `#include <lights_fragment_end>
-	{
-		// cos θ between the shading normal and the direction to the eye, in
-		// view space: (0, 0, 1) under an orthographic camera, towards the
-		// camera position under a perspective one.
-		vec3 irid_view = isOrthographic ? vec3( 0.0, 0.0, 1.0 ) : normalize( vViewPosition );
-		float irid_cos = saturate( dot( normal, irid_view ) );
-${useRough ? `		// Rough: the analytic lights took the film at v·h in BRDF_GGX; the
-		// environment light is the lobe's, so F_eff at n·v and the roughness.
-		reflectedLight.indirectSpecular *= irid_film_rough( irid_thickness_nm, irid_cos, irid_roughness );`
-    : `		IridFilm irid = ${call};
-		reflectedLight.directSpecular *= irid.reflectance;
-		reflectedLight.indirectSpecular *= irid.reflectance;`}
-	}`);
-    shader.fragmentShader = fs;
+    shader.fragmentShader = replaceChunk(fs, '#include <lights_fragment_end>', filmLighting(call, useRough));
   };
   const key = material.customProgramCacheKey.bind(material);
-  const own = `irid-film-${hash(code + roughCode)}`;
+  const own = `irid-film-${hash(code + roughPart.code)}`;
   material.customProgramCacheKey = () => `${key()}|${own}`;
-  material.userData.iridFilm = true;
+  FILMS.set(material, { uniforms, given, options });
+  keepFilmOnClone(material);
   material.needsUpdate = true;
   return uniforms;
+}
+
+/** The uniforms of the film on `material` (as addIridFilm returned them), or null when it has none. */
+export function iridUniforms(material) {
+  return FILMS.get(material)?.uniforms ?? null;
 }

@@ -86,3 +86,23 @@ export function iridColor(stackFile, angles, roughness = null) {
   if (colours.length !== angles.length) throw new Error(`irid color gave ${colours.length} colours for ${angles.length} angles`);
   return colours;
 }
+
+/**
+ * The stack of film.json seen from its substrate (reversed), as a stack file
+ * in `dir`: for stacks of constant indices, which every back-side export of
+ * the test has.
+ */
+export function reversedStack(film, dir) {
+  const index = (m) => {
+    const c = m.dispersion && m.dispersion.constant;
+    if (!c) throw new Error(`${m.name}: the test writes constant indices only`);
+    return `[${c.n}, ${c.k}]`;
+  };
+  const lines = [`ambient = { n = ${index(film.stack.substrate)} }`, `substrate = { n = ${index(film.stack.ambient)} }`];
+  for (const layer of [...film.stack.layers].reverse()) {
+    lines.push('[[layers]]', `n = ${index(layer.material)}`, `thickness_nm = ${layer.thickness_nm}`);
+  }
+  const file = path.join(dir, 'reversed.toml');
+  fs.writeFileSync(file, `${lines.join('\n')}\n`);
+  return file;
+}

@@ -15,7 +15,7 @@ import fs from 'node:fs';
 import os from 'node:os';
 import path from 'node:path';
 import { linearSrgbToLab, deltaE00 } from './colour.mjs';
-import { HERE, REPO, iridColor, launchChromium, serve, stacksFromEnv, stackWithThickness } from './harness.mjs';
+import { HERE, REPO, iridColor, launchChromium, reversedStack, serve, stacksFromEnv, stackWithThickness } from './harness.mjs';
 
 const PREVIEW = process.env.IRID_PREVIEW;
 const STACKS = stacksFromEnv();
@@ -44,8 +44,11 @@ let size;
 const geometry = {};
 
 before(async () => {
+  scratch = fs.mkdtempSync(path.join(os.tmpdir(), 'irid-three-'));
   ({ server, baseUrl } = await serve([
     ['/exports/', path.join(PREVIEW, 'exports')],
+    ['/scratch/', scratch],
+    ['/film-json/', path.join(REPO, 'tests/film-json')],
     ['/web/', path.join(REPO, 'web')],
     ['/three/', path.join(HERE, 'node_modules/three')],
     ['/tools/', HERE],
@@ -57,7 +60,6 @@ before(async () => {
   page.on('console', (m) => { if (m.type() === 'error') page.errors.push(m.text()); });
   await page.goto(`${baseUrl}/tools/three_sphere.html`);
   await page.waitForFunction(() => document.body.dataset.state === 'ready', null, { timeout: 60000 });
-  scratch = fs.mkdtempSync(path.join(os.tmpdir(), 'irid-three-'));
   size = await page.evaluate(() => window.threeCheck.size);
   for (const camera of ['perspective', 'orthographic']) {
     geometry[camera] = await page.evaluate((c) => window.threeCheck.geometry(c), camera);
@@ -245,8 +247,8 @@ test('a texture that is not the export\'s, a film.json without row check or of a
   const refusal = (kind) => page.evaluate(([u, k]) => window.threeCheck.refusal(u, k), [url, kind]);
   assert.match(await refusal('swapped'), /^transmittance\.exr: texel \(\d+, \d+\) holds .*not this export's texture$/);
   assert.match(await refusal('size'), /^reflectance\.exr: \d+ × \d+ texels, film\.json says \d+ × \d+$/);
-  assert.match(await refusal('no row check'), /^film\.json: has no texture\.row_check/);
-  assert.match(await refusal('version'), /^film\.json: version 99 is not one this module reads/);
+  assert.match(await refusal('no row check'), /^film\.json: texture\.row_check must be an object/);
+  assert.match(await refusal('version'), /^film\.json: version 99: readers take version 3 only/);
 });
 
 // ------------------------------------------------------------------ rough films
@@ -323,4 +325,169 @@ test('rough: { rough: true } with an export that has no rough table is refused b
   assert.ok(other, 'every export has the rough table: the test needs one without');
   const message = await page.evaluate((url) => window.threeCheck.roughRefusal(url), `/exports/${other}/`);
   assert.match(message ?? '', /^film\.json: has no rough table.*irid export STACK --rough/);
+});
+
+// ------------------------------------------------------------------ natural steps off the path
+
+test('film.json: every file of tests/film-json by the one reader rule (docs/gpu.md)', async () => {
+  const cases = JSON.parse(fs.readFileSync(path.join(REPO, 'tests/film-json/cases.json'), 'utf8'));
+  for (const name of cases.good) {
+    assert.equal(await page.evaluate((u) => window.threeCheck.readError(u), `/film-json/${name}`), null, name);
+  }
+  for (const [name, field] of Object.entries(cases.bad)) {
+    const url = `/film-json/${name}`;
+    const message = await page.evaluate((u) => window.threeCheck.readError(u), url);
+    assert.ok(message !== null, `${name}: accepted`);
+    assert.ok(message.startsWith(`${url}: `) && message.includes(field) && !message.includes('\n'), `${name}: ${message}`);
+  }
+});
+
+/** Renders the loaded film at `thickness`s, as seen on `faces`, against the stack as seen from that side. */
+function compareLoaded(name, film, camera, faces) {
+  return async (thickness) => {
+    const rgba = await render(camera, thickness);
+    if (faces === 'front') return compareSphere(rgba, geometry[camera], STACKS.get(name), film, thickness);
+    // The film from the substrate: the reversed stack, its varying layer
+    // counted from that side.
+    const stack = reversedStack(film, scratch);
+    return compareSphere(rgba, backGeometry[camera], stack, { ...film, layer: film.sides.back.layer }, thickness);
+  };
+}
+
+/** ΔE00 over two thicknesses of the loaded film against the exact colour of `faces` ('front' or 'back'). */
+async function sphereError(name, camera, faces) {
+  const film = readFilm(name);
+  const [t0, t1] = film.domain.thickness_nm;
+  const compare = compareLoaded(name, film, camera, faces);
+  const parts = [];
+  for (const f of [0.3, 0.7]) parts.push(await compare(t0 + f * (t1 - t0)));
+  const points = parts.reduce((s, r) => s + r.points, 0);
+  return { mean: parts.reduce((s, r) => s + r.mean * r.points, 0) / points, max: Math.max(...parts.map((r) => r.max)), points };
+}
+
+/** Per camera, cos θ of the sphere's back faces (its inside, as an outside camera sees it). */
+const backGeometry = {};
+
+/** The export of IRID_STACKS with a back side where light can be totally reflected (coated glass). */
+function glassExport() {
+  for (const name of STACKS.keys()) {
+    const film = readFilm(name);
+    if (film.sides.back && film.sides.back.critical_cos !== null && !film.opaque) return [name, film];
+  }
+  throw new Error('no export of IRID_STACKS has a back side with a critical angle (e.g. tests/blender/film-on-glass.toml)');
+}
+
+test('side: THREE.BackSide and DoubleSide show the film from the substrate on inner faces, past the critical angle too', async () => {
+  const [name, film] = glassExport();
+  const e = film.error.back;
+  const bound = { mean: Math.max(MEAN_BOUND, 2 * e.mean_delta_e00[0]), max: Math.max(MAX_BOUND, e.max_delta_e00[0]) };
+  for (const camera of ['perspective', 'orthographic']) {
+    backGeometry[camera] = await page.evaluate((c) => window.threeCheck.geometry(c, 'back'), camera);
+  }
+  await page.evaluate((url) => window.threeCheck.load(url, 'EXRLoader half'), `/exports/${name}/`);
+  // Past the critical angle (cos below critical_cos) the film reflects
+  // everything: the test needs pixels there.
+  const critical = film.sides.back.critical_cos;
+  const beyond = backGeometry.orthographic.filter((c, i) => i % 4 === 0 && c > COS_MIN && c < critical).length;
+  console.log(`${name}: ${beyond} orthographic pixels of the inner faces past the critical angle (cos θ < ${critical.toFixed(4)})`);
+  assert.ok(beyond > 500, `${beyond} pixels past the critical angle`);
+  const cases = [['BackSide', false, 'perspective'], ['BackSide', false, 'orthographic'], ['DoubleSide', true, 'orthographic']];
+  for (const [side, farHalf, camera] of cases) {
+    await page.evaluate(([s, h]) => window.threeCheck.setSide(s, h), [side, farHalf]);
+    const r = await sphereError(name, camera, 'back');
+    console.log(`${name}, side: ${side}${farHalf ? ' (far half)' : ''}, ${camera}: against the film from the substrate `
+      + `ΔE00 mean ${r.mean.toFixed(4)}, max ${r.max.toFixed(4)} over ${r.points} pixels (2 thicknesses)`);
+    assert.ok(r.points > 1000, `${r.points} pixels`);
+    assert.ok(r.mean <= bound.mean && r.max <= bound.max, `${side} ${camera}: ΔE00 mean ${r.mean}, max ${r.max}`);
+  }
+  // DoubleSide's front faces are still the film from the ambient.
+  await page.evaluate(() => window.threeCheck.setSide('DoubleSide'));
+  const front = await sphereError(name, 'orthographic', 'front');
+  const frontBound = bounds(film);
+  console.log(`${name}, side: DoubleSide, front faces: ΔE00 mean ${front.mean.toFixed(4)}, max ${front.max.toFixed(4)}`);
+  assert.ok(front.mean <= frontBound.mean && front.max <= frontBound.max, `DoubleSide front: ΔE00 mean ${front.mean}, max ${front.max}`);
+  assert.deepEqual(page.errors, []);
+});
+
+test('textures from a plain EXRLoader (rows upside down) given to addIridFilm are read right side up', async () => {
+  for (const name of [...STACKS.keys()].filter((n) => ['soap-film', 'film-on-copper'].includes(n))) {
+    await page.evaluate((url) => window.threeCheck.loadPlain(url), `/exports/${name}/`);
+    const bound = bounds(readFilm(name));
+    for (const camera of ['perspective', 'orthographic']) {
+      const r = await sphereError(name, camera, 'front');
+      console.log(`${name}, a plain EXRLoader's textures, ${camera}: ΔE00 mean ${r.mean.toFixed(4)}, max ${r.max.toFixed(4)} over ${r.points} pixels`);
+      assert.ok(r.mean <= bound.mean && r.max <= bound.max, `${name} ${camera}: ΔE00 mean ${r.mean}, max ${r.max}`);
+    }
+  }
+  assert.deepEqual(page.errors, []);
+});
+
+test('material.clone() keeps the film and its thickness; addIridFilm on a copied material gives it one', async () => {
+  const name = [...STACKS.keys()][0];
+  const bound = bounds(readFilm(name));
+  for (const how of ['clone', 'copy']) {
+    await page.evaluate((url) => window.threeCheck.load(url, 'EXRLoader half'), `/exports/${name}/`);
+    const copied = await page.evaluate((h) => window.threeCheck.replaceMaterial(h), how);
+    if (how === 'clone') assert.deepEqual(copied, { film: true, thicknessKept: true }, 'the clone has the film');
+    else assert.deepEqual(copied, { film: false }, 'a copy has no film before addIridFilm');
+    const r = await sphereError(name, 'orthographic', 'front');
+    console.log(`${name}, ${how === 'clone' ? 'material.clone()' : 'addIridFilm(new material().copy(material))'}: `
+      + `ΔE00 mean ${r.mean.toFixed(4)}, max ${r.max.toFixed(4)} over ${r.points} pixels`);
+    assert.ok(r.mean <= bound.mean && r.max <= bound.max, `${how}: ΔE00 mean ${r.mean}, max ${r.max}`);
+  }
+  assert.deepEqual(page.errors, []);
+});
+
+/** Where an OpenEXR file's header ends (its offset table starts): after the attributes' closing null byte. */
+function exrHeaderEnd(bytes) {
+  let at = 8; // magic number and version
+  while (bytes[at] !== 0) {
+    at = bytes.indexOf(0, at) + 1; // name
+    at = bytes.indexOf(0, at) + 1; // type
+    at += 4 + bytes.readInt32LE(at); // size and value
+  }
+  return at + 1;
+}
+
+test('loader errors name the file: a truncated or damaged EXR, a film.json that is not JSON or has no domain', async () => {
+  const name = [...STACKS.keys()][0];
+  const source = path.join(PREVIEW, 'exports', name);
+  const film = readFilm(name);
+  const texture = film.texture.files.reflectance;
+  const variant = (folder, change) => {
+    fs.cpSync(source, path.join(scratch, folder), { recursive: true });
+    change(path.join(scratch, folder));
+    return `/scratch/${folder}/`;
+  };
+  const truncated = variant('truncated', (d) => {
+    const bytes = fs.readFileSync(path.join(d, texture));
+    fs.writeFileSync(path.join(d, texture), bytes.subarray(0, bytes.length - 200));
+  });
+  const damaged = variant('damaged', (d) => {
+    // The first block's deflate stream (after its y, its size and the
+    // 2-byte zlib header) overwritten with 0xff: an invalid block type.
+    const bytes = fs.readFileSync(path.join(d, texture));
+    const block = Number(bytes.readBigUInt64LE(exrHeaderEnd(bytes)));
+    bytes.fill(0xff, block + 10, block + 8 + bytes.readInt32LE(block + 4));
+    fs.writeFileSync(path.join(d, texture), bytes);
+  });
+  const notJson = variant('not-json', (d) => fs.writeFileSync(path.join(d, 'film.json'), '{"format": "irid-film",'));
+  const noDomain = variant('no-domain', (d) => {
+    const { domain, ...rest } = film;
+    fs.writeFileSync(path.join(d, 'film.json'), JSON.stringify(rest));
+  });
+  const cases = [
+    [truncated, 'EXRLoader half', texture], [truncated, 'EXRLoader float', texture], [truncated, 'exr.js float', texture],
+    [damaged, 'EXRLoader half', texture], [damaged, 'exr.js float', texture],
+    [notJson, 'EXRLoader half', 'film.json', /: not JSON \(/], [noDomain, 'EXRLoader half', 'film.json', /: domain must be an object$/],
+  ];
+  for (const [url, route, file, what = /./] of cases) {
+    const message = await page.evaluate(([u, r]) => window.threeCheck.loadError(u, r), [url, route]);
+    console.log(`${url}, ${route}: ${message}`);
+    assert.ok(message !== null, `${url} ${route}: loaded`);
+    assert.ok(message.startsWith(`${url}${file}: `) && !message.includes('\n'), `${url} ${route}: ${message}`);
+    assert.match(message, what);
+  }
+  page.errors = page.errors.filter((e) => !/Failed to load resource/.test(e));
+  assert.deepEqual(page.errors, []);
 });

@@ -18,7 +18,7 @@ import fs from 'node:fs';
 import os from 'node:os';
 import path from 'node:path';
 import { srgb8ToLinear, linearSrgbToLab, deltaE00 } from './colour.mjs';
-import { iridColor, launchChromium, serve, stacksFromEnv, stackWithThickness } from './harness.mjs';
+import { REPO, iridColor, launchChromium, reversedStack, serve, stacksFromEnv, stackWithThickness } from './harness.mjs';
 
 const PREVIEW = process.env.IRID_PREVIEW;
 const STACKS = stacksFromEnv();
@@ -137,26 +137,6 @@ async function compareChart(page, film, quantity, stackFile, side = 'front', rou
   const mean = differences.reduce((s, d) => s + d, 0) / differences.length;
   const max = Math.max(...differences);
   return { mean, max, points: differences.length };
-}
-
-/**
- * The stack of film.json seen from its substrate (reversed), as a stack file
- * in `dir`: for stacks of constant indices, which every back-side export of
- * the test has.
- */
-function reversedStack(film, dir) {
-  const index = (m) => {
-    const c = m.dispersion && m.dispersion.constant;
-    if (!c) throw new Error(`${m.name}: the test writes constant indices only`);
-    return `[${c.n}, ${c.k}]`;
-  };
-  const lines = [`ambient = { n = ${index(film.stack.substrate)} }`, `substrate = { n = ${index(film.stack.ambient)} }`];
-  for (const layer of [...film.stack.layers].reverse()) {
-    lines.push('[[layers]]', `n = ${index(layer.material)}`, `thickness_nm = ${layer.thickness_nm}`);
-  }
-  const file = path.join(dir, 'reversed.toml');
-  fs.writeFileSync(file, `${lines.join('\n')}\n`);
-  return file;
 }
 
 function readFilm(dir) {
@@ -415,6 +395,27 @@ test('screenshot', async (t) => {
   await page.close();
 });
 
+test('film.json: every file of tests/film-json by the one reader rule (docs/gpu.md)', async () => {
+  fs.cpSync(path.join(REPO, 'tests/film-json'), path.join(root, 'film-json'), { recursive: true });
+  const page = await ready();
+  const read = (name) => page.evaluate(async (url) => {
+    try {
+      window.IridWeb.preview.readPreviewFilm(await (await fetch(url)).text(), url);
+      return null;
+    } catch (e) {
+      return e.message;
+    }
+  }, `/film-json/${name}`);
+  const cases = JSON.parse(fs.readFileSync(path.join(REPO, 'tests/film-json/cases.json'), 'utf8'));
+  for (const name of cases.good) assert.equal(await read(name), null, name);
+  for (const [name, field] of Object.entries(cases.bad)) {
+    const message = await read(name);
+    assert.ok(message !== null, `${name}: accepted`);
+    assert.ok(message.startsWith(`/film-json/${name}: `) && message.includes(field) && !message.includes('\n'), `${name}: ${message}`);
+  }
+  await page.close();
+});
+
 test('a missing export, damaged ones, and no WebGL2 each show a message', async () => {
   const dir = firstExportDir();
   const film = readFilm(dir);
@@ -428,7 +429,7 @@ test('a missing export, damaged ones, and no WebGL2 each show a message', async 
   fs.cpSync(path.join(root, dir), badJson, { recursive: true });
   fs.writeFileSync(path.join(badJson, 'film.json'), '{"format": "irid-film", "version": 1,');
   page = await open('?export=../bad-json/');
-  assert.match(await page.textContent('#message'), /film\.json: not valid JSON/);
+  assert.match(await page.textContent('#message'), /film\.json: not JSON/);
   await page.close();
 
   const truncated = path.join(root, 'truncated');
@@ -658,7 +659,7 @@ test('rough: without the rough table the control is disabled and says why', asyn
   await page.close();
 });
 
-/** The page's sky (web/preview.js, irid_environment with u_environment 0), restated: linear RGB towards unit d. */
+/** The page's sky (web/preview/shaders.js, irid_environment with u_environment 0), restated: linear RGB towards unit d. */
 function sky(d) {
   const sun = (() => { const v = [0.45, 0.55, 0.7]; const l = Math.hypot(...v); return v.map((x) => x / l); })();
   const s = Math.max(d[0] * sun[0] + d[1] * sun[1] + d[2] * sun[2], 0);
