@@ -118,7 +118,9 @@ def main():
     results = Results()
     with tempfile.TemporaryDirectory(prefix="irid-blender-docs-") as tmp:
         test_docs_snippets(results)
-        test_layering_snippet(results, Irid(args.irid, tmp), Path(tmp))
+        # The snippet runs in a folder of its own: the binary by its full path.
+        irid = Irid(os.path.abspath(args.irid), tmp)
+        test_layering_snippet(results, irid, Path(tmp))
         test_addon_zip(results, Path(tmp))
     print(f"{results.passed} passed, {results.failed} failed")
     return 1 if results.failed else 0
