@@ -29,25 +29,85 @@ pub fn set_memory_budget(bytes: Option<u64>) {
 }
 
 /// The budget in bytes: [`set_memory_budget`], else [`MEMORY_LIMIT_ENV`],
-/// else [`DEFAULT_MEMORY_SHARE`] of physical memory.
+/// else [`DEFAULT_MEMORY_SHARE`] of physical memory (or of the control
+/// group's limit when lower); in every case no more than the address space
+/// the process has left under its `RLIMIT_AS` ([`address_space_left`]).
 pub fn memory_budget() -> Result<u64> {
+    Ok(budget_and_hint()?.0)
+}
+
+/// [`memory_budget`] and what to do to raise it, for the message refusing
+/// an allocation.
+fn budget_and_hint() -> Result<(u64, &'static str)> {
     let set = OVERRIDE.load(Ordering::Relaxed);
-    if set > 0 {
-        return Ok(set);
+    let chosen = if set > 0 {
+        set
+    } else {
+        match std::env::var(MEMORY_LIMIT_ENV) {
+            Ok(text) => parse_bytes(&text).ok_or_else(|| {
+                Error::invalid(
+                    MEMORY_LIMIT_ENV,
+                    format!(
+                        "'{}' is not a size in bytes (a positive integer, optionally followed by K, M, G or T)",
+                        crate::error::escape(&text)
+                    ),
+                )
+            })?,
+            Err(_) => physical_memory_once()
+                .map_or(FALLBACK_BUDGET, |m| (m as f64 * DEFAULT_MEMORY_SHARE) as u64),
+        }
+    };
+    Ok(match address_space_left() {
+        Some(left) if left < chosen => (
+            left.max(1),
+            "what the process's address-space limit, ulimit -v, leaves free",
+        ),
+        _ => (chosen, "set IRID_MEMORY_LIMIT to change it"),
+    })
+}
+
+/// The share of the address space left under `RLIMIT_AS` that the budget
+/// allows: the rest is headroom for what the estimates leave out (the
+/// allocator's per-thread arenas reserve address space, not memory).
+const ADDRESS_SPACE_SHARE: f64 = 0.75;
+
+/// [`ADDRESS_SPACE_SHARE`] of what the process may still map under its
+/// `RLIMIT_AS` (`ulimit -v`, `prlimit --as`): the limit less the address
+/// space mapped now (`/proc/self/statm`). None without such a limit. Read
+/// at every call, unlike the machine's memory: the mapped size changes as
+/// the process runs, and a process without the limit pays one system call.
+fn address_space_left() -> Option<u64> {
+    #[cfg(target_os = "linux")]
+    {
+        let mut limit = libc::rlimit {
+            rlim_cur: 0,
+            rlim_max: 0,
+        };
+        // SAFETY: getrlimit writes the struct it is given and nothing else.
+        if unsafe { libc::getrlimit(libc::RLIMIT_AS, &mut limit) } != 0
+            || limit.rlim_cur == libc::RLIM_INFINITY
+        {
+            return None;
+        }
+        let limit = limit.rlim_cur as u64;
+        let mapped = std::fs::read_to_string("/proc/self/statm")
+            .ok()
+            .and_then(|t| t.split_whitespace().next()?.parse::<u64>().ok())
+            .and_then(|pages| pages.checked_mul(page_size()?))
+            .unwrap_or(0);
+        Some((limit.saturating_sub(mapped) as f64 * ADDRESS_SPACE_SHARE) as u64)
     }
-    match std::env::var(MEMORY_LIMIT_ENV) {
-        Ok(text) => parse_bytes(&text).ok_or_else(|| {
-            Error::invalid(
-                MEMORY_LIMIT_ENV,
-                format!(
-                    "'{}' is not a size in bytes (a positive integer, optionally followed by K, M, G or T)",
-                    crate::error::escape(&text)
-                ),
-            )
-        }),
-        Err(_) => Ok(physical_memory_once()
-            .map_or(FALLBACK_BUDGET, |m| (m as f64 * DEFAULT_MEMORY_SHARE) as u64)),
+    #[cfg(not(target_os = "linux"))]
+    {
+        None
     }
+}
+
+#[cfg(unix)]
+fn page_size() -> Option<u64> {
+    // SAFETY: sysconf has no preconditions; it returns -1 on error.
+    let page = unsafe { libc::sysconf(libc::_SC_PAGESIZE) };
+    (page > 0).then_some(page as u64)
 }
 
 /// [`physical_memory`], read on the first call only: the budget is looked
@@ -93,31 +153,65 @@ pub fn parse_bytes(text: &str) -> Option<u64> {
     n.checked_mul(1u64 << shift).filter(|&b| b > 0)
 }
 
-/// Physical memory in bytes, from the operating system, or the control
-/// group's limit when that is lower (a container sees the host's memory).
+/// Physical memory in bytes, from the operating system, or the lowest
+/// memory limit of the control groups the process is in when lower (a
+/// container sees the host's memory).
 fn physical_memory() -> Option<u64> {
-    let cgroup = std::fs::read_to_string("/sys/fs/cgroup/memory.max")
-        .ok()
-        .and_then(|t| t.trim().parse::<u64>().ok());
-    let machine = machine_memory();
-    match (machine, cgroup) {
-        (Some(m), Some(c)) => Some(m.min(c)),
-        (m, c) => m.or(c),
+    let groups = std::fs::read_to_string("/proc/self/cgroup").unwrap_or_default();
+    [
+        machine_memory(),
+        cgroup_limit(&groups, std::path::Path::new("/sys/fs/cgroup")),
+    ]
+    .into_iter()
+    .flatten()
+    .min()
+}
+
+/// The lowest memory limit on the control groups listed in `groups` (the
+/// text of `/proc/self/cgroup`) and their ancestors, under the hierarchy
+/// mounted at `root`: v2's `memory.max` ("max": none), v1's
+/// `memory/…/memory.limit_in_bytes` (a figure near 2⁶³: none). Also the
+/// root's own files, which is where a container sees its own group.
+fn cgroup_limit(groups: &str, root: &std::path::Path) -> Option<u64> {
+    let mut files = vec![
+        root.join("memory.max"),
+        root.join("memory/memory.limit_in_bytes"),
+    ];
+    for line in groups.lines() {
+        let mut fields = line.splitn(3, ':');
+        let (Some(_), Some(controllers), Some(path)) =
+            (fields.next(), fields.next(), fields.next())
+        else {
+            continue;
+        };
+        let (base, file) = if controllers.is_empty() {
+            (root.to_path_buf(), "memory.max")
+        } else if controllers.split(',').any(|c| c == "memory") {
+            (root.join("memory"), "memory.limit_in_bytes")
+        } else {
+            continue;
+        };
+        let mut dir = base.join(path.trim_start_matches('/'));
+        while dir.starts_with(&base) {
+            files.push(dir.join(file));
+            if !dir.pop() {
+                break;
+            }
+        }
     }
+    files
+        .iter()
+        .filter_map(|f| std::fs::read_to_string(f).ok()?.trim().parse::<u64>().ok())
+        .min()
 }
 
 fn machine_memory() -> Option<u64> {
     #[cfg(unix)]
     {
         // SAFETY: sysconf has no preconditions; it returns -1 on error.
-        let (pages, page) = unsafe {
-            (
-                libc::sysconf(libc::_SC_PHYS_PAGES),
-                libc::sysconf(libc::_SC_PAGESIZE),
-            )
-        };
-        if pages > 0 && page > 0 {
-            return (pages as u64).checked_mul(page as u64);
+        let pages = unsafe { libc::sysconf(libc::_SC_PHYS_PAGES) };
+        if pages > 0 {
+            return (pages as u64).checked_mul(page_size()?);
         }
     }
     None
@@ -150,13 +244,13 @@ pub fn product(counts: &[u64], bytes_each: u64) -> Option<u64> {
 /// memory limit of 3.9 GB (set IRID_MEMORY_LIMIT to change it)". A
 /// malformed [`MEMORY_LIMIT_ENV`] is an [`Error::InvalidInput`].
 pub fn check_allocation(what: &str, estimate: Option<u64>) -> Result<()> {
-    let limit = memory_budget()?;
+    let (limit, hint) = budget_and_hint()?;
     match estimate {
         Some(bytes) if bytes <= limit => Ok(()),
         _ => Err(Error::OverBudget {
             what: what.to_string(),
             why: format!(
-                "needs about {}, above the memory limit of {} (set {MEMORY_LIMIT_ENV} to change it)",
+                "needs about {}, above the memory limit of {} ({hint})",
                 estimate.map_or("more than 18 EB".to_string(), human_bytes),
                 human_bytes(limit)
             ),
@@ -171,7 +265,7 @@ pub fn check_allocation(what: &str, estimate: Option<u64>) -> Result<()> {
 /// the allocator aborts. Bytes that are not UTF-8 are malformed content.
 pub fn read_text(path: &std::path::Path) -> Result<String> {
     use std::io::Read;
-    let limit = memory_budget()?;
+    let (limit, hint) = budget_and_hint()?;
     let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
     let what = format!("{}: reading the file", path.display());
     check_allocation(&what, file.metadata().ok().map(|m| m.len()))?;
@@ -183,7 +277,7 @@ pub fn read_text(path: &std::path::Path) -> Result<String> {
         return Err(Error::OverBudget {
             what,
             why: format!(
-                "holds more than the memory limit of {} (set {MEMORY_LIMIT_ENV} to change it)",
+                "holds more than the memory limit of {} ({hint})",
                 human_bytes(limit)
             ),
         });
@@ -239,6 +333,31 @@ mod tests {
             Err(Error::Io { .. })
         ));
         std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn the_lowest_control_group_limit_counts() {
+        let root = std::env::temp_dir().join(format!("irid-cgroup-{}", std::process::id()));
+        let write = |path: &str, text: &str| {
+            let file = root.join(path);
+            std::fs::create_dir_all(file.parent().unwrap()).unwrap();
+            std::fs::write(file, text).unwrap();
+        };
+        // v2: the job's group allows more than its parent, which counts.
+        write("user.slice/memory.max", "3000000\n");
+        write("user.slice/job/memory.max", "max\n");
+        write("user.slice/job/task/memory.max", "5000000\n");
+        assert_eq!(
+            cgroup_limit("0::/user.slice/job/task\n", &root),
+            Some(3_000_000)
+        );
+        assert_eq!(cgroup_limit("0::/elsewhere\n", &root), None);
+        // v1: the memory controller's hierarchy; "unlimited" is a figure
+        // near 2^63 that the machine's memory undercuts.
+        write("memory/docker/abc/memory.limit_in_bytes", "2000000\n");
+        let v1 = "12:cpu,cpuacct:/docker/abc\n4:memory:/docker/abc\n";
+        assert_eq!(cgroup_limit(v1, &root), Some(2_000_000));
+        std::fs::remove_dir_all(&root).unwrap();
     }
 
     #[test]

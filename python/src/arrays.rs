@@ -9,12 +9,12 @@
 
 use std::ops::RangeInclusive;
 
-use numpy::{Element, PyArray1, PyArrayDyn, PyArrayMethods, PyUntypedArrayMethods};
+use numpy::{Element, PyArray1, PyArrayDyn, PyArrayMethods, PyUntypedArray, PyUntypedArrayMethods};
 use pyo3::exceptions::{PyMemoryError, PyOverflowError, PyTypeError};
 use pyo3::prelude::*;
-use pyo3::types::{IntoPyDict, PyBool, PyFloat, PyList, PyTuple};
+use pyo3::types::{IntoPyDict, PyBool, PyFloat, PyInt, PyList, PyTuple};
 
-use crate::budget::Footprint;
+use crate::budget::{room_for, Footprint};
 use crate::{invalid, wrong_type};
 
 /// numpy's error converting argument `what`, as the exception the package
@@ -54,10 +54,11 @@ pub fn values<'py, T: Element + Clone>(
         let shape = array.shape().to_vec();
         // as_slice is memory order, which a Fortran-ordered array does not
         // share with C order.
-        let values = match array.as_slice() {
-            Ok(contiguous) if array.is_c_contiguous() => contiguous.to_vec(),
-            _ => array.as_array().iter().cloned().collect(),
-        };
+        let mut values = room_for(array.len(), what)?;
+        match array.as_slice() {
+            Ok(contiguous) if array.is_c_contiguous() => values.extend_from_slice(contiguous),
+            _ => values.extend(array.as_array().iter().cloned()),
+        }
         return Ok((values, shape));
     }
     if obj.is_none() {
@@ -87,8 +88,28 @@ pub fn values<'py, T: Element + Clone>(
     };
     let array = converted.downcast::<PyArrayDyn<T>>()?.readonly();
     measure(array.len(), 1)?;
-    let values = array.as_array().iter().cloned().collect();
+    let mut values = room_for(array.len(), what)?;
+    values.extend(array.as_array().iter().cloned());
     Ok((values, array.shape().to_vec()))
+}
+
+/// How many values converting `obj` gives, read without copying anything:
+/// an array's size, a number's 1, a list's or tuple's length (its rows, for
+/// a nested one: the list itself holds more memory than that). None for
+/// anything else, which the conversion measures itself. An entry point
+/// checks its whole footprint with these counts before it converts any
+/// argument, so that a huge argument is refused before it is copied.
+pub fn planned_len(obj: &Bound<'_, PyAny>) -> Option<usize> {
+    if let Ok(array) = obj.downcast::<PyUntypedArray>() {
+        return Some(array.len());
+    }
+    if obj.is_instance_of::<PyFloat>() || obj.is_instance_of::<PyInt>() {
+        return Some(1);
+    }
+    if obj.is_instance_of::<PyList>() || obj.is_instance_of::<PyTuple>() {
+        return obj.len().ok();
+    }
+    None
 }
 
 /// Real values of `obj` as a flat list, with its shape.

@@ -11,6 +11,7 @@
 //! memory), the one the command line honours. Array arguments are checked
 //! by `arrays` before they are copied.
 
+use pyo3::exceptions::PyMemoryError;
 use pyo3::prelude::*;
 
 use crate::py_error;
@@ -40,4 +41,27 @@ impl Footprint {
     pub fn check(self, what: &str) -> PyResult<()> {
         irid::limits::check_allocation(what, self.0).map_err(py_error)
     }
+}
+
+/// An empty vector with room for `len` items, or `MemoryError` ("WHAT: the
+/// system refused 7.2 GB") when the allocator cannot give it: under an
+/// address-space limit (`ulimit -v`) the allocation can fail below the
+/// budget, and Rust's allocation failure aborts the interpreter.
+pub fn room_for<T>(len: usize, what: &str) -> PyResult<Vec<T>> {
+    let mut v = Vec::new();
+    v.try_reserve_exact(len).map_err(|_| {
+        let bytes = (len as u64).saturating_mul(std::mem::size_of::<T>() as u64);
+        PyMemoryError::new_err(format!(
+            "{what}: the system refused {} of memory",
+            irid::limits::human_bytes(bytes)
+        ))
+    })?;
+    Ok(v)
+}
+
+/// `len` copies of `value` ([`room_for`]).
+pub fn filled<T: Clone>(len: usize, value: T, what: &str) -> PyResult<Vec<T>> {
+    let mut v = room_for(len, what)?;
+    v.resize(len, value);
+    Ok(v)
 }

@@ -10,10 +10,10 @@ use irid::optics::{
     WAVELENGTH_RANGE_NM,
 };
 
-use crate::arrays::{array, real_list, values};
-use crate::budget::Footprint;
+use crate::arrays::{array, planned_len, real_list, values};
+use crate::budget::{filled, room_for, Footprint};
 use crate::invalid;
-use crate::pool::compute;
+use crate::pool::{compute, compute_interruptible, Cancel};
 
 /// Checks everything the solver relies on, naming the entry at fault in
 /// tmm-faster's terms (`n[i, j]`: wavelength i, medium j; `d[j]`).
@@ -39,11 +39,13 @@ fn check(
             ),
         ));
     }
-    if d[0] != f64::INFINITY || d[media - 1] != f64::INFINITY {
+    // tmm-faster ignores these two entries, and its examples write 0 there.
+    let half_space = |t: f64| t == f64::INFINITY || t == 0.0;
+    if !half_space(d[0]) || !half_space(d[media - 1]) {
         return Err(invalid(
             "d",
             format!(
-                "the first and last entries (ambient and substrate) must be inf, got {} and {}",
+                "the first and last entries (ambient and substrate) must be inf (or 0), got {} and {}",
                 d[0],
                 d[media - 1]
             ),
@@ -121,7 +123,9 @@ const KEYS: [&str; 6] = ["R_s", "R_p", "T_s", "T_p", "R_avg", "T_avg"];
 /// whose indices do not change with wavelength takes the non-dispersive
 /// kernel). With `parallel`, the tasks run on the current thread pool, and
 /// the wavelengths are cut into runs when there are too few angles to keep
-/// every thread busy; without, on the calling thread, one run per angle.
+/// every thread busy, or when a run would take longer than a signal may
+/// wait ([`MAX_RUN`]); without, on the calling thread, one run per angle.
+/// The tasks stop once `cancel` is set (what they leave is discarded).
 pub fn solve_grid(
     indices: &[C64],
     thicknesses_nm: &[f64],
@@ -129,16 +133,21 @@ pub fn solve_grid(
     wavelengths_nm: &[f64],
     cos_theta0: &[f64],
     parallel: bool,
+    cancel: &Cancel,
+    mut out: Vec<f64>,
 ) -> Vec<f64> {
     let media = thicknesses_nm.len() + 2;
     let (n_w, n_a) = (wavelengths_nm.len(), cos_theta0.len());
-    let mut out = vec![0.0; n_a * KEYS.len() * n_w];
+    debug_assert_eq!(out.len(), n_a * KEYS.len() * n_w);
     if out.is_empty() {
         return out;
     }
     let runs = if parallel {
         let tasks_wanted = 4 * rayon::current_num_threads();
-        tasks_wanted.div_ceil(n_a).clamp(1, n_w.div_ceil(MIN_RUN))
+        tasks_wanted
+            .div_ceil(n_a)
+            .clamp(1, n_w.div_ceil(MIN_RUN))
+            .max(n_w.div_ceil(MAX_RUN))
     } else {
         1
     };
@@ -170,6 +179,9 @@ pub fn solve_grid(
     let solve_task =
         |spectrum: &mut Vec<Response>,
          (cos, grid, [rs, rp, ts, tp, r, t]): (f64, &StackGrid, [&mut [f64]; 6])| {
+            if cancel.is_set() {
+                return;
+            }
             spectrum.clear();
             spectrum.resize(grid.wavelengths_nm().len(), Response::default());
             grid.solve_spectrum(thicknesses_nm, cos, spectrum);
@@ -216,12 +228,17 @@ fn grid_footprint(wavelengths: usize, angles: usize, media: usize) -> Footprint 
 /// amortize laying the run's indices out.
 const MIN_RUN: usize = 64;
 
+/// Most wavelengths in a run of [`solve_grid`]: a few milliseconds of work
+/// between two looks at the cancel flag, however few the angles.
+const MAX_RUN: usize = 1 << 16;
+
 /// R and T of a coherent multilayer at every wavelength and angle, with the
 /// arguments and result of tmm-faster's `calc_coherent`.
 ///
 /// n: complex indices n + ik (k > 0 absorbs, k < 0 is gain), shape
 /// (wavelengths, media), ambient first; a 1-D n is the same at every
-/// wavelength. d: thicknesses in nm, inf for the ambient and the substrate.
+/// wavelength. d: thicknesses in nm, inf (or 0, as tmm-faster's examples
+/// write it) for the ambient and the substrate.
 /// angles: incidence in the ambient, degrees in [0, 90]. wavelengths: vacuum
 /// wavelengths in nm.
 ///
@@ -239,6 +256,26 @@ pub fn coherent<'py>(
     wavelengths: &Bound<'py, PyAny>,
 ) -> PyResult<Bound<'py, PyDict>> {
     Grid::new(n, d, angles, wavelengths)?.solve(py, &Coherence::coherent())
+}
+
+/// [`grid_footprint`] and the arguments' copies, from their sizes as given
+/// (numpy's arrays, lists: [`planned_len`]) before any is converted, so
+/// that a call far above the budget is refused before it copies gigabytes.
+/// The media are counted from `d`, which has one entry per medium.
+fn planned_footprint(
+    n: &Bound<'_, PyAny>,
+    d: &Bound<'_, PyAny>,
+    angles: &Bound<'_, PyAny>,
+    wavelengths: &Bound<'_, PyAny>,
+) -> PyResult<()> {
+    let [Some(w), Some(a), Some(media)] = [wavelengths, angles, d].map(planned_len) else {
+        return Ok(());
+    };
+    let indices = planned_len(n).unwrap_or(0);
+    grid_footprint(w, a, media)
+        .items(&[w + a + media], 8)
+        .items(&[indices], 16)
+        .check(&format!("{w} wavelengths × {a} angles × {media} media"))
 }
 
 /// A wavelength × angle grid of one stack as tmm-faster's functions take
@@ -260,6 +297,7 @@ impl Grid {
         angles: &Bound<'_, PyAny>,
         wavelengths: &Bound<'_, PyAny>,
     ) -> PyResult<Grid> {
+        planned_footprint(n, d, angles, wavelengths)?;
         let wavelengths_nm = real_list(wavelengths, "wavelengths")?;
         let angles_deg = real_list(angles, "angles")?;
         let d = real_list(d, "d")?;
@@ -285,7 +323,11 @@ impl Grid {
         ))?;
         if shape.len() == 1 {
             // One set of media for every wavelength.
-            indices = indices.repeat(wavelengths_nm.len());
+            let mut repeated = room_for(indices.len() * wavelengths_nm.len(), "n")?;
+            for _ in 0..wavelengths_nm.len() {
+                repeated.extend_from_slice(&indices);
+            }
+            indices = repeated;
         }
         check(&indices, media, &d, &angles_deg, &wavelengths_nm)?;
         Ok(Grid {
@@ -310,7 +352,8 @@ impl Grid {
         let thicknesses_nm = &self.d[1..self.media - 1];
         let cos_theta0: Vec<f64> = self.angles_deg.iter().map(|&a| cos_deg(a)).collect();
         let parallel = n_w * n_a >= PARALLEL_MIN_POINTS;
-        let values = compute(py, parallel, || {
+        let out = filled(n_a * KEYS.len() * n_w, 0.0, "the result")?;
+        let solve = |cancel: &Cancel| {
             solve_grid(
                 &self.indices,
                 thicknesses_nm,
@@ -318,8 +361,15 @@ impl Grid {
                 &self.wavelengths_nm,
                 &cos_theta0,
                 parallel,
+                cancel,
+                out,
             )
-        })?;
+        };
+        let values = if parallel {
+            compute_interruptible(py, solve)?
+        } else {
+            compute(py, false, || solve(&Cancel::default()))?
+        };
         if let Some(k) = values.iter().position(|v| !v.is_finite()) {
             let (a, w) = (k / (KEYS.len() * n_w), k % n_w);
             let row = &self.indices[w * self.media..(w + 1) * self.media];

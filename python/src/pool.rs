@@ -12,7 +12,9 @@
 //! without touching rayon.
 
 use std::ptr::null_mut;
-use std::sync::atomic::{AtomicPtr, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicPtr, Ordering};
+use std::sync::mpsc::{self, RecvTimeoutError};
+use std::time::Duration;
 
 use pyo3::exceptions::PyOSError;
 use pyo3::prelude::*;
@@ -66,7 +68,8 @@ fn process_pool() -> PyResult<&'static ThreadPool> {
 /// small call's whole work). `work` may use rayon only when `parallel`: on
 /// the calling thread rayon's parallel iterators would split onto its
 /// global pool, whose threads a forked child lacks. Every entry point's
-/// computation goes through here.
+/// computation goes through here or [`compute_interruptible`]; a parallel
+/// one is interrupted as that describes, though only once `work` is done.
 pub fn compute<T: Send>(
     py: Python<'_>,
     parallel: bool,
@@ -75,6 +78,66 @@ pub fn compute<T: Send>(
     if !parallel {
         return Ok(py.allow_threads(work));
     }
+    compute_interruptible(py, |_| work())
+}
+
+/// How often the calling thread looks for signals while the pool works.
+const SIGNAL_POLL: Duration = Duration::from_millis(20);
+
+/// Set when the call that passed it is interrupted: its work stops at the
+/// next block that looks ([`Cancel::is_set`]) and its partial result is
+/// thrown away.
+#[derive(Default)]
+pub struct Cancel(AtomicBool);
+
+impl Cancel {
+    pub fn is_set(&self) -> bool {
+        self.0.load(Ordering::Relaxed)
+    }
+}
+
+/// Runs `work` on this process's pool with the GIL released, while the
+/// calling thread runs Python's signal handlers every [`SIGNAL_POLL`]: a
+/// handler that raises (Ctrl-C's `KeyboardInterrupt`) sets the [`Cancel`]
+/// flag `work` polls between its blocks, and once `work` returns the call
+/// raises that exception, its result discarded. Without this a signal
+/// waits for the whole call, since Python runs handlers only between
+/// bytecodes of the main thread.
+pub fn compute_interruptible<T: Send>(
+    py: Python<'_>,
+    work: impl FnOnce(&Cancel) -> T + Send,
+) -> PyResult<T> {
     let pool = process_pool()?;
-    Ok(py.allow_threads(|| pool.install(work)))
+    let cancel = Cancel::default();
+    let (result, interrupt) = py.allow_threads(|| {
+        pool.in_place_scope(|scope| {
+            let (done, finished) = mpsc::channel();
+            let cancel = &cancel;
+            scope.spawn(move |_| {
+                // A send fails only once the receiver is gone, which it
+                // is not before this job ends (the scope waits for it).
+                let _ = done.send(work(cancel));
+            });
+            let mut interrupt = None;
+            loop {
+                match finished.recv_timeout(SIGNAL_POLL) {
+                    Ok(result) => return (Some(result), interrupt),
+                    // The job panicked: the scope passes the panic on.
+                    Err(RecvTimeoutError::Disconnected) => return (None, interrupt),
+                    Err(RecvTimeoutError::Timeout) if interrupt.is_none() => {
+                        interrupt = Python::with_gil(|py| py.check_signals()).err();
+                        if interrupt.is_some() {
+                            cancel.0.store(true, Ordering::Relaxed);
+                        }
+                    }
+                    Err(RecvTimeoutError::Timeout) => {}
+                }
+            }
+        })
+    });
+    match (interrupt, result) {
+        (Some(e), _) => Err(e),
+        (None, Some(result)) => Ok(result),
+        (None, None) => unreachable!("a job that panicked ends the scope with its panic"),
+    }
 }

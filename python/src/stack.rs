@@ -16,10 +16,10 @@ use irid::optics::{
 };
 use irid::rough::{check_roughness, rough_colors, RoughColor};
 
-use crate::arrays::{array, count, integer_in, real, real_list, reals};
+use crate::arrays::{array, count, integer_in, planned_len, real, real_list, reals};
 use crate::budget::Footprint;
 use crate::coherent::check_wavelengths;
-use crate::pool::compute;
+use crate::pool::{compute, compute_interruptible, Cancel};
 use crate::{invalid, py_error, wrong_type};
 
 /// A refractive-index model: a constant n + ik, a built-in material, a
@@ -438,9 +438,13 @@ impl PyStack {
         let grid = StackGrid::new(&self.stack, &wavelengths).map_err(py_error)?;
         let cos_theta0: Vec<f64> = angles.iter().map(|a| a.to_radians().cos()).collect();
         let parallel = shape.iter().product::<usize>() >= SOLVE_PARALLEL_MIN_POINTS;
-        let points = compute(py, parallel, || {
-            solve_points(&grid, &cos_theta0, sweep.as_ref(), parallel)
-        })?;
+        let solve =
+            |cancel: &Cancel| solve_points(&grid, &cos_theta0, sweep.as_ref(), parallel, cancel);
+        let points = if parallel {
+            compute_interruptible(py, solve)?
+        } else {
+            compute(py, false, || solve(&Cancel::default()))?
+        };
         if let Some(k) = points.iter().position(|p| !p.power[0].is_finite()) {
             lasing_at(&grid, &cos_theta0, sweep.as_ref(), k)?;
         }
@@ -486,27 +490,19 @@ impl PyStack {
         white: &str,
         roughness: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<Bound<'py, PyDict>> {
-        let angles = real_list(angles_deg, "angles_deg")?;
         let sampling: Sampling = sampling.parse().map_err(py_error)?;
         let white: White = white.parse().map_err(py_error)?;
         let integrator = SpectralIntegrator::with_white(sampling, white);
+        // From the argument's size before it is copied, then from the copy.
+        let rough = roughness.is_some();
+        if let Some(n) = planned_len(angles_deg) {
+            self.color_footprint(&integrator, n, rough)?;
+        }
+        let angles = real_list(angles_deg, "angles_deg")?;
+        self.color_footprint(&integrator, angles.len(), rough)?;
         if let Some(roughness) = roughness {
             return self.rough_color(py, &integrator, angles, roughness);
         }
-        let samples = integrator.wavelengths_nm().len();
-        // The responses at every (wavelength, angle), the grid's indices,
-        // and per angle its colour and the four (angles, 3) results.
-        Footprint::new()
-            .items(
-                &[samples, angles.len()],
-                std::mem::size_of::<Response>() as u64,
-            )
-            .items(&[samples, self.stack.layers.len() + 2], 64)
-            .items(
-                &[angles.len()],
-                std::mem::size_of::<FilmColor>() as u64 + 4 * 3 * 8,
-            )
-            .check(&format!("{} angles × {samples} wavelengths", angles.len()))?;
         let colours = compute(py, false, || {
             stack_colors(&self.stack, &integrator, &angles)
         })?
@@ -576,6 +572,33 @@ impl PyStack {
 }
 
 impl PyStack {
+    /// Checks what `Stack.color` allocates for `angles` angles. Smooth: the
+    /// responses at every (wavelength, angle), the grid's indices, and per
+    /// angle its colour and the four (angles, 3) results. Rough: the
+    /// colours and the three results (the library checks its own sweep and
+    /// kernels).
+    fn color_footprint(
+        &self,
+        integrator: &SpectralIntegrator,
+        angles: usize,
+        rough: bool,
+    ) -> PyResult<()> {
+        if rough {
+            return Footprint::new()
+                .items(&[angles], std::mem::size_of::<RoughColor>() as u64 + 8 * 8)
+                .check(&format!("{angles} angles"));
+        }
+        let samples = integrator.wavelengths_nm().len();
+        Footprint::new()
+            .items(&[samples, angles], std::mem::size_of::<Response>() as u64)
+            .items(&[samples, self.stack.layers.len() + 2], 64)
+            .items(
+                &[angles],
+                std::mem::size_of::<FilmColor>() as u64 + 4 * 3 * 8 + 8,
+            )
+            .check(&format!("{angles} angles × {samples} wavelengths"))
+    }
+
     /// `Stack.color(..., roughness=R)`: F_eff per angle (docs/rough.md).
     fn rough_color<'py>(
         &self,
@@ -586,14 +609,6 @@ impl PyStack {
     ) -> PyResult<Bound<'py, PyDict>> {
         let roughness = real(roughness, "roughness")?;
         check_roughness("roughness", roughness).map_err(py_error)?;
-        // The library checks its own sweep and kernels; here the colours
-        // and the three results.
-        Footprint::new()
-            .items(
-                &[angles.len()],
-                std::mem::size_of::<RoughColor>() as u64 + 7 * 8,
-            )
-            .check(&format!("{} angles", angles.len()))?;
         let colours = compute(py, true, || {
             rough_colors(&self.stack, integrator, &angles, roughness)
         })?
@@ -667,17 +682,22 @@ const SOLVE_PARALLEL_MIN_POINTS: usize = 256;
 
 /// R, T and the amplitudes at every (thickness of the sweep, wavelength of
 /// the grid, angle) point, angles fastest: a row of angles per task on the
-/// current thread pool when `parallel`, else on this thread.
+/// current thread pool when `parallel`, else on this thread. Rows stop once
+/// `cancel` is set (the points are then discarded).
 fn solve_points(
     grid: &StackGrid,
     cos_theta0: &[f64],
     sweep: Option<&Sweep>,
     parallel: bool,
+    cancel: &Cancel,
 ) -> Vec<Point> {
     let wavelengths = grid.wavelengths_nm();
     let runs = sweep.map_or(1, |s| s.thicknesses_nm.len());
     let mut points = vec![Point::default(); runs * wavelengths.len() * cos_theta0.len()];
     let fill_row = |(row, out): (usize, &mut [Point])| {
+        if cancel.is_set() {
+            return;
+        }
         let (run, i) = (row / wavelengths.len(), row % wavelengths.len());
         let mut d = grid.thicknesses_nm().to_vec();
         if let Some(s) = sweep {

@@ -124,6 +124,25 @@ def test_matches_tmm_faster_where_it_is_right(seed):
     assert max_diff(mine, theirs) <= TOL
 
 
+@pytest.mark.parametrize("ends", [(0.0, 0.0), (0, np.inf), (np.inf, 0)])
+def test_zero_end_thicknesses_as_tmm_faster_examples_write_them(ends):
+    """tmm-faster ignores the ambient's and substrate's thicknesses, and its
+    examples give 0 there: the same call must run unchanged on irid."""
+    rng = np.random.default_rng(11)
+    n, d, w = random_stack(rng, 3, wavelengths=20)
+    angles = np.linspace(0.0, 85.0, 7)
+    zero_ends = [ends[0], *d[1:-1], ends[1]]
+    want = irid.coherent(n, d, angles, w)
+    got = irid.coherent(n, zero_ends, angles, w)
+    for k in KEYS:
+        np.testing.assert_array_equal(got[k], want[k])
+    assert max_diff(got, tmm_faster.calc_coherent(n, np.array(zero_ends, dtype=float), angles, w)) <= TOL
+    c = ["i", "c", "i", "c", "i"]
+    np.testing.assert_array_equal(
+        irid.incoherent(n, zero_ends, c, angles, w)["R_avg"], irid.incoherent(n, d, c, angles, w)["R_avg"]
+    )
+
+
 @pytest.mark.parametrize("case", ["gain film on gold", "metal under glass"])
 def test_right_where_tmm_faster_is_wrong(case):
     n_list, d = HARD[case]

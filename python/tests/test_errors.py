@@ -23,7 +23,8 @@ def message_of_cli(run):
 @pytest.mark.parametrize(
     "n, d, angles, wavelengths, needle",
     [
-        ([1.0, 1.5, 1.0], [0.0, 100.0, INF], [0.0], [500.0], "must be inf"),
+        ([1.0, 1.5, 1.0], [5.0, 100.0, INF], [0.0], [500.0], "must be inf (or 0)"),
+        ([1.0, 1.5, 1.0], [INF, 100.0, -INF], [0.0], [500.0], "must be inf (or 0)"),
         ([1.0, 1.5, 1.0], [INF, 100.0, INF, INF], [0.0], [500.0], "d has 4 entries"),
         ([1.0, 1.5, 1.0], [INF, -1.0, INF], [0.0], [500.0], "d[1]"),
         ([1.0, 1.5, 1.0], [INF, math.nan, INF], [0.0], [500.0], "d[1]"),

@@ -6,6 +6,7 @@ with irid in its place."""
 
 import math
 import os
+import re
 import runpy
 import sys
 import types
@@ -242,6 +243,18 @@ def test_a_lasing_layer_is_a_value_error():
     stack = irid.Stack(layers=[((1.5, -0.01), 1e6, False)], substrate=1.5)
     with pytest.raises(ValueError, match=r"^layers\[1\]: this incoherent layer lases"):
         stack.solve([550.0], [0.0])
+
+
+def test_a_strong_gain_is_a_short_figure_in_the_lasing_error():
+    # A 1 mm absorber-turned-amplifier: the power grows by e^500-odd per
+    # round trip, a figure that printed in fixed point ran to hundreds of digits.
+    with pytest.raises(ValueError) as e:
+        irid.incoherent(np.array([1, 1.52 - 0.01j, 1.0]), [np.inf, 1e6, np.inf], "iii", [0.0], [500.0])
+    message = str(e.value)
+    assert len(message) < 250 and "\n" not in message, message
+    gain = re.search(r"comes back with (\S+) times its power", message).group(1)
+    assert re.fullmatch(r"\d\.\d\de\d+", gain), gain
+    assert float(gain) > 1e100
 
 
 @pytest.mark.parametrize(

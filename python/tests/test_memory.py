@@ -163,3 +163,88 @@ def test_baking_to_an_error_target_honours_irid_memory_limit(limit):
     limit("2M")
     with pytest.raises(MemoryError, match=r"max-error 1e-5: a grid of \d+ nodes checked at \d+: needs about"):
         irid.bake(film(), max_error=1e-5, validation_points=0)
+
+
+#: Runs CALL in a child interpreter (with `np` and `irid` imported) and
+#: prints the exception it raised, or "ok", then the growth of the child's
+#: peak resident memory over the call, in MB.
+CHILD = """
+import resource, sys
+import numpy as np
+import irid
+
+before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+try:
+    {call}
+    outcome = "ok"
+except MemoryError as e:
+    outcome = "MemoryError: " + str(e)
+grown = (resource.getrusage(resource.RUSAGE_SELF).ru_maxrss - before) / 1024
+print(outcome)
+print(round(grown))
+"""
+
+
+def run_child(call, *, env=None, address_space=None):
+    """(what the call raised or "ok", its peak memory growth in MB) in a
+    child interpreter; `address_space` caps the child's RLIMIT_AS, as
+    `ulimit -v` or `prlimit --as` do."""
+    import resource
+    import subprocess
+    import sys
+
+    def cap():
+        if address_space is not None:
+            resource.setrlimit(resource.RLIMIT_AS, (address_space, address_space))
+
+    child_env = {k: v for k, v in os.environ.items() if k != "IRID_MEMORY_LIMIT"}
+    child_env.update(env or {})
+    run = subprocess.run(
+        [sys.executable, "-c", CHILD.format(call=call)],
+        capture_output=True,
+        text=True,
+        env=child_env,
+        preexec_fn=cap,
+        timeout=300,
+    )
+    assert run.returncode == 0, f"exit {run.returncode}: {run.stderr.strip()[-500:]}"
+    outcome, grown = run.stdout.strip().rsplit("\n", 1)
+    return outcome, int(grown)
+
+
+ISSUE_GRID = "irid.coherent(np.array([1, 1.5, 1.0]), [np.inf, 100, np.inf], np.linspace(0, 89, 15000), np.linspace(400, 700, 10**4))"
+
+
+@pytest.mark.parametrize("env", [{}, {"IRID_MEMORY_LIMIT": "1T"}])
+def test_an_address_space_limit_is_a_memory_error_not_an_abort(env):
+    # The issue's case: a 7.2 GB result under a 6 GiB RLIMIT_AS aborted the
+    # interpreter ("memory allocation of 7200000000 bytes failed", SIGABRT),
+    # as it did with any IRID_MEMORY_LIMIT above what the limit leaves.
+    outcome, _ = run_child(ISSUE_GRID, env=env, address_space=6 << 30)
+    assert outcome.startswith(
+        "MemoryError: 10000 wavelengths × 15000 angles × 3 media: needs about 7.2 GB, above the memory limit of"
+    ), outcome
+    assert outcome.endswith("(what the process's address-space limit, ulimit -v, leaves free)"), outcome
+    # What fits under the same limit runs.
+    outcome, _ = run_child(
+        "irid.coherent([1, 1.5, 1.0], [np.inf, 100, np.inf], np.linspace(0, 89, 1000), np.linspace(400, 700, 10**4))",
+        address_space=6 << 30,
+    )
+    assert outcome == "ok"
+
+
+@pytest.mark.parametrize(
+    "name, call",
+    [
+        ("Stack.color", "irid.Stack(layers=[(1.5, 300.0)]).color(np.broadcast_to(30.0, (2 * 10**8,)))"),
+        ("Stack.color rough", "irid.Stack(layers=[(1.5, 300.0)]).color(np.broadcast_to(30.0, (2 * 10**8,)), roughness=0.3)"),
+        ("coherent", "irid.coherent([1, 1.5, 1.0], [np.inf, 100, np.inf], np.broadcast_to(0.0, (2 * 10**8,)), [500.0])"),
+        ("incoherent", "irid.incoherent([1, 1.5, 1.0], [np.inf, 100, np.inf], 'ici', np.broadcast_to(0.0, (2 * 10**8,)), [500.0])"),
+    ],
+)
+def test_the_budget_is_checked_before_the_arguments_are_copied(name, call):
+    # 2·10^8 angles copy into 1.6 GB, within a 2 GiB limit, but the call's
+    # results and buffers are far above it: refused before the copy.
+    outcome, grown = run_child(call, env={"IRID_MEMORY_LIMIT": "2G"})
+    assert outcome.startswith("MemoryError: ") and "200000000 angles" in outcome, outcome
+    assert grown < 200, f"{name}: the peak memory grew by {grown} MB before the MemoryError"

@@ -142,8 +142,8 @@ impl Diverged {
         let angle = cos_theta0.clamp(-1.0, 1.0).acos().to_degrees();
         let gain = if self.round_trip.is_finite() {
             format!(
-                "a wave in it comes back with {:.6} times its power after each round trip",
-                self.round_trip
+                "a wave in it comes back with {} times its power after each round trip",
+                short_figure(self.round_trip)
             )
         } else {
             "it amplifies beyond any finite power".to_string()
@@ -162,6 +162,17 @@ impl Diverged {
             format!("layers[{}]", self.layer),
             self.reason(wavelength_nm, cos_theta0),
         )
+    }
+}
+
+/// A gain as a short figure: `1.000123` near the threshold of 1, where the
+/// digits matter, `4.35e217` for a gain far above it, whose fixed-point
+/// form runs to hundreds of digits.
+fn short_figure(x: f64) -> String {
+    if x.abs() < 1e3 {
+        format!("{x:.6}")
+    } else {
+        format!("{x:.2e}")
     }
 }
 
