@@ -42,14 +42,34 @@ fn fits_a_spectrum_and_writes_the_stack() {
     dir.write("m.csv", spectrum_csv());
     let run = irid_in(
         &dir,
-        ["fit", "stack.toml", "--spectrum", "m.csv", "--vary", "1,2", "-o", "out/fitted.toml", "--json"],
+        [
+            "fit",
+            "stack.toml",
+            "--spectrum",
+            "m.csv",
+            "--vary",
+            "1,2",
+            "-o",
+            "out/fitted.toml",
+            "--json",
+        ],
     );
     // The output's folder does not exist: refused before any work.
     run.assert_one_line_error("missing folder", &["out"]);
     std::fs::create_dir(dir.join("out")).unwrap();
     let run = irid_in(
         &dir,
-        ["fit", "stack.toml", "--spectrum", "m.csv", "--vary", "1,2", "-o", "out/fitted.toml", "--json"],
+        [
+            "fit",
+            "stack.toml",
+            "--spectrum",
+            "m.csv",
+            "--vary",
+            "1,2",
+            "-o",
+            "out/fitted.toml",
+            "--json",
+        ],
     );
     assert!(run.success(), "{}", run.stderr);
     let fit: serde_json::Value = serde_json::from_str(&run.stdout).unwrap();
@@ -62,7 +82,10 @@ fn fits_a_spectrum_and_writes_the_stack() {
     }
     assert!(fit["alternatives"].as_array().unwrap().is_empty());
     // The table names each thickness, χ² and the residual.
-    let run = irid_in(&dir, ["fit", "stack.toml", "--spectrum", "m.csv", "--vary", "2"]);
+    let run = irid_in(
+        &dir,
+        ["fit", "stack.toml", "--spectrum", "m.csv", "--vary", "2"],
+    );
     assert!(run.success(), "{}", run.stderr);
     for needle in ["layer 2:", " ± ", "χ² =", "residual"] {
         assert!(run.stdout.contains(needle), "{}", run.stdout);
@@ -76,11 +99,23 @@ fn fits_colours_at_angles() {
     let hidden = Stack::from_toml_str(STACK, &dir, "stack").unwrap();
     let mut hidden = hidden.clone();
     hidden.layers[1].thickness_nm = 175.0;
-    let colors =
-        stack_colors(&hidden, &SpectralIntegrator::new(Sampling::Exact), &[0.0, 40.0]).unwrap();
-    let mut args: Vec<String> = ["fit", "stack.toml", "--vary", "2", "--bounds", "120:200", "--json"]
-        .map(String::from)
-        .to_vec();
+    let colors = stack_colors(
+        &hidden,
+        &SpectralIntegrator::new(Sampling::Exact),
+        &[0.0, 40.0],
+    )
+    .unwrap();
+    let mut args: Vec<String> = [
+        "fit",
+        "stack.toml",
+        "--vary",
+        "2",
+        "--bounds",
+        "120:200",
+        "--json",
+    ]
+    .map(String::from)
+    .to_vec();
     for c in &colors {
         let [r, g, b] = c.reflectance_rgb;
         args.push("--color".into());
@@ -101,28 +136,64 @@ fn bad_input_is_one_line_and_writes_nothing() {
     dir.write("m.csv", spectrum_csv());
     for (name, text) in [
         ("nocol.csv", "wavelength_nm,R\n500,0.1\n"),
-        ("nan.csv", "wavelength_nm,angle_deg,R\n500,0,nan\n600,0,0.1\n700,0,0.1\n"),
+        (
+            "nan.csv",
+            "wavelength_nm,angle_deg,R\n500,0,nan\n600,0,0.1\n700,0,0.1\n",
+        ),
         ("neg.csv", "wavelength_nm,angle_deg,R\n-500,0,0.1\n"),
         ("angle.csv", "wavelength_nm,angle_deg,R\n500,90,0.1\n"),
     ] {
         dir.write(name, text);
     }
     let cases: [(&[&str], &[&str]); 10] = [
-        (&["--spectrum", "nocol.csv", "--vary", "1"], &["nocol.csv", "angle_deg"]),
-        (&["--spectrum", "nan.csv", "--vary", "1"], &["nan.csv", "line 2", "R"]),
-        (&["--spectrum", "neg.csv", "--vary", "1"], &["neg.csv", "wavelength_nm"]),
-        (&["--spectrum", "angle.csv", "--vary", "1"], &["angle.csv", "angle_deg", "[0, 90)"]),
-        (&["--spectrum", "m.csv", "--vary", "0"], &["--vary", "0 names no layer"]),
-        (&["--spectrum", "m.csv", "--vary", "3"], &["--vary", "substrate"]),
-        (&["--spectrum", "m.csv", "--vary", "9"], &["--vary", "9 names no layer"]),
-        (&["--spectrum", "m.csv", "--vary", "1", "--bounds", "10:20"], &["--bounds[0]", "excludes the start"]),
-        (&["--color", "3,0,0@0", "--vary", "1"], &["--color '3,0,0@0'", "passive film"]),
-        (&["--color", "0.1,0.1@0", "--vary", "1"], &["--color", "three channels"]),
+        (
+            &["--spectrum", "nocol.csv", "--vary", "1"],
+            &["nocol.csv", "angle_deg"],
+        ),
+        (
+            &["--spectrum", "nan.csv", "--vary", "1"],
+            &["nan.csv", "line 2", "R"],
+        ),
+        (
+            &["--spectrum", "neg.csv", "--vary", "1"],
+            &["neg.csv", "wavelength_nm"],
+        ),
+        (
+            &["--spectrum", "angle.csv", "--vary", "1"],
+            &["angle.csv", "angle_deg", "[0, 90)"],
+        ),
+        (
+            &["--spectrum", "m.csv", "--vary", "0"],
+            &["--vary", "0 names no layer"],
+        ),
+        (
+            &["--spectrum", "m.csv", "--vary", "3"],
+            &["--vary", "substrate"],
+        ),
+        (
+            &["--spectrum", "m.csv", "--vary", "9"],
+            &["--vary", "9 names no layer"],
+        ),
+        (
+            &["--spectrum", "m.csv", "--vary", "1", "--bounds", "10:20"],
+            &["--bounds[0]", "excludes the start"],
+        ),
+        (
+            &["--color", "3,0,0@0", "--vary", "1"],
+            &["--color '3,0,0@0'", "passive film"],
+        ),
+        (
+            &["--color", "0.1,0.1@0", "--vary", "1"],
+            &["--color", "three channels"],
+        ),
     ];
     for (extra, needles) in cases {
         let mut args = vec!["fit", "stack.toml", "-o", "fitted.toml"];
         args.extend_from_slice(extra);
         irid_in(&dir, &args).assert_one_line_error(&format!("{args:?}"), needles);
-        assert!(!dir.join("fitted.toml").exists(), "{args:?} wrote fitted.toml");
+        assert!(
+            !dir.join("fitted.toml").exists(),
+            "{args:?} wrote fitted.toml"
+        );
     }
 }

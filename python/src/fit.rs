@@ -30,7 +30,10 @@ fn layers(vary: &Bound<'_, PyAny>) -> PyResult<Vec<usize>> {
 /// `angles_deg`: each in [0, 90).
 fn check_angles(angles: &[f64]) -> PyResult<()> {
     match angles.iter().find(|a| !(0.0..90.0).contains(*a)) {
-        Some(a) => Err(invalid("angles_deg", format!("{a} is outside [0, 90) degrees"))),
+        Some(a) => Err(invalid(
+            "angles_deg",
+            format!("{a} is outside [0, 90) degrees"),
+        )),
         None => Ok(()),
     }
 }
@@ -101,7 +104,10 @@ pub fn fit<'py>(
     let t = channel(t, "T", grid)?;
     let batch = match (&r, &t) {
         (Some((_, a)), Some((_, b))) if a != b => {
-            return Err(invalid("T", format!("batch shape {b:?} differs from R's {a:?}")))
+            return Err(invalid(
+                "T",
+                format!("batch shape {b:?} differs from R's {a:?}"),
+            ))
         }
         (Some((_, a)), _) | (None, Some((_, a))) => a.clone(),
         (None, None) => return Err(invalid("R", "neither R nor T is given")),
@@ -166,20 +172,43 @@ fn results<'py>(
     let k = fits[0].layers.len();
     let with = |extra: &[usize]| -> Vec<usize> { batch.iter().chain(extra).copied().collect() };
     let out = PyDict::new(py);
-    let column = |f: &dyn Fn(&SpectrumFit) -> Vec<f64>| -> Vec<f64> { fits.iter().flat_map(f).collect() };
+    let column =
+        |f: &dyn Fn(&SpectrumFit) -> Vec<f64>| -> Vec<f64> { fits.iter().flat_map(f).collect() };
     out.set_item("layers", fits[0].layers.clone())?;
-    out.set_item("thickness_nm", array(py, column(&|f| f.thickness_nm.clone()), &with(&[k]))?)?;
-    out.set_item("sigma_nm", array(py, column(&|f| f.sigma_nm.clone()), &with(&[k]))?)?;
+    out.set_item(
+        "thickness_nm",
+        array(py, column(&|f| f.thickness_nm.clone()), &with(&[k]))?,
+    )?;
+    out.set_item(
+        "sigma_nm",
+        array(py, column(&|f| f.sigma_nm.clone()), &with(&[k]))?,
+    )?;
     out.set_item("chi2", array(py, column(&|f| vec![f.chi2]), &with(&[]))?)?;
-    out.set_item("residual", array(py, column(&|f| vec![f.rms_residual]), &with(&[]))?)?;
-    out.set_item("threshold", array(py, column(&|f| vec![f.threshold]), &with(&[]))?)?;
+    out.set_item(
+        "residual",
+        array(py, column(&|f| vec![f.rms_residual]), &with(&[]))?,
+    )?;
+    out.set_item(
+        "threshold",
+        array(py, column(&|f| vec![f.threshold]), &with(&[]))?,
+    )?;
     out.set_item("degrees_of_freedom", fits[0].degrees_of_freedom)?;
     let ambiguous: Vec<bool> = fits.iter().map(SpectrumFit::is_ambiguous).collect();
     out.set_item("ambiguous", array(py, ambiguous, &with(&[]))?)?;
     let grid_shape = with(&[grid.0, grid.1]);
     for (key, values) in [
-        ("residual_R", fits.iter().map(|f| f.residual_r.clone()).collect::<Option<Vec<_>>>()),
-        ("residual_T", fits.iter().map(|f| f.residual_t.clone()).collect::<Option<Vec<_>>>()),
+        (
+            "residual_R",
+            fits.iter()
+                .map(|f| f.residual_r.clone())
+                .collect::<Option<Vec<_>>>(),
+        ),
+        (
+            "residual_T",
+            fits.iter()
+                .map(|f| f.residual_t.clone())
+                .collect::<Option<Vec<_>>>(),
+        ),
     ] {
         match values {
             Some(v) => out.set_item(key, array(py, v.concat(), &grid_shape)?)?,
@@ -222,7 +251,10 @@ pub fn fit_color<'py>(
     if shape != [angles.len(), 3] {
         return Err(invalid(
             "target_rgb",
-            format!("shape {shape:?}: expected ({}, 3), one colour per angle", angles.len()),
+            format!(
+                "shape {shape:?}: expected ({}, 3), one colour per angle",
+                angles.len()
+            ),
         ));
     }
     let roughness = roughness.map(|r| real(r, "roughness")).transpose()?;
@@ -234,14 +266,30 @@ pub fn fit_color<'py>(
             rgb: [rgb[3 * j], rgb[3 * j + 1], rgb[3 * j + 2]],
         })
         .collect();
-    let fit = compute(py, true, || fit_color(stack, &vary, &targets, white, roughness))?
-        .map_err(py_error)?;
+    let fit = compute(py, true, || {
+        fit_color(stack, &vary, &targets, white, roughness)
+    })?
+    .map_err(py_error)?;
     let out = PyDict::new(py);
-    out.set_item("stack", PyStack { stack: vary.apply(stack, &fit.thickness_nm) })?;
+    out.set_item(
+        "stack",
+        PyStack {
+            stack: vary.apply(stack, &fit.thickness_nm),
+        },
+    )?;
     out.set_item("layers", fit.layers.clone())?;
-    out.set_item("thickness_nm", array(py, fit.thickness_nm.clone(), &[layers.len()])?)?;
-    out.set_item("angle_deg", array(py, fit.angle_deg.clone(), &[angles.len()])?)?;
-    out.set_item("delta_e2000", array(py, fit.delta_e2000.clone(), &[angles.len()])?)?;
+    out.set_item(
+        "thickness_nm",
+        array(py, fit.thickness_nm.clone(), &[layers.len()])?,
+    )?;
+    out.set_item(
+        "angle_deg",
+        array(py, fit.angle_deg.clone(), &[angles.len()])?,
+    )?;
+    out.set_item(
+        "delta_e2000",
+        array(py, fit.delta_e2000.clone(), &[angles.len()])?,
+    )?;
     out.set_item("rgb", array(py, fit.rgb.concat(), &[angles.len(), 3])?)?;
     Ok(out)
 }

@@ -11,8 +11,8 @@ use anyhow::{anyhow, bail, Context, Result};
 use irid::atomic::OutputSet;
 use irid::color::{Sampling, SpectralIntegrator, White};
 use irid::fit::{
-    check_target, fit_color, fit_spectrum, read_spectrum_csv, with_thicknesses, ColorFit, ColorTarget,
-    SpectrumFit, Vary,
+    check_target, fit_color, fit_spectrum, read_spectrum_csv, with_thicknesses, ColorFit,
+    ColorTarget, SpectrumFit, Vary,
 };
 use irid::optics::Stack;
 
@@ -27,8 +27,8 @@ pub struct Args {
     #[arg(long, conflicts_with = "color")]
     pub spectrum: Option<PathBuf>,
     /// A target colour R,G,B@ANGLE: linear sRGB of the reflectance under
-    /// --white, seen at ANGLE degrees; repeat for several angles.
-    #[arg(long, num_args = 1.., allow_hyphen_values = true)]
+    /// --white, seen at ANGLE degrees; repeat the flag for several angles.
+    #[arg(long, action = clap::ArgAction::Append)]
     pub color: Vec<String>,
     /// The layers to fit, counted from 1 at the ambient side: `1,2`.
     #[arg(long, required = true)]
@@ -80,7 +80,10 @@ pub fn run(args: Args) -> Result<ExitCode> {
             let name = path.display().to_string();
             measured.check(&name, layers.len())?;
             let fit = fit_spectrum(&stack, &vary, &measured).with_context(|| name.clone())?;
-            (fit.thickness_nm.clone(), spectrum_report(&fit, &name, args.json)?)
+            (
+                fit.thickness_nm.clone(),
+                spectrum_report(&fit, &name, args.json)?,
+            )
         }
         None => {
             let fit = fit_color(&stack, &vary, &targets, white, None)?;
@@ -116,7 +119,9 @@ fn parse_layers(text: &str) -> Result<Vec<usize>> {
 
 /// `--bounds 100:300,50:150`.
 fn parse_bounds(text: &str) -> Result<Vec<(f64, f64)>> {
-    text.split(',').map(|r| parse_range("--bounds", r)).collect()
+    text.split(',')
+        .map(|r| parse_range("--bounds", r))
+        .collect()
 }
 
 /// `--color R,G,B@ANGLE`.
@@ -126,7 +131,10 @@ fn parse_color(text: &str) -> Result<ColorTarget> {
         .split_once('@')
         .ok_or_else(|| bad("expected R,G,B@ANGLE"))?;
     let number = |s: &str| -> Result<f64> {
-        let v: f64 = s.trim().parse().map_err(|_| bad(&format!("'{}' is not a number", s.trim())))?;
+        let v: f64 = s
+            .trim()
+            .parse()
+            .map_err(|_| bad(&format!("'{}' is not a number", s.trim())))?;
         if !v.is_finite() {
             return Err(bad(&format!("'{}' is not finite", s.trim())));
         }
@@ -138,7 +146,9 @@ fn parse_color(text: &str) -> Result<ColorTarget> {
     };
     let angle_deg = number(angle)?;
     if !(0.0..90.0).contains(&angle_deg) {
-        return Err(bad(&format!("angle {angle_deg} is outside [0, 90) degrees")));
+        return Err(bad(&format!(
+            "angle {angle_deg} is outside [0, 90) degrees"
+        )));
     }
     Ok(ColorTarget {
         angle_deg,
@@ -162,7 +172,11 @@ fn spectrum_report(fit: &SpectrumFit, name: &str, json: bool) -> Result<String> 
         fit.degrees_of_freedom,
         fit.chi2 / fit.degrees_of_freedom.max(1) as f64
     )?;
-    writeln!(text, "residual: rms of model − measured {:.3e}", fit.rms_residual)?;
+    writeln!(
+        text,
+        "residual: rms of model − measured {:.3e}",
+        fit.rms_residual
+    )?;
     if fit.alternatives.is_empty() {
         writeln!(
             text,

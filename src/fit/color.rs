@@ -118,13 +118,19 @@ pub fn check_target(integrator: &SpectralIntegrator, t: &ColorTarget, what: &str
 /// solid is the zonotope Σ R(λ) w(λ) of the integrator's weights w; its
 /// facets are spanned by pairs of weights, and a point is inside when no
 /// facet's normal u has u·rgb above the solid's support Σ max(0, u·w).
-fn check_reachable(integrator: &SpectralIntegrator, rgb: [f64; 3]) -> std::result::Result<(), String> {
+fn check_reachable(
+    integrator: &SpectralIntegrator,
+    rgb: [f64; 3],
+) -> std::result::Result<(), String> {
     if rgb.iter().any(|c| !c.is_finite()) {
         return Err("is not a finite colour".into());
     }
     let [r, g, b] = integrator.rgb_weights();
     let w: Vec<[f64; 3]> = (0..r.len()).map(|i| [r[i], g[i], b[i]]).collect();
-    let scale: f64 = w.iter().map(|v| v.iter().map(|c| c.abs()).sum::<f64>()).sum();
+    let scale: f64 = w
+        .iter()
+        .map(|v| v.iter().map(|c| c.abs()).sum::<f64>())
+        .sum();
     for i in 0..w.len() {
         for j in i + 1..w.len() {
             let u = cross(w[i], w[j]);
@@ -204,7 +210,10 @@ impl ColorModel {
             stack: stack.clone(),
             vary: vary.clone(),
             angles_deg: targets.iter().map(|t| t.angle_deg).collect(),
-            cos_theta0: targets.iter().map(|t| t.angle_deg.to_radians().cos()).collect(),
+            cos_theta0: targets
+                .iter()
+                .map(|t| t.angle_deg.to_radians().cos())
+                .collect(),
             weights: integrator.rgb_lane_weights(),
             integrator,
             grid,
@@ -221,7 +230,12 @@ impl Model for ColorModel {
 
     fn predict(&self, x: &[f64], out: &mut [f64]) -> Result<()> {
         if let Some(r) = self.roughness {
-            let colors = rough_colors(&self.vary.apply(&self.stack, x), &self.integrator, &self.angles_deg, r)?;
+            let colors = rough_colors(
+                &self.vary.apply(&self.stack, x),
+                &self.integrator,
+                &self.angles_deg,
+                r,
+            )?;
             for (j, c) in colors.iter().enumerate() {
                 out[3 * j..3 * j + 3].copy_from_slice(&c.reflectance_rgb);
             }
@@ -234,12 +248,20 @@ impl Model for ColorModel {
             out[3 * j..3 * j + 3].copy_from_slice(&power.reflectance);
         }
         if out.iter().any(|v| !v.is_finite()) {
-            return Err(Error::invalid("fit", "an incoherent gain layer lases at the varied thicknesses"));
+            return Err(Error::invalid(
+                "fit",
+                "an incoherent gain layer lases at the varied thicknesses",
+            ));
         }
         Ok(())
     }
 
-    fn predict_with_jacobian(&self, x: &[f64], out: &mut [f64], jacobian: &mut [f64]) -> Result<()> {
+    fn predict_with_jacobian(
+        &self,
+        x: &[f64],
+        out: &mut [f64],
+        jacobian: &mut [f64],
+    ) -> Result<()> {
         if self.roughness.is_none() {
             let stack = self.vary.apply(&self.stack, x);
             let colors = colors_with_gradient(&stack, &self.integrator, &self.angles_deg)?;
@@ -301,7 +323,9 @@ impl Loss for Targets {
             let rgb = [p[3 * j], p[3 * j + 1], p[3 * j + 2]];
             let (_, gradient) = delta_e00_with_gradient(rgb, *target);
             for q in 0..parameters {
-                jacobian[q * m + j] = (0..3).map(|c| gradient[c] * dp[q * width + 3 * j + c]).sum();
+                jacobian[q * m + j] = (0..3)
+                    .map(|c| gradient[c] * dp[q * width + 3 * j + c])
+                    .sum();
             }
         }
     }

@@ -48,7 +48,10 @@ pub fn parse_spectrum_csv(text: &str, origin: &Path) -> Result<Measurement> {
         }
     }
     if index[2].is_none() && index[3].is_none() {
-        return Err(bad(header_line, "missing column 'R' or 'T' (one at least)".into()));
+        return Err(bad(
+            header_line,
+            "missing column 'R' or 'T' (one at least)".into(),
+        ));
     }
     let mut columns: [Vec<f64>; 5] = Default::default();
     for (line, text) in lines {
@@ -61,9 +64,12 @@ pub fn parse_spectrum_csv(text: &str, origin: &Path) -> Result<Measurement> {
         }
         for (c, column) in columns.iter_mut().enumerate() {
             let Some(i) = index[c] else { continue };
-            let v: f64 = fields[i]
-                .parse()
-                .map_err(|_| bad(line, format!("{}: '{}' is not a number", COLUMNS[c], fields[i])))?;
+            let v: f64 = fields[i].parse().map_err(|_| {
+                bad(
+                    line,
+                    format!("{}: '{}' is not a number", COLUMNS[c], fields[i]),
+                )
+            })?;
             check_value(c, v).map_err(|why| bad(line, format!("{}: {v} {why}", COLUMNS[c])))?;
             column.push(v);
         }

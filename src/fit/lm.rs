@@ -16,8 +16,12 @@ use crate::error::Result;
 /// (`jacobian[p * m + i]` = ∂rᵢ/∂x_p).
 pub trait Residuals {
     /// Evaluates the residuals (and the Jacobian when `jacobian` is `Some`).
-    fn evaluate(&mut self, x: &[f64], residuals: &mut [f64], jacobian: Option<&mut [f64]>)
-        -> Result<()>;
+    fn evaluate(
+        &mut self,
+        x: &[f64],
+        residuals: &mut [f64],
+        jacobian: Option<&mut [f64]>,
+    ) -> Result<()>;
 }
 
 impl<F> Residuals for F
@@ -108,7 +112,11 @@ pub fn minimize(
         clamp(&mut x_new);
         let taken: Vec<f64> = (0..n).map(|p| x_new[p] - x[p]).collect();
         let tol = options.step_tolerance;
-        if taken.iter().zip(&x).all(|(d, x)| d.abs() <= tol * (x.abs() + tol)) {
+        if taken
+            .iter()
+            .zip(&x)
+            .all(|(d, x)| d.abs() <= tol * (x.abs() + tol))
+        {
             break;
         }
         model.evaluate(&x_new, &mut r_new, None)?;
@@ -235,7 +243,10 @@ mod tests {
             Ok(())
         };
         let min = minimize(&mut model, 2, &[-1.2, 1.0], &[FREE; 2], &Options::default()).unwrap();
-        assert!((min.x[0] - 1.0).abs() < 1e-8 && (min.x[1] - 1.0).abs() < 1e-8, "{min:?}");
+        assert!(
+            (min.x[0] - 1.0).abs() < 1e-8 && (min.x[1] - 1.0).abs() < 1e-8,
+            "{min:?}"
+        );
         assert!(min.chi2 < 1e-16, "{min:?}");
     }
 
@@ -259,9 +270,18 @@ mod tests {
             }
             Ok(())
         };
-        let min = minimize(&mut model, t.len(), &[1.0, 2.0], &[FREE; 2], &Options::default())
-            .unwrap();
-        assert!((min.x[0] - a).abs() < 1e-8 && (min.x[1] - b).abs() < 1e-8, "{min:?}");
+        let min = minimize(
+            &mut model,
+            t.len(),
+            &[1.0, 2.0],
+            &[FREE; 2],
+            &Options::default(),
+        )
+        .unwrap();
+        assert!(
+            (min.x[0] - a).abs() < 1e-8 && (min.x[1] - b).abs() < 1e-8,
+            "{min:?}"
+        );
         // (JᵀJ)⁻¹ from the Jacobian written out at the truth.
         let (mut s00, mut s01, mut s11) = (0.0, 0.0, 0.0);
         for &t in &t {
@@ -273,7 +293,10 @@ mod tests {
         }
         let det = s00 * s11 - s01 * s01;
         let cov = min.covariance.unwrap();
-        for (got, want) in cov.iter().zip([s11 / det, -s01 / det, -s01 / det, s00 / det]) {
+        for (got, want) in cov
+            .iter()
+            .zip([s11 / det, -s01 / det, -s01 / det, s00 / det])
+        {
             assert!((got - want).abs() < 1e-8 * want.abs(), "{got} {want}");
         }
     }

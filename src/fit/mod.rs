@@ -116,10 +116,7 @@ impl SpectrumFitter {
     /// the measurement it was made with; values and σ may differ).
     pub fn fit(&self, measured: &Measurement) -> Result<SpectrumFit> {
         let (y, sigma) = measured.values(self.model.layout());
-        let loss = WeightedResiduals {
-            measured: y,
-            sigma,
-        };
+        let loss = WeightedResiduals { measured: y, sigma };
         let found = search::search(&self.model, &loss, &self.library, &self.vary.bounds_nm)?;
         self.report(measured, &loss, &found.minima)
     }
@@ -141,8 +138,16 @@ impl SpectrumFitter {
         let values = loss.measured.len();
         let dof = values - k;
         let reduced = best.chi2 / dof.max(1) as f64;
-        let scale = if measured.sigma.is_some() { reduced.max(1.0) } else { reduced };
-        let cov_scale = if measured.sigma.is_some() { 1.0 } else { reduced };
+        let scale = if measured.sigma.is_some() {
+            reduced.max(1.0)
+        } else {
+            reduced
+        };
+        let cov_scale = if measured.sigma.is_some() {
+            1.0
+        } else {
+            reduced
+        };
         let sigma_nm: Vec<f64> = (0..k)
             .map(|p| match &best.covariance {
                 Some(c) => (c[p * k + p] * cov_scale).max(0.0).sqrt(),
@@ -168,10 +173,16 @@ impl SpectrumFitter {
         self.model.predict(&best.x, &mut p)?;
         let rows = self.model.layout().per_row(&p);
         let residual_r = measured.reflectance.as_ref().map(|r| {
-            rows.iter().zip(r).map(|((m, _), y)| m.unwrap_or(0.0) - y).collect::<Vec<_>>()
+            rows.iter()
+                .zip(r)
+                .map(|((m, _), y)| m.unwrap_or(0.0) - y)
+                .collect::<Vec<_>>()
         });
         let residual_t = measured.transmittance.as_ref().map(|t| {
-            rows.iter().zip(t).map(|((_, m), y)| m.unwrap_or(0.0) - y).collect::<Vec<_>>()
+            rows.iter()
+                .zip(t)
+                .map(|((_, m), y)| m.unwrap_or(0.0) - y)
+                .collect::<Vec<_>>()
         });
         let (sum, count) = [&residual_r, &residual_t]
             .into_iter()

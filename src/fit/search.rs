@@ -272,7 +272,14 @@ fn scan_points(bounds: &[(f64, f64)], steps: &[f64], budget: usize) -> Vec<Vec<f
                         let c = counts[axis];
                         let k = i % c;
                         i /= c;
-                        at(axis, if c > 1 { k as f64 / (c - 1) as f64 } else { 0.5 })
+                        at(
+                            axis,
+                            if c > 1 {
+                                k as f64 / (c - 1) as f64
+                            } else {
+                                0.5
+                            },
+                        )
                     })
                     .collect()
             })
@@ -367,7 +374,10 @@ mod tests {
         for axis in 0..3 {
             let (lo, hi) = bounds[axis];
             let mean = points.iter().map(|p| p[axis]).sum::<f64>() / 1000.0;
-            assert!((mean - 0.5 * (lo + hi)).abs() < 0.01 * (hi - lo), "{axis}: {mean}");
+            assert!(
+                (mean - 0.5 * (lo + hi)).abs() < 0.01 * (hi - lo),
+                "{axis}: {mean}"
+            );
             assert!(points.iter().all(|p| (lo..=hi).contains(&p[axis])));
         }
         // A small grid is scanned whole, corners included.

@@ -104,7 +104,8 @@ impl Measurement {
         if self.reflectance.is_none() && self.transmittance.is_none() {
             return Err(Error::invalid(arg("R"), "neither R nor T is given"));
         }
-        let values = rows * (self.reflectance.is_some() as usize + self.transmittance.is_some() as usize);
+        let values =
+            rows * (self.reflectance.is_some() as usize + self.transmittance.is_some() as usize);
         if values <= parameters {
             return Err(Error::invalid(
                 arg("R"),
@@ -280,7 +281,10 @@ impl SpectrumModel {
                 }
             }
         }
-        Err(Error::invalid("fit", "the model is not finite at the varied thicknesses"))
+        Err(Error::invalid(
+            "fit",
+            "the model is not finite at the varied thicknesses",
+        ))
     }
 
     fn store(&self, at: usize, response: &Response, out: &mut [f64]) {
@@ -315,7 +319,12 @@ impl Model for SpectrumModel {
         self.check_finite(x, out)
     }
 
-    fn predict_with_jacobian(&self, x: &[f64], out: &mut [f64], jacobian: &mut [f64]) -> Result<()> {
+    fn predict_with_jacobian(
+        &self,
+        x: &[f64],
+        out: &mut [f64],
+        jacobian: &mut [f64],
+    ) -> Result<()> {
         let mut t = Vec::with_capacity(self.base.len());
         self.vary.fill(&self.base, x, &mut t);
         let width = self.predictions();

@@ -46,7 +46,11 @@ pub fn with_thicknesses(
 
 fn same_folder(a: &Path, b: &Path) -> bool {
     let canonical = |p: &Path| {
-        let p = if p.as_os_str().is_empty() { Path::new(".") } else { p };
+        let p = if p.as_os_str().is_empty() {
+            Path::new(".")
+        } else {
+            p
+        };
         p.canonicalize().unwrap_or_else(|_| p.to_path_buf())
     };
     canonical(a) == canonical(b)
@@ -72,13 +76,22 @@ mod tests {
         let text = "ambient = { n = 1.0 }\nsubstrate = { table = \"glass.csv\" }\n\
                     [[layers]]\nn = 1.33\nthickness_nm = 500.0\n[[layers]]\nn = 2\nthickness_nm = 10\n";
         let here = Path::new("/nonexistent/a");
-        let out = with_thicknesses(text, "s.toml", &[(2, 12.5)], here, Path::new("/nonexistent/b"))
-            .unwrap();
+        let out = with_thicknesses(
+            text,
+            "s.toml",
+            &[(2, 12.5)],
+            here,
+            Path::new("/nonexistent/b"),
+        )
+        .unwrap();
         let doc: toml::Table = toml::from_str(&out).unwrap();
         let layers = doc["layers"].as_array().unwrap();
         assert_eq!(layers[0]["thickness_nm"].as_float(), Some(500.0));
         assert_eq!(layers[1]["thickness_nm"].as_float(), Some(12.5));
-        assert_eq!(doc["substrate"]["table"].as_str(), Some("/nonexistent/a/glass.csv"));
+        assert_eq!(
+            doc["substrate"]["table"].as_str(),
+            Some("/nonexistent/a/glass.csv")
+        );
         // In the same folder the path stays as written.
         let same = with_thicknesses(text, "s.toml", &[(1, 1.0)], here, here).unwrap();
         assert!(same.contains("\"glass.csv\""), "{same}");

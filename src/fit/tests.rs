@@ -30,7 +30,13 @@ fn gaussian(rng: &mut Pcg64) -> f64 {
 }
 
 /// R of `stack` at `wavelengths` × `angles`, plus noise of σ `noise`.
-fn measure(stack: &Stack, wavelengths: &[f64], angles: &[f64], noise: f64, rng: &mut Pcg64) -> Measurement {
+fn measure(
+    stack: &Stack,
+    wavelengths: &[f64],
+    angles: &[f64],
+    noise: f64,
+    rng: &mut Pcg64,
+) -> Measurement {
     let grid = StackGrid::new(stack, wavelengths).unwrap();
     let mut m = Measurement {
         sigma: Some(Vec::new()),
@@ -43,7 +49,10 @@ fn measure(stack: &Stack, wavelengths: &[f64], angles: &[f64], noise: f64, rng: 
         for (w, r) in wavelengths.iter().zip(&out) {
             m.wavelength_nm.push(*w);
             m.angle_deg.push(a);
-            m.reflectance.as_mut().unwrap().push(r.r() + noise * gaussian(rng));
+            m.reflectance
+                .as_mut()
+                .unwrap()
+                .push(r.r() + noise * gaussian(rng));
             m.sigma.as_mut().unwrap().push(noise);
         }
     }
@@ -62,11 +71,20 @@ fn recovers_hidden_stacks_of_one_to_six_layers() {
         for _ in 0..3 {
             let truth: Vec<f64> = (0..layers).map(|_| rng.random_range(40.0..300.0)).collect();
             let indices: Vec<f64> = (0..layers)
-                .map(|i| if i % 2 == 0 { rng.random_range(2.0..2.4) } else { rng.random_range(1.38..1.5) })
+                .map(|i| {
+                    if i % 2 == 0 {
+                        rng.random_range(2.0..2.4)
+                    } else {
+                        rng.random_range(1.38..1.5)
+                    }
+                })
                 .collect();
             let hidden = hidden_stack(&truth, &indices);
             let measured = measure(&hidden, &wavelengths, &[0.0, 45.0], 1e-3, &mut rng);
-            let start: Vec<f64> = truth.iter().map(|d| d * rng.random_range(0.6..1.4)).collect();
+            let start: Vec<f64> = truth
+                .iter()
+                .map(|d| d * rng.random_range(0.6..1.4))
+                .collect();
             let bounds: Vec<(f64, f64)> = truth.iter().map(|d| (0.5 * d, 1.5 * d)).collect();
             let guess = hidden_stack(&start, &indices);
             let all: Vec<usize> = (1..=layers).collect();
@@ -103,15 +121,24 @@ fn colour_fit_reaches_reachable_targets() {
             let colors = stack_colors(&hidden, &integrator, &angles).unwrap();
             let targets: Vec<ColorTarget> = colors
                 .iter()
-                .map(|c| ColorTarget { angle_deg: c.angle_deg, rgb: c.reflectance_rgb })
+                .map(|c| ColorTarget {
+                    angle_deg: c.angle_deg,
+                    rgb: c.reflectance_rgb,
+                })
                 .collect();
-            let start: Vec<f64> = truth.iter().map(|d| d * rng.random_range(0.7..1.3)).collect();
+            let start: Vec<f64> = truth
+                .iter()
+                .map(|d| d * rng.random_range(0.7..1.3))
+                .collect();
             let bounds: Vec<(f64, f64)> = truth.iter().map(|d| (0.5 * d, 1.5 * d)).collect();
             let guess = hidden_stack(&start, &indices[..layers]);
             let all: Vec<usize> = (1..=layers).collect();
             let vary = Vary::new(&guess, &all, Some(&bounds), "vary", "bounds").unwrap();
             let fit = fit_color(&guess, &vary, &targets, White::D65, None).unwrap();
-            assert!(fit.delta_e2000.iter().all(|de| *de <= 0.5), "{fit:?} truth {truth:?}");
+            assert!(
+                fit.delta_e2000.iter().all(|de| *de <= 0.5),
+                "{fit:?} truth {truth:?}"
+            );
         }
     }
 }
@@ -122,11 +149,22 @@ fn colour_fit_reaches_reachable_targets() {
 fn unreachable_colours_are_refused() {
     let guess = hidden_stack(&[300.0], &[1.33]);
     let vary = Vary::new(&guess, &[1], None, "vary", "bounds").unwrap();
-    for rgb in [[1.5, 0.0, 0.0], [-0.1, -0.1, -0.1], [1.01, 1.01, 1.01], [f64::NAN, 0.0, 0.0]] {
-        let target = [ColorTarget { angle_deg: 0.0, rgb }];
+    for rgb in [
+        [1.5, 0.0, 0.0],
+        [-0.1, -0.1, -0.1],
+        [1.01, 1.01, 1.01],
+        [f64::NAN, 0.0, 0.0],
+    ] {
+        let target = [ColorTarget {
+            angle_deg: 0.0,
+            rgb,
+        }];
         let e = fit_color(&guess, &vary, &target, crate::color::White::D65, None).unwrap_err();
         assert!(e.to_string().starts_with("target_rgb[0]: "), "{e}");
     }
-    let grey = [ColorTarget { angle_deg: 10.0, rgb: [0.99, 0.99, 0.99] }];
+    let grey = [ColorTarget {
+        angle_deg: 10.0,
+        rgb: [0.99, 0.99, 0.99],
+    }];
     assert!(fit_color(&guess, &vary, &grey, crate::color::White::D65, None).is_ok());
 }
