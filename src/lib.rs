@@ -14,6 +14,7 @@ pub mod bench;
 pub mod color;
 pub mod error;
 pub mod export;
+pub mod fit;
 pub mod limits;
 pub mod lut;
 pub mod optics;

@@ -32,6 +32,8 @@ enum Command {
     Bake(cli::bake::Args),
     /// GPU-ready textures, film.json and shaders for any renderer.
     Export(cli::export::Args),
+    /// Fit layer thicknesses to a measured spectrum or to colours at angles.
+    Fit(cli::fit::Args),
     /// Print a lookup table's header.
     Info(cli::info::Args),
     /// Measure a lookup table's error against the solver.
@@ -65,6 +67,7 @@ fn main() -> ExitCode {
         Command::Color(args) => cli::color::run(args),
         Command::Bake(args) => cli::bake::run(args),
         Command::Export(args) => cli::export::run(args),
+        Command::Fit(args) => cli::fit::run(args),
         Command::Info(args) => cli::info::run(args),
         Command::Validate(args) => cli::validate::run(args),
         Command::Render(args) => cli::render::run(args),

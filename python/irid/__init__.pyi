@@ -199,3 +199,55 @@ class RoughLut:
         """F_eff at broadcast points, (..., 3) linear sRGB. Thickness and
         cos θ beyond the table take its end's value; NaN or a roughness
         outside [0, 1] raises ValueError."""
+
+class Fit:
+    """The result of ``fit``; array shapes lead with the batch shape (...),
+    () for one spectrum."""
+
+    stack: Optional[Stack]  # None for a batch
+    layers: List[int]
+    thickness_nm: npt.NDArray[np.float64]  # (..., layers)
+    sigma_nm: npt.NDArray[np.float64]  # (..., layers)
+    chi2: npt.NDArray[np.float64]  # (...)
+    residual: npt.NDArray[np.float64]  # (...): rms of model - measured
+    residual_R: Optional[npt.NDArray[np.float64]]  # (..., wavelengths, angles)
+    residual_T: Optional[npt.NDArray[np.float64]]
+    threshold: npt.NDArray[np.float64]  # (...)
+    ambiguous: npt.NDArray[np.bool_]  # (...)
+    alternatives: List[List[Tuple[List[float], float]]]
+    degrees_of_freedom: int
+
+class ColorFit:
+    """The result of ``fit_color``."""
+
+    stack: Stack
+    layers: List[int]
+    thickness_nm: npt.NDArray[np.float64]
+    angle_deg: npt.NDArray[np.float64]
+    delta_e2000: npt.NDArray[np.float64]
+    rgb: npt.NDArray[np.float64]  # (angles, 3)
+
+def fit(
+    stack: Stack,
+    vary: Sequence[int],
+    wavelengths_nm: ArrayLike,
+    angles_deg: ArrayLike,
+    R: Optional[ArrayLike] = None,
+    T: Optional[ArrayLike] = None,
+    sigma: Optional[ArrayLike] = None,
+    bounds: Optional[Sequence[Tuple[float, float]]] = None,
+) -> Fit:
+    """Weighted least squares of the varied layers' thicknesses (1-based from
+    the top) to R and/or T shaped (..., wavelengths, angles)."""
+
+def fit_color(
+    stack: Stack,
+    vary: Sequence[int],
+    angles_deg: ArrayLike,
+    target_rgb: ArrayLike,
+    white: str = "d65",
+    roughness: Optional[float] = None,
+    bounds: Optional[Sequence[Tuple[float, float]]] = None,
+) -> ColorFit:
+    """The thicknesses whose reflected colours come closest in CIEDE2000 to
+    ``target_rgb`` (angles, 3) at ``angles_deg``."""

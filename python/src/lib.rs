@@ -17,6 +17,7 @@
 mod arrays;
 mod budget;
 mod coherent;
+mod fit;
 mod gradient;
 mod incoherent;
 mod lut;
@@ -80,6 +81,8 @@ fn _irid(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(stack::material, m)?)?;
     m.add_function(wrap_pyfunction!(stack::materials, m)?)?;
     m.add_function(wrap_pyfunction!(lut::bake, m)?)?;
+    m.add_function(wrap_pyfunction!(fit::fit, m)?)?;
+    m.add_function(wrap_pyfunction!(fit::fit_color, m)?)?;
     m.add_class::<stack::PyMaterial>()?;
     m.add_class::<stack::PyStack>()?;
     m.add_class::<lut::PyLut>()?;

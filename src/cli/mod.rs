@@ -23,6 +23,7 @@ pub mod color;
 pub mod demo;
 pub mod eval;
 pub mod export;
+pub mod fit;
 pub mod info;
 pub mod logger;
 pub mod preview;

@@ -11,7 +11,8 @@ cd "$(dirname "$0")/../.."
 venv=.venv-python
 pip=(--quiet --disable-pip-version-check)
 [ -x "$venv/bin/python" ] || python3 -m venv "$venv"
-"$venv/bin/pip" install "${pip[@]}" pytest numpy mpmath jax tmm==0.2.0 tmm-faster==0.1.3
+# dask[distributed]: the batched fit under a local Dask cluster (test_fit.py).
+"$venv/bin/pip" install "${pip[@]}" pytest numpy mpmath jax tmm==0.2.0 tmm-faster==0.1.3 "dask[distributed]==2026.11.0"
 # The wheel tools/test.sh built ($IRID_WHEEL), or one built here;
 # --force-reinstall: the version number does not change with the sources.
 wheel=$(bash tools/python_wheel.sh "$venv/bin/python")
