@@ -6,7 +6,7 @@ finite difference of two renders with the same seed, on the table paths
 import numpy as np
 import pytest
 
-from mitsuba_setup import COATED_GLASS, FILM_ON_GOLD, dr, irid, mi, orthographic_sphere
+from mitsuba_setup import COATED_GLASS, FILM_ON_GOLD, JIT, dr, irid, mi, orthographic_sphere, use
 
 SIZE, SPP = 12, 16
 #: Thickness steps well inside a table's cells (a table is piecewise linear:
@@ -103,6 +103,19 @@ def test_roughness_ad_agrees_with_a_same_seed_finite_difference(jit, gold_tables
     bsdf = irid.mitsuba.bsdf(FILM_ON_GOLD, thickness_nm=300.0, roughness=0.3, table=None if table is None else gold_tables[table])
     ad, fd = ad_and_fd(bsdf, {"roughness": 0.3}, {"roughness": 0.4}, integrator="direct")
     _check(f"{table or 'solver'} roughness 0.3, direct", ad, fd)
+
+
+def test_prb_differentiates_a_rough_table_film_in_symbolic_mode(gold_tables):
+    """Mitsuba's prb in the symbolic mode register(symbolic=True) keeps (in
+    the evaluated mode register() sets, Mitsuba 3.9.1's prb aborts the
+    interpreter, docs/mitsuba.md)."""
+    use(JIT, symbolic=True)
+    try:
+        bsdf = irid.mitsuba.bsdf(FILM_ON_GOLD, thickness_nm=300.0, roughness=0.3, table=gold_tables["grid"])
+        ad, fd = ad_and_fd(bsdf, {"thickness_nm": 303.3}, {"thickness_nm": 290.0}, integrator="prb")
+    finally:
+        use(JIT)
+    _check("grid roughness 0.3, prb", ad, fd)
 
 
 @pytest.mark.parametrize("table", ["atlas", None], ids=["atlas", "solver"])
