@@ -17,6 +17,7 @@
 mod arrays;
 mod budget;
 mod coherent;
+mod gradient;
 mod incoherent;
 mod lut;
 mod pool;

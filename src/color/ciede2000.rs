@@ -13,9 +13,9 @@
 use std::f64::consts::PI;
 
 /// (6/29)³: below it, Lab's f(t) is the linear segment.
-const LAB_EPSILON: f64 = 216.0 / 24_389.0;
+pub(crate) const LAB_EPSILON: f64 = 216.0 / 24_389.0;
 /// (29/3)³: the linear segment's slope times 116.
-const LAB_KAPPA: f64 = 24_389.0 / 27.0;
+pub(crate) const LAB_KAPPA: f64 = 24_389.0 / 27.0;
 
 /// CIE Lab of XYZ relative to the white `white_xyz`.
 pub(crate) fn lab(xyz: [f64; 3], white_xyz: [f64; 3]) -> [f64; 3] {

@@ -8,7 +8,9 @@
 
 pub mod cie_tables;
 mod ciede2000;
+mod dual;
 mod film;
+pub mod gradient;
 pub mod refine;
 mod sampling;
 mod space;

@@ -1,5 +1,6 @@
 //! Optics: materials, stacks and the transfer-matrix solver.
 
+pub mod gradient;
 pub mod incoherent;
 pub mod lanes;
 pub mod library;

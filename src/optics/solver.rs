@@ -433,7 +433,7 @@ pub(super) fn one_way(phase: C64) -> C64 {
 /// |q|² < 10⁻⁴ |n|²: within this the Γ recursion would lose more than
 /// about two digits to the merging of the layer's two waves.
 #[inline]
-fn near_critical(q: C64, nsq: C64) -> bool {
+pub(super) fn near_critical(q: C64, nsq: C64) -> bool {
     let q2 = q.norm_sqr();
     q2 * q2 < 1e-8 * nsq.norm_sqr()
 }

@@ -1,0 +1,297 @@
+//! The derivative of the incoherent recursion ([`climb`]) of a whole stack
+//! with respect to every layer's thickness, in forward mode at the power
+//! level: each coherent group's amplitude derivatives come from the taped
+//! coherent recursion, and ρ, τ carry one derivative per layer up through
+//! [`through_layer`]'s sums. There are as many groups as incoherent layers
+//! plus one, so this costs about two coherent sweeps of the stack plus
+//! N per group.
+//!
+//! [`climb`]: super::super::incoherent::climb
+//! [`through_layer`]: super::super::incoherent::through_layer
+
+use num_complex::Complex64 as C64;
+
+use super::super::incoherent::{
+    carrying_index, flux_factors, one_pass, solve_incoherent, through_layer, Coherence, Diverged,
+    Light,
+};
+use super::super::solver::{grazing, sqrt_upper, Amplitudes, Response};
+use super::coherent::{recurse_media_gradient, AmplitudeGradient, Step};
+use super::ResponseGradient;
+
+/// ρ and τ of one polarization and their derivatives, one per layer.
+struct Sums {
+    rho: f64,
+    tau: f64,
+    d_rho: Vec<f64>,
+    d_tau: Vec<f64>,
+}
+
+/// d|r|² from r and dr; d|t|² from |t|² and d log t.
+fn d_norm_sqr(r: C64, dr: C64) -> f64 {
+    2.0 * (r.conj() * dr).re
+}
+
+/// One coherent group (stack media `top..=bottom`) from above and from
+/// below, with the derivatives of both by the thickness of each of its
+/// layers (`top + 1 + i` at `[i]`).
+struct Group {
+    down: Amplitudes,
+    up: Amplitudes,
+    d_down: Vec<AmplitudeGradient>,
+    d_up: Vec<AmplitudeGradient>,
+}
+
+fn group(
+    indices: &[C64],
+    thicknesses_nm: &[f64],
+    (top, bottom): (usize, usize),
+    light: &Light,
+    (top_medium, bottom_medium): ([C64; 3], [C64; 3]),
+    tape: &mut Vec<Step>,
+) -> Group {
+    let media = bottom - top + 1;
+    let mut d_down = vec![AmplitudeGradient::default(); media - 2];
+    let mut d_up = d_down.clone();
+    let down = recurse_media_gradient(
+        media,
+        |j| indices[top + j],
+        |j| thicknesses_nm[top + j],
+        light.wavelength_nm,
+        light.beta_sq,
+        top_medium,
+        bottom_medium[2],
+        tape,
+        &mut d_down,
+    );
+    let up = recurse_media_gradient(
+        media,
+        |j| indices[bottom - j],
+        |j| thicknesses_nm[bottom - j - 2],
+        light.wavelength_nm,
+        light.beta_sq,
+        bottom_medium,
+        top_medium[2],
+        tape,
+        &mut d_up,
+    );
+    d_up.reverse();
+    Group {
+        down,
+        up,
+        d_down,
+        d_up,
+    }
+}
+
+/// [`solve_incoherent`](super::super::solve_incoherent) with the
+/// derivative of R and T (s and p) by each layer's thickness.
+pub(crate) fn solve_mixed_with_gradient(
+    indices: &[C64],
+    thicknesses_nm: &[f64],
+    coherence: &Coherence,
+    wavelength_nm: f64,
+    cos_theta0: f64,
+    tape: &mut Vec<Step>,
+) -> Result<(Response, ResponseGradient), Diverged> {
+    let layers = thicknesses_nm.len();
+    if cos_theta0 <= 0.0 {
+        return Ok((grazing(indices), ResponseGradient::zeros(layers)));
+    }
+    let light = Light::new(wavelength_nm, indices[0].re, cos_theta0.min(1.0));
+    let n_sub = indices[layers + 1];
+    let q_sub = sqrt_upper(light.normal_index_sq(n_sub));
+    let n0 = C64::new(light.n0, 0.0);
+    let top_medium = [n0, n0 * n0, C64::new(light.q0, 0.0)];
+
+    let zeros = || vec![0.0; layers];
+    let (mut below, mut n_below, mut q_below) = (layers + 1, n_sub, q_sub);
+    let mut state: Option<[Sums; 2]> = None;
+    let mut opaque = false;
+    let incoherent = coherence.incoherent_layers();
+    for &m in incoherent.iter().rev().chain(std::iter::once(&0)) {
+        let (n, q) = if m == 0 {
+            (top_medium[0], top_medium[2])
+        } else {
+            let n = indices[m];
+            let z = light.normal_index_sq(n);
+            match carrying_index(n, z) {
+                Some(q) => (n, q),
+                None => {
+                    (state, opaque) = (None, true);
+                    (below, n_below, q_below) = (m, n, sqrt_upper(z));
+                    continue;
+                }
+            }
+        };
+        let top = if m == 0 { top_medium } else { [n, n * n, q] };
+        let g = group(
+            indices,
+            thicknesses_nm,
+            (m, below),
+            &light,
+            (top, [n_below, n_below * n_below, q_below]),
+            tape,
+        );
+        let first_layer = m; // layer index (0-based) of the group's first finite medium
+        state = Some(match state {
+            None => {
+                let mut sums = [
+                    Sums {
+                        rho: g.down.rs.norm_sqr(),
+                        tau: g.down.ts.norm_sqr(),
+                        d_rho: zeros(),
+                        d_tau: zeros(),
+                    },
+                    Sums {
+                        rho: g.down.rp.norm_sqr(),
+                        tau: g.down.tp.norm_sqr(),
+                        d_rho: zeros(),
+                        d_tau: zeros(),
+                    },
+                ];
+                for (i, d) in g.d_down.iter().enumerate() {
+                    let l = first_layer + i;
+                    sums[0].d_rho[l] = d_norm_sqr(g.down.rs, d.rs);
+                    sums[0].d_tau[l] = 2.0 * sums[0].tau * d.log_ts.re;
+                    sums[1].d_rho[l] = d_norm_sqr(g.down.rp, d.rp);
+                    sums[1].d_tau[l] = 2.0 * sums[1].tau * d.log_tp.re;
+                }
+                sums
+            }
+            Some([s, p]) => {
+                let pass = one_pass(light.k0, q_below, thicknesses_nm[below - 1]);
+                let d_pass = -2.0 * light.k0 * q_below.im * pass;
+                let cross = Crossing {
+                    group: &g,
+                    pass,
+                    d_pass,
+                    layer_index: below - 1,
+                    first_layer,
+                    layer: below,
+                };
+                [cross.sums(s, Pol::S)?, cross.sums(p, Pol::P)?]
+            }
+        });
+        (below, n_below, q_below) = (m, n, q);
+    }
+    let [s, p] = state.expect("the ambient closes the recursion");
+    let [flux_s, flux_p] = if opaque {
+        [0.0, 0.0]
+    } else {
+        flux_factors(n_sub, q_sub, light.q0)
+    };
+    let response = Response {
+        rs: s.rho,
+        rp: p.rho,
+        ts: s.tau * flux_s,
+        tp: p.tau * flux_p,
+    };
+    if !response.is_finite() {
+        // Finite round trips whose gain still overflows the sum: the
+        // forward solver names the layer.
+        let diverged = solve_incoherent(
+            indices,
+            thicknesses_nm,
+            coherence,
+            wavelength_nm,
+            cos_theta0,
+        )
+        .err()
+        .unwrap_or(Diverged {
+            layer: incoherent[0],
+            round_trip: f64::INFINITY,
+        });
+        return Err(diverged);
+    }
+    let gradient = ResponseGradient {
+        rs: s.d_rho,
+        rp: p.d_rho,
+        ts: s.d_tau.iter().map(|d| d * flux_s).collect(),
+        tp: p.d_tau.iter().map(|d| d * flux_p).collect(),
+    };
+    Ok((response, gradient))
+}
+
+#[derive(Clone, Copy)]
+enum Pol {
+    S,
+    P,
+}
+
+/// Crossing an incoherent layer and the group above it.
+struct Crossing<'a> {
+    group: &'a Group,
+    pass: f64,
+    d_pass: f64,
+    /// The incoherent layer's index among the layers (0-based).
+    layer_index: usize,
+    /// The layer index of the group's first finite medium.
+    first_layer: usize,
+    /// The incoherent layer's number (1-based), for [`Diverged`].
+    layer: usize,
+}
+
+impl Crossing<'_> {
+    /// ρ' = A + B P²ρ/(1 − C P²ρ), τ' = E P τ/(1 − C P²ρ), with A = |r|²,
+    /// B = |t t'|², C = |r'|², E = |t|² of the group, and their derivatives.
+    fn sums(&self, sums: Sums, pol: Pol) -> Result<Sums, Diverged> {
+        let g = self.group;
+        let pick = |a: &Amplitudes| match pol {
+            Pol::S => (a.rs, a.ts),
+            Pol::P => (a.rp, a.tp),
+        };
+        let pick_d = |d: &AmplitudeGradient| match pol {
+            Pol::S => (d.rs, d.log_ts),
+            Pol::P => (d.rp, d.log_tp),
+        };
+        let (r, t) = pick(&g.down);
+        let (r_up, t_up) = pick(&g.up);
+        let (rho, tau) = through_layer(
+            (sums.rho, sums.tau),
+            (r, t),
+            (r_up, t_up),
+            self.pass,
+            self.layer,
+        )?;
+        let (b, c, e) = ((t * t_up).norm_sqr(), r_up.norm_sqr(), t.norm_sqr());
+        let (p, rho0, tau0) = (self.pass, sums.rho, sums.tau);
+        let returned = p * p * rho0;
+        let inv = 1.0 / (1.0 - c * returned);
+        // Derivatives through ρ, τ below and through P: every layer below
+        // the group, and the incoherent layer itself.
+        let mut d_rho = sums.d_rho;
+        let mut d_tau = sums.d_tau;
+        for l in 0..d_rho.len() {
+            let mut d_returned = p * p * d_rho[l];
+            let mut d_p = 0.0;
+            if l == self.layer_index {
+                d_p = self.d_pass;
+                d_returned += 2.0 * p * d_p * rho0;
+            }
+            let dr = b * d_returned * inv * inv;
+            let dt = (e * d_p * tau0 + e * p * d_tau[l]) * inv
+                + e * p * tau0 * inv * inv * c * d_returned;
+            d_rho[l] = dr;
+            d_tau[l] = dt;
+        }
+        // Derivatives through the group's own layers.
+        for (i, (dd, du)) in g.d_down.iter().zip(&g.d_up).enumerate() {
+            let l = self.first_layer + i;
+            let (dr, dlt) = pick_d(dd);
+            let (dr_up, dlt_up) = pick_d(du);
+            let da = d_norm_sqr(r, dr);
+            let db = 2.0 * b * (dlt + dlt_up).re;
+            let dc = d_norm_sqr(r_up, dr_up);
+            let de = 2.0 * e * dlt.re;
+            d_rho[l] = da + db * returned * inv + b * returned * returned * dc * inv * inv;
+            d_tau[l] = de * p * tau0 * inv + e * p * tau0 * inv * inv * dc * returned;
+        }
+        Ok(Sums {
+            rho,
+            tau,
+            d_rho,
+            d_tau,
+        })
+    }
+}

@@ -1,0 +1,252 @@
+//! Exact derivatives of R and T by every layer's thickness, from one extra
+//! sweep of the solver's own recursion (not finite differences).
+//!
+//! Thickness enters the recursion only through each layer's phase: the
+//! round-trip factor e^{2i k0 q d} in Γ form, the layer matrix of a
+//! near-critical layer in field form. The coherent derivative
+//! ([`coherent`]) records each step's local derivative on the way up and
+//! multiplies them on one sweep back down (reverse mode), so all N
+//! derivatives cost about one more recursion. Mixed stacks ([`mixed`])
+//! differentiate the incoherent power sums in forward mode, taking each
+//! coherent group's amplitude derivatives from the coherent sweep.
+//!
+//! Every derivative is per nm of the layer's thickness, layers top down.
+//! The method and its checks are in docs/inverse.md.
+
+mod coherent;
+mod mixed;
+
+use num_complex::Complex64 as C64;
+
+use super::incoherent::Coherence;
+use super::solver::{grazing, normal_index, sin_sq, Response};
+use super::stack::{Stack, StackGrid};
+use crate::error::Result;
+pub use coherent::AmplitudeGradient;
+use coherent::{recurse_media_gradient, Step};
+
+/// d/d(thickness in nm) of each layer (top layer first) of one [`Response`].
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct ResponseGradient {
+    /// ∂R_s/∂d_j.
+    pub rs: Vec<f64>,
+    /// ∂R_p/∂d_j.
+    pub rp: Vec<f64>,
+    /// ∂T_s/∂d_j.
+    pub ts: Vec<f64>,
+    /// ∂T_p/∂d_j.
+    pub tp: Vec<f64>,
+}
+
+impl ResponseGradient {
+    /// All derivatives zero, for `layers` layers.
+    pub fn zeros(layers: usize) -> ResponseGradient {
+        ResponseGradient {
+            rs: vec![0.0; layers],
+            rp: vec![0.0; layers],
+            ts: vec![0.0; layers],
+            tp: vec![0.0; layers],
+        }
+    }
+
+    /// ∂R/∂d_j of unpolarized light.
+    pub fn r(&self, layer: usize) -> f64 {
+        0.5 * (self.rs[layer] + self.rp[layer])
+    }
+
+    /// ∂T/∂d_j of unpolarized light.
+    pub fn t(&self, layer: usize) -> f64 {
+        0.5 * (self.ts[layer] + self.tp[layer])
+    }
+}
+
+/// Scratch reused across the points of a grid.
+#[derive(Default)]
+pub(crate) struct Workspace {
+    tape: Vec<Step>,
+    amplitudes: Vec<AmplitudeGradient>,
+}
+
+/// R and T of a coherent or mixed stack given as `indices` (ambient, N
+/// layers, substrate) and N `thicknesses_nm`, with their derivatives by
+/// each thickness: [`solve_incoherent`](super::solve_incoherent)'s
+/// arguments and answer. Errors where an incoherent layer lases.
+pub(crate) fn solve_indices_with_gradient(
+    indices: &[C64],
+    thicknesses_nm: &[f64],
+    coherence: &Coherence,
+    wavelength_nm: f64,
+    cos_theta0: f64,
+    work: &mut Workspace,
+) -> std::result::Result<(Response, ResponseGradient), super::Diverged> {
+    if !coherence.is_coherent() {
+        return mixed::solve_mixed_with_gradient(
+            indices,
+            thicknesses_nm,
+            coherence,
+            wavelength_nm,
+            cos_theta0,
+            &mut work.tape,
+        );
+    }
+    let layers = thicknesses_nm.len();
+    if cos_theta0 <= 0.0 {
+        return Ok((grazing(indices), ResponseGradient::zeros(layers)));
+    }
+    let cos_theta0 = cos_theta0.min(1.0);
+    let n0 = indices[0].re;
+    let top = [
+        C64::new(n0, 0.0),
+        C64::new(n0 * n0, 0.0),
+        C64::new(n0 * cos_theta0, 0.0),
+    ];
+    let beta_sq = n0 * n0 * sin_sq(cos_theta0);
+    let q_sub = normal_index(indices[layers + 1], beta_sq);
+    work.amplitudes.clear();
+    work.amplitudes.resize(layers, AmplitudeGradient::default());
+    let amp = recurse_media_gradient(
+        layers + 2,
+        |j| indices[j],
+        |j| thicknesses_nm[j],
+        wavelength_nm,
+        beta_sq,
+        top,
+        q_sub,
+        &mut work.tape,
+        &mut work.amplitudes,
+    );
+    let response = super::solver::power(indices, cos_theta0, &amp);
+    let mut gradient = ResponseGradient::zeros(layers);
+    for (l, d) in work.amplitudes.iter().enumerate() {
+        gradient.rs[l] = 2.0 * (amp.rs.conj() * d.rs).re;
+        gradient.rp[l] = 2.0 * (amp.rp.conj() * d.rp).re;
+        gradient.ts[l] = 2.0 * response.ts * d.log_ts.re;
+        gradient.tp[l] = 2.0 * response.tp * d.log_tp.re;
+    }
+    Ok((response, gradient))
+}
+
+/// One stack (coherent or mixed/incoherent layers) at one wavelength and
+/// cos θ0: R and T, and their derivatives by each layer's thickness in nm.
+/// Fails, naming the layer, where an incoherent gain layer lases.
+pub fn solve_with_gradient(
+    stack: &Stack,
+    wavelength_nm: f64,
+    cos_theta0: f64,
+) -> Result<(Response, ResponseGradient)> {
+    stack.validate()?;
+    let mut indices = Vec::with_capacity(stack.layers.len() + 2);
+    stack.indices_at(wavelength_nm, &mut indices)?;
+    solve_indices_with_gradient(
+        &indices,
+        &stack.thicknesses_nm(),
+        &stack.coherence(),
+        wavelength_nm,
+        cos_theta0,
+        &mut Workspace::default(),
+    )
+    .map_err(|d| d.error(wavelength_nm, cos_theta0))
+}
+
+/// R, T and their thickness derivatives over a wavelength × angle grid.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct GradientGrid {
+    /// N, the number of layers.
+    pub layers: usize,
+    /// The number of wavelengths.
+    pub wavelengths: usize,
+    /// The number of angles.
+    pub angles: usize,
+    /// R and T of wavelength w, angle a at `[w * angles + a]`.
+    pub response: Vec<Response>,
+    /// ∂R_s/∂d of layer l (top down) at wavelength w, angle a at
+    /// `[(l * wavelengths + w) * angles + a]`; likewise the others.
+    pub d_rs: Vec<f64>,
+    /// ∂R_p/∂d, laid out as `d_rs`.
+    pub d_rp: Vec<f64>,
+    /// ∂T_s/∂d, laid out as `d_rs`.
+    pub d_ts: Vec<f64>,
+    /// ∂T_p/∂d, laid out as `d_rs`.
+    pub d_tp: Vec<f64>,
+}
+
+impl GradientGrid {
+    /// The position of (layer, wavelength, angle) in the `d_*` arrays.
+    #[inline]
+    pub fn at(&self, layer: usize, wavelength: usize, angle: usize) -> usize {
+        (layer * self.wavelengths + wavelength) * self.angles + angle
+    }
+
+    fn zeros(layers: usize, wavelengths: usize, angles: usize) -> GradientGrid {
+        let points = wavelengths * angles;
+        GradientGrid {
+            layers,
+            wavelengths,
+            angles,
+            response: vec![Response::default(); points],
+            d_rs: vec![0.0; layers * points],
+            d_rp: vec![0.0; layers * points],
+            d_ts: vec![0.0; layers * points],
+            d_tp: vec![0.0; layers * points],
+        }
+    }
+}
+
+/// R and T of `stack` at every (wavelength, cos θ0) pair with their
+/// derivatives by every layer's thickness ([`GradientGrid`]'s layout).
+/// Fails, naming the layer, where an incoherent gain layer lases.
+pub fn solve_grid_with_gradient(
+    stack: &Stack,
+    wavelengths_nm: &[f64],
+    cos_theta0: &[f64],
+) -> Result<GradientGrid> {
+    let grid = StackGrid::new(stack, wavelengths_nm)?;
+    solve_stack_grid_with_gradient(&grid, grid.thicknesses_nm(), cos_theta0)
+}
+
+/// [`solve_grid_with_gradient`] over a [`StackGrid`] whose indices are
+/// already evaluated, with the layer thicknesses given (e.g. the grid's
+/// own with some varied), as a fit iterates.
+///
+/// # Panics
+/// If `thicknesses_nm` does not have one thickness per layer of the grid.
+pub fn solve_stack_grid_with_gradient(
+    grid: &StackGrid,
+    thicknesses_nm: &[f64],
+    cos_theta0: &[f64],
+) -> Result<GradientGrid> {
+    let layers = grid.thicknesses_nm().len();
+    assert_eq!(
+        thicknesses_nm.len(),
+        layers,
+        "thicknesses_nm: one per layer"
+    );
+    let (wavelengths, angles) = (grid.wavelengths_nm().len(), cos_theta0.len());
+    let mut out = GradientGrid::zeros(layers, wavelengths, angles);
+    let mut work = Workspace::default();
+    for (w, (wavelength_nm, indices)) in grid.iter().enumerate() {
+        for (a, &c) in cos_theta0.iter().enumerate() {
+            let (response, gradient) = solve_indices_with_gradient(
+                indices,
+                thicknesses_nm,
+                grid.coherence(),
+                wavelength_nm,
+                c,
+                &mut work,
+            )
+            .map_err(|d| d.error(wavelength_nm, c))?;
+            out.response[w * angles + a] = response;
+            for l in 0..layers {
+                let i = out.at(l, w, a);
+                out.d_rs[i] = gradient.rs[l];
+                out.d_rp[i] = gradient.rp[l];
+                out.d_ts[i] = gradient.ts[l];
+                out.d_tp[i] = gradient.tp[l];
+            }
+        }
+    }
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests;
