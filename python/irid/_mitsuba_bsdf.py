@@ -3,10 +3,13 @@ Mitsuba variant is set): the film's R and T per wavelength, from irid's
 solver through numpy or from a spectral table looked up in Dr.Jit, and the
 BSDF's sampling, evaluation and density."""
 
+import json
+
 import drjit as dr
 import mitsuba as mi
 import numpy as np
 
+from . import Stack
 from .mitsuba import MAX_THICKNESS_NM, SPECTRAL_RANGE_NM, FilmError, _FilmSetup, ggx_lambda
 
 #: The smallest α of Mitsuba's MicrofacetDistribution (it clamps below).
@@ -103,6 +106,42 @@ class _SolverLanes:
         step = np.where(self.a, up - down, 1.0)
         return (r1 - r0) / step, (t1 - t0) / step
 
+    def thickness_derivative(self):
+        """d(R, T)/d(thickness) of the varying layer at every lane: irid's
+        exact derivative (``Stack.solve(gradient=True)``), one solve of one
+        point per lane, the stack as the light meets it (reversed from
+        the substrate)."""
+        d_r, d_t = np.zeros(self.w.shape), np.zeros(self.w.shape)
+        template = json.loads(self.stack.to_json())
+        count = len(template["layers"])
+        # Stack.solve takes angles below 90°; at grazing incidence R → 1 and
+        # its derivative → 0, which cos θ = 1e-7 gives within float32.
+        angles = np.degrees(np.arccos(np.clip(self.c, 1e-7, 1.0)))
+        stacks = {}
+        for index in zip(*np.nonzero(self.a)):
+            side, d = bool(self.f[index]), float(self.d[index])
+            if (side, d) not in stacks:
+                stacks[(side, d)] = _oriented_stack(template, self.layer, d, side)
+            stack, layer_index = stacks[(side, d)]
+            solved = stack.solve([self.w[index]], [angles[index]], gradient=True)
+            d_r[index] = solved["dR_dd"][layer_index, 0, 0]
+            d_t[index] = solved["dT_dd"][layer_index, 0, 0]
+        return d_r, d_t
+
+
+def _oriented_stack(template, layer, thickness, front):
+    """The stack of JSON ``template`` with layer ``layer`` (1-based from the
+    ambient) at ``thickness``, as light from the ambient (``front``) or
+    from the substrate meets it, and that layer's 0-based index in it."""
+    stack = json.loads(json.dumps(template))
+    stack["layers"][layer - 1]["thickness_nm"] = thickness
+    index = layer - 1
+    if not front:
+        stack["ambient"], stack["substrate"] = stack["substrate"], stack["ambient"]
+        stack["layers"].reverse()
+        index = len(stack["layers"]) - layer
+    return Stack.from_json(json.dumps(stack)), index
+
 
 def _spectrum(x):
     return mi.UnpolarizedSpectrum(np.asarray(x, dtype=np.float32))
@@ -110,30 +149,41 @@ def _spectrum(x):
 
 class _SolverOp(dr.CustomOp):
     """irid's solver as a Dr.Jit operation: the values from numpy, and their
-    derivative with respect to cos θ (a float64 central difference of the
-    solver) for the gradients that reach the film through the direction
-    (a roughness, a microfacet's normal)."""
+    derivatives with respect to the thickness (irid's exact derivative)
+    and cos θ (a float64 central difference of the solver, for gradients
+    that reach the film through the direction: a roughness, a
+    microfacet's normal)."""
 
-    def eval(self, lanes_of, thickness, cos_theta):
+    def eval(self, lanes_of, wants, thickness, cos_theta):
+        # dr.custom hands eval detached inputs: which ones carry gradients
+        # comes from the caller.
         self.lanes = lanes_of(thickness, cos_theta)
-        self.derivative = None
+        self.wants = wants
+        self.derivatives = {}
         r, t = self.lanes.response()
         return _spectrum(r), _spectrum(t)
 
-    def _cos_derivative(self):
-        if self.derivative is None:
-            self.derivative = tuple(_spectrum(x) for x in self.lanes.cos_derivative())
-        return self.derivative
+    def _derivative(self, name):
+        if name not in self.derivatives:
+            pair = self.lanes.thickness_derivative() if name == "thickness" else self.lanes.cos_derivative()
+            self.derivatives[name] = tuple(_spectrum(x) for x in pair)
+        return self.derivatives[name]
 
     def forward(self):
-        dr_dc, dt_dc = self._cos_derivative()
-        grad_c = self.grad_in("cos_theta")
-        self.set_grad_out((dr_dc * grad_c, dt_dc * grad_c))
+        out_r, out_t = dr.zeros(mi.UnpolarizedSpectrum), dr.zeros(mi.UnpolarizedSpectrum)
+        for name in ("thickness", "cos_theta"):
+            if self.wants[name]:
+                d_r, d_t = self._derivative(name)
+                grad = self.grad_in(name)
+                out_r, out_t = out_r + d_r * grad, out_t + d_t * grad
+        self.set_grad_out((out_r, out_t))
 
     def backward(self):
-        dr_dc, dt_dc = self._cos_derivative()
         grad_r, grad_t = self.grad_out()
-        self.set_grad_in("cos_theta", dr.sum(grad_r * dr_dc + grad_t * dt_dc))
+        for name in ("thickness", "cos_theta"):
+            if self.wants[name]:
+                d_r, d_t = self._derivative(name)
+                self.set_grad_in(name, dr.sum(grad_r * d_r + grad_t * d_t))
 
     def name(self):
         return "irid_film solver"
@@ -152,20 +202,13 @@ class _SolverResponse:
     def __call__(self, thickness, cos_theta, wavelengths, front, active):
         if self.jit and dr.flag(dr.JitFlag.SymbolicScope):
             return _warn_symbolic(self)
-        if dr.grad_enabled(thickness):
-            raise FilmError(
-                "thickness_nm",
-                "a gradient with respect to the thickness on the solver path needs d(R, T)/d(thickness) "
-                "from irid's solver, which this version of irid does not give; give the film a "
-                "spectral table (irid.bake(stack, kind='spectral', wavelengths_nm=(360, 830), "
-                "thickness_nm=(lo, hi)), atlas or grid), whose lookup Dr.Jit differentiates",
-            )
 
         def lanes_of(d, c):
             return _SolverLanes(self.stack, self.layer, d, c, wavelengths, front, active)
 
-        if self.jit and dr.grad_enabled(cos_theta):
-            return dr.custom(_SolverOp, lanes_of, dr.detach(thickness), cos_theta)
+        if self.jit and (dr.grad_enabled(thickness) or dr.grad_enabled(cos_theta)):
+            wants = {"thickness": dr.grad_enabled(thickness), "cos_theta": dr.grad_enabled(cos_theta)}
+            return dr.custom(_SolverOp, lanes_of, wants, thickness, cos_theta)
         r, t = lanes_of(thickness, cos_theta).response()
         return _spectrum(r), _spectrum(t)
 
