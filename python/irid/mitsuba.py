@@ -4,16 +4,16 @@
 (``scalar_spectral`` or ``llvm_ad_spectral``; other spectral, unpolarized
 variants are accepted but untested). Its parameters:
 
-- ``stack``: a stack file path, or the JSON of an ``irid.Stack``
-  (``stack.to_json()``; ``bsdf(stack, ...)`` writes the dict for you, since
-  Mitsuba's scene dicts cannot hold Python objects of other libraries);
+- ``stack``: an ``irid.Stack`` (``register()`` lets ``mi.load_dict`` take
+  one), a stack file path, or a stack's JSON (``stack.to_json()``);
 - ``layer``: the layer whose thickness varies, 1-based from the ambient side
   (default 1);
 - ``thickness_nm``: a number, or any Mitsuba texture (a bitmap with
   ``raw: True``, noise, a checkerboard...) whose value is the thickness in nm;
-- ``table`` (optional): an irid spectral table (``irid bake --kind spectral
-  --wavelengths 360:830``) baked for this stack and layer, looked up instead
-  of solving;
+- ``table`` (optional): the path of an irid spectral table baked for this
+  stack and layer over 360–830 nm (``irid.bake(stack, kind="spectral",
+  wavelengths_nm=(360, 830), thickness_nm=(lo, hi)).save(path)``), looked
+  up in Dr.Jit instead of solving;
 - ``roughness`` (optional, default 0): 0 is a mirror-smooth film; above 0 a
   GGX lobe (alpha = roughness², height-correlated Smith G2, the film's
   Fresnel per microfacet at v·h); a texture gives a roughness per point
