@@ -4,19 +4,24 @@
 (``scalar_spectral`` or ``llvm_ad_spectral``; other spectral, unpolarized
 variants are accepted but untested). Its parameters:
 
-- ``stack``: a stack file path, or the JSON of an ``irid.Stack``
-  (``stack.to_json()``; ``bsdf(stack, ...)`` writes the dict for you, since
-  Mitsuba's scene dicts cannot hold Python objects of other libraries);
+- ``stack``: an ``irid.Stack`` (``register()`` lets ``mi.load_dict`` take
+  one), a stack file path, or a stack's JSON (``stack.to_json()``);
 - ``layer``: the layer whose thickness varies, 1-based from the ambient side
   (default 1);
 - ``thickness_nm``: a number, or any Mitsuba texture (a bitmap with
   ``raw: True``, noise, a checkerboard...) whose value is the thickness in nm;
-- ``table`` (optional): an irid spectral table (``irid bake --kind spectral
-  --wavelengths 360:830``) baked for this stack and layer, looked up instead
-  of solving;
+- ``table`` (optional): the path of an irid spectral table baked for this
+  stack and layer over 360–830 nm (``irid.bake(stack, kind="spectral",
+  wavelengths_nm=(360, 830), thickness_nm=(lo, hi)).save(path)``), looked
+  up in Dr.Jit instead of solving;
 - ``roughness`` (optional, default 0): 0 is a mirror-smooth film; above 0 a
   GGX lobe (alpha = roughness², height-correlated Smith G2, the film's
-  Fresnel per microfacet at v·h).
+  Fresnel per microfacet at v·h); a texture gives a roughness per point
+  (a rough lobe everywhere, roughness below 0.01 taken as 0.01).
+
+``mi.traverse(scene)`` lists each film's ``thickness_nm`` (its value, or
+its texture's parameters) and ``roughness``; both are differentiable in
+the AD variants (docs/mitsuba.md, "Inverse rendering").
 
 Light from the ambient side (the side the shape's normal points to) is
 reflected with the film's R; a lossless substrate transmits the film's T,
@@ -76,6 +81,37 @@ def register(symbolic=False):
         dr.set_flag(dr.JitFlag.SymbolicLoops, False)
         dr.set_flag(dr.JitFlag.SymbolicCalls, False)
     mi.register_bsdf(_PLUGIN, lambda props: _film_class(variant, symbolic)(props))
+    _accept_stacks_in_load_dict(mi)
+
+
+def _stacks_as_json(value):
+    """``value`` (a scene dict or any part of it) with every ``irid.Stack``
+    given as an ``irid_film``'s ``stack`` written as its JSON."""
+    if not isinstance(value, dict):
+        return value
+    out = {key: _stacks_as_json(item) for key, item in value.items()}
+    if out.get("type") == _PLUGIN and isinstance(out.get("stack"), Stack):
+        out["stack"] = out["stack"].to_json()
+    return out
+
+
+def _accept_stacks_in_load_dict(mi):
+    """Mitsuba's scene dicts hold only its own types (an ``irid.Stack`` makes
+    ``load_dict`` raise nanobind's type error); ``register()`` therefore
+    wraps ``mi.load_dict`` once so that an ``irid_film``'s ``stack`` may be
+    an ``irid.Stack``. (Mitsuba's ``load_dict`` is one function for every
+    variant: it loads in the current one, so the wrapper holds across
+    ``mi.set_variant``.)"""
+    original = mi.load_dict
+    if getattr(original, "_irid_wrapper", False):
+        return
+
+    def load_dict(scene, *args, **kwargs):
+        return original(_stacks_as_json(scene), *args, **kwargs)
+
+    load_dict._irid_wrapper = True
+    load_dict.__doc__ = mi.load_dict.__doc__
+    mi.load_dict = load_dict
 
 
 def bsdf(stack, thickness_nm, layer=1, table=None, roughness=0.0):
@@ -106,8 +142,10 @@ class _FilmSetup:
         self.layer = layer
         self.thickness = thickness  # a float, or the caller's texture
         self.table = table
-        self.roughness = roughness
-        self.alpha = roughness * roughness
+        self.roughness = roughness  # a float, or the caller's texture
+        self.textured_roughness = _is_texture(roughness)
+        #: Whether the film is a rough lobe (a textured roughness always is).
+        self.rough = self.textured_roughness or roughness > 0.0
         wavelengths = np.linspace(*SPECTRAL_RANGE_NM, 471)
         indices = _media_indices(stack, wavelengths)
         self.transmissive = not np.any(indices[-1].imag != 0.0)
@@ -119,7 +157,7 @@ class _FilmSetup:
         #: n_substrate / n_ambient at every nm of SPECTRAL_RANGE_NM, for the
         #: angle in the ambient that light from the substrate corresponds to.
         self.eta_per_nm = (indices[-1].real / indices[0].real).astype(np.float32)
-        if roughness > 0.0 and self.transmissive and abs(self.eta - 1.0) < 1e-6:
+        if self.rough and self.transmissive and abs(self.eta - 1.0) < 1e-6:
             raise FilmError(
                 "roughness",
                 "a rough film with the same index on both sides refracts nothing (its transmission is "
@@ -161,8 +199,12 @@ class _FilmSetup:
             if not 0.0 <= thickness <= MAX_THICKNESS_NM:
                 raise FilmError("thickness_nm", f"must be finite, ≥ 0 and ≤ {MAX_THICKNESS_NM:g}, got {thickness}")
         roughness = values.get("roughness", 0.0)
-        if isinstance(roughness, bool) or not isinstance(roughness, (int, float)) or not 0.0 <= float(roughness) <= 1.0:
-            raise FilmError("roughness", f"must be a number in [0, 1], got {roughness!r}")
+        if not _is_texture(roughness):
+            if isinstance(roughness, bool) or not isinstance(roughness, (int, float)) or not 0.0 <= float(roughness) <= 1.0:
+                # A short value as written; anything else by its type (a repr can run to pages).
+                shown = repr(roughness) if isinstance(roughness, (str, int, float)) and len(repr(roughness)) <= 40 else type(roughness).__name__
+                raise FilmError("roughness", f"must be a number in [0, 1] or a texture, got {shown}")
+            roughness = float(roughness)
         table = None
         if values.get("table") is not None:
             path = values["table"]
@@ -170,7 +212,12 @@ class _FilmSetup:
                 table = Lut.load(path)
             except (OSError, ValueError) as e:
                 raise FilmError("table", str(e)) from None
-        return _FilmSetup(stack, layer, thickness, table, float(roughness))
+        return _FilmSetup(stack, layer, thickness, table, roughness)
+
+
+def _is_texture(value):
+    """A texture's scene-dict entry, or the Mitsuba texture made of one."""
+    return isinstance(value, dict) or hasattr(value, "eval_1")
 
 
 def _load_stack(value):

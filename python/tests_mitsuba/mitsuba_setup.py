@@ -42,13 +42,18 @@ def use(variant, symbolic=False):
     irid.mitsuba.register(symbolic=symbolic)
 
 
-def orthographic_sphere(bsdf, size, max_depth=2):
+def orthographic_sphere(bsdf, size, max_depth=2, integrator="path"):
     """A unit sphere filling an orthographic view of [-1, 1]² under the
-    constant emitter (CIE D65 at luminance 1), looked at along −z."""
+    constant emitter (CIE D65 at luminance 1), looked at along −z, with
+    ``integrator`` (``direct``: emitter sampling only)."""
+    if integrator == "direct":
+        rendering = {"type": "direct", "emitter_samples": 1, "bsdf_samples": 0}
+    else:
+        rendering = {"type": integrator, "max_depth": max_depth}
     return mi.load_dict(
         {
             "type": "scene",
-            "integrator": {"type": "path", "max_depth": max_depth},
+            "integrator": rendering,
             "emitter": {"type": "constant"},
             "sensor": {
                 "type": "orthographic",

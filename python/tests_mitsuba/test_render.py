@@ -209,9 +209,10 @@ def glass_atlas(tmp_path_factory):
 
 
 def test_atlas_table_is_irids_sampler_and_meets_the_solver(jit, glass_atlas):
-    """An atlas table is read by irid's own sampler (the JIT lanes through
-    numpy, between kernels) and is within its target of the solver above
-    its aliased strip."""
+    """An atlas table looked up in Dr.Jit is irid's own sampler (both in
+    float32; Dr.Jit's log and square root may differ from Rust's in the last
+    bit, which a texel's slope turns into a few 1e-6) and is within its
+    target of the solver above its aliased strip."""
     lut = irid.Lut.load(glass_atlas)
     floor = lut.header["atlas"]["aliased_below_cos"]
     rng = np.random.default_rng(6)
@@ -222,8 +223,8 @@ def test_atlas_table_is_irids_sampler_and_meets_the_solver(jit, glass_atlas):
     front = np.ones(n, bool)
     r, t = _film_response(JIT, COATED_GLASS, str(glass_atlas), cos_theta, wavelengths, thickness, front)
     r_ref, t_ref = lut.sample(thickness[None, :], cos_theta[None, :], wavelengths)
-    np.testing.assert_allclose(r, r_ref, atol=2e-6)
-    np.testing.assert_allclose(t, t_ref, atol=2e-6)
+    np.testing.assert_allclose(r, r_ref, atol=5e-6)
+    np.testing.assert_allclose(t, t_ref, atol=5e-6)
     solver = _film_response(JIT, COATED_GLASS, None, cos_theta, wavelengths, thickness, front)
     assert np.abs(r - solver[0]).max() <= 5e-3 and np.abs(t - solver[1]).max() <= 5e-3
 

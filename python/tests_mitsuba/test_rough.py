@@ -186,7 +186,7 @@ def test_bad_roughness_is_one_line_at_load_time(jit, roughness):
     RuntimeError whose last line is the plugin's), and through
     irid.mitsuba.bsdf(), which checks the dict it writes."""
     entry = {"type": "irid_film", "stack": FILM_ON_GOLD.to_json(), "thickness_nm": 300.0, "roughness": roughness}
-    message = f"irid_film: roughness: must be a number in [0, 1], got {roughness!r}"
+    message = f"irid_film: roughness: must be a number in [0, 1] or a texture, got {roughness!r}"
     with pytest.raises(RuntimeError) as caught:
         mi.load_dict(entry)
     assert str(caught.value).strip().splitlines()[-1].endswith(message), str(caught.value)
