@@ -1,5 +1,5 @@
 //! `irid bench`: speed against error, and the grid workload the Python peers
-//! (`tools/bench_peers.py`) are timed against.
+//! (`tools/bench/bench_peers.py`) are timed against.
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -248,7 +248,7 @@ fn setup_note(machine: &Machine, command: &str, out: &Path) -> String {
          - Command: `{command}`\n\n\
          The peers' timings (peers.md) come from a second command, run after this one:\n\n\
          ```sh\n\
-         OMP_NUM_THREADS=2 IRID_BIN=target/release/irid .venv/bin/python tools/bench_peers.py -o {out}\n\
+         OMP_NUM_THREADS=2 IRID_BIN=target/release/irid .venv/bin/python tools/bench/bench_peers.py -o {out}\n\
          ```\n",
         date = machine.date_utc,
         name = run_dir_name(machine),
