@@ -74,9 +74,10 @@ fn gradient(c: &mut Criterion) {
             out[0].r()
         })
     });
-    g.bench_function("20 layers, 401 wavelengths x 3 angles, with gradient", |b| {
-        b.iter(|| solve_stack_grid_with_gradient(&grid, black_box(&d), &cos).expect("solve"))
-    });
+    g.bench_function(
+        "20 layers, 401 wavelengths x 3 angles, with gradient",
+        |b| b.iter(|| solve_stack_grid_with_gradient(&grid, black_box(&d), &cos).expect("solve")),
+    );
     g.finish();
 }
 

@@ -13,7 +13,8 @@ use rand_pcg::Pcg64;
 
 use common::random_stack::{random_stack, KINDS};
 use irid::optics::gradient::{
-    solve_grid_with_gradient, solve_stack_grid_with_gradient_on, solve_with_gradient, ResponseGradient,
+    solve_grid_with_gradient, solve_stack_grid_with_gradient_on, solve_with_gradient,
+    ResponseGradient,
 };
 use irid::optics::lanes::Path;
 use irid::optics::{Layer, Material, Response, Stack, StackGrid};
@@ -300,10 +301,19 @@ fn grid_matches_points() {
         .collect();
     // Glass at sin θ0 = 0.8 (cos 0.6) puts the 1.2 layer at its critical angle.
     stacks.push(stack_of(
-        &[c64(1.5, 0.0), c64(2.0, 0.0), c64(1.2, 0.0), c64(1.7, 0.01), c64(1.5, 0.0)],
+        &[
+            c64(1.5, 0.0),
+            c64(2.0, 0.0),
+            c64(1.2, 0.0),
+            c64(1.7, 0.01),
+            c64(1.5, 0.0),
+        ],
         &[80.0, 300.0, 150.0],
     ));
-    let mut mixed = stack_of(&[c64(1.0, 0.0), c64(1.45, 0.0), c64(2.1, 0.2), c64(1.5, 0.0)], &[130.0, 2000.0]);
+    let mut mixed = stack_of(
+        &[c64(1.0, 0.0), c64(1.45, 0.0), c64(2.1, 0.2), c64(1.5, 0.0)],
+        &[130.0, 2000.0],
+    );
     mixed.layers[1].coherent = false;
     stacks.push(mixed);
     let wavelengths: Vec<f64> = (0..11).map(|i| 400.0 + 37.0 * i as f64).collect();
@@ -312,18 +322,28 @@ fn grid_matches_points() {
         let grid = StackGrid::new(stack, &wavelengths).unwrap();
         assert_eq!(
             solve_grid_with_gradient(stack, &wavelengths, &cosines).unwrap(),
-            solve_stack_grid_with_gradient_on(Path::Best, &grid, &stack.thicknesses_nm(), &cosines).unwrap()
+            solve_stack_grid_with_gradient_on(Path::Best, &grid, &stack.thicknesses_nm(), &cosines)
+                .unwrap()
         );
         for path in [Path::Best, Path::Avx2, Path::Portable] {
-            let got = solve_stack_grid_with_gradient_on(path, &grid, &stack.thicknesses_nm(), &cosines).unwrap();
-            assert_eq!((got.layers, got.wavelengths, got.angles), (stack.layers.len(), 11, 5));
+            let got =
+                solve_stack_grid_with_gradient_on(path, &grid, &stack.thicknesses_nm(), &cosines)
+                    .unwrap();
+            assert_eq!(
+                (got.layers, got.wavelengths, got.angles),
+                (stack.layers.len(), 11, 5)
+            );
             for (w, &wl) in wavelengths.iter().enumerate() {
                 for (a, &c) in cosines.iter().enumerate() {
                     let (r, g) = solve_with_gradient(stack, wl, c).unwrap();
-                    let close = |x: f64, y: f64, scale: f64| (x - y).abs() <= 1e-12 * scale.max(1.0);
+                    let close =
+                        |x: f64, y: f64, scale: f64| (x - y).abs() <= 1e-12 * scale.max(1.0);
                     let resp = got.response[w * 5 + a];
                     assert!(
-                        parts(&resp).iter().zip(parts(&r)).all(|(x, y)| close(*x, y, y.abs())),
+                        parts(&resp)
+                            .iter()
+                            .zip(parts(&r))
+                            .all(|(x, y)| close(*x, y, y.abs())),
                         "case {case} {path:?}: {resp:?} vs {r:?}"
                     );
                     for l in 0..stack.layers.len() {

@@ -9,17 +9,19 @@ use rayon::prelude::*;
 
 use irid::color::gradient::{colors_with_gradient, ColorGradient};
 use irid::color::SpectralIntegrator;
-use irid::optics::gradient::{solve_grid_point_with_gradient, ResponseGradient, Workspace};
-use irid::optics::{Response, Stack, StackGrid};
+use irid::optics::gradient::{solve_stack_grid_with_gradient, GradientGrid};
+use irid::optics::{Stack, StackGrid};
 
 use crate::arrays::array;
 use crate::budget::Footprint;
 use crate::pool::compute;
 use crate::py_error;
 
-/// Fewest points of a gradient solve that go to the thread pool (each costs
-/// about as much as a few forward points).
-const PARALLEL_MIN_POINTS: usize = 128;
+/// Fewest points × layers of a gradient solve that go to the thread pool.
+const PARALLEL_MIN_POINTS: usize = 2048;
+
+/// Wavelengths per task when the pool solves a gradient.
+const CHUNK_WAVELENGTHS: usize = 32;
 
 /// Adds dRs_dd, dRp_dd, dTs_dd, dTp_dd, dR_dd and dT_dd, each of shape
 /// (layers, wavelengths, angles), to `result`, for the grid's stack at its
@@ -39,51 +41,60 @@ pub fn add_solve_gradient(
         ))?;
     let points = wavelengths * angles;
     let parallel = points * layers.max(1) >= PARALLEL_MIN_POINTS;
-    // One row of angles per wavelength, each with its own scratch.
-    let rows = compute(py, parallel, || {
-        let row = |w: usize| -> irid::error::Result<Vec<(Response, ResponseGradient)>> {
-            let mut work = Workspace::default();
-            cos_theta0
-                .iter()
-                .map(|&c| {
-                    solve_grid_point_with_gradient(grid, w, grid.thicknesses_nm(), c, &mut work)
-                })
-                .collect()
+    // Runs of wavelengths, each solved whole (the lanes take a coherent
+    // stack's points four or eight at a time), one run per task.
+    let run = if parallel {
+        CHUNK_WAVELENGTHS
+    } else {
+        wavelengths.max(1)
+    };
+    let chunks = compute(py, parallel, || {
+        let chunk = |w0: usize| -> irid::error::Result<GradientGrid> {
+            let w1 = (w0 + run).min(wavelengths);
+            let media = layers + 2;
+            let part = StackGrid::from_indices(
+                grid.indices()[w0 * media..w1 * media].to_vec(),
+                grid.thicknesses_nm().to_vec(),
+                &grid.wavelengths_nm()[w0..w1],
+            )
+            .with_coherence(grid.coherence().clone());
+            solve_stack_grid_with_gradient(&part, grid.thicknesses_nm(), cos_theta0)
         };
+        let starts: Vec<usize> = (0..wavelengths).step_by(run).collect();
         if parallel {
-            (0..wavelengths).into_par_iter().map(row).collect::<Vec<_>>()
+            starts.into_par_iter().map(chunk).collect::<Vec<_>>()
         } else {
-            (0..wavelengths).map(row).collect()
+            starts.into_iter().map(chunk).collect()
         }
     })?;
-    let rows: Vec<Vec<(Response, ResponseGradient)>> = rows
+    let chunks: Vec<GradientGrid> = chunks
         .into_iter()
         .collect::<irid::error::Result<_>>()
         .map_err(py_error)?;
     let shape = [layers, wavelengths, angles];
-    let column = |f: &dyn Fn(&ResponseGradient, usize) -> f64| -> Vec<f64> {
+    let column = |f: &dyn Fn(&GradientGrid, usize) -> f64| -> Vec<f64> {
         let mut out = Vec::with_capacity(layers * points);
         for l in 0..layers {
-            for row in &rows {
-                out.extend(row.iter().map(|(_, g)| f(g, l)));
+            for c in &chunks {
+                let span = l * c.wavelengths * angles..(l + 1) * c.wavelengths * angles;
+                out.extend(span.map(|i| f(c, i)));
             }
         }
         out
     };
-    let keys: [(&str, &dyn Fn(&ResponseGradient, usize) -> f64); 6] = [
-        ("dRs_dd", &|g, l| g.rs[l]),
-        ("dRp_dd", &|g, l| g.rp[l]),
-        ("dTs_dd", &|g, l| g.ts[l]),
-        ("dTp_dd", &|g, l| g.tp[l]),
-        ("dR_dd", &|g, l| g.r(l)),
-        ("dT_dd", &|g, l| g.t(l)),
+    let keys: [(&str, &dyn Fn(&GradientGrid, usize) -> f64); 6] = [
+        ("dRs_dd", &|g, i| g.d_rs[i]),
+        ("dRp_dd", &|g, i| g.d_rp[i]),
+        ("dTs_dd", &|g, i| g.d_ts[i]),
+        ("dTp_dd", &|g, i| g.d_tp[i]),
+        ("dR_dd", &|g, i| 0.5 * (g.d_rs[i] + g.d_rp[i])),
+        ("dT_dd", &|g, i| 0.5 * (g.d_ts[i] + g.d_tp[i])),
     ];
     for (key, f) in keys {
         result.set_item(key, array(py, column(f), &shape)?)?;
     }
     Ok(())
 }
-
 /// The colours of `stack` at `angles` (degrees, checked by the caller) with
 /// their derivatives: the per-angle colours as `Stack.color` reports them,
 /// plus dreflectance_rgb_dd and dtransmittance_rgb_dd of shape
@@ -96,16 +107,16 @@ pub fn colors(
 ) -> PyResult<Vec<ColorGradient>> {
     let layers = stack.layers.len();
     Footprint::new()
-        .items(
-            &[2, integrator.wavelengths_nm().len(), layers.max(1), 4],
-            8,
-        )
+        .items(&[2, integrator.wavelengths_nm().len(), layers.max(1), 4], 8)
         .items(&[angles.len(), layers.max(1), 4, 3], 8)
         .check(&format!(
             "the colour gradient of {layers} layers × {} angles",
             angles.len()
         ))?;
-    compute(py, false, || colors_with_gradient(stack, integrator, angles))?.map_err(py_error)
+    compute(py, false, || {
+        colors_with_gradient(stack, integrator, angles)
+    })?
+    .map_err(py_error)
 }
 
 /// Adds `Stack.color`'s derivative arrays (see [`colors`]) to `result`.

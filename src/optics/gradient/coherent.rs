@@ -106,7 +106,7 @@ impl Wave {
     }
 
     /// Γ form to field form at admittance η: u = 1 + Γ, v = η(1 − Γ).
-    fn to_fields(&mut self, eta: C64) -> Local {
+    fn enter_fields(&mut self, eta: C64) -> Local {
         let g = self.w[0];
         self.w = [ONE + g, eta * (ONE - g)];
         Local {
@@ -117,7 +117,7 @@ impl Wave {
 
     /// Field form back to Γ form into a medium of admittance η:
     /// Γ = (ηu − v)/(ηu + v), t gains 2η/(ηu + v).
-    fn to_gamma(&mut self, eta: C64) -> Local {
+    fn leave_fields(&mut self, eta: C64) -> Local {
         let [u, v] = self.w;
         let inv = (eta * u + v).inv();
         self.w = [(eta * u - v) * inv, ZERO];
@@ -276,8 +276,8 @@ pub(crate) fn recurse_media_gradient(
                 in_fields = true;
                 Step {
                     layer: None,
-                    s: s.to_fields(q_below),
-                    p: p.to_fields(q_below / nsq_below),
+                    s: s.enter_fields(q_below),
+                    p: p.enter_fields(q_below / nsq_below),
                 }
             }
             (true, true) => {
@@ -293,8 +293,8 @@ pub(crate) fn recurse_media_gradient(
                 in_fields = false;
                 Step {
                     layer: None,
-                    s: s.to_gamma(q_above),
-                    p: p.to_gamma(q_above / nsq_above),
+                    s: s.leave_fields(q_above),
+                    p: p.leave_fields(q_above / nsq_above),
                 }
             }
         };

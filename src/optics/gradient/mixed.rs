@@ -104,7 +104,6 @@ pub(crate) fn solve_mixed_with_gradient(
     let n0 = C64::new(light.n0, 0.0);
     let top_medium = [n0, n0 * n0, C64::new(light.q0, 0.0)];
 
-    let zeros = || vec![0.0; layers];
     let (mut below, mut n_below, mut q_below) = (layers + 1, n_sub, q_sub);
     let mut state: Option<[Sums; 2]> = None;
     let mut opaque = false;
@@ -135,30 +134,7 @@ pub(crate) fn solve_mixed_with_gradient(
         );
         let first_layer = m; // layer index (0-based) of the group's first finite medium
         state = Some(match state {
-            None => {
-                let mut sums = [
-                    Sums {
-                        rho: g.down.rs.norm_sqr(),
-                        tau: g.down.ts.norm_sqr(),
-                        d_rho: zeros(),
-                        d_tau: zeros(),
-                    },
-                    Sums {
-                        rho: g.down.rp.norm_sqr(),
-                        tau: g.down.tp.norm_sqr(),
-                        d_rho: zeros(),
-                        d_tau: zeros(),
-                    },
-                ];
-                for (i, d) in g.d_down.iter().enumerate() {
-                    let l = first_layer + i;
-                    sums[0].d_rho[l] = d_norm_sqr(g.down.rs, d.rs);
-                    sums[0].d_tau[l] = 2.0 * sums[0].tau * d.log_ts.re;
-                    sums[1].d_rho[l] = d_norm_sqr(g.down.rp, d.rp);
-                    sums[1].d_tau[l] = 2.0 * sums[1].tau * d.log_tp.re;
-                }
-                sums
-            }
+            None => first_sums(&g, first_layer, layers),
             Some([s, p]) => {
                 let pass = one_pass(light.k0, q_below, thicknesses_nm[below - 1]);
                 let d_pass = -2.0 * light.k0 * q_below.im * pass;
@@ -211,6 +187,26 @@ pub(crate) fn solve_mixed_with_gradient(
         tp: p.d_tau.iter().map(|d| d * flux_p).collect(),
     };
     Ok((response, gradient))
+}
+
+/// ρ and τ seen from the incoherent medium above the lowest group (the
+/// group's own |r|² and |t|²), with their derivatives by its layers.
+fn first_sums(g: &Group, first_layer: usize, layers: usize) -> [Sums; 2] {
+    let start = |r: C64, t: C64| Sums {
+        rho: r.norm_sqr(),
+        tau: t.norm_sqr(),
+        d_rho: vec![0.0; layers],
+        d_tau: vec![0.0; layers],
+    };
+    let mut sums = [start(g.down.rs, g.down.ts), start(g.down.rp, g.down.tp)];
+    for (i, d) in g.d_down.iter().enumerate() {
+        let l = first_layer + i;
+        sums[0].d_rho[l] = d_norm_sqr(g.down.rs, d.rs);
+        sums[0].d_tau[l] = 2.0 * sums[0].tau * d.log_ts.re;
+        sums[1].d_rho[l] = d_norm_sqr(g.down.rp, d.rp);
+        sums[1].d_tau[l] = 2.0 * sums[1].tau * d.log_tp.re;
+    }
+    sums
 }
 
 #[derive(Clone, Copy)]

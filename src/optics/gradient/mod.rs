@@ -234,7 +234,11 @@ pub fn solve_stack_grid_with_gradient_on(
     cos_theta0: &[f64],
 ) -> Result<GradientGrid> {
     let layers = grid.thicknesses_nm().len();
-    assert_eq!(thicknesses_nm.len(), layers, "thicknesses_nm: one per layer");
+    assert_eq!(
+        thicknesses_nm.len(),
+        layers,
+        "thicknesses_nm: one per layer"
+    );
     let (wavelengths, angles) = (grid.wavelengths_nm().len(), cos_theta0.len());
     let mut out = GradientGrid::zeros(layers, wavelengths, angles);
     let mut work = Workspace::default();

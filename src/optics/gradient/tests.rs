@@ -7,9 +7,9 @@ fn c(re: f64, im: f64) -> C64 {
     C64::new(re, im)
 }
 
-/// The taped recursion is the solver's recursion: the same amplitudes to
-/// rounding (the compiler may order the two copies' arithmetic apart by an
-/// ulp), in Γ form and across near-critical layers.
+/// The taped recursion is the solver's recursion: the same amplitudes, in
+/// Γ form bit for bit, and across near-critical layers (whose matrix
+/// products it groups differently) to rounding.
 #[test]
 fn taped_recursion_is_the_solver() {
     let cases: [(&[C64], &[f64], f64); 3] = [
@@ -56,10 +56,7 @@ fn taped_recursion_is_the_solver() {
             (got.ts, want.ts),
             (got.tp, want.tp),
         ] {
-            assert!(
-                (g - w).norm() <= 1e-14 * w.norm().max(1.0),
-                "{g} against {w}"
-            );
+            assert!((g - w).norm() <= 1e-14 * w.norm().max(1.0), "{g} vs {w}");
         }
     }
 }

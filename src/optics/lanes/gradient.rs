@@ -258,18 +258,19 @@ fn write_block<V: Lanes>(
         power.power[2].to_array(),
         power.power[3].to_array(),
     ];
-    for l in 0..count {
+    let responses: [Response; MAX_LANES] = std::array::from_fn(|l| Response {
+        rs: arrays[0][l],
+        rp: arrays[1][l],
+        ts: arrays[2][l],
+        tp: arrays[3][l],
+    });
+    for (l, response) in responses[..count].iter().enumerate() {
         let point = (w0 + l) * angles + a;
         if near_critical & (1 << l) != 0 {
             sink.fallback.push(point);
-            continue;
+        } else {
+            sink.response[point] = *response;
         }
-        sink.response[point] = Response {
-            rs: arrays[0][l],
-            rp: arrays[1][l],
-            ts: arrays[2][l],
-            tp: arrays[3][l],
-        };
     }
     for (layer, d) in d_layers.iter().enumerate() {
         let parts = [

@@ -51,9 +51,9 @@ mod spectrum;
 mod x86;
 
 pub use arith::MAX_LANES;
-pub use gradient::GradientSink;
 use arith::{Lanes, Portable};
 use general::{batch_body, points_body, spectrum_body};
+pub use gradient::GradientSink;
 use sink::{Integrate, Store};
 pub use sink::{SpectralWeights, WeightedPower};
 pub use spectrum::Spectrum;
@@ -273,7 +273,11 @@ pub fn gradient_grid_on(
     sink: &mut GradientSink<'_>,
 ) {
     let points = wavelengths_nm.len() * cos_theta0.len();
-    assert_eq!(indices.len(), (thicknesses_nm.len() + 2) * wavelengths_nm.len(), "indices");
+    assert_eq!(
+        indices.len(),
+        (thicknesses_nm.len() + 2) * wavelengths_nm.len(),
+        "indices"
+    );
     assert_eq!(sink.response.len(), points, "response");
     for d in &sink.d {
         assert_eq!(d.len(), points * thicknesses_nm.len(), "derivatives");
@@ -281,7 +285,14 @@ pub fn gradient_grid_on(
     if points == 0 {
         return;
     }
-    gradient_copies(path, indices, thicknesses_nm, wavelengths_nm, cos_theta0, sink)
+    gradient_copies(
+        path,
+        indices,
+        thicknesses_nm,
+        wavelengths_nm,
+        cos_theta0,
+        sink,
+    )
 }
 
 kernel_copies! {
