@@ -89,7 +89,7 @@ fn address_space_left() -> Option<u64> {
         {
             return None;
         }
-        let limit = limit.rlim_cur as u64;
+        let limit = limit.rlim_cur;
         let mapped = std::fs::read_to_string("/proc/self/statm")
             .ok()
             .and_then(|t| t.split_whitespace().next()?.parse::<u64>().ok())

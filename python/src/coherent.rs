@@ -126,6 +126,9 @@ const KEYS: [&str; 6] = ["R_s", "R_p", "T_s", "T_p", "R_avg", "T_avg"];
 /// every thread busy, or when a run would take longer than a signal may
 /// wait ([`MAX_RUN`]); without, on the calling thread, one run per angle.
 /// The tasks stop once `cancel` is set (what they leave is discarded).
+/// `out` is the buffer, one value per (angle, key, wavelength), allocated
+/// by the caller so that a refusal is a `MemoryError`.
+#[allow(clippy::too_many_arguments)]
 pub fn solve_grid(
     indices: &[C64],
     thicknesses_nm: &[f64],
