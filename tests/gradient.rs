@@ -12,8 +12,11 @@ use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg64;
 
 use common::random_stack::{random_stack, KINDS};
-use irid::optics::gradient::{solve_grid_with_gradient, solve_with_gradient, ResponseGradient};
-use irid::optics::{Layer, Material, Response, Stack};
+use irid::optics::gradient::{
+    solve_grid_with_gradient, solve_stack_grid_with_gradient_on, solve_with_gradient, ResponseGradient,
+};
+use irid::optics::lanes::Path;
+use irid::optics::{Layer, Material, Response, Stack, StackGrid};
 
 fn constant(n: C64) -> Material {
     Material::constant(n.re, n.im)
@@ -281,25 +284,65 @@ fn near_critical_layers() {
     }
 }
 
+/// The grid (the lanes for coherent stacks, each copy of the kernel, the
+/// scalar gradient for the points they leave) against the scalar gradient
+/// point by point, over random stacks of every kind, with grazing and
+/// near-critical points among them, and for a mixed stack.
 #[test]
 fn grid_matches_points() {
-    let n = [c64(1.0, 0.0), c64(1.45, 0.0), c64(2.1, 0.2), c64(1.5, 0.0)];
-    let mut stack = stack_of(&n, &[130.0, 2000.0, 70.0][..2]);
-    stack.layers[1].coherent = true;
-    let wavelengths = [400.0, 523.0, 777.0];
-    let cosines = [1.0, 0.5, 0.1, 0.0];
-    let grid = solve_grid_with_gradient(&stack, &wavelengths, &cosines).unwrap();
-    assert_eq!((grid.layers, grid.wavelengths, grid.angles), (2, 3, 4));
-    for (w, &wl) in wavelengths.iter().enumerate() {
-        for (a, &c) in cosines.iter().enumerate() {
-            let (r, g) = solve_with_gradient(&stack, wl, c).unwrap();
-            assert_eq!(grid.response[w * 4 + a], r);
-            for l in 0..2 {
-                let i = grid.at(l, w, a);
-                assert_eq!(
-                    [grid.d_rs[i], grid.d_rp[i], grid.d_ts[i], grid.d_tp[i]],
-                    gradient_parts(&g, l)
-                );
+    let mut rng = Pcg64::seed_from_u64(401);
+    let mut stacks: Vec<Stack> = (0..24)
+        .map(|case| {
+            let layers = rng.random_range(0..12);
+            let (n, d) = random_stack(&mut rng, KINDS[case % KINDS.len()], layers, 300.0);
+            stack_of(&n, &d)
+        })
+        .collect();
+    // Glass at sin θ0 = 0.8 (cos 0.6) puts the 1.2 layer at its critical angle.
+    stacks.push(stack_of(
+        &[c64(1.5, 0.0), c64(2.0, 0.0), c64(1.2, 0.0), c64(1.7, 0.01), c64(1.5, 0.0)],
+        &[80.0, 300.0, 150.0],
+    ));
+    let mut mixed = stack_of(&[c64(1.0, 0.0), c64(1.45, 0.0), c64(2.1, 0.2), c64(1.5, 0.0)], &[130.0, 2000.0]);
+    mixed.layers[1].coherent = false;
+    stacks.push(mixed);
+    let wavelengths: Vec<f64> = (0..11).map(|i| 400.0 + 37.0 * i as f64).collect();
+    let cosines = [1.0, 0.6, 0.1, 1e-6, 0.0];
+    for (case, stack) in stacks.iter().enumerate() {
+        let grid = StackGrid::new(stack, &wavelengths).unwrap();
+        assert_eq!(
+            solve_grid_with_gradient(stack, &wavelengths, &cosines).unwrap(),
+            solve_stack_grid_with_gradient_on(Path::Best, &grid, &stack.thicknesses_nm(), &cosines).unwrap()
+        );
+        for path in [Path::Best, Path::Avx2, Path::Portable] {
+            let got = solve_stack_grid_with_gradient_on(path, &grid, &stack.thicknesses_nm(), &cosines).unwrap();
+            assert_eq!((got.layers, got.wavelengths, got.angles), (stack.layers.len(), 11, 5));
+            for (w, &wl) in wavelengths.iter().enumerate() {
+                for (a, &c) in cosines.iter().enumerate() {
+                    let (r, g) = solve_with_gradient(stack, wl, c).unwrap();
+                    let close = |x: f64, y: f64, scale: f64| (x - y).abs() <= 1e-12 * scale.max(1.0);
+                    let resp = got.response[w * 5 + a];
+                    assert!(
+                        parts(&resp).iter().zip(parts(&r)).all(|(x, y)| close(*x, y, y.abs())),
+                        "case {case} {path:?}: {resp:?} vs {r:?}"
+                    );
+                    for l in 0..stack.layers.len() {
+                        let i = got.at(l, w, a);
+                        let lanes = [got.d_rs[i], got.d_rp[i], got.d_ts[i], got.d_tp[i]];
+                        let scalar = gradient_parts(&g, l);
+                        for q in 0..4 {
+                            let scale = (0..stack.layers.len())
+                                .map(|m| gradient_parts(&g, m)[q].abs())
+                                .fold(0.0, f64::max);
+                            assert!(
+                                close(lanes[q], scalar[q], scale * 1e3),
+                                "case {case} {path:?} layer {l} at ({w}, {a}), quantity {q}: {} vs {}",
+                                lanes[q],
+                                scalar[q]
+                            );
+                        }
+                    }
+                }
             }
         }
     }

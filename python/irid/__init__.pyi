@@ -99,11 +99,15 @@ class Stack:
         angles_deg: ArrayLike,
         thickness_nm: Optional[ArrayLike] = None,
         layer: int = 1,
+        gradient: bool = False,
     ) -> Dict[str, npt.NDArray[Any]]:
         """Rs, Rp, Ts, Tp, R, T (float64) and rs, rp, ts, tp (complex128), each
         (wavelengths, angles), or (thicknesses, wavelengths, angles) with
         ``thickness_nm`` setting layer ``layer`` (1-based). A stack with
-        incoherent layers has no amplitudes: R and T only."""
+        incoherent layers has no amplitudes: R and T only. gradient=True
+        (not with thickness_nm) adds dRs_dd, dRp_dd, dTs_dd, dTp_dd, dR_dd,
+        dT_dd, each (layers, wavelengths, angles): the exact derivatives
+        per nm of each layer's thickness, top layer first."""
     def response(
         self,
         cos_theta: ArrayLike,
@@ -125,12 +129,16 @@ class Stack:
         sampling: str = "exact",
         white: str = "d65",
         roughness: Optional[float] = None,
+        gradient: bool = False,
     ) -> Dict[str, npt.NDArray[np.float64]]:
         """angle_deg, reflectance_rgb, transmittance_rgb (linear sRGB),
         reflectance_xyz, transmittance_xyz, each (angles, 3) but angle_deg.
         With roughness in [0, 1]: angle_deg, reflectance_rgb and
         reflectance_xyz of F_eff (the reflectance pre-integrated over a GGX
-        lobe, docs/rough.md) and lobe_albedo (angles,)."""
+        lobe, docs/rough.md) and lobe_albedo (angles,). gradient=True (not
+        with roughness) adds dreflectance_rgb_dd, dtransmittance_rgb_dd,
+        dreflectance_xyz_dd, dtransmittance_xyz_dd, each (layers, angles, 3):
+        the exact derivatives per nm of each layer's thickness."""
 
 def bake(
     stack: Stack,

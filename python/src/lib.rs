@@ -18,6 +18,7 @@ mod arrays;
 mod budget;
 mod coherent;
 mod fit;
+mod gradient;
 mod incoherent;
 mod lut;
 mod pool;

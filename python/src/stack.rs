@@ -381,7 +381,12 @@ impl PyStack {
     /// rs, rp, ts, tp (complex128; r referred to the top interface, t the
     /// ratio of the forward amplitude at the substrate's interface to the
     /// incident one, in Byrnes' tmm's convention).
-    #[pyo3(signature = (wavelengths_nm, angles_deg, thickness_nm=None, layer=None))]
+    ///
+    /// gradient=True adds the exact derivatives by every layer's thickness
+    /// (per nm, layers top down; docs/inverse.md): dRs_dd, dRp_dd, dTs_dd,
+    /// dTp_dd, dR_dd, dT_dd, each of shape (layers, wavelengths, angles).
+    /// Not with a `thickness_nm` sweep.
+    #[pyo3(signature = (wavelengths_nm, angles_deg, thickness_nm=None, layer=None, gradient=false))]
     fn solve<'py>(
         &self,
         py: Python<'py>,
@@ -389,7 +394,14 @@ impl PyStack {
         angles_deg: &Bound<'py, PyAny>,
         thickness_nm: Option<&Bound<'py, PyAny>>,
         layer: Option<&Bound<'py, PyAny>>,
+        gradient: bool,
     ) -> PyResult<Bound<'py, PyDict>> {
+        if gradient && thickness_nm.is_some() {
+            return Err(invalid(
+                "gradient",
+                "is the derivative at the stack's own thicknesses: not with a thickness_nm sweep",
+            ));
+        }
         let wavelengths = real_list(wavelengths_nm, "wavelengths_nm")?;
         let angles = real_list(angles_deg, "angles_deg")?;
         if let Some(a) = angles.iter().find(|a| !(**a >= 0.0 && **a < 90.0)) {
@@ -449,6 +461,9 @@ impl PyStack {
             let column = points.iter().map(|p| p.power[k]).collect();
             result.set_item(key, array(py, column, &shape)?)?;
         }
+        if gradient {
+            crate::gradient::add_solve_gradient(py, &result, &grid, &cos_theta0)?;
+        }
         if !self.stack.is_coherent() {
             return Ok(result);
         }
@@ -477,7 +492,12 @@ impl PyStack {
     /// reflectance_rgb, reflectance_xyz (as above) and lobe_albedo (A,), the
     /// white lobe's directional albedo; no transmittance. Roughness 0 gives
     /// the smooth reflectance exactly.
-    #[pyo3(signature = (angles_deg, sampling="exact", white="d65", roughness=None))]
+    ///
+    /// gradient=True (smooth films only) adds the exact derivatives of the
+    /// colours by every layer's thickness (per nm, layers top down):
+    /// dreflectance_rgb_dd, dtransmittance_rgb_dd, dreflectance_xyz_dd and
+    /// dtransmittance_xyz_dd, each of shape (layers, angles, 3).
+    #[pyo3(signature = (angles_deg, sampling="exact", white="d65", roughness=None, gradient=false))]
     fn color<'py>(
         &self,
         py: Python<'py>,
@@ -485,11 +505,21 @@ impl PyStack {
         sampling: &str,
         white: &str,
         roughness: Option<&Bound<'py, PyAny>>,
+        gradient: bool,
     ) -> PyResult<Bound<'py, PyDict>> {
         let angles = real_list(angles_deg, "angles_deg")?;
         let sampling: Sampling = sampling.parse().map_err(py_error)?;
         let white: White = white.parse().map_err(py_error)?;
         let integrator = SpectralIntegrator::with_white(sampling, white);
+        if gradient {
+            if roughness.is_some() {
+                return Err(invalid(
+                    "gradient",
+                    "is given for smooth films only: not with roughness",
+                ));
+            }
+            return self.color_gradient(py, &integrator, angles);
+        }
         if let Some(roughness) = roughness {
             return self.rough_color(py, &integrator, angles, roughness);
         }
@@ -610,6 +640,31 @@ impl PyStack {
         )?;
         let n = colours.len();
         result.set_item("lobe_albedo", array(py, albedo, &[n])?)?;
+        Ok(result)
+    }
+}
+
+impl PyStack {
+    /// `Stack.color(..., gradient=True)`: the colours and their derivatives.
+    fn color_gradient<'py>(
+        &self,
+        py: Python<'py>,
+        integrator: &SpectralIntegrator,
+        angles: Vec<f64>,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        let colours = crate::gradient::colors(py, &self.stack, integrator, &angles)?;
+        let result = colour_dict(
+            py,
+            angles,
+            &colours,
+            &[
+                ("reflectance_rgb", |c| c.reflectance_rgb),
+                ("transmittance_rgb", |c| c.transmittance_rgb),
+                ("reflectance_xyz", |c| c.reflectance_xyz),
+                ("transmittance_xyz", |c| c.transmittance_xyz),
+            ],
+        )?;
+        crate::gradient::add_color_gradient(py, &result, self.stack.layers.len(), &colours)?;
         Ok(result)
     }
 }

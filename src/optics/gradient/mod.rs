@@ -19,6 +19,7 @@ mod mixed;
 use num_complex::Complex64 as C64;
 
 use super::incoherent::Coherence;
+use super::lanes;
 use super::solver::{grazing, normal_index, sin_sq, Response};
 use super::stack::{Stack, StackGrid};
 use crate::error::Result;
@@ -60,9 +61,10 @@ impl ResponseGradient {
     }
 }
 
-/// Scratch reused across the points of a grid.
+/// Scratch reused across the points of a grid
+/// ([`solve_grid_point_with_gradient`]); `Workspace::default()` makes one.
 #[derive(Default)]
-pub(crate) struct Workspace {
+pub struct Workspace {
     tape: Vec<Step>,
     amplitudes: Vec<AmplitudeGradient>,
 }
@@ -215,37 +217,98 @@ pub fn solve_stack_grid_with_gradient(
     thicknesses_nm: &[f64],
     cos_theta0: &[f64],
 ) -> Result<GradientGrid> {
+    solve_stack_grid_with_gradient_on(lanes::Path::Best, grid, thicknesses_nm, cos_theta0)
+}
+
+/// [`solve_stack_grid_with_gradient`] on a chosen copy of the lane kernel
+/// (a coherent stack's points go through the lanes, but for those at
+/// grazing incidence or with a near-critical layer; a mixed stack's through
+/// the scalar gradient).
+///
+/// # Panics
+/// If `thicknesses_nm` does not have one thickness per layer of the grid.
+pub fn solve_stack_grid_with_gradient_on(
+    path: lanes::Path,
+    grid: &StackGrid,
+    thicknesses_nm: &[f64],
+    cos_theta0: &[f64],
+) -> Result<GradientGrid> {
     let layers = grid.thicknesses_nm().len();
-    assert_eq!(
-        thicknesses_nm.len(),
-        layers,
-        "thicknesses_nm: one per layer"
-    );
+    assert_eq!(thicknesses_nm.len(), layers, "thicknesses_nm: one per layer");
     let (wavelengths, angles) = (grid.wavelengths_nm().len(), cos_theta0.len());
     let mut out = GradientGrid::zeros(layers, wavelengths, angles);
     let mut work = Workspace::default();
-    for (w, (wavelength_nm, indices)) in grid.iter().enumerate() {
-        for (a, &c) in cos_theta0.iter().enumerate() {
-            let (response, gradient) = solve_indices_with_gradient(
-                indices,
-                thicknesses_nm,
-                grid.coherence(),
-                wavelength_nm,
-                c,
-                &mut work,
-            )
-            .map_err(|d| d.error(wavelength_nm, c))?;
-            out.response[w * angles + a] = response;
-            for l in 0..layers {
-                let i = out.at(l, w, a);
-                out.d_rs[i] = gradient.rs[l];
-                out.d_rp[i] = gradient.rp[l];
-                out.d_ts[i] = gradient.ts[l];
-                out.d_tp[i] = gradient.tp[l];
-            }
+    let points: Vec<usize> = if grid.coherence().is_coherent() {
+        let mut fallback = Vec::new();
+        let GradientGrid {
+            response,
+            d_rs,
+            d_rp,
+            d_ts,
+            d_tp,
+            ..
+        } = &mut out;
+        lanes::gradient_grid_on(
+            path,
+            grid.indices(),
+            thicknesses_nm,
+            grid.wavelengths_nm(),
+            cos_theta0,
+            &mut lanes::GradientSink {
+                response,
+                d: [d_rs, d_rp, d_ts, d_tp],
+                fallback: &mut fallback,
+            },
+        );
+        fallback
+    } else {
+        (0..wavelengths * angles).collect()
+    };
+    for point in points {
+        let (w, a) = (point / angles, point % angles);
+        let (response, gradient) =
+            solve_grid_point_with_gradient(grid, w, thicknesses_nm, cos_theta0[a], &mut work)?;
+        out.response[point] = response;
+        for l in 0..layers {
+            let i = out.at(l, w, a);
+            out.d_rs[i] = gradient.rs[l];
+            out.d_rp[i] = gradient.rp[l];
+            out.d_ts[i] = gradient.ts[l];
+            out.d_tp[i] = gradient.tp[l];
         }
     }
     Ok(out)
+}
+
+/// R, T and their derivatives at the `w`-th wavelength of `grid` and cos θ0
+/// `cos_theta0`, with the layer thicknesses given: one point of
+/// [`solve_stack_grid_with_gradient`], for callers that spread a grid's
+/// points over threads (one [`Workspace`] each).
+///
+/// # Panics
+/// If `thicknesses_nm` does not have one thickness per layer of the grid.
+pub fn solve_grid_point_with_gradient(
+    grid: &StackGrid,
+    w: usize,
+    thicknesses_nm: &[f64],
+    cos_theta0: f64,
+    work: &mut Workspace,
+) -> Result<(Response, ResponseGradient)> {
+    assert_eq!(
+        thicknesses_nm.len(),
+        grid.thicknesses_nm().len(),
+        "thicknesses_nm: one per layer"
+    );
+    let wavelength_nm = grid.wavelengths_nm()[w];
+    solve_indices_with_gradient(
+        grid.indices_at(w),
+        thicknesses_nm,
+        grid.coherence(),
+        wavelength_nm,
+        cos_theta0,
+        work,
+    )
+    .map_err(|d| d.error(wavelength_nm, cos_theta0))
 }
 
 #[cfg(test)]

@@ -43,6 +43,7 @@
 mod arith;
 mod constant;
 mod general;
+mod gradient;
 mod incoherent;
 mod sink;
 mod spectrum;
@@ -50,6 +51,7 @@ mod spectrum;
 mod x86;
 
 pub use arith::MAX_LANES;
+pub use gradient::GradientSink;
 use arith::{Lanes, Portable};
 use general::{batch_body, points_body, spectrum_body};
 use sink::{Integrate, Store};
@@ -239,6 +241,47 @@ kernel_copies! {
     ) -> () {
         points_body::<V>(layers, indices, thicknesses_nm, wavelengths_nm, cos_theta0, out)
     }
+}
+
+kernel_copies! {
+    fn gradient_copies<V>(
+        indices: &[C64],
+        thicknesses_nm: &[f64],
+        wavelengths_nm: &[f64],
+        cos_theta0: &[f64],
+        sink: &mut GradientSink<'_>,
+    ) -> () {
+        gradient::gradient_body::<V>(indices, thicknesses_nm, wavelengths_nm, cos_theta0, sink)
+    }
+}
+
+/// R, T and their derivatives by every layer's thickness at every
+/// (wavelength, angle) point of a coherent stack, `indices`
+/// wavelength-major (N + 2 per wavelength), into `sink` (the layout is
+/// [`GradientSink`]'s). Points at grazing incidence or with a layer near
+/// its critical angle are not solved but listed in `sink.fallback`, for
+/// the scalar gradient (`optics::gradient`) to fill.
+///
+/// # Panics
+/// If the lengths disagree.
+pub fn gradient_grid_on(
+    path: Path,
+    indices: &[C64],
+    thicknesses_nm: &[f64],
+    wavelengths_nm: &[f64],
+    cos_theta0: &[f64],
+    sink: &mut GradientSink<'_>,
+) {
+    let points = wavelengths_nm.len() * cos_theta0.len();
+    assert_eq!(indices.len(), (thicknesses_nm.len() + 2) * wavelengths_nm.len(), "indices");
+    assert_eq!(sink.response.len(), points, "response");
+    for d in &sink.d {
+        assert_eq!(d.len(), points * thicknesses_nm.len(), "derivatives");
+    }
+    if points == 0 {
+        return;
+    }
+    gradient_copies(path, indices, thicknesses_nm, wavelengths_nm, cos_theta0, sink)
 }
 
 kernel_copies! {
