@@ -56,8 +56,6 @@ __all__ = [
     "coherent",
     "fit",
     "fit_color",
-    "Fit",
-    "ColorFit",
     "incoherent",
     "material",
     "materials",

@@ -5,7 +5,7 @@ use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 
 use irid::color::White;
-use irid::fit::{fit_color, ColorTarget, Measurement, SpectrumFit, SpectrumFitter, Vary};
+use irid::fit::{self as fitting, ColorTarget, Measurement, SpectrumFit, SpectrumFitter, Vary};
 
 use crate::arrays::{array, integer_in, real, reals};
 use crate::coherent::check_wavelengths;
@@ -46,9 +46,12 @@ fn bounds(obj: Option<&Bound<'_, PyAny>>) -> PyResult<Option<Vec<(f64, f64)>>> {
         .iter()
         .enumerate()
         .map(|(i, p)| {
-            let (lo, hi): (Bound<'_, PyAny>, Bound<'_, PyAny>) = p.extract()?;
             let what = format!("bounds[{i}]");
-            Ok((real(&lo, &what)?, real(&hi, &what)?))
+            let pair: Vec<Bound<'_, PyAny>> = p.extract()?;
+            let [lo, hi] = &pair[..] else {
+                return Err(invalid(what, "expected a pair (lo, hi) in nm"));
+            };
+            Ok((real(lo, &what)?, real(hi, &what)?))
         })
         .collect::<PyResult<Vec<_>>>()
         .map(Some)
@@ -267,7 +270,7 @@ pub fn fit_color<'py>(
         })
         .collect();
     let fit = compute(py, true, || {
-        fit_color(stack, &vary, &targets, white, roughness)
+        fitting::fit_color(stack, &vary, &targets, white, roughness)
     })?
     .map_err(py_error)?;
     let out = PyDict::new(py);

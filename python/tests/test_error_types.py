@@ -54,6 +54,12 @@ def incoherent(**kw):
     return irid.incoherent(**args)
 
 
+def fit(f, **kw):
+    args = dict(stack=f.stack, vary=[1], wavelengths_nm=[500.0, 600.0], angles_deg=[0.0], R=np.full((2, 1), 0.05))
+    args.update(kw)
+    return irid.fit(**args)
+
+
 def bake(f, **kw):
     return irid.bake(f.stack, **{"resolution": (4, 4), "validation_points": 0, **kw})
 
@@ -132,6 +138,17 @@ CASES = [
     ("Stack.from_json malformed", lambda f: irid.Stack.from_json('{"ambient": 1}'), ValueError),
     ("Stack.from_json a number", lambda f: irid.Stack.from_json(5), TypeError),
     # Stack.color
+    ("fit vary 0", lambda f: fit(f, vary=[0]), ValueError),
+    ("fit vary the substrate", lambda f: fit(f, vary=[2]), ValueError),
+    ("fit vary a string", lambda f: fit(f, vary="a"), TypeError),
+    ("fit stack a string", lambda f: irid.fit("glass", [1], [500.0, 600.0], [0.0], R=np.zeros((2, 1))), TypeError),
+    ("fit NaN R", lambda f: fit(f, R=np.full((2, 1), NAN)), ValueError),
+    ("fit R of the wrong shape", lambda f: fit(f, R=np.zeros((3, 1))), ValueError),
+    ("fit bounds excluding the start", lambda f: fit(f, bounds=[(10.0, 20.0)]), ValueError),
+    ("fit bounds of strings", lambda f: fit(f, bounds=[("a", "b")]), TypeError),
+    ("fit_color unreachable target", lambda f: irid.fit_color(f.stack, [1], [0.0], [[2.0, 0.0, 0.0]]), ValueError),
+    ("fit_color unknown white", lambda f: irid.fit_color(f.stack, [1], [0.0], [[0.1, 0.1, 0.1]], white="f2"), ValueError),
+    ("fit_color stack None", lambda f: irid.fit_color(None, [1], [0.0], [[0.1, 0.1, 0.1]]), TypeError),
     ("Stack.color NaN angle", lambda f: f.stack.color([NAN]), ValueError),
     ("Stack.color unknown sampling", lambda f: f.stack.color([0.0], sampling="fine"), ValueError),
     ("Stack.color sampling a number", lambda f: f.stack.color([0.0], sampling=5), TypeError),

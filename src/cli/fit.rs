@@ -167,10 +167,10 @@ fn spectrum_report(fit: &SpectrumFit, name: &str, json: bool) -> Result<String> 
     }
     writeln!(
         text,
-        "χ² = {:.4} over {} degrees of freedom (reduced {:.4})",
-        fit.chi2,
+        "χ² = {} over {} degrees of freedom (reduced {})",
+        number(fit.chi2),
         fit.degrees_of_freedom,
-        fit.chi2 / fit.degrees_of_freedom.max(1) as f64
+        number(fit.chi2 / fit.degrees_of_freedom.max(1) as f64)
     )?;
     writeln!(
         text,
@@ -180,21 +180,30 @@ fn spectrum_report(fit: &SpectrumFit, name: &str, json: bool) -> Result<String> 
     if fit.alternatives.is_empty() {
         writeln!(
             text,
-            "unique: no other minimum within Δχ² {:.3} of the best",
-            fit.threshold
+            "unique: no other minimum within Δχ² {} of the best",
+            number(fit.threshold)
         )?;
     }
     for alt in &fit.alternatives {
         let at: Vec<String> = alt.thickness_nm.iter().map(|d| format!("{d:.3}")).collect();
         writeln!(
             text,
-            "ambiguous: thicknesses {} nm fit as well (Δχ² {:.3} ≤ {:.3})",
+            "ambiguous: thicknesses {} nm fit as well (Δχ² {} ≤ {})",
             at.join(", "),
-            alt.chi2 - fit.chi2,
-            fit.threshold
+            number(alt.chi2 - fit.chi2),
+            number(fit.threshold)
         )?;
     }
     Ok(text)
+}
+
+/// Four decimals, or four significant digits in exponent form below 0.01.
+fn number(x: f64) -> String {
+    if x != 0.0 && x.abs() < 1e-2 {
+        format!("{x:.3e}")
+    } else {
+        format!("{x:.4}")
+    }
 }
 
 fn color_report(fit: &ColorFit, json: bool) -> Result<String> {

@@ -12,7 +12,7 @@ pub fn cholesky(a: &[f64], n: usize) -> Option<Vec<f64>> {
             if i == j {
                 // A pivot lost to rounding against the diagonal's size means a
                 // direction the data does not constrain.
-                if !(v > a[i * n + i].abs() * 1e-14) || !v.is_finite() {
+                if v.is_nan() || v <= a[i * n + i].abs() * 1e-14 || !v.is_finite() {
                     return None;
                 }
                 l[i * n + i] = v.sqrt();

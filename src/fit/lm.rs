@@ -49,6 +49,8 @@ pub struct Options {
     /// Converged when an accepted step lowers Σr² by less than this
     /// fraction of it.
     pub relative_tolerance: f64,
+    /// Done once Σr² falls to this (0: never).
+    pub chi2_floor: f64,
 }
 
 impl Default for Options {
@@ -57,6 +59,7 @@ impl Default for Options {
             max_iterations: 100,
             step_tolerance: 1e-10,
             relative_tolerance: 1e-15,
+            chi2_floor: 0.0,
         }
     }
 }
@@ -102,7 +105,7 @@ pub fn minimize(
     let mut nu = 2.0;
     let mut iterations = 1;
     let (mut r_new, mut x_new) = (vec![0.0; m], vec![0.0; n]);
-    while iterations < options.max_iterations && chi2 > 0.0 {
+    while iterations < options.max_iterations && chi2 > options.chi2_floor {
         let Some(step) = damped_step(&jtj, &g, &x, bounds, lambda, n) else {
             break;
         };

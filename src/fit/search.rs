@@ -40,6 +40,10 @@ pub(crate) trait Loss: Sync {
     /// The residuals and their Jacobian from the predictions' (both
     /// parameter-major).
     fn chain(&self, p: &[f64], dp: &[f64], r: &mut [f64], jacobian: &mut [f64]);
+    /// Σr² below which a refinement is done (0: run to convergence).
+    fn chi2_floor(&self) -> f64 {
+        0.0
+    }
 }
 
 /// The scan: points inside the bounds and the model's predictions there,
@@ -157,7 +161,11 @@ pub(crate) fn refine(
         }
         Ok(())
     };
-    minimize(&mut residuals, m, x, bounds, &Options::default())
+    let options = Options {
+        chi2_floor: loss.chi2_floor(),
+        ..Options::default()
+    };
+    minimize(&mut residuals, m, x, bounds, &options)
 }
 
 /// From the best minimum, scans each parameter alone across its bounds (the
