@@ -258,6 +258,52 @@ class _GridLookup:
         return r, t
 
 
+def _chart_uv(chart, d, c):
+    """An atlas chart's normalized coordinates (u, v) of (d, c), and for a
+    corner whether it serves them (as ``texel_f32`` in src/atlas/chart.rs
+    maps them, in Dr.Jit arithmetic)."""
+    f32 = np.float32
+    a, floor = (f32(chart["optical"][k]) for k in ("a", "floor"))
+    coords = chart["coords"]
+
+    def s(c):
+        return dr.sqrt(dr.maximum(1.0 - float(a) * (1.0 - c * c), float(floor * floor)))
+
+    if coords["kind"] == "corner":
+        scale, radius = float(f32(coords["scale_nm"])), float(f32(coords["radius"]))
+        pp = d * s(c) / scale
+        rho = dr.sqrt(pp * pp + c * c)
+        # atan2(0, 0) reads φ = 0, as the shaders do.
+        phi = dr.select(rho > 0.0, dr.atan2(pp, c), 0.0)
+        return dr.clip(phi / (np.pi / 2), 0.0, 1.0), dr.clip(rho / radius, 0.0, 1.0), rho < radius
+    p_axis, c_axis = coords["p"], coords["c"]
+    p0, lo_nm, hi_nm = (f32(p_axis[k]) for k in ("p0_nm", "lo_nm", "hi_nm"))
+    lo, hi, anchor, offset = (f32(c_axis[k]) for k in ("lo", "hi", "anchor", "offset"))
+    c = dr.clip(c, float(lo), float(hi))
+    p = d * s(c)
+
+    def u_warp(p):
+        if p0 > 0.0:
+            return dr.log(1.0 + dr.maximum(p, 0.0) / float(p0))
+        return p
+
+    def v_warp(c):
+        t = dr.abs(c - float(anchor))
+        g = dr.log(t + float(offset)) if offset > 0.0 else (dr.sqrt(t) if offset == 0.0 else t)
+        return g if lo >= anchor else -g
+
+    def v_warp_f32(c):
+        t = abs(c - anchor)
+        g = np.log(t + offset) if offset > 0.0 else (np.sqrt(t) if offset == 0.0 else t)
+        return float(g if lo >= anchor else -g)
+
+    u0, u1 = (float(np.log(f32(1.0) + x / p0)) if p0 > 0.0 else float(x) for x in (lo_nm, hi_nm))
+    v0, v1 = v_warp_f32(lo), v_warp_f32(hi)
+    u = dr.clip((u_warp(p) - u0) / (u1 - u0), 0.0, 1.0) if u1 > u0 else mi.Float(0.0)
+    v = dr.clip((v_warp(c) - v0) / (v1 - v0), 0.0, 1.0) if v1 > v0 else mi.Float(0.0)
+    return u, v, None
+
+
 class _AtlasLookup:
     """An atlas table (format version 4, docs/lut-format.md) in Dr.Jit,
     operation for operation irid's sampler in float32 (``locate_f32`` and
@@ -281,51 +327,6 @@ class _AtlasLookup:
         self.reflectance = mi.Float(np.ascontiguousarray(data[..., 0]).ravel())
         self.transmittance = mi.Float(np.ascontiguousarray(data[..., 1]).ravel())
 
-    @staticmethod
-    def _chart_uv(chart, d, c):
-        """A chart's normalized coordinates (u, v) of (d, c), and for a
-        corner whether it serves them."""
-        f32 = np.float32
-        a, floor = (f32(chart["optical"][k]) for k in ("a", "floor"))
-        coords = chart["coords"]
-
-        def s(c):
-            return dr.sqrt(dr.maximum(1.0 - float(a) * (1.0 - c * c), float(floor * floor)))
-
-        if coords["kind"] == "corner":
-            scale, radius = float(f32(coords["scale_nm"])), float(f32(coords["radius"]))
-            pp = d * s(c) / scale
-            rho = dr.sqrt(pp * pp + c * c)
-            # atan2(0, 0) reads φ = 0, as the shaders do.
-            phi = dr.select(rho > 0.0, dr.atan2(pp, c), 0.0)
-            return dr.clip(phi / (np.pi / 2), 0.0, 1.0), dr.clip(rho / radius, 0.0, 1.0), rho < radius
-        p_axis, c_axis = coords["p"], coords["c"]
-        p0, lo_nm, hi_nm = (f32(p_axis[k]) for k in ("p0_nm", "lo_nm", "hi_nm"))
-        lo, hi, anchor, offset = (f32(c_axis[k]) for k in ("lo", "hi", "anchor", "offset"))
-        c = dr.clip(c, float(lo), float(hi))
-        p = d * s(c)
-
-        def u_warp(p):
-            if p0 > 0.0:
-                return dr.log(1.0 + dr.maximum(p, 0.0) / float(p0))
-            return p
-
-        def v_warp(c):
-            t = dr.abs(c - float(anchor))
-            g = dr.log(t + float(offset)) if offset > 0.0 else (dr.sqrt(t) if offset == 0.0 else t)
-            return g if lo >= anchor else -g
-
-        def v_warp_f32(c):
-            t = abs(c - anchor)
-            g = np.log(t + offset) if offset > 0.0 else (np.sqrt(t) if offset == 0.0 else t)
-            return float(g if lo >= anchor else -g)
-
-        u0, u1 = (float(np.log(f32(1.0) + x / p0)) if p0 > 0.0 else float(x) for x in (lo_nm, hi_nm))
-        v0, v1 = v_warp_f32(lo), v_warp_f32(hi)
-        u = dr.clip((u_warp(p) - u0) / (u1 - u0), 0.0, 1.0) if u1 > u0 else mi.Float(0.0)
-        v = dr.clip((v_warp(c) - v0) / (v1 - v0), 0.0, 1.0) if v1 > v0 else mi.Float(0.0)
-        return u, v, None
-
     def _texel(self, d, c):
         """The texel position (x, y) of (d, c) on the ambient side's charts."""
         d = dr.clip(d, *self.atlas_range)
@@ -334,7 +335,7 @@ class _AtlasLookup:
         x, y = mi.Float(0.0), mi.Float(0.0)
         last = None
         for chart in self.charts:
-            u, v, in_corner = self._chart_uv(chart, d, c)
+            u, v, in_corner = _chart_uv(chart, d, c)
             rect = chart["rect"]
             tx = rect["x"] + 0.5 + u * (rect["width"] - 1.0)
             ty = rect["y"] + 0.5 + v * (rect["height"] - 1.0)
