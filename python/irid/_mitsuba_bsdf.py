@@ -430,8 +430,8 @@ class _TableResponse:
 class _FilmLoading:
     """Reading a film's properties into the BSDF's state: the solver or
     table behind R and T, the parameters, and the lobes Mitsuba is told
-    about. Mixed into the class _make_bsdf builds, whose ``_flags`` are
-    its variant's BSDFFlags."""
+    about. One of the pieces of the class _make_bsdf builds, whose
+    ``_flags`` are its variant's BSDFFlags."""
 
     def _load(self, props, symbolic):
         flags = self._flags
@@ -488,7 +488,7 @@ class _FilmLoading:
 class _FilmLobes:
     """The film's R and T at an incidence, the choice between its
     reflection and transmission lobes, and the smooth film's sampling
-    (delta lobes). Mixed into the class _make_bsdf builds."""
+    (delta lobes). One of the pieces of the class _make_bsdf builds."""
 
     def film(self, si, cos_theta, front, active):
         """The film's (R, T) at ``cos_theta`` for light from the front
@@ -576,7 +576,7 @@ class _FilmLobes:
 class _GgxLobes:
     """The rough film: GGX microfacets, α = roughness², height-correlated
     Smith G2, each facet reflecting and transmitting as the smooth film
-    does (_FilmLobes, which this mixin's class also has)."""
+    does (_FilmLobes, a piece of the same class)."""
 
     def alpha(self, si, active):
         """GGX's α = roughness² at ``si`` (Mitsuba's GGX takes no α below
@@ -663,12 +663,17 @@ class _GgxLobes:
         return dr.select(active, mi.Spectrum(value), 0.0), dr.select(active, pdf, 0.0)
 
 
+#: The pieces of the BSDF class beside Mitsuba's interface.
+_PIECES = (_FilmLoading, _FilmLobes, _GgxLobes)
+
+
 def _make_bsdf(symbolic):
     """The BSDF class of the variant set now: Mitsuba's interface (the
-    methods its C++ side calls) over the mixins above, which hold the
-    film's state, lobes and GGX."""
+    methods its C++ side calls), with the methods of _PIECES (the film's
+    state, its lobes, GGX) copied in: a nanobind type takes exactly one
+    base, so they cannot be mixed in by inheritance."""
 
-    class IridFilm(_FilmLoading, _FilmLobes, _GgxLobes, mi.BSDF):
+    class IridFilm(mi.BSDF):
         """irid's thin film: exact per-wavelength R and T, smooth or GGX-rough."""
 
         _flags = mi.BSDFFlags
@@ -718,4 +723,8 @@ def _make_bsdf(symbolic):
         def to_string(self):
             return self._description()
 
+    for piece in _PIECES:
+        for name, value in vars(piece).items():
+            if not name.startswith("__"):
+                setattr(IridFilm, name, value)
     return IridFilm
