@@ -258,6 +258,52 @@ class _GridLookup:
         return r, t
 
 
+def _chart_uv(chart, d, c):
+    """An atlas chart's normalized coordinates (u, v) of (d, c), and for a
+    corner whether it serves them (as ``texel_f32`` in src/atlas/chart.rs
+    maps them, in Dr.Jit arithmetic)."""
+    f32 = np.float32
+    a, floor = (f32(chart["optical"][k]) for k in ("a", "floor"))
+    coords = chart["coords"]
+
+    def s(c):
+        return dr.sqrt(dr.maximum(1.0 - float(a) * (1.0 - c * c), float(floor * floor)))
+
+    if coords["kind"] == "corner":
+        scale, radius = float(f32(coords["scale_nm"])), float(f32(coords["radius"]))
+        pp = d * s(c) / scale
+        rho = dr.sqrt(pp * pp + c * c)
+        # atan2(0, 0) reads φ = 0, as the shaders do.
+        phi = dr.select(rho > 0.0, dr.atan2(pp, c), 0.0)
+        return dr.clip(phi / (np.pi / 2), 0.0, 1.0), dr.clip(rho / radius, 0.0, 1.0), rho < radius
+    p_axis, c_axis = coords["p"], coords["c"]
+    p0, lo_nm, hi_nm = (f32(p_axis[k]) for k in ("p0_nm", "lo_nm", "hi_nm"))
+    lo, hi, anchor, offset = (f32(c_axis[k]) for k in ("lo", "hi", "anchor", "offset"))
+    c = dr.clip(c, float(lo), float(hi))
+    p = d * s(c)
+
+    def u_warp(p):
+        if p0 > 0.0:
+            return dr.log(1.0 + dr.maximum(p, 0.0) / float(p0))
+        return p
+
+    def v_warp(c):
+        t = dr.abs(c - float(anchor))
+        g = dr.log(t + float(offset)) if offset > 0.0 else (dr.sqrt(t) if offset == 0.0 else t)
+        return g if lo >= anchor else -g
+
+    def v_warp_f32(c):
+        t = abs(c - anchor)
+        g = np.log(t + offset) if offset > 0.0 else (np.sqrt(t) if offset == 0.0 else t)
+        return float(g if lo >= anchor else -g)
+
+    u0, u1 = (float(np.log(f32(1.0) + x / p0)) if p0 > 0.0 else float(x) for x in (lo_nm, hi_nm))
+    v0, v1 = v_warp_f32(lo), v_warp_f32(hi)
+    u = dr.clip((u_warp(p) - u0) / (u1 - u0), 0.0, 1.0) if u1 > u0 else mi.Float(0.0)
+    v = dr.clip((v_warp(c) - v0) / (v1 - v0), 0.0, 1.0) if v1 > v0 else mi.Float(0.0)
+    return u, v, None
+
+
 class _AtlasLookup:
     """An atlas table (format version 4, docs/lut-format.md) in Dr.Jit,
     operation for operation irid's sampler in float32 (``locate_f32`` and
@@ -281,51 +327,6 @@ class _AtlasLookup:
         self.reflectance = mi.Float(np.ascontiguousarray(data[..., 0]).ravel())
         self.transmittance = mi.Float(np.ascontiguousarray(data[..., 1]).ravel())
 
-    @staticmethod
-    def _chart_uv(chart, d, c):
-        """A chart's normalized coordinates (u, v) of (d, c), and for a
-        corner whether it serves them."""
-        f32 = np.float32
-        a, floor = (f32(chart["optical"][k]) for k in ("a", "floor"))
-        coords = chart["coords"]
-
-        def s(c):
-            return dr.sqrt(dr.maximum(1.0 - float(a) * (1.0 - c * c), float(floor * floor)))
-
-        if coords["kind"] == "corner":
-            scale, radius = float(f32(coords["scale_nm"])), float(f32(coords["radius"]))
-            pp = d * s(c) / scale
-            rho = dr.sqrt(pp * pp + c * c)
-            # atan2(0, 0) reads φ = 0, as the shaders do.
-            phi = dr.select(rho > 0.0, dr.atan2(pp, c), 0.0)
-            return dr.clip(phi / (np.pi / 2), 0.0, 1.0), dr.clip(rho / radius, 0.0, 1.0), rho < radius
-        p_axis, c_axis = coords["p"], coords["c"]
-        p0, lo_nm, hi_nm = (f32(p_axis[k]) for k in ("p0_nm", "lo_nm", "hi_nm"))
-        lo, hi, anchor, offset = (f32(c_axis[k]) for k in ("lo", "hi", "anchor", "offset"))
-        c = dr.clip(c, float(lo), float(hi))
-        p = d * s(c)
-
-        def u_warp(p):
-            if p0 > 0.0:
-                return dr.log(1.0 + dr.maximum(p, 0.0) / float(p0))
-            return p
-
-        def v_warp(c):
-            t = dr.abs(c - float(anchor))
-            g = dr.log(t + float(offset)) if offset > 0.0 else (dr.sqrt(t) if offset == 0.0 else t)
-            return g if lo >= anchor else -g
-
-        def v_warp_f32(c):
-            t = abs(c - anchor)
-            g = np.log(t + offset) if offset > 0.0 else (np.sqrt(t) if offset == 0.0 else t)
-            return float(g if lo >= anchor else -g)
-
-        u0, u1 = (float(np.log(f32(1.0) + x / p0)) if p0 > 0.0 else float(x) for x in (lo_nm, hi_nm))
-        v0, v1 = v_warp_f32(lo), v_warp_f32(hi)
-        u = dr.clip((u_warp(p) - u0) / (u1 - u0), 0.0, 1.0) if u1 > u0 else mi.Float(0.0)
-        v = dr.clip((v_warp(c) - v0) / (v1 - v0), 0.0, 1.0) if v1 > v0 else mi.Float(0.0)
-        return u, v, None
-
     def _texel(self, d, c):
         """The texel position (x, y) of (d, c) on the ambient side's charts."""
         d = dr.clip(d, *self.atlas_range)
@@ -334,7 +335,7 @@ class _AtlasLookup:
         x, y = mi.Float(0.0), mi.Float(0.0)
         last = None
         for chart in self.charts:
-            u, v, in_corner = self._chart_uv(chart, d, c)
+            u, v, in_corner = _chart_uv(chart, d, c)
             rect = chart["rect"]
             tx = rect["x"] + 0.5 + u * (rect["width"] - 1.0)
             ty = rect["y"] + 0.5 + v * (rect["height"] - 1.0)
@@ -426,52 +427,260 @@ class _TableResponse:
         return mi.UnpolarizedSpectrum(*r), mi.UnpolarizedSpectrum(*t)
 
 
+class _FilmLoading:
+    """Reading a film's properties into the BSDF's state: the solver or
+    table behind R and T, the parameters, and the lobes Mitsuba is told
+    about. One of the pieces of the class _make_bsdf builds, whose
+    ``_flags`` are its variant's BSDFFlags."""
+
+    def _load(self, props, symbolic):
+        flags = self._flags
+        values = {key: props[key] for key in props.keys()}
+        values["type"] = "irid_film"
+        setup = _FilmSetup.from_values(values)
+        self.setup = setup
+        if isinstance(setup.thickness, mi.Texture):
+            self.thickness = setup.thickness
+        elif isinstance(setup.thickness, float):
+            self.thickness = dr.opaque(mi.Float, setup.thickness)
+        else:
+            raise FilmError("thickness_nm", f"expected a number or a texture, got {type(setup.thickness).__name__}")
+        if setup.textured_roughness and not isinstance(setup.roughness, mi.Texture):
+            raise FilmError("roughness", f"expected a number or a texture, got {type(setup.roughness).__name__}")
+        self.roughness = setup.roughness if setup.textured_roughness else dr.opaque(mi.Float, setup.roughness)
+        self.transmissive = setup.transmissive
+        self.eta = setup.eta
+        self.rough = setup.rough
+        if setup.table is None and dr.is_jit_v(mi.Float) and symbolic:
+            raise FilmError(
+                "table",
+                "missing: irid.mitsuba.register(symbolic=True) keeps Dr.Jit's symbolic loops, in which "
+                "only a table can be looked up (the solver runs between kernels); give a spectral "
+                "table or register without symbolic=True",
+            )
+        self.response = _TableResponse(setup) if setup.table is not None else _SolverResponse(setup)
+        sides = flags.FrontSide | flags.BackSide if self.transmissive else flags.FrontSide
+        reflection = (flags.GlossyReflection if self.rough else flags.DeltaReflection) | sides
+        transmission = (
+            (flags.GlossyTransmission if self.rough else flags.DeltaTransmission)
+            | flags.FrontSide
+            | flags.BackSide
+            | flags.NonSymmetric
+        )
+        self.m_components = [reflection] + ([transmission] if self.transmissive else [])
+        self.m_flags = reflection | (transmission if self.transmissive else 0)
+        if setup.textured_roughness or isinstance(self.thickness, mi.Texture):
+            self.m_flags = self.m_flags | flags.SpatiallyVarying
+
+    def _description(self):
+        """The one line Mitsuba prints for the BSDF."""
+        s = self.setup
+        source = "table" if s.table is not None else "solver"
+        thickness, roughness = (
+            "texture" if isinstance(v, mi.Texture) else f"{float(v[0]) if dr.is_array_v(v) else float(v):g}" for v in (self.thickness, self.roughness)
+        )
+        return (
+            f"IridFilm[layer={s.layer}, thickness_nm={thickness}, roughness={roughness}, "
+            f"{source}, {'transmissive' if self.transmissive else 'opaque'}]"
+        )
+
+
+class _FilmLobes:
+    """The film's R and T at an incidence, the choice between its
+    reflection and transmission lobes, and the smooth film's sampling
+    (delta lobes). One of the pieces of the class _make_bsdf builds."""
+
+    def film(self, si, cos_theta, front, active):
+        """The film's (R, T) at ``cos_theta`` for light from the front
+        (ambient) or back (substrate) side, per wavelength of ``si``."""
+        if isinstance(self.thickness, mi.Texture):
+            thickness = self.thickness.eval_1(si, active)
+        else:
+            thickness = mi.Float(self.thickness)
+        return self.response(thickness, cos_theta, si.wavelengths, front, active)
+
+    def lobe_choice(self, ctx, r, t, cos_in, front, glossy):
+        """The probability of sampling reflection rather than transmission
+        (the spectrum's mean R against its mean T), or None when neither
+        lobe is enabled."""
+        flags = self._flags
+        reflect_flag = flags.GlossyReflection if glossy else flags.DeltaReflection
+        transmit_flag = flags.GlossyTransmission if glossy else flags.DeltaTransmission
+        has_r = ctx.is_enabled(reflect_flag, 0)
+        has_t = self.transmissive and ctx.is_enabled(transmit_flag, 1)
+        if not has_r and not has_t:
+            return None
+        if not has_t:
+            return mi.Float(1.0)
+        # Past the critical angle of the directions' own refraction no
+        # ray can be sent through, whatever a dispersive index says.
+        eta_ti = dr.select(front, 1.0 / self.eta, self.eta)
+        tir = (1.0 - cos_in * cos_in) * eta_ti * eta_ti >= 1.0
+        r_mean = _channel_mean(r)
+        t_mean = dr.select(tir, 0.0, _channel_mean(t))
+        total = r_mean + t_mean
+        p_r = dr.select(total > 0.0, r_mean / dr.maximum(total, 1e-30), 1.0)
+        return p_r if has_r else mi.Float(0.0)
+
+    def incidence(self, si, active):
+        """cos θ_i, whether light comes from the ambient side, and the
+        lanes this film answers (no grazing ray; an opaque film's back
+        side is black)."""
+        cos_i = mi.Frame3f.cos_theta(si.wi)
+        front = cos_i > 0.0
+        active = active & (cos_i != 0.0)
+        if not self.transmissive:
+            active = active & front
+        return cos_i, front, active
+
+    def lobe_sample(self, selected_r, eta_it, glossy):
+        """A BSDFSample3f naming the lobe chosen (reflection or refraction)."""
+        flags = self._flags
+        bs = dr.zeros(mi.BSDFSample3f)
+        reflection = flags.GlossyReflection if glossy else flags.DeltaReflection
+        transmission = flags.GlossyTransmission if glossy else flags.DeltaTransmission
+        bs.eta = dr.select(selected_r, 1.0, eta_it)
+        bs.sampled_component = dr.select(selected_r, mi.UInt32(0), mi.UInt32(1))
+        bs.sampled_type = dr.select(selected_r, mi.UInt32(+reflection), mi.UInt32(+transmission))
+        return bs
+
+    def choose_lobe(self, ctx, si, cos_in, front, active, sample1, glossy):
+        """The film's (R, T) at ``cos_in`` (signed: cos θ_i, or wi·m for a
+        microfacet), the lobe ``sample1`` picks, and the refraction's
+        cos θ_t and η_ti there; None when no lobe is enabled."""
+        r, t = self.film(si, dr.abs(cos_in), front, active)
+        p_r = self.lobe_choice(ctx, r, t, dr.abs(cos_in), front, glossy)
+        if p_r is None:
+            return None
+        selected_r = sample1 < p_r
+        _, cos_t, eta_it, eta_ti = mi.fresnel(cos_in, self.eta)
+        bs = self.lobe_sample(selected_r, eta_it, glossy)
+        return r, t, p_r, selected_r, cos_t, eta_ti, bs
+
+    def radiance_scale(self, ctx, eta_ti):
+        return dr.square(eta_ti) if ctx.mode == mi.TransportMode.Radiance else 1.0
+
+    def sample_smooth(self, ctx, si, sample1, active):
+        cos_i, front, active = self.incidence(si, active)
+        chosen = self.choose_lobe(ctx, si, cos_i, front, active, sample1, glossy=False)
+        if chosen is None:
+            return dr.zeros(mi.BSDFSample3f), dr.zeros(mi.Spectrum)
+        r, t, p_r, selected_r, cos_t, eta_ti, bs = chosen
+        bs.wo = dr.select(selected_r, mi.reflect(si.wi), mi.refract(si.wi, cos_t, eta_ti))
+        bs.pdf = dr.select(selected_r, p_r, 1.0 - p_r)
+        active = active & (bs.pdf > 0.0)
+        weight = dr.select(selected_r, r, t * self.radiance_scale(ctx, eta_ti)) / dr.maximum(bs.pdf, 1e-30)
+        return bs, dr.select(active, mi.Spectrum(weight), 0.0)
+
+
+class _GgxLobes:
+    """The rough film: GGX microfacets, α = roughness², height-correlated
+    Smith G2, each facet reflecting and transmitting as the smooth film
+    does (_FilmLobes, a piece of the same class)."""
+
+    def alpha(self, si, active):
+        """GGX's α = roughness² at ``si`` (Mitsuba's GGX takes no α below
+        1e-4, roughness 0.01; the masking uses the same α, so the lobe
+        is one GGX throughout)."""
+        if isinstance(self.roughness, mi.Texture):
+            roughness = self.roughness.eval_1(si, active)
+        else:
+            roughness = mi.Float(self.roughness)
+        roughness = dr.clip(dr.select(dr.isfinite(roughness), roughness, 0.0), 0.0, 1.0)
+        return dr.maximum(roughness * roughness, MIN_GGX_ALPHA)
+
+    @staticmethod
+    def masking(alpha, wi, wo):
+        """G1(wi) and G2(wi, wo) = 1 / (1 + Λ(wi) + Λ(wo))."""
+        lambda_i = ggx_lambda(alpha, mi.Frame3f.cos_theta(wi))
+        lambda_o = ggx_lambda(alpha, mi.Frame3f.cos_theta(wo))
+        return 1.0 / (1.0 + lambda_i), 1.0 / (1.0 + lambda_i + lambda_o)
+
+    def sample_rough(self, ctx, si, sample1, sample2, active):
+        cos_i, front, active = self.incidence(si, active)
+        alpha = self.alpha(si, active)
+        distr = mi.MicrofacetDistribution(mi.MicrofacetType.GGX, alpha, True)
+        m, pdf_m = distr.sample(dr.mulsign(si.wi, cos_i), sample2)
+        active = active & (pdf_m > 0.0)
+        dot_wi_m = dr.dot(si.wi, m)
+        chosen = self.choose_lobe(ctx, si, dot_wi_m, front, active, sample1, glossy=True)
+        if chosen is None:
+            return dr.zeros(mi.BSDFSample3f), dr.zeros(mi.Spectrum)
+        r, t, p_r, selected_r, cos_t, eta_ti, bs = chosen
+        bs.wo = dr.select(selected_r, mi.reflect(si.wi, m), mi.refract(si.wi, m, cos_t, eta_ti))
+        cos_o, dot_wo_m = mi.Frame3f.cos_theta(bs.wo), dr.dot(bs.wo, m)
+        active = active & dr.select(selected_r, cos_o * cos_i > 0.0, cos_o * cos_i < 0.0)
+        active = active & (dot_wo_m * cos_o > 0.0)
+        p_lobe = dr.select(selected_r, p_r, 1.0 - p_r)
+        bs.pdf = pdf_m * p_lobe * dr.abs(self.half_vector_jacobian(selected_r, dot_wi_m, dot_wo_m, bs.eta))
+        active = active & (bs.pdf > 0.0)
+        g1_i, g2 = self.masking(alpha, si.wi, bs.wo)
+        value = dr.select(selected_r, r, t * self.radiance_scale(ctx, eta_ti))
+        weight = value * (g2 / g1_i) / dr.maximum(p_lobe, 1e-30)
+        return bs, dr.select(active, mi.Spectrum(weight), 0.0)
+
+    @staticmethod
+    def half_vector_jacobian(reflect, dot_wi_m, dot_wo_m, eta_it):
+        """dω_m / dω_o for reflection, and for refraction with relative index eta_it."""
+        return dr.select(
+            reflect,
+            1.0 / (4.0 * dot_wo_m),
+            eta_it * eta_it * dot_wo_m / dr.square(dot_wi_m + eta_it * dot_wo_m),
+        )
+
+    def eval_pdf_rough(self, ctx, si, wo, active):
+        flags = self._flags
+        cos_i, cos_o = mi.Frame3f.cos_theta(si.wi), mi.Frame3f.cos_theta(wo)
+        front = cos_i > 0.0
+        reflect = cos_i * cos_o > 0.0
+        has_r = ctx.is_enabled(flags.GlossyReflection, 0)
+        has_t = self.transmissive and ctx.is_enabled(flags.GlossyTransmission, 1)
+        active = active & (cos_i != 0.0) & ((has_r & reflect) | (has_t & _not(reflect)))
+        if not self.transmissive:
+            active = active & front
+        eta_it = dr.select(front, self.eta, 1.0 / self.eta)
+        m = dr.normalize(si.wi + wo * dr.select(reflect, 1.0, eta_it))
+        m = dr.mulsign(m, mi.Frame3f.cos_theta(m))
+        dot_wi_m, dot_wo_m = dr.dot(si.wi, m), dr.dot(wo, m)
+        active = active & (dot_wi_m * cos_i > 0.0) & (dot_wo_m * cos_o > 0.0)
+        r, t = self.film(si, dr.abs(dot_wi_m), front, active)
+        p_r = self.lobe_choice(ctx, r, t, dr.abs(dot_wi_m), front, glossy=True)
+        if p_r is None:
+            return dr.zeros(mi.Spectrum), mi.Float(0.0)
+        alpha = self.alpha(si, active)
+        distr = mi.MicrofacetDistribution(mi.MicrofacetType.GGX, alpha, True)
+        d = distr.eval(m)
+        _, g2 = self.masking(alpha, si.wi, wo)
+        value_r = r * (d * g2 / (4.0 * dr.abs(cos_i)))
+        value_t = (
+            t
+            * self.radiance_scale(ctx, 1.0 / eta_it)
+            * dr.abs(d * g2 * eta_it * eta_it * dot_wi_m * dot_wo_m / (cos_i * dr.square(dot_wi_m + eta_it * dot_wo_m)))
+        )
+        value = dr.select(reflect, value_r, value_t)
+        jacobian = dr.abs(self.half_vector_jacobian(reflect, dot_wi_m, dot_wo_m, eta_it))
+        pdf = distr.pdf(dr.mulsign(si.wi, cos_i), m) * dr.select(reflect, p_r, 1.0 - p_r) * jacobian
+        return dr.select(active, mi.Spectrum(value), 0.0), dr.select(active, pdf, 0.0)
+
+
+#: The pieces of the BSDF class beside Mitsuba's interface.
+_PIECES = (_FilmLoading, _FilmLobes, _GgxLobes)
+
+
 def _make_bsdf(symbolic):
-    flags = mi.BSDFFlags
+    """The BSDF class of the variant set now: Mitsuba's interface (the
+    methods its C++ side calls), with the methods of _PIECES (the film's
+    state, its lobes, GGX) copied in: a nanobind type takes exactly one
+    base, so they cannot be mixed in by inheritance."""
 
     class IridFilm(mi.BSDF):
         """irid's thin film: exact per-wavelength R and T, smooth or GGX-rough."""
 
+        _flags = mi.BSDFFlags
+
         def __init__(self, props):
             mi.BSDF.__init__(self, props)
-            values = {key: props[key] for key in props.keys()}
-            values["type"] = "irid_film"
-            setup = _FilmSetup.from_values(values)
-            self.setup = setup
-            if isinstance(setup.thickness, mi.Texture):
-                self.thickness = setup.thickness
-            elif isinstance(setup.thickness, float):
-                self.thickness = dr.opaque(mi.Float, setup.thickness)
-            else:
-                raise FilmError("thickness_nm", f"expected a number or a texture, got {type(setup.thickness).__name__}")
-            if setup.textured_roughness and not isinstance(setup.roughness, mi.Texture):
-                raise FilmError("roughness", f"expected a number or a texture, got {type(setup.roughness).__name__}")
-            self.roughness = setup.roughness if setup.textured_roughness else dr.opaque(mi.Float, setup.roughness)
-            self.transmissive = setup.transmissive
-            self.eta = setup.eta
-            self.rough = setup.rough
-            if setup.table is None and dr.is_jit_v(mi.Float) and symbolic:
-                raise FilmError(
-                    "table",
-                    "missing: irid.mitsuba.register(symbolic=True) keeps Dr.Jit's symbolic loops, in which "
-                    "only a table can be looked up (the solver runs between kernels); give a spectral "
-                    "table or register without symbolic=True",
-                )
-            self.response = _TableResponse(setup) if setup.table is not None else _SolverResponse(setup)
-            sides = flags.FrontSide | flags.BackSide if self.transmissive else flags.FrontSide
-            reflection = (flags.GlossyReflection if self.rough else flags.DeltaReflection) | sides
-            transmission = (
-                (flags.GlossyTransmission if self.rough else flags.DeltaTransmission)
-                | flags.FrontSide
-                | flags.BackSide
-                | flags.NonSymmetric
-            )
-            self.m_components = [reflection] + ([transmission] if self.transmissive else [])
-            self.m_flags = reflection | (transmission if self.transmissive else 0)
-            if setup.textured_roughness or isinstance(self.thickness, mi.Texture):
-                self.m_flags = self.m_flags | flags.SpatiallyVarying
-
-        # -- parameters ---------------------------------------------------------
+            self._load(props, symbolic)
 
         def traverse(self, callback):
             callback.put("thickness_nm", self.thickness, mi.ParamFlags.Differentiable)
@@ -490,178 +699,6 @@ def _make_bsdf(symbolic):
                 value = getattr(self, name)
                 if isinstance(value, mi.Float) and dr.width(value) != 1:
                     raise FilmError(f"{name}_nm" if name == "thickness" else name, "must be one number (or a texture)")
-
-        # -- the film ---------------------------------------------------------
-
-        def film(self, si, cos_theta, front, active):
-            """The film's (R, T) at ``cos_theta`` for light from the front
-            (ambient) or back (substrate) side, per wavelength of ``si``."""
-            if isinstance(self.thickness, mi.Texture):
-                thickness = self.thickness.eval_1(si, active)
-            else:
-                thickness = mi.Float(self.thickness)
-            return self.response(thickness, cos_theta, si.wavelengths, front, active)
-
-        def lobe_choice(self, ctx, r, t, cos_in, front, glossy):
-            """The probability of sampling reflection rather than transmission
-            (the spectrum's mean R against its mean T), or None when neither
-            lobe is enabled."""
-            reflect_flag = flags.GlossyReflection if glossy else flags.DeltaReflection
-            transmit_flag = flags.GlossyTransmission if glossy else flags.DeltaTransmission
-            has_r = ctx.is_enabled(reflect_flag, 0)
-            has_t = self.transmissive and ctx.is_enabled(transmit_flag, 1)
-            if not has_r and not has_t:
-                return None
-            if not has_t:
-                return mi.Float(1.0)
-            # Past the critical angle of the directions' own refraction no
-            # ray can be sent through, whatever a dispersive index says.
-            eta_ti = dr.select(front, 1.0 / self.eta, self.eta)
-            tir = (1.0 - cos_in * cos_in) * eta_ti * eta_ti >= 1.0
-            r_mean = _channel_mean(r)
-            t_mean = dr.select(tir, 0.0, _channel_mean(t))
-            total = r_mean + t_mean
-            p_r = dr.select(total > 0.0, r_mean / dr.maximum(total, 1e-30), 1.0)
-            return p_r if has_r else mi.Float(0.0)
-
-        def incidence(self, si, active):
-            """cos θ_i, whether light comes from the ambient side, and the
-            lanes this film answers (no grazing ray; an opaque film's back
-            side is black)."""
-            cos_i = mi.Frame3f.cos_theta(si.wi)
-            front = cos_i > 0.0
-            active = active & (cos_i != 0.0)
-            if not self.transmissive:
-                active = active & front
-            return cos_i, front, active
-
-        @staticmethod
-        def lobe_sample(selected_r, eta_it, glossy):
-            """A BSDFSample3f naming the lobe chosen (reflection or refraction)."""
-            bs = dr.zeros(mi.BSDFSample3f)
-            reflection = flags.GlossyReflection if glossy else flags.DeltaReflection
-            transmission = flags.GlossyTransmission if glossy else flags.DeltaTransmission
-            bs.eta = dr.select(selected_r, 1.0, eta_it)
-            bs.sampled_component = dr.select(selected_r, mi.UInt32(0), mi.UInt32(1))
-            bs.sampled_type = dr.select(selected_r, mi.UInt32(+reflection), mi.UInt32(+transmission))
-            return bs
-
-        def choose_lobe(self, ctx, si, cos_in, front, active, sample1, glossy):
-            """The film's (R, T) at ``cos_in`` (signed: cos θ_i, or wi·m for a
-            microfacet), the lobe ``sample1`` picks, and the refraction's
-            cos θ_t and η_ti there; None when no lobe is enabled."""
-            r, t = self.film(si, dr.abs(cos_in), front, active)
-            p_r = self.lobe_choice(ctx, r, t, dr.abs(cos_in), front, glossy)
-            if p_r is None:
-                return None
-            selected_r = sample1 < p_r
-            _, cos_t, eta_it, eta_ti = mi.fresnel(cos_in, self.eta)
-            bs = self.lobe_sample(selected_r, eta_it, glossy)
-            return r, t, p_r, selected_r, cos_t, eta_ti, bs
-
-        def radiance_scale(self, ctx, eta_ti):
-            return dr.square(eta_ti) if ctx.mode == mi.TransportMode.Radiance else 1.0
-
-        # -- smooth -----------------------------------------------------------
-
-        def sample_smooth(self, ctx, si, sample1, active):
-            cos_i, front, active = self.incidence(si, active)
-            chosen = self.choose_lobe(ctx, si, cos_i, front, active, sample1, glossy=False)
-            if chosen is None:
-                return dr.zeros(mi.BSDFSample3f), dr.zeros(mi.Spectrum)
-            r, t, p_r, selected_r, cos_t, eta_ti, bs = chosen
-            bs.wo = dr.select(selected_r, mi.reflect(si.wi), mi.refract(si.wi, cos_t, eta_ti))
-            bs.pdf = dr.select(selected_r, p_r, 1.0 - p_r)
-            active = active & (bs.pdf > 0.0)
-            weight = dr.select(selected_r, r, t * self.radiance_scale(ctx, eta_ti)) / dr.maximum(bs.pdf, 1e-30)
-            return bs, dr.select(active, mi.Spectrum(weight), 0.0)
-
-        # -- rough (GGX, alpha = roughness², height-correlated Smith G2) ------
-
-        def alpha(self, si, active):
-            """GGX's α = roughness² at ``si`` (Mitsuba's GGX takes no α below
-            1e-4, roughness 0.01; the masking uses the same α, so the lobe
-            is one GGX throughout)."""
-            if isinstance(self.roughness, mi.Texture):
-                roughness = self.roughness.eval_1(si, active)
-            else:
-                roughness = mi.Float(self.roughness)
-            roughness = dr.clip(dr.select(dr.isfinite(roughness), roughness, 0.0), 0.0, 1.0)
-            return dr.maximum(roughness * roughness, MIN_GGX_ALPHA)
-
-        @staticmethod
-        def masking(alpha, wi, wo):
-            """G1(wi) and G2(wi, wo) = 1 / (1 + Λ(wi) + Λ(wo))."""
-            lambda_i = ggx_lambda(alpha, mi.Frame3f.cos_theta(wi))
-            lambda_o = ggx_lambda(alpha, mi.Frame3f.cos_theta(wo))
-            return 1.0 / (1.0 + lambda_i), 1.0 / (1.0 + lambda_i + lambda_o)
-
-        def sample_rough(self, ctx, si, sample1, sample2, active):
-            cos_i, front, active = self.incidence(si, active)
-            alpha = self.alpha(si, active)
-            distr = mi.MicrofacetDistribution(mi.MicrofacetType.GGX, alpha, True)
-            m, pdf_m = distr.sample(dr.mulsign(si.wi, cos_i), sample2)
-            active = active & (pdf_m > 0.0)
-            dot_wi_m = dr.dot(si.wi, m)
-            chosen = self.choose_lobe(ctx, si, dot_wi_m, front, active, sample1, glossy=True)
-            if chosen is None:
-                return dr.zeros(mi.BSDFSample3f), dr.zeros(mi.Spectrum)
-            r, t, p_r, selected_r, cos_t, eta_ti, bs = chosen
-            bs.wo = dr.select(selected_r, mi.reflect(si.wi, m), mi.refract(si.wi, m, cos_t, eta_ti))
-            cos_o, dot_wo_m = mi.Frame3f.cos_theta(bs.wo), dr.dot(bs.wo, m)
-            active = active & dr.select(selected_r, cos_o * cos_i > 0.0, cos_o * cos_i < 0.0)
-            active = active & (dot_wo_m * cos_o > 0.0)
-            p_lobe = dr.select(selected_r, p_r, 1.0 - p_r)
-            bs.pdf = pdf_m * p_lobe * dr.abs(self.half_vector_jacobian(selected_r, dot_wi_m, dot_wo_m, bs.eta))
-            active = active & (bs.pdf > 0.0)
-            g1_i, g2 = self.masking(alpha, si.wi, bs.wo)
-            value = dr.select(selected_r, r, t * self.radiance_scale(ctx, eta_ti))
-            weight = value * (g2 / g1_i) / dr.maximum(p_lobe, 1e-30)
-            return bs, dr.select(active, mi.Spectrum(weight), 0.0)
-
-        @staticmethod
-        def half_vector_jacobian(reflect, dot_wi_m, dot_wo_m, eta_it):
-            """dω_m / dω_o for reflection, and for refraction with relative index eta_it."""
-            return dr.select(
-                reflect,
-                1.0 / (4.0 * dot_wo_m),
-                eta_it * eta_it * dot_wo_m / dr.square(dot_wi_m + eta_it * dot_wo_m),
-            )
-
-        def eval_pdf_rough(self, ctx, si, wo, active):
-            cos_i, cos_o = mi.Frame3f.cos_theta(si.wi), mi.Frame3f.cos_theta(wo)
-            front = cos_i > 0.0
-            reflect = cos_i * cos_o > 0.0
-            has_r = ctx.is_enabled(flags.GlossyReflection, 0)
-            has_t = self.transmissive and ctx.is_enabled(flags.GlossyTransmission, 1)
-            active = active & (cos_i != 0.0) & ((has_r & reflect) | (has_t & _not(reflect)))
-            if not self.transmissive:
-                active = active & front
-            eta_it = dr.select(front, self.eta, 1.0 / self.eta)
-            m = dr.normalize(si.wi + wo * dr.select(reflect, 1.0, eta_it))
-            m = dr.mulsign(m, mi.Frame3f.cos_theta(m))
-            dot_wi_m, dot_wo_m = dr.dot(si.wi, m), dr.dot(wo, m)
-            active = active & (dot_wi_m * cos_i > 0.0) & (dot_wo_m * cos_o > 0.0)
-            r, t = self.film(si, dr.abs(dot_wi_m), front, active)
-            p_r = self.lobe_choice(ctx, r, t, dr.abs(dot_wi_m), front, glossy=True)
-            if p_r is None:
-                return dr.zeros(mi.Spectrum), mi.Float(0.0)
-            alpha = self.alpha(si, active)
-            distr = mi.MicrofacetDistribution(mi.MicrofacetType.GGX, alpha, True)
-            d = distr.eval(m)
-            _, g2 = self.masking(alpha, si.wi, wo)
-            value_r = r * (d * g2 / (4.0 * dr.abs(cos_i)))
-            value_t = (
-                t
-                * self.radiance_scale(ctx, 1.0 / eta_it)
-                * dr.abs(d * g2 * eta_it * eta_it * dot_wi_m * dot_wo_m / (cos_i * dr.square(dot_wi_m + eta_it * dot_wo_m)))
-            )
-            value = dr.select(reflect, value_r, value_t)
-            jacobian = dr.abs(self.half_vector_jacobian(reflect, dot_wi_m, dot_wo_m, eta_it))
-            pdf = distr.pdf(dr.mulsign(si.wi, cos_i), m) * dr.select(reflect, p_r, 1.0 - p_r) * jacobian
-            return dr.select(active, mi.Spectrum(value), 0.0), dr.select(active, pdf, 0.0)
-
-        # -- Mitsuba's interface ------------------------------------------------
 
         def sample(self, ctx, si, sample1, sample2, active=True):
             if self.rough:
@@ -684,14 +721,10 @@ def _make_bsdf(symbolic):
             return self.eval_pdf_rough(ctx, si, wo, active)
 
         def to_string(self):
-            s = self.setup
-            source = "table" if s.table is not None else "solver"
-            thickness, roughness = (
-                "texture" if isinstance(v, mi.Texture) else f"{float(v[0]) if dr.is_array_v(v) else float(v):g}" for v in (self.thickness, self.roughness)
-            )
-            return (
-                f"IridFilm[layer={s.layer}, thickness_nm={thickness}, roughness={roughness}, "
-                f"{source}, {'transmissive' if self.transmissive else 'opaque'}]"
-            )
+            return self._description()
 
+    for piece in _PIECES:
+        for name, value in vars(piece).items():
+            if not name.startswith("__"):
+                setattr(IridFilm, name, value)
     return IridFilm

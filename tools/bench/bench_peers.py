@@ -405,7 +405,22 @@ def process_bake_rows(args, failures):
 
 
 def write_report(path, args, general, bake, failures, findings, command, process_bake=(), incoherent=()):
-    lines = [
+    lines = _report_header(args, command)
+    lines += _general_section(args, general)
+    if incoherent:
+        lines += _incoherent_section(args, incoherent)
+    lines += _bake_section(args, bake)
+    if process_bake:
+        lines += _process_bake_section(args, process_bake)
+    lines += _agreement_section(args, failures, findings)
+    tmp = path + ".tmp"
+    with open(tmp, "w") as f:
+        f.write("\n".join(lines) + "\n")
+    os.replace(tmp, path)
+
+
+def _report_header(args, command):
+    return [
         "# irid against other TMM implementations",
         "",
         f"- Date: {datetime.datetime.now(datetime.timezone.utc):%Y-%m-%d %H:%M} UTC",
@@ -419,6 +434,11 @@ def write_report(path, args, general, bake, failures, findings, command, process
         "(higher means irid is faster). Times are the best of "
         f"{args.repeat} runs, without process start-up or I/O.",
         "",
+    ]
+
+
+def _general_section(args, general):
+    lines = [
         "## General evaluation: wavelength × angle grid",
         "",
         f"Wavelengths `{args.wavelengths}` nm × angles `{args.angles}` °. Byrnes' `tmm` is timed on every "
@@ -442,34 +462,41 @@ def write_report(path, args, general, bake, failures, findings, command, process
         f"**{worst:.1f}x** ({'met' if worst >= 20 else 'NOT met'}).",
         "",
     ]
-    if incoherent:
-        lines += [
-            "## Incoherent layers: wavelength × angle grid",
-            "",
-            f"The same grid on stacks with incoherent (thick) layers, against tmm-faster's `calc_incoherent` "
-            f"and Byrnes' `inc_tmm` (timed on every {args.byrnes_step}th wavelength and scaled per point). "
-            "coated-sheet is `luts/coated-sheet.toml`: a TiO2 film on a 1 mm incoherent fused-silica sheet "
-            "with MgF2 behind, in air.",
-            "",
-            "| stack | points | irid (ms) | calc_incoherent (ms) | ratio | inc_tmm (ms, scaled) | ratio "
-            "| max diff vs inc_tmm | vs calc_incoherent (R, T) |",
-            "|---|---:|---:|---:|---:|---:|---:|---:|---:|",
-        ]
-        for r in incoherent:
-            tc, fc = r["tmm cmp"], r["tmm-faster cmp"]
-            lines.append(
-                f"| {r['stack']} | {r['points']} | {r['irid'] * 1e3:.2f} | {r['tmm-faster'] * 1e3:.2f} | "
-                f"{r['tmm-faster'] / r['irid']:.1f}x | {r['tmm'] * 1e3:.0f} | {r['tmm'] / r['irid']:.0f}x | "
-                f"{max(tc['R'], tc['T']):.1e} | {fc['R']:.1e}, {fc['T']:.1e} |"
-            )
-        worst = min(r["tmm-faster"] / r["irid"] for r in incoherent)
-        lines += [
-            "",
-            f"Target: ≥ 10x calc_incoherent on the same {args.threads} threads. Lowest ratio in this run: "
-            f"**{worst:.1f}x** ({'met' if worst >= 10 else 'NOT met'}).",
-            "",
-        ]
+    return lines
+
+
+def _incoherent_section(args, incoherent):
+    lines = [
+        "## Incoherent layers: wavelength × angle grid",
+        "",
+        f"The same grid on stacks with incoherent (thick) layers, against tmm-faster's `calc_incoherent` "
+        f"and Byrnes' `inc_tmm` (timed on every {args.byrnes_step}th wavelength and scaled per point). "
+        "coated-sheet is `luts/coated-sheet.toml`: a TiO2 film on a 1 mm incoherent fused-silica sheet "
+        "with MgF2 behind, in air.",
+        "",
+        "| stack | points | irid (ms) | calc_incoherent (ms) | ratio | inc_tmm (ms, scaled) | ratio "
+        "| max diff vs inc_tmm | vs calc_incoherent (R, T) |",
+        "|---|---:|---:|---:|---:|---:|---:|---:|---:|",
+    ]
+    for r in incoherent:
+        tc, fc = r["tmm cmp"], r["tmm-faster cmp"]
+        lines.append(
+            f"| {r['stack']} | {r['points']} | {r['irid'] * 1e3:.2f} | {r['tmm-faster'] * 1e3:.2f} | "
+            f"{r['tmm-faster'] / r['irid']:.1f}x | {r['tmm'] * 1e3:.0f} | {r['tmm'] / r['irid']:.0f}x | "
+            f"{max(tc['R'], tc['T']):.1e} | {fc['R']:.1e}, {fc['T']:.1e} |"
+        )
+    worst = min(r["tmm-faster"] / r["irid"] for r in incoherent)
     lines += [
+        "",
+        f"Target: ≥ 10x calc_incoherent on the same {args.threads} threads. Lowest ratio in this run: "
+        f"**{worst:.1f}x** ({'met' if worst >= 10 else 'NOT met'}).",
+        "",
+    ]
+    return lines
+
+
+def _bake_section(args, bake):
+    lines = [
         "## Baking a full table: thickness × angle × wavelength",
         "",
         f"`irid bench --grid STACK --bake-nodes {args.bake_nodes}`: irid's baker (`lut::bake`) builds an rgb table of "
@@ -504,29 +531,36 @@ def write_report(path, args, general, bake, failures, findings, command, process
                   "table-only bake, which computes the same points as tmm-faster. Lowest ratio in this run: "
                   f"**{worst:.1f}x** ({'met' if worst >= 50 else 'NOT met'}). The checked bake, which also "
                   f"measures its own error, reaches {worst_checked:.1f}x at its lowest."]
-    if process_bake:
-        lines += [
-            "",
-            "## The default bake as a whole process",
-            "",
-            f"`irid bake STACK -o table.exr --thickness T0:T1 --resolution {args.process_bake}` as a whole process "
-            f"(best of {args.repeat}, RAYON_NUM_THREADS={args.threads}): start-up, the table's nodes, the bake check "
-            "(about 4x the table's points), the validation (each of its points a full 1 nm spectrum through "
-            "the general solver) and the file write. tmm-faster computes R and T at the written table's "
-            "thickness x angle nodes at every wavelength of the 1 nm integration, one call per thickness node.",
-            "",
-            "| stack | command | table points | validation points | bake check points | irid (s) | tmm-faster (s) | ratio |",
-            "|---|---|---:|---:|---:|---:|---:|---:|",
-        ]
-        for r in process_bake:
-            lines.append(
-                f"| {r['stack']} | `{r['command']}` | {r['points']} | {r['validation']} | {r['check']} | "
-                f"{r['irid']:.3f} | {r['tmm-faster']:.2f} | {r['tmm-faster'] / r['irid']:.1f}x |"
-            )
-        worst = min(r["tmm-faster"] / r["irid"] for r in process_bake)
-        lines += ["", f"Target: the default bake ≥ 20x tmm-faster. Lowest ratio in this run: **{worst:.1f}x** "
-                  f"({'met' if worst >= 20 else 'NOT met'})."]
-    lines += ["", "## Agreement", ""]
+    return lines
+
+
+def _process_bake_section(args, process_bake):
+    lines = [
+        "",
+        "## The default bake as a whole process",
+        "",
+        f"`irid bake STACK -o table.exr --thickness T0:T1 --resolution {args.process_bake}` as a whole process "
+        f"(best of {args.repeat}, RAYON_NUM_THREADS={args.threads}): start-up, the table's nodes, the bake check "
+        "(about 4x the table's points), the validation (each of its points a full 1 nm spectrum through "
+        "the general solver) and the file write. tmm-faster computes R and T at the written table's "
+        "thickness x angle nodes at every wavelength of the 1 nm integration, one call per thickness node.",
+        "",
+        "| stack | command | table points | validation points | bake check points | irid (s) | tmm-faster (s) | ratio |",
+        "|---|---|---:|---:|---:|---:|---:|---:|",
+    ]
+    for r in process_bake:
+        lines.append(
+            f"| {r['stack']} | `{r['command']}` | {r['points']} | {r['validation']} | {r['check']} | "
+            f"{r['irid']:.3f} | {r['tmm-faster']:.2f} | {r['tmm-faster'] / r['irid']:.1f}x |"
+        )
+    worst = min(r["tmm-faster"] / r["irid"] for r in process_bake)
+    lines += ["", f"Target: the default bake ≥ 20x tmm-faster. Lowest ratio in this run: **{worst:.1f}x** "
+              f"({'met' if worst >= 20 else 'NOT met'})."]
+    return lines
+
+
+def _agreement_section(args, failures, findings):
+    lines = ["", "## Agreement", ""]
     lines += [
         "Byrnes' `tmm` is the reference: irid's solver was verified against it, a disagreement with it "
         "beyond the tolerance fails this run. In the bake, it is evaluated at "
@@ -539,10 +573,7 @@ def write_report(path, args, general, bake, failures, findings, command, process
     if findings:
         lines += ["", "Where the other peers disagree with irid (and so with Byrnes' tmm); their timings are still shown:", ""]
         lines += [f"- {f}" for f in findings]
-    tmp = path + ".tmp"
-    with open(tmp, "w") as f:
-        f.write("\n".join(lines) + "\n")
-    os.replace(tmp, path)
+    return lines
 
 
 def main():

@@ -127,28 +127,13 @@ def colour_grid(n, d, angles, wavelengths):
     return peer_calls.colour_grid(n, d[1:-1], angles, wavelengths)
 
 
-def main():
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("-o", "--out", default="benches/results", help="directory of peers.md")
-    ap.add_argument("--threads", type=int, default=THREADS_DEFAULT)
-    ap.add_argument("--repeat", type=int, default=7)
-    ap.add_argument("--quick", action="store_true", help="small grids (a smoke test, not a measurement)")
-    args = ap.parse_args()
-    # Both thread pools read these once, at first use.
-    os.environ["OMP_NUM_THREADS"] = os.environ["RAYON_NUM_THREADS"] = str(args.threads)
-
-    from importlib.metadata import version
-
+def coherent_rows(irid, args, wavelengths, angles, step, failures, findings):
+    """irid.coherent against tmm-faster, colour-science (timed) and Byrnes'
+    tmm (on every step-th wavelength, scaled per point) on STACKS."""
     import numpy as np
     import tmm_faster
 
-    import irid
-
-    load = os.getloadavg()
-    step = 4 if args.quick else 20
-    wavelengths = np.arange(380.0, 781.0, 20.0 if args.quick else 1.0)
-    angles = np.arange(0.0, 90.0, 10.0 if args.quick else 1.0)
-    rows, failures, findings = [], [], []
+    rows = []
     for name, file, reversed_ in STACKS:
         n, d = arrays(irid, file, reversed_, wavelengths)
         mine_s, mine = best_of(args.repeat, lambda: irid.coherent(n, d, angles, wavelengths))
@@ -166,7 +151,13 @@ def main():
         rows.append((name, mine["R_avg"].size, mine_s, tf_s, col_s, by_s, diff, tf_diff))
         print(f"  {name:13s} irid {mine_s * 1e3:7.2f} ms   tmm-faster x{tf_s / mine_s:5.1f}   "
               f"colour x{col_s / mine_s:6.1f}   tmm x{by_s / mine_s:7.0f}", flush=True)
-    incoherent = incoherent_rows(irid, args, wavelengths, angles, step, failures, findings)
+    return rows
+
+
+def coherent_lines(rows, args, wavelengths, angles, step, load):
+    """The section's heading, the run's conditions and the irid.coherent
+    table, from coherent_rows' rows."""
+    from importlib.metadata import version
 
     cpu = "unknown"
     try:
@@ -212,16 +203,12 @@ def main():
         f"**{worst_tf:.1f}x** ({'met' if worst_tf >= 10 else 'NOT met'}); ≥ 1000x Byrnes' tmm, lowest "
         f"**{worst_tmm:.0f}x** ({'met' if worst_tmm >= 1000 else 'NOT met'}).",
     ]
-    lines += incoherent_lines(incoherent, args)
-    lines += [""]
-    lines += [f"- FAILED: {f}" for f in failures] or [
-        "- irid.coherent agrees with Byrnes' tmm, and irid.incoherent with Byrnes' inc_tmm, to 1e-9 at every "
-        "point compared."]
-    lines += [f"- {f}" for f in findings]
-    lines.append(END)
-    section = "\n".join(lines) + "\n"
+    return lines
 
-    path = Path(args.out) / "peers.md"
+
+def write_section(path, section):
+    """Puts ``section`` into peers.md at ``path`` in place of this script's
+    previous section, or appends it; returns the path."""
     path.parent.mkdir(parents=True, exist_ok=True)
     text = path.read_text() if path.exists() else "# irid against other TMM implementations\n"
     pattern = re.compile(re.escape(BEGIN) + ".*?" + re.escape(END) + "\n?", re.S)
@@ -229,6 +216,39 @@ def main():
     tmp = path.with_suffix(".md.tmp")
     tmp.write_text(text)
     os.replace(tmp, path)
+    return path
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("-o", "--out", default="benches/results", help="directory of peers.md")
+    ap.add_argument("--threads", type=int, default=THREADS_DEFAULT)
+    ap.add_argument("--repeat", type=int, default=7)
+    ap.add_argument("--quick", action="store_true", help="small grids (a smoke test, not a measurement)")
+    args = ap.parse_args()
+    # Both thread pools read these once, at first use.
+    os.environ["OMP_NUM_THREADS"] = os.environ["RAYON_NUM_THREADS"] = str(args.threads)
+
+    import numpy as np
+
+    import irid
+
+    load = os.getloadavg()
+    step = 4 if args.quick else 20
+    wavelengths = np.arange(380.0, 781.0, 20.0 if args.quick else 1.0)
+    angles = np.arange(0.0, 90.0, 10.0 if args.quick else 1.0)
+    failures, findings = [], []
+    rows = coherent_rows(irid, args, wavelengths, angles, step, failures, findings)
+    incoherent = incoherent_rows(irid, args, wavelengths, angles, step, failures, findings)
+    lines = coherent_lines(rows, args, wavelengths, angles, step, load)
+    lines += incoherent_lines(incoherent, args)
+    lines += [""]
+    lines += [f"- FAILED: {f}" for f in failures] or [
+        "- irid.coherent agrees with Byrnes' tmm, and irid.incoherent with Byrnes' inc_tmm, to 1e-9 at every "
+        "point compared."]
+    lines += [f"- {f}" for f in findings]
+    lines.append(END)
+    path = write_section(Path(args.out) / "peers.md", "\n".join(lines) + "\n")
     print(f"wrote {path}")
     for f in failures:
         print("FAILED:", f)
