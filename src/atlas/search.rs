@@ -31,6 +31,7 @@ use super::eval::Film;
 use super::{pack, Atlas, Image, MAX_CHARTS};
 use crate::color::delta_e2000_rgb;
 use crate::error::{Error, Result};
+use crate::sweep::Side;
 
 /// What the atlas must meet, at every point of the domain a table can
 /// follow (see the module docs).
@@ -48,8 +49,8 @@ pub struct Goal {
 pub struct SideRequest<'a> {
     /// The film as seen from this side.
     pub film: &'a Film,
-    /// 0: light from the ambient; 1: from the substrate.
-    pub side: u32,
+    /// Which side the light arrives from.
+    pub side: Side,
     /// The cos θ range (in the medium the light arrives from).
     pub cos: (f64, f64),
     /// What this side's charts must meet.
@@ -60,7 +61,7 @@ pub struct SideRequest<'a> {
 #[derive(Clone, Debug, PartialEq)]
 pub struct SideReport {
     /// The side.
-    pub side: u32,
+    pub side: Side,
     /// cos θ below which the integrated colour is aliased (see the module
     /// docs): the target is not sought there; 0 when nowhere.
     pub aliased_below: f64,
@@ -396,7 +397,7 @@ pub fn build(
 fn describe(skeleton: &Skeleton) -> String {
     format!(
         "side {}: {} piece(s) of cos θ{}{}{}",
-        skeleton.req.side,
+        skeleton.req.side.index(),
         skeleton.pieces.len(),
         if skeleton.corner.is_some() {
             ", a corner chart"
@@ -809,7 +810,7 @@ fn layout(skeleton: &Skeleton, goal: Goal, progress: &dyn Fn(&str)) -> Result<Ve
         }
         progress(&format!(
             "side {} cos θ {:.4}–{:.4}: {} band(s), {predicted} texels predicted{}",
-            skeleton.req.side,
+            skeleton.req.side.index(),
             piece.lo,
             piece.hi,
             bands.len(),
@@ -1238,8 +1239,13 @@ const SHRINK_BELOW: f64 = 0.3;
 
 fn chart_name(chart: &Chart) -> String {
     match chart.coords {
-        Coords::Band { c, .. } => format!("side {} band cos θ {:.4}–{:.4}", chart.side, c.lo, c.hi),
-        Coords::Corner { .. } => format!("side {} corner", chart.side),
+        Coords::Band { c, .. } => format!(
+            "side {} band cos θ {:.4}–{:.4}",
+            chart.side.index(),
+            c.lo,
+            c.hi
+        ),
+        Coords::Corner { .. } => format!("side {} corner", chart.side.index()),
     }
 }
 
@@ -1271,7 +1277,7 @@ fn unreachable_target(skeleton: &Skeleton, chart: &Chart, goal: Goal) -> Error {
         what,
         format!(
             "not reached within the size limits ({}×{} texels needed, at most {MAX_CHART_TEXELS} a chart) on side {} at {region}",
-            chart.rect.width, chart.rect.height, skeleton.req.side
+            chart.rect.width, chart.rect.height, skeleton.req.side.index()
         ),
     )
 }
@@ -1422,7 +1428,7 @@ impl Measurement {
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct SideMeasurement {
     /// The side.
-    pub side: u32,
+    pub side: Side,
     /// Every point of the side.
     pub all: Measurement,
     /// The points the target applies to: at or above the aliased strip's
@@ -1635,7 +1641,7 @@ mod tests {
 
     fn band(width: usize, height: usize) -> Chart {
         Chart {
-            side: 0,
+            side: Side::Front,
             optical: Optical { a: 0.5, floor: 0.5 },
             coords: Coords::Band {
                 p: LogAxis {

@@ -4,8 +4,8 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use anyhow::Result;
+use irid::lut::rough::{is_rough_table, RoughHeader, RoughLut};
 use irid::lut::{ColorInfo, Header, Lut};
-use irid::rough::file::{is_rough_table, RoughHeader, RoughLut};
 use irid::rough::slices::SliceError;
 
 #[derive(clap::Args)]

@@ -11,7 +11,7 @@ use exr::prelude::{
 };
 use serde_json::json;
 
-use super::{side_index, Export, Side, Texture, HEADER_VEC4, SHADERS, UNIFORM_VEC4};
+use super::{Export, Side, Texture, HEADER_VEC4, SHADERS, UNIFORM_VEC4};
 use crate::atlas::{Atlas, Chart, Coords, PARAMS_PER_CHART};
 use crate::atomic::{Output, OutputSet, Prepared, Replace};
 use crate::error::{Error, Result};
@@ -187,7 +187,7 @@ fn sides_json(export: &Export) -> serde_json::Value {
         Some(s) => {
             let seen = spec.seen_from(side);
             json!({
-                "index": side_index(side),
+                "index": side.index(),
                 "charts": s.charts,
                 "light_from": if side == Side::Front { "ambient" } else { "substrate" },
                 "stack": if side == Side::Front { "as written" } else { "reversed" },

@@ -33,7 +33,7 @@ use crate::atlas::Film;
 use crate::color::{Sampling, SpectralIntegrator, White};
 use crate::error::{Error, Result};
 use crate::optics::Stack;
-pub use crate::render::Side;
+pub use crate::sweep::Side;
 
 /// The largest texture side an atlas uses: WebGPU's default limit for 2D
 /// textures, which desktop GPUs exceed.
@@ -41,14 +41,6 @@ pub const MAX_SIZE: usize = 8192;
 /// The largest finite f16 value: a table holding more is not representable.
 pub const F16_MAX: f64 = 65504.0;
 pub use crate::atlas::LASING_BOUND;
-
-/// The side's number in the shader: 0 front, 1 back.
-pub fn side_index(side: Side) -> u32 {
-    match side {
-        Side::Front => 0,
-        Side::Back => 1,
-    }
-}
 
 /// The shaders, as committed in `shaders/` (the GLSL and HLSL forms are
 /// generated from the WGSL by `cargo run -p irid-gpu --bin gen-shaders`).
@@ -129,7 +121,12 @@ impl ExportSpec {
 
     /// Checks ranges and the stack; errors name the offending option.
     pub fn validate(&self) -> Result<()> {
-        crate::lut::check_film_domain(&self.stack, self.layer, self.thickness_nm, self.cos_theta)?;
+        crate::sweep::check_film_domain(
+            &self.stack,
+            self.layer,
+            self.thickness_nm,
+            self.cos_theta,
+        )?;
         check_target("max-error", self.max_error)?;
         if let Some(e) = self.back_max_error {
             check_target("back-max-error", e)?;
@@ -287,7 +284,7 @@ impl Export {
     /// `irid_film` as a GPU computes it from the f16 textures: R and T for
     /// light arriving from `side`.
     pub fn sample(&self, thickness_nm: f32, cos_theta: f32, side: Side) -> ([f32; 3], [f32; 3]) {
-        match crate::atlas::locate_f32(&self.uniform, thickness_nm, cos_theta, side_index(side)) {
+        match crate::atlas::locate_f32(&self.uniform, thickness_nm, cos_theta, side) {
             Some(t) => {
                 let uv = [
                     t[0] / self.atlas.width as f32,
@@ -459,7 +456,7 @@ fn side_requests<'a>(
         .zip(films)
         .map(|(&side, film)| SideRequest {
             film,
-            side: side_index(side),
+            side: side,
             cos: spec.cos_theta,
             goal: Goal {
                 max_abs: Some(spec.target(side)),
@@ -483,7 +480,7 @@ fn side_export(
     let own = charted.iter().position(|&s| s == side).unwrap_or(0);
     let m = &built.measured[own];
     let atlas = &built.atlas;
-    let chart_side = side_index(charted[own]);
+    let chart_side = charted[own];
     let charts: Vec<usize> = (0..atlas.charts.len())
         .filter(|&k| atlas.charts[k].side == chart_side)
         .collect();

@@ -22,6 +22,7 @@ use crate::color::SpectralIntegrator;
 use crate::error::{Error, Result};
 use crate::rough::slices::{self, MeasurePoints, Reference, RoughSlices, SliceError, SliceRequest};
 use crate::rough::{rough_reflectance, Quadrature, RoughTable};
+use crate::sweep::Side;
 
 pub use crate::rough::slices::GRAZING_COS;
 
@@ -154,7 +155,8 @@ impl RoughExport {
     /// for operation in f32: F_eff at (thickness, cos θ, roughness).
     pub fn sample(&self, thickness_nm: f32, cos_theta: f32, roughness: f32) -> [f32; 3] {
         let v = &self.uniform;
-        let Some(texel) = locate_f32(&v[ATLAS_OFFSET_F32..], thickness_nm, cos_theta, 0) else {
+        let Some(texel) = locate_f32(&v[ATLAS_OFFSET_F32..], thickness_nm, cos_theta, Side::Front)
+        else {
             return [0.0; 3];
         };
         let n = v[2];

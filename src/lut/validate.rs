@@ -5,7 +5,6 @@ use rand::{Rng, SeedableRng};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use super::bake::critical_cos;
 use super::sample::{channel_names, Lut};
 use super::Kind;
 use crate::atlas::search::scaled_error;
@@ -14,6 +13,7 @@ use crate::color::{delta_e2000_rgb, Sampling, SpectralIntegrator};
 use crate::error::{Error, Result};
 use crate::optics::lanes::SpectralWeights;
 use crate::optics::{solve_mixed, StackGrid};
+use crate::sweep::critical_cos;
 
 /// Error of a table against the solver. Arrays named `*_abs` have one
 /// entry per channel (in `channels` order); `*_de2000` have two entries,

@@ -52,9 +52,10 @@ use super::{rough_reflectance, MuGrid, Quadrature, RoughTable};
 use crate::atlas::{pack, Atlas, Chart, Coords, Film, Image};
 use crate::color::{delta_e2000_rgb, SpectralIntegrator};
 use crate::error::{Error, Result};
-use crate::lut::rgb_at_nodes;
 use crate::optics::Stack;
 use crate::simd::simd_dispatch;
+use crate::sweep::rgb_at_nodes;
+use crate::sweep::Side;
 
 /// Slices of the first count tried.
 const START_SLICES: usize = 5;
@@ -186,7 +187,7 @@ impl RoughSlices {
     /// computes it: the chart by the atlas's rule, one bilinear fetch in each
     /// of the two slices around √r · (S − 1), blended linearly.
     pub fn sample(&self, d: f64, c: f64, r: f64) -> [f64; 3] {
-        let Some(k) = self.atlas.chart_for(d, c, 0) else {
+        let Some(k) = self.atlas.chart_for(d, c, Side::Front) else {
             return [0.0; 3];
         };
         let chart = &self.atlas.charts[k];
@@ -406,7 +407,7 @@ pub fn build(
         .atlas
         .charts
         .iter()
-        .filter(|c| c.side == 0)
+        .filter(|c| c.side == Side::Front)
         .copied()
         .collect();
     if smooth_charts.is_empty() {
@@ -586,7 +587,7 @@ fn second_difference_error(
         .charts
         .iter()
         .enumerate()
-        .filter(|(_, c)| c.side == 0)
+        .filter(|(_, c)| c.side == Side::Front)
         .collect();
     fronts
         .par_iter()
@@ -598,7 +599,7 @@ fn second_difference_error(
             values.extend(tables.iter().map(|t| filler.values(t, &stencils)));
             let mut worst = 0.0f64;
             for (k, &(d, c)) in nodes.iter().enumerate() {
-                if c < GRAZING_COS || atlas.chart_for(d, c, 0) != Some(owner) {
+                if c < GRAZING_COS || atlas.chart_for(d, c, Side::Front) != Some(owner) {
                     continue;
                 }
                 for w in values.windows(3) {
@@ -646,9 +647,9 @@ fn grown_charts(
         .charts
         .par_iter()
         .enumerate()
-        .filter(|(_, c)| c.side == 0)
+        .filter(|(_, c)| c.side == Side::Front)
         .map(|(k, chart)| {
-            let serves = |d: f64, c: f64| atlas.chart_for(d, c, 0) == Some(k);
+            let serves = |d: f64, c: f64| atlas.chart_for(d, c, Side::Front) == Some(k);
             let mut chart = *chart;
             for _ in 0..CHART_ROUNDS {
                 let (eu, ev) = midpoint_errors(filler, tables, &chart, &serves);
@@ -893,7 +894,7 @@ pub fn cos_span(atlas: &Atlas) -> (f64, f64) {
     atlas
         .charts
         .iter()
-        .filter(|c| c.side == 0)
+        .filter(|c| c.side == Side::Front)
         .map(|c| match c.coords {
             Coords::Band { c, .. } => (c.lo, c.hi),
             Coords::Corner { radius, .. } => (0.0, radius.min(1.0)),
@@ -1114,7 +1115,7 @@ mod tests {
         };
         let sides = [SideRequest {
             film: &film,
-            side: 0,
+            side: Side::Front,
             cos,
             goal,
         }];
