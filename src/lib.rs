@@ -20,6 +20,7 @@ pub mod optics;
 pub mod render;
 pub mod rough;
 mod simd;
+pub mod stats;
 pub mod sweep;
 pub mod web;
 

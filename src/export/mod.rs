@@ -21,10 +21,10 @@ mod texture;
 
 pub use crate::atlas::{Atlas, Chart, HEADER_VEC4, MAX_CHARTS, PARAMS_PER_CHART, UNIFORM_VEC4};
 pub use files::{declare_dir, fill_dir, film_json, write_dir, FILM_FORMAT, FILM_VERSION};
-pub use measure::{measurement_points, ExportError, DEFAULT_POINTS, POINTS_SEED};
+pub use measure::{measurement_points, DEFAULT_POINTS, POINTS_SEED};
 pub use rough::{
-    rough_exact_at, RoughError, RoughExport, RoughPoints, GRAZING_COS, ROUGH_AXIS_POINTS,
-    ROUGH_GRAZING_POINTS, ROUGH_SEED, ROUGH_SHADERS, ROUGH_VEC4, TILING_VEC4,
+    rough_exact_at, RoughExport, RoughPoints, GRAZING_COS, ROUGH_AXIS_POINTS, ROUGH_GRAZING_POINTS,
+    ROUGH_SEED, ROUGH_SHADERS, ROUGH_VEC4, TILING_VEC4,
 };
 pub use texture::{RowCheck, Texture};
 
@@ -33,6 +33,7 @@ use crate::atlas::Film;
 use crate::color::{Sampling, SpectralIntegrator, White};
 use crate::error::{Error, Result};
 use crate::optics::Stack;
+use crate::stats::{AtlasFigures, ColourFigures};
 pub use crate::sweep::Side;
 
 /// The largest texture side an atlas uses: WebGPU's default limit for 2D
@@ -228,9 +229,9 @@ pub struct SideExport {
     /// What the GPU computes (f32 texture coordinates, bilinear with f32
     /// weights on f16 texels) against the exact solver on the stack seen
     /// from this side, over every measured point.
-    pub error: ExportError,
+    pub error: ColourFigures,
     /// The same over the points below `aliased_below` (none when 0).
-    pub aliased_error: Option<ExportError>,
+    pub aliased_error: Option<ColourFigures>,
     /// The cos θ band over which a dispersive ambient's critical angle
     /// moves (light from the denser side), where the target is not sought
     /// and its charts take a fixed budget of texels
@@ -240,16 +241,16 @@ pub struct SideExport {
     /// The error over the measured points where the target is sought
     /// (above the aliased strip, outside the critical band), when the side
     /// has either.
-    pub sought_error: Option<ExportError>,
+    pub sought_error: Option<ColourFigures>,
     /// The error over points of the band's own
     /// ([`crate::atlas::search::CRITICAL_BAND_POINTS`], seed
     /// [`crate::atlas::search::CRITICAL_BAND_SEED`]), when it has one.
-    pub critical_error: Option<ExportError>,
+    pub critical_error: Option<ColourFigures>,
     /// The most a filter with 1/256 weight steps adds to `error.max_abs`:
     /// the largest neighbouring-texel step of its charts / 256.
     pub weights_8bit_extra: f64,
     /// The error through the 16-bit PNGs, when asked for.
-    pub png_error: Option<ExportError>,
+    pub png_error: Option<ColourFigures>,
 }
 
 /// A finished export: the atlas, its two textures, and each side's error.
@@ -504,8 +505,8 @@ fn side_export(
         sought_error: (m.aliased.points > 0 || m.critical.points > 0)
             .then(|| export_error(&m.resolved)),
         critical_band: built.sides[own].unsought_band,
-        critical_error: built.sides[own].unsought_band.map(|_| ExportError {
-            seed: crate::atlas::search::CRITICAL_BAND_SEED,
+        critical_error: built.sides[own].unsought_band.map(|_| ColourFigures {
+            seed: Some(crate::atlas::search::CRITICAL_BAND_SEED),
             ..export_error(&m.critical)
         }),
         weights_8bit_extra: f64::from(step) / 256.0,
@@ -513,23 +514,23 @@ fn side_export(
     }
 }
 
-/// An [`ExportError`] from the atlas search's measurement.
-fn export_error(m: &crate::atlas::search::Measurement) -> ExportError {
+/// An export side's figures from the atlas search's measurement.
+fn export_error(m: &AtlasFigures) -> ColourFigures {
     // An export's atlas holds R and T in RGB: six channels.
     let six = |v: &[f64]| -> [f64; 6] { std::array::from_fn(|k| v.get(k).copied().unwrap_or(0.0)) };
-    ExportError {
+    ColourFigures {
+        points: m.points,
         max_abs: six(&m.max_abs),
         p99_abs: six(&m.p99_abs),
         mean_abs: six(&m.mean_abs),
-        max_delta_e00: m.max_de,
-        mean_delta_e00: m.mean_de,
-        points: m.points,
-        seed: POINTS_SEED,
+        max_delta_e00: m.max_delta_e00,
+        mean_delta_e00: m.mean_delta_e00,
+        seed: Some(POINTS_SEED),
         worst_point: m.worst_point,
     }
 }
 
-fn aliased_error(m: &SideMeasurement) -> Option<ExportError> {
+fn aliased_error(m: &SideMeasurement) -> Option<ColourFigures> {
     (m.aliased.points > 0).then(|| export_error(&m.aliased))
 }
 
@@ -582,7 +583,7 @@ fn png_errors(export: &mut Export) -> Result<()> {
                 [r[0], r[1], r[2], t[0], t[1], t[2]].map(f64::from)
             })
             .collect();
-        let m = crate::atlas::search::Measurement::of(&points, &got, &exact);
+        let m = crate::atlas::search::figures(&points, &got.concat(), &exact.concat(), 6, true);
         export.sides[k].png_error = Some(export_error(&m));
     }
     export.png_scale = Some(scale);

@@ -18,7 +18,8 @@ use crate::atlas::{Atlas, Coords, Image};
 use crate::color::{Sampling, SpectralIntegrator, White};
 use crate::error::{Error, Result};
 use crate::optics::Stack;
-use crate::rough::slices::{self, slice_roughness, RoughSlices, SliceError, GRAZING_COS};
+use crate::rough::slices::{self, slice_roughness, RoughSlices, GRAZING_COS};
+use crate::stats::RoughFigures;
 use crate::sweep::Side;
 
 use super::file::{ascii_json, attribute_text, first_header, read_planes, write_layer};
@@ -46,9 +47,9 @@ pub struct RoughErrorInfo {
     /// differences.
     pub blend_error: f64,
     /// At random points with cos θ ≥ `grazing_cos`.
-    pub measured: SliceError,
+    pub measured: RoughFigures,
     /// At random points with cos θ < `grazing_cos`.
-    pub grazing: SliceError,
+    pub grazing: RoughFigures,
 }
 
 /// Everything a reader needs besides the pixels.
@@ -150,7 +151,7 @@ impl RoughLut {
     /// from the PCG64 stream of `seed` (see
     /// [`slices::measure_sampler`]): (cos θ ≥ the grazing strip,
     /// below it).
-    pub fn validate(&self, seed: u64) -> Result<(SliceError, SliceError)> {
+    pub fn validate(&self, seed: u64) -> Result<(RoughFigures, RoughFigures)> {
         slices::measure_sampler(
             &self.header.stack,
             self.header.layer,
