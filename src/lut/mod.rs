@@ -257,53 +257,58 @@ impl BakeSpec {
                     self.fixed_bake_bytes([thickness, angle, wavelength]),
                 )?;
             }
-            Resolution::MaxError(e) => {
-                // An infinite absolute target stands for none, beside a
-                // colour target.
-                let colour_only = e == f64::INFINITY && self.max_de.is_some();
-                if !(e > 0.0 && (e.is_finite() || colour_only)) {
-                    return Err(Error::invalid(
-                        "max-error",
-                        format!("must be a positive number, got {e:e}"),
-                    ));
-                }
-                if let Some(de) = self.max_de {
-                    if self.kind == Kind::Spectral {
-                        return Err(Error::invalid(
-                            "max-de",
-                            "applies to rgb tables (a spectral table has no colour to target)",
-                        ));
-                    }
-                    if !(de > 0.0 && de.is_finite()) {
-                        return Err(Error::invalid(
-                            "max-de",
-                            format!("must be a positive number, got {de:e}"),
-                        ));
-                    }
-                    if self.layout() != Layout::Atlas {
-                        return Err(Error::invalid(
-                            "max-de",
-                            "needs the atlas layout (a grid refines for max-error only)",
-                        ));
-                    }
-                }
-                let floor = storage_error_floor(self.half);
-                if e < floor {
-                    return Err(Error::invalid(
-                        "max-error",
-                        format!(
-                            "{e:e} is below what {} storage resolves: its values near 1 are {floor:e} apart",
-                            if self.half { "f16" } else { "f32" }
-                        ),
-                    ));
-                }
-                if !self.check {
-                    return Err(Error::invalid(
-                        "no-check",
-                        "needs a fixed resolution: with max-error the bake check is how the grid is chosen",
-                    ));
-                }
+            Resolution::MaxError(e) => self.validate_target(e)?,
+        }
+        Ok(())
+    }
+
+    /// Checks an error target `e` (and the colour target beside it)
+    /// against the kind, the layout and the storage.
+    fn validate_target(&self, e: f64) -> Result<()> {
+        // An infinite absolute target stands for none, beside a
+        // colour target.
+        let colour_only = e == f64::INFINITY && self.max_de.is_some();
+        if !(e > 0.0 && (e.is_finite() || colour_only)) {
+            return Err(Error::invalid(
+                "max-error",
+                format!("must be a positive number, got {e:e}"),
+            ));
+        }
+        if let Some(de) = self.max_de {
+            if self.kind == Kind::Spectral {
+                return Err(Error::invalid(
+                    "max-de",
+                    "applies to rgb tables (a spectral table has no colour to target)",
+                ));
             }
+            if !(de > 0.0 && de.is_finite()) {
+                return Err(Error::invalid(
+                    "max-de",
+                    format!("must be a positive number, got {de:e}"),
+                ));
+            }
+            if self.layout() != Layout::Atlas {
+                return Err(Error::invalid(
+                    "max-de",
+                    "needs the atlas layout (a grid refines for max-error only)",
+                ));
+            }
+        }
+        let floor = storage_error_floor(self.half);
+        if e < floor {
+            return Err(Error::invalid(
+                "max-error",
+                format!(
+                    "{e:e} is below what {} storage resolves: its values near 1 are {floor:e} apart",
+                    if self.half { "f16" } else { "f32" }
+                ),
+            ));
+        }
+        if !self.check {
+            return Err(Error::invalid(
+                "no-check",
+                "needs a fixed resolution: with max-error the bake check is how the grid is chosen",
+            ));
         }
         Ok(())
     }
