@@ -10,9 +10,11 @@ use std::path::{Path, PathBuf};
 
 #[cfg(feature = "cli")]
 use common::irid;
+use common::Scratch;
 use irid::color::Sampling;
 use irid::lut::{bake, validate, BakeSpec, Kind, Layout, Lut, Resolution};
-use irid::optics::{Layer, Material, Stack};
+use irid::optics::Stack;
+use rand::{Rng, SeedableRng};
 
 fn luts_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("luts")
