@@ -93,11 +93,7 @@ pub struct Summary {
 /// every number, and the worst point is chosen by each point's largest
 /// error, NaN left out.
 pub fn summarize(abs: &[f64], channels: usize, de: &[f64], colours: usize) -> Summary {
-    let n = if channels == 0 {
-        0
-    } else {
-        abs.len() / channels
-    };
+    let n = abs.len().checked_div(channels).unwrap_or(0);
     let mut out = Summary {
         points: n,
         max_abs: vec![0.0; channels],

@@ -457,7 +457,7 @@ fn side_requests<'a>(
         .zip(films)
         .map(|(&side, film)| SideRequest {
             film,
-            side: side,
+            side,
             cos: spec.cos_theta,
             goal: Goal {
                 max_abs: Some(spec.target(side)),
