@@ -21,6 +21,8 @@ pub mod optics;
 pub mod render;
 pub mod rough;
 mod simd;
+pub mod stats;
+pub mod sweep;
 pub mod web;
 
 pub use error::{Error, Result};

@@ -10,10 +10,11 @@ mod common;
 use std::path::Path;
 
 use irid::color::SpectralIntegrator;
+use irid::lut::rough::bake_rough;
+use irid::lut::RoughLut;
 use irid::lut::{bake, BakeSpec};
 use irid::optics::Stack;
-use irid::rough::file::bake_rough;
-use irid::rough::{rough_reflectance, Quadrature, RoughLut};
+use irid::rough::{rough_reflectance, Quadrature};
 use rand::{Rng, SeedableRng};
 
 const TARGET: f64 = 2e-3;

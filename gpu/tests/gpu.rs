@@ -16,8 +16,7 @@ use std::path::{Path, PathBuf};
 
 use harness::{bind, glsl_program, gpu, program, read_dir, run, wgsl_program, Gpu, Source};
 use irid::export::{
-    critical_cos, exact_at, export, measurement_points, side_index, write_dir, Export, ExportSpec,
-    Side,
+    critical_cos, exact_at, export, measurement_points, write_dir, Export, ExportSpec, Side,
 };
 use irid::optics::Stack;
 
@@ -141,7 +140,7 @@ fn compare(case: &Case, side: Side, got: &[[f32; 6]]) -> (f64, [f64; 6]) {
         .points
         .iter()
         .zip(got)
-        .zip(&case.exact[side_index(side) as usize])
+        .zip(&case.exact[side.index() as usize])
     {
         let (r, t) = case.export.sample(p[0], p[1], side);
         let cpu = [r[0], r[1], r[2], t[0], t[1], t[2]];
@@ -177,7 +176,7 @@ fn check(gpu: &Gpu, case: &Case, language: &str, source: Source) {
     let bound = bind(gpu, &files);
     let program = program(gpu, &bound.layout, source);
     for side in [Side::Front, Side::Back] {
-        let (got, _) = run(gpu, &program, &bound, &case.points, 1, side_index(side));
+        let (got, _) = run(gpu, &program, &bound, &case.points, 1, side.index());
         let (emulation, exact) = compare(case, side, &got);
         assert!(
             emulation <= EMULATION_TOLERANCE,

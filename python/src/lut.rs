@@ -269,7 +269,7 @@ impl PyLut {
     /// before a pixel is read.
     #[staticmethod]
     fn load(py: Python<'_>, path: PathBuf) -> PyResult<Self> {
-        if irid::rough::file::is_rough_table(&path) {
+        if irid::lut::rough::is_rough_table(&path) {
             return Err(invalid(
                 path.display().to_string(),
                 "a rough table (irid bake --rough): irid.RoughLut.load reads it",

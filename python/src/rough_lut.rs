@@ -6,7 +6,8 @@ use std::path::PathBuf;
 use pyo3::prelude::*;
 use rayon::prelude::*;
 
-use irid::rough::{check_roughness, RoughLut};
+use irid::lut::RoughLut;
+use irid::rough::check_roughness;
 
 use crate::arrays::{array, broadcast_reals, json_to_py, position};
 use crate::lut::SAMPLE_BLOCK;

@@ -14,6 +14,8 @@
 use serde::{Deserialize, Serialize};
 use std::f64::consts::FRAC_PI_2;
 
+use crate::sweep::Side;
+
 /// The optical thickness factor s(c) of one side of a film.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Optical {
@@ -291,9 +293,10 @@ pub struct Rect {
 /// One chart of an atlas.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Chart {
-    /// 0: light from the ambient (the stack as written); 1: from the
-    /// substrate (the stack reversed, cos θ in the substrate).
-    pub side: u32,
+    /// Which side the light arrives from: the front (the stack as
+    /// written) or the back (the stack reversed, cos θ in the substrate);
+    /// 0 or 1 in files and the shaders' uniforms.
+    pub side: Side,
     /// s(c) of that side.
     pub optical: Optical,
     /// The coordinates.
@@ -373,13 +376,11 @@ impl Chart {
         }
     }
 
-    /// Its parameters are finite and within their ranges (side 0 or 1, a
-    /// floor in (0, 1], increasing axes inside their domains).
+    /// Its parameters are finite and within their ranges (a floor in
+    /// (0, 1], increasing axes inside their domains; the side is 0 or 1 by
+    /// its type, read from a file through [`Side`]'s `TryFrom<u32>`).
     pub fn check(&self) -> Result<(), String> {
         let o = self.optical;
-        if self.side > 1 {
-            return Err(format!("side {}, expected 0 or 1", self.side));
-        }
         if !(o.a >= 0.0 && o.a.is_finite() && o.floor > 0.0 && o.floor <= 1.0) {
             return Err(format!("optical a {} floor {}", o.a, o.floor));
         }
@@ -429,7 +430,7 @@ impl Chart {
             r.y as f64,
             r.width as f64,
             r.height as f64,
-            f64::from(self.side),
+            f64::from(self.side.index()),
             kind,
             self.optical.a,
             self.optical.floor,
@@ -503,7 +504,7 @@ mod tests {
 
     fn band(offset: f64, anchor: f64, lo: f64, hi: f64) -> Chart {
         Chart {
-            side: 0,
+            side: Side::Front,
             optical: Optical::new(1.0, 1.33),
             coords: Coords::Band {
                 p: LogAxis {

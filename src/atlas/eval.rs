@@ -5,9 +5,9 @@ use rayon::prelude::*;
 use super::chart::{Chart, Coords, Optical};
 use crate::color::SpectralIntegrator;
 use crate::error::{Error, Result};
-use crate::lut::{Kind, Prepared, Row};
 use crate::optics::lanes::SpectralWeights;
 use crate::optics::Stack;
+use crate::sweep::{Kind, Prepared, Row};
 
 /// |R| or |T| beyond which a gain film is taken to be at a lasing pole: a
 /// hundredfold amplification is no film a renderer shows, and near a pole

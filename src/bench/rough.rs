@@ -9,8 +9,8 @@ use std::time::Instant;
 use super::stacks::BenchStack;
 use super::tables::{spec, RGB_TARGET};
 use crate::error::Result;
+use crate::lut::rough::bake_rough;
 use crate::lut::{bake, Kind, Layout};
-use crate::rough::file::bake_rough;
 
 /// The rough tables' error target (the issue's: 2e-3).
 pub const ROUGH_TARGET: f64 = 2e-3;

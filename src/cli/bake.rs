@@ -6,11 +6,11 @@ use std::time::Instant;
 
 use anyhow::{anyhow, bail, Context, Result};
 use irid::atomic::OutputSet;
+use irid::lut::rough::bake_rough;
 use irid::lut::{
     bake_with_progress, validate, BakeSpec, Kind, Layout, Resolution, VALIDATION_SEED,
 };
 use irid::optics::Stack;
-use irid::rough::file::bake_rough;
 
 use super::args::{parse_choice, parse_range, FilmArgs};
 

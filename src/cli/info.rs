@@ -4,9 +4,9 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use anyhow::Result;
+use irid::lut::rough::{is_rough_table, RoughHeader, RoughLut};
 use irid::lut::{ColorInfo, Header, Lut};
-use irid::rough::file::{is_rough_table, RoughHeader, RoughLut};
-use irid::rough::slices::SliceError;
+use irid::stats::RoughFigures;
 
 #[derive(clap::Args)]
 pub struct Args {
@@ -289,7 +289,7 @@ pub fn print_rough_error(h: &RoughHeader) {
 }
 
 /// One line of measured figures.
-pub fn say_slice_error(out: &mut String, name: &str, e: &SliceError) {
+pub fn say_slice_error(out: &mut String, name: &str, e: &RoughFigures) {
     if e.points == 0 {
         super::say!(out, "  {name}: no points");
         return;

@@ -28,7 +28,7 @@ pub fn run(args: Args) -> Result<ExitCode> {
     if let Some(e) = args.max_error {
         anyhow::ensure!(e >= 0.0, "--max-error {e}: must be ≥ 0");
     }
-    if irid::rough::file::is_rough_table(&args.lut) {
+    if irid::lut::rough::is_rough_table(&args.lut) {
         return run_rough(&args);
     }
     let lut = Lut::load(&args.lut)?;
@@ -62,7 +62,7 @@ pub fn run(args: Args) -> Result<ExitCode> {
 /// reflectance at random points (its own draw: --points is not used; the
 /// count is the measurement's, see docs/lut-format.md).
 fn run_rough(args: &Args) -> Result<ExitCode> {
-    let rough = irid::rough::RoughLut::load(&args.lut)?;
+    let rough = irid::lut::RoughLut::load(&args.lut)?;
     let (measured, grazing) = rough.validate(args.seed)?;
     let grazing_cos = rough.header().error.grazing_cos;
     if args.json {

@@ -11,7 +11,7 @@ use exr::prelude::{
 };
 use serde_json::json;
 
-use super::{side_index, Export, Side, Texture, HEADER_VEC4, SHADERS, UNIFORM_VEC4};
+use super::{Export, Side, Texture, HEADER_VEC4, SHADERS, UNIFORM_VEC4};
 use crate::atlas::{Atlas, Chart, Coords, PARAMS_PER_CHART};
 use crate::atomic::{Output, OutputSet, Prepared, Replace};
 use crate::error::{Error, Result};
@@ -112,7 +112,7 @@ fn write_png(texture: &Texture, scale: f64, path: &Path) -> Result<()> {
 }
 
 /// An error's figures as film.json states them: its fields by name (a
-/// side's `ExportError`, the rough table's `RoughError`).
+/// side's and the rough table's [`crate::stats::Figures`]).
 pub(super) fn error_json<E: serde::Serialize>(e: &E) -> serde_json::Value {
     // Numbers and arrays of numbers: nothing that can fail to serialize.
     serde_json::to_value(e).unwrap_or(serde_json::Value::Null)
@@ -187,7 +187,7 @@ fn sides_json(export: &Export) -> serde_json::Value {
         Some(s) => {
             let seen = spec.seen_from(side);
             json!({
-                "index": side_index(side),
+                "index": side.index(),
                 "charts": s.charts,
                 "light_from": if side == Side::Front { "ambient" } else { "substrate" },
                 "stack": if side == Side::Front { "as written" } else { "reversed" },
@@ -235,22 +235,22 @@ fn errors_json(export: &Export) -> serde_json::Value {
         let mut e = error_json(&side.error);
         e["target_max_abs"] = json!(export.spec.target(side.side));
         e["weights_8bit_extra_max_abs"] = json!(side.weights_8bit_extra);
-        e["aliased"] = side
-            .aliased_error
-            .as_ref()
-            .map_or(serde_json::Value::Null, error_json::<super::ExportError>);
-        e["sought"] = side
-            .sought_error
-            .as_ref()
-            .map_or(serde_json::Value::Null, error_json::<super::ExportError>);
-        e["critical_band"] = side
-            .critical_error
-            .as_ref()
-            .map_or(serde_json::Value::Null, error_json::<super::ExportError>);
-        e["png"] = side
-            .png_error
-            .as_ref()
-            .map_or(serde_json::Value::Null, error_json::<super::ExportError>);
+        e["aliased"] = side.aliased_error.as_ref().map_or(
+            serde_json::Value::Null,
+            error_json::<crate::stats::ColourFigures>,
+        );
+        e["sought"] = side.sought_error.as_ref().map_or(
+            serde_json::Value::Null,
+            error_json::<crate::stats::ColourFigures>,
+        );
+        e["critical_band"] = side.critical_error.as_ref().map_or(
+            serde_json::Value::Null,
+            error_json::<crate::stats::ColourFigures>,
+        );
+        e["png"] = side.png_error.as_ref().map_or(
+            serde_json::Value::Null,
+            error_json::<crate::stats::ColourFigures>,
+        );
         error[side_name(side.side)] = e;
     }
     error

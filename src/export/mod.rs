@@ -21,10 +21,10 @@ mod texture;
 
 pub use crate::atlas::{Atlas, Chart, HEADER_VEC4, MAX_CHARTS, PARAMS_PER_CHART, UNIFORM_VEC4};
 pub use files::{declare_dir, fill_dir, film_json, write_dir, FILM_FORMAT, FILM_VERSION};
-pub use measure::{measurement_points, ExportError, DEFAULT_POINTS, POINTS_SEED};
+pub use measure::{measurement_points, DEFAULT_POINTS, POINTS_SEED};
 pub use rough::{
-    rough_exact_at, RoughError, RoughExport, RoughPoints, GRAZING_COS, ROUGH_AXIS_POINTS,
-    ROUGH_GRAZING_POINTS, ROUGH_SEED, ROUGH_SHADERS, ROUGH_VEC4, TILING_VEC4,
+    rough_exact_at, RoughExport, RoughPoints, GRAZING_COS, ROUGH_AXIS_POINTS, ROUGH_GRAZING_POINTS,
+    ROUGH_SEED, ROUGH_SHADERS, ROUGH_VEC4, TILING_VEC4,
 };
 pub use texture::{RowCheck, Texture};
 
@@ -33,7 +33,8 @@ use crate::atlas::Film;
 use crate::color::{Sampling, SpectralIntegrator, White};
 use crate::error::{Error, Result};
 use crate::optics::Stack;
-pub use crate::render::Side;
+use crate::stats::{AtlasFigures, ColourFigures};
+pub use crate::sweep::Side;
 
 /// The largest texture side an atlas uses: WebGPU's default limit for 2D
 /// textures, which desktop GPUs exceed.
@@ -41,14 +42,6 @@ pub const MAX_SIZE: usize = 8192;
 /// The largest finite f16 value: a table holding more is not representable.
 pub const F16_MAX: f64 = 65504.0;
 pub use crate::atlas::LASING_BOUND;
-
-/// The side's number in the shader: 0 front, 1 back.
-pub fn side_index(side: Side) -> u32 {
-    match side {
-        Side::Front => 0,
-        Side::Back => 1,
-    }
-}
 
 /// The shaders, as committed in `shaders/` (the GLSL and HLSL forms are
 /// generated from the WGSL by `cargo run -p irid-gpu --bin gen-shaders`).
@@ -129,7 +122,12 @@ impl ExportSpec {
 
     /// Checks ranges and the stack; errors name the offending option.
     pub fn validate(&self) -> Result<()> {
-        crate::lut::check_film_domain(&self.stack, self.layer, self.thickness_nm, self.cos_theta)?;
+        crate::sweep::check_film_domain(
+            &self.stack,
+            self.layer,
+            self.thickness_nm,
+            self.cos_theta,
+        )?;
         check_target("max-error", self.max_error)?;
         if let Some(e) = self.back_max_error {
             check_target("back-max-error", e)?;
@@ -231,9 +229,9 @@ pub struct SideExport {
     /// What the GPU computes (f32 texture coordinates, bilinear with f32
     /// weights on f16 texels) against the exact solver on the stack seen
     /// from this side, over every measured point.
-    pub error: ExportError,
+    pub error: ColourFigures,
     /// The same over the points below `aliased_below` (none when 0).
-    pub aliased_error: Option<ExportError>,
+    pub aliased_error: Option<ColourFigures>,
     /// The cos θ band over which a dispersive ambient's critical angle
     /// moves (light from the denser side), where the target is not sought
     /// and its charts take a fixed budget of texels
@@ -243,16 +241,16 @@ pub struct SideExport {
     /// The error over the measured points where the target is sought
     /// (above the aliased strip, outside the critical band), when the side
     /// has either.
-    pub sought_error: Option<ExportError>,
+    pub sought_error: Option<ColourFigures>,
     /// The error over points of the band's own
     /// ([`crate::atlas::search::CRITICAL_BAND_POINTS`], seed
     /// [`crate::atlas::search::CRITICAL_BAND_SEED`]), when it has one.
-    pub critical_error: Option<ExportError>,
+    pub critical_error: Option<ColourFigures>,
     /// The most a filter with 1/256 weight steps adds to `error.max_abs`:
     /// the largest neighbouring-texel step of its charts / 256.
     pub weights_8bit_extra: f64,
     /// The error through the 16-bit PNGs, when asked for.
-    pub png_error: Option<ExportError>,
+    pub png_error: Option<ColourFigures>,
 }
 
 /// A finished export: the atlas, its two textures, and each side's error.
@@ -287,7 +285,7 @@ impl Export {
     /// `irid_film` as a GPU computes it from the f16 textures: R and T for
     /// light arriving from `side`.
     pub fn sample(&self, thickness_nm: f32, cos_theta: f32, side: Side) -> ([f32; 3], [f32; 3]) {
-        match crate::atlas::locate_f32(&self.uniform, thickness_nm, cos_theta, side_index(side)) {
+        match crate::atlas::locate_f32(&self.uniform, thickness_nm, cos_theta, side) {
             Some(t) => {
                 let uv = [
                     t[0] / self.atlas.width as f32,
@@ -459,7 +457,7 @@ fn side_requests<'a>(
         .zip(films)
         .map(|(&side, film)| SideRequest {
             film,
-            side: side_index(side),
+            side,
             cos: spec.cos_theta,
             goal: Goal {
                 max_abs: Some(spec.target(side)),
@@ -483,7 +481,7 @@ fn side_export(
     let own = charted.iter().position(|&s| s == side).unwrap_or(0);
     let m = &built.measured[own];
     let atlas = &built.atlas;
-    let chart_side = side_index(charted[own]);
+    let chart_side = charted[own];
     let charts: Vec<usize> = (0..atlas.charts.len())
         .filter(|&k| atlas.charts[k].side == chart_side)
         .collect();
@@ -507,8 +505,8 @@ fn side_export(
         sought_error: (m.aliased.points > 0 || m.critical.points > 0)
             .then(|| export_error(&m.resolved)),
         critical_band: built.sides[own].unsought_band,
-        critical_error: built.sides[own].unsought_band.map(|_| ExportError {
-            seed: crate::atlas::search::CRITICAL_BAND_SEED,
+        critical_error: built.sides[own].unsought_band.map(|_| ColourFigures {
+            seed: Some(crate::atlas::search::CRITICAL_BAND_SEED),
             ..export_error(&m.critical)
         }),
         weights_8bit_extra: f64::from(step) / 256.0,
@@ -516,23 +514,23 @@ fn side_export(
     }
 }
 
-/// An [`ExportError`] from the atlas search's measurement.
-fn export_error(m: &crate::atlas::search::Measurement) -> ExportError {
+/// An export side's figures from the atlas search's measurement.
+fn export_error(m: &AtlasFigures) -> ColourFigures {
     // An export's atlas holds R and T in RGB: six channels.
     let six = |v: &[f64]| -> [f64; 6] { std::array::from_fn(|k| v.get(k).copied().unwrap_or(0.0)) };
-    ExportError {
+    ColourFigures {
+        points: m.points,
         max_abs: six(&m.max_abs),
         p99_abs: six(&m.p99_abs),
         mean_abs: six(&m.mean_abs),
-        max_delta_e00: m.max_de,
-        mean_delta_e00: m.mean_de,
-        points: m.points,
-        seed: POINTS_SEED,
+        max_delta_e00: m.max_delta_e00,
+        mean_delta_e00: m.mean_delta_e00,
+        seed: Some(POINTS_SEED),
         worst_point: m.worst_point,
     }
 }
 
-fn aliased_error(m: &SideMeasurement) -> Option<ExportError> {
+fn aliased_error(m: &SideMeasurement) -> Option<ColourFigures> {
     (m.aliased.points > 0).then(|| export_error(&m.aliased))
 }
 
@@ -585,7 +583,7 @@ fn png_errors(export: &mut Export) -> Result<()> {
                 [r[0], r[1], r[2], t[0], t[1], t[2]].map(f64::from)
             })
             .collect();
-        let m = crate::atlas::search::Measurement::of(&points, &got, &exact);
+        let m = crate::atlas::search::figures(&points, &got.concat(), &exact.concat(), 6, true);
         export.sides[k].png_error = Some(export_error(&m));
     }
     export.png_scale = Some(scale);

@@ -20,8 +20,10 @@ use super::{ExportSpec, F16_MAX, MAX_SIZE};
 use crate::atlas::{locate_f32, Atlas, Film, Image};
 use crate::color::SpectralIntegrator;
 use crate::error::{Error, Result};
-use crate::rough::slices::{self, MeasurePoints, Reference, RoughSlices, SliceError, SliceRequest};
+use crate::rough::slices::{self, MeasurePoints, Reference, RoughSlices, SliceRequest};
 use crate::rough::{rough_reflectance, Quadrature, RoughTable};
+use crate::stats::RoughFigures;
+use crate::sweep::Side;
 
 pub use crate::rough::slices::GRAZING_COS;
 
@@ -70,35 +72,6 @@ pub const ROUGH_SHADERS: [(&str, &str); 4] = [
     ),
 ];
 
-/// Error of what the GPU computes from the rough table against
-/// `irid::rough` (default quadrature), per RGB channel of F_eff.
-#[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
-pub struct RoughError {
-    /// Largest absolute error per channel.
-    pub max_abs: [f64; 3],
-    /// 99th percentile of the absolute error per channel.
-    pub p99_abs: [f64; 3],
-    /// Mean absolute error per channel.
-    pub mean_abs: [f64; 3],
-    /// Largest and mean CIEDE2000 of the colour.
-    pub max_delta_e00: f64,
-    /// See `max_delta_e00`.
-    pub mean_delta_e00: f64,
-    /// How many points were measured.
-    pub points: usize,
-    /// The PCG64 seed of the points.
-    pub seed: u64,
-    /// (thickness nm, cos θ, roughness) of the largest error.
-    pub worst_point: [f64; 3],
-}
-
-impl RoughError {
-    /// The largest of `max_abs`.
-    pub fn max_all(&self) -> f64 {
-        self.max_abs.iter().fold(0.0, |a, &b| a.max(b))
-    }
-}
-
 /// A finished rough table.
 #[derive(Clone, Debug)]
 pub struct RoughExport {
@@ -115,10 +88,10 @@ pub struct RoughExport {
     pub target: f64,
     /// What the GPU computes against `irid::rough` at cos θ ≥
     /// [`GRAZING_COS`]: what the target is met over.
-    pub error: RoughError,
+    pub error: RoughFigures,
     /// The same at cos θ below [`GRAZING_COS`] (none when the export's
     /// angles do not reach there).
-    pub grazing_error: Option<RoughError>,
+    pub grazing_error: Option<RoughFigures>,
     /// The quadrature F_eff was computed with.
     pub quadrature: Quadrature,
     uniform: Vec<f32>,
@@ -154,7 +127,8 @@ impl RoughExport {
     /// for operation in f32: F_eff at (thickness, cos θ, roughness).
     pub fn sample(&self, thickness_nm: f32, cos_theta: f32, roughness: f32) -> [f32; 3] {
         let v = &self.uniform;
-        let Some(texel) = locate_f32(&v[ATLAS_OFFSET_F32..], thickness_nm, cos_theta, 0) else {
+        let Some(texel) = locate_f32(&v[ATLAS_OFFSET_F32..], thickness_nm, cos_theta, Side::Front)
+        else {
             return [0.0; 3];
         };
         let n = v[2];
@@ -229,18 +203,12 @@ pub fn rough_exact_at(spec: &ExportSpec, points: &RoughPoints) -> Result<RoughTa
 
 /// What `rough` gives against `reference`: over the cosines at or above
 /// [`GRAZING_COS`], and over those below (`None` when there are none).
-fn measure(reference: &Reference, rough: &RoughExport) -> (RoughError, Option<RoughError>) {
+fn measure(reference: &Reference, rough: &RoughExport) -> (RoughFigures, Option<RoughFigures>) {
     let (main, grazing) =
         reference.errors(&|t, c, r| rough.sample(t as f32, c as f32, r as f32).map(f64::from));
-    let with_seed = |e: SliceError| RoughError {
-        max_abs: e.max_abs,
-        p99_abs: e.p99_abs,
-        mean_abs: e.mean_abs,
-        max_delta_e00: e.max_delta_e00,
-        mean_delta_e00: e.mean_delta_e00,
-        points: e.points,
-        seed: ROUGH_SEED,
-        worst_point: e.worst_point,
+    let with_seed = |e: RoughFigures| RoughFigures {
+        seed: Some(ROUGH_SEED),
+        ..e
     };
     let grazing = (grazing.points > 0).then(|| with_seed(grazing));
     (with_seed(main), grazing)
@@ -285,7 +253,7 @@ fn pack(built: &RoughSlices, target: f64) -> Result<RoughExport> {
             texels: vec![[0.0, 0.0, 0.0, 1.0]; width * height],
         },
         target,
-        error: RoughError::default(),
+        error: RoughFigures::default(),
         grazing_error: None,
         quadrature: Quadrature::default(),
         uniform: Vec::new(),
@@ -442,7 +410,7 @@ pub(super) fn rough_json(rough: &RoughExport) -> serde_json::Value {
     error["grazing_below_cos"] = serde_json::json!(GRAZING_COS);
     error["grazing"] = rough.grazing_error.as_ref().map_or(
         serde_json::Value::Null,
-        super::files::error_json::<RoughError>,
+        super::files::error_json::<RoughFigures>,
     );
     serde_json::json!({
         "texture": {

@@ -6,9 +6,9 @@
 
 mod axis;
 mod bake;
-pub(crate) use bake::{critical_cos, rgb_at_nodes, Prepared, Row};
 pub(crate) mod file;
 mod header;
+pub mod rough;
 mod sample;
 mod validate;
 
@@ -18,14 +18,18 @@ pub use header::{
     BakeCheck, ColorInfo, ErrorInfo, Header, TableAtlas, ATLAS_VERSION, FORMAT_NAME,
     FORMAT_VERSION, NEWEST_READABLE_VERSION, OLDEST_READABLE_VERSION, WHITE_E_VERSION,
 };
+pub use rough::{RoughHeader, RoughLut};
 pub use sample::{FilmRgb, Lut};
 pub use validate::{validate, ErrorStats, RegionStats, MAX_POINTS as MAX_VALIDATION_POINTS};
+// The sweep's, named here too: a table is of a kind, and covers what the
+// sweep can evaluate.
+pub use crate::sweep::{check_film_domain, Kind};
 
 use serde::{Deserialize, Serialize};
 
 use crate::color::{Sampling, White};
 use crate::error::{Error, Result};
-use crate::optics::{Stack, MAX_THICKNESS_NM};
+use crate::optics::Stack;
 
 /// Every medium of `stack` is defined over `range` (nm): a spectral table
 /// spans no wavelength its materials' data does not.
@@ -52,92 +56,6 @@ fn check_wavelength_data(stack: &Stack, range: (f64, f64)) -> Result<()> {
         }
     }
     Ok(())
-}
-
-/// Checks what a table or an export covers: the stack itself, `layer`
-/// within it, 0 ≤ min ≤ max ≤ [`MAX_THICKNESS_NM`] (the stack's own bound,
-/// which also keeps an f32 thickness axis finite), and 0 ≤ cos θ min ≤ max
-/// ≤ 1. Errors name the option: `layer`, `thickness` or `angles`.
-pub fn check_film_domain(
-    stack: &Stack,
-    layer: usize,
-    thickness_nm: (f64, f64),
-    cos_theta: (f64, f64),
-) -> Result<()> {
-    stack.validate()?;
-    let n = stack.layers.len();
-    if n > 0 && !(1..=n).contains(&layer) {
-        return Err(Error::invalid(
-            "layer",
-            format!("must be between 1 and {n} (the stack's layers), got {layer}"),
-        ));
-    }
-    if n > 0 && !stack.layers[layer - 1].coherent {
-        let coherent: Vec<String> = (1..=n)
-            .filter(|&l| stack.layers[l - 1].coherent)
-            .map(|l| l.to_string())
-            .collect();
-        return Err(Error::invalid(
-            "layer",
-            format!(
-                "layer {layer} is incoherent (coherent = false): a table's thickness axis must be \
-                 on a coherent layer ({})",
-                if coherent.is_empty() {
-                    "the stack has none".to_string()
-                } else {
-                    format!("coherent layers: {}", coherent.join(", "))
-                }
-            ),
-        ));
-    }
-    let (t0, t1) = thickness_nm;
-    if !(t0 >= 0.0 && t0 <= t1 && t1 <= MAX_THICKNESS_NM) {
-        return Err(Error::invalid(
-            "thickness",
-            format!("need 0 ≤ min ≤ max ≤ {MAX_THICKNESS_NM:e} nm, got {t0}:{t1}"),
-        ));
-    }
-    let (c0, c1) = cos_theta;
-    if !(c0 >= 0.0 && c1 <= 1.0 && c0 <= c1) {
-        return Err(Error::invalid(
-            "angles",
-            format!("cos θ range must satisfy 0 ≤ min ≤ max ≤ 1, got {c0}:{c1}"),
-        ));
-    }
-    Ok(())
-}
-
-/// What a table holds.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Kind {
-    /// Unpolarized R and T as linear sRGB under D65, over thickness × cos θ.
-    Rgb,
-    /// Unpolarized R and T over thickness × cos θ × wavelength.
-    Spectral,
-}
-
-impl std::str::FromStr for Kind {
-    type Err = Error;
-    fn from_str(s: &str) -> Result<Kind> {
-        match s {
-            "rgb" => Ok(Kind::Rgb),
-            "spectral" => Ok(Kind::Spectral),
-            _ => Err(Error::invalid(
-                format!("kind '{s}'"),
-                "expected rgb or spectral",
-            )),
-        }
-    }
-}
-
-impl std::fmt::Display for Kind {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(match self {
-            Kind::Rgb => "rgb",
-            Kind::Spectral => "spectral",
-        })
-    }
 }
 
 /// How a table places its nodes (docs/lut-format.md).
@@ -339,53 +257,58 @@ impl BakeSpec {
                     self.fixed_bake_bytes([thickness, angle, wavelength]),
                 )?;
             }
-            Resolution::MaxError(e) => {
-                // An infinite absolute target stands for none, beside a
-                // colour target.
-                let colour_only = e == f64::INFINITY && self.max_de.is_some();
-                if !(e > 0.0 && (e.is_finite() || colour_only)) {
-                    return Err(Error::invalid(
-                        "max-error",
-                        format!("must be a positive number, got {e:e}"),
-                    ));
-                }
-                if let Some(de) = self.max_de {
-                    if self.kind == Kind::Spectral {
-                        return Err(Error::invalid(
-                            "max-de",
-                            "applies to rgb tables (a spectral table has no colour to target)",
-                        ));
-                    }
-                    if !(de > 0.0 && de.is_finite()) {
-                        return Err(Error::invalid(
-                            "max-de",
-                            format!("must be a positive number, got {de:e}"),
-                        ));
-                    }
-                    if self.layout() != Layout::Atlas {
-                        return Err(Error::invalid(
-                            "max-de",
-                            "needs the atlas layout (a grid refines for max-error only)",
-                        ));
-                    }
-                }
-                let floor = storage_error_floor(self.half);
-                if e < floor {
-                    return Err(Error::invalid(
-                        "max-error",
-                        format!(
-                            "{e:e} is below what {} storage resolves: its values near 1 are {floor:e} apart",
-                            if self.half { "f16" } else { "f32" }
-                        ),
-                    ));
-                }
-                if !self.check {
-                    return Err(Error::invalid(
-                        "no-check",
-                        "needs a fixed resolution: with max-error the bake check is how the grid is chosen",
-                    ));
-                }
+            Resolution::MaxError(e) => self.validate_target(e)?,
+        }
+        Ok(())
+    }
+
+    /// Checks an error target `e` (and the colour target beside it)
+    /// against the kind, the layout and the storage.
+    fn validate_target(&self, e: f64) -> Result<()> {
+        // An infinite absolute target stands for none, beside a
+        // colour target.
+        let colour_only = e == f64::INFINITY && self.max_de.is_some();
+        if !(e > 0.0 && (e.is_finite() || colour_only)) {
+            return Err(Error::invalid(
+                "max-error",
+                format!("must be a positive number, got {e:e}"),
+            ));
+        }
+        if let Some(de) = self.max_de {
+            if self.kind == Kind::Spectral {
+                return Err(Error::invalid(
+                    "max-de",
+                    "applies to rgb tables (a spectral table has no colour to target)",
+                ));
             }
+            if !(de > 0.0 && de.is_finite()) {
+                return Err(Error::invalid(
+                    "max-de",
+                    format!("must be a positive number, got {de:e}"),
+                ));
+            }
+            if self.layout() != Layout::Atlas {
+                return Err(Error::invalid(
+                    "max-de",
+                    "needs the atlas layout (a grid refines for max-error only)",
+                ));
+            }
+        }
+        let floor = storage_error_floor(self.half);
+        if e < floor {
+            return Err(Error::invalid(
+                "max-error",
+                format!(
+                    "{e:e} is below what {} storage resolves: its values near 1 are {floor:e} apart",
+                    if self.half { "f16" } else { "f32" }
+                ),
+            ));
+        }
+        if !self.check {
+            return Err(Error::invalid(
+                "no-check",
+                "needs a fixed resolution: with max-error the bake check is how the grid is chosen",
+            ));
         }
         Ok(())
     }

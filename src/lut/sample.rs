@@ -9,6 +9,7 @@ use super::header::{
 };
 use super::Kind;
 use crate::optics::{MAX_THICKNESS_NM, WAVELENGTH_RANGE_NM};
+use crate::sweep::Side;
 
 /// A film's unpolarized reflectance and transmittance as linear sRGB.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -70,7 +71,9 @@ impl AtlasNodes {
 
     fn rgb(&self, thickness_nm: f32, cos_theta: f32) -> FilmRgb {
         let mut v = [f32::NAN; 6];
-        if let Some(t) = crate::atlas::locate_f32(&self.uniform, thickness_nm, cos_theta, 0) {
+        if let Some(t) =
+            crate::atlas::locate_f32(&self.uniform, thickness_nm, cos_theta, Side::Front)
+        {
             self.image.bilinear(t, &mut v);
         }
         if let Some(w) = self.white {
@@ -87,7 +90,9 @@ impl AtlasNodes {
     /// (R, T) of wavelength block `block` at (thickness, cos θ).
     fn spectral(&self, thickness_nm: f32, cos_theta: f32, block: usize) -> [f32; 2] {
         let mut v = [f32::NAN; 2];
-        if let Some(t) = crate::atlas::locate_f32(&self.uniform, thickness_nm, cos_theta, 0) {
+        if let Some(t) =
+            crate::atlas::locate_f32(&self.uniform, thickness_nm, cos_theta, Side::Front)
+        {
             let offset = (block * self.block_rows) as f32;
             self.image.bilinear([t[0], t[1] + offset], &mut v);
         }

@@ -5,7 +5,6 @@ use rand::{Rng, SeedableRng};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use super::bake::critical_cos;
 use super::sample::{channel_names, Lut};
 use super::Kind;
 use crate::atlas::search::scaled_error;
@@ -14,6 +13,8 @@ use crate::color::{delta_e2000_rgb, Sampling, SpectralIntegrator};
 use crate::error::{Error, Result};
 use crate::optics::lanes::SpectralWeights;
 use crate::optics::{solve_mixed, StackGrid};
+use crate::stats::p99_index;
+use crate::sweep::critical_cos;
 
 /// Error of a table against the solver. Arrays named `*_abs` have one
 /// entry per channel (in `channels` order); `*_de2000` have two entries,
@@ -553,7 +554,7 @@ impl QuantileHistogram {
     /// holding that rank, but never above `max`. Within 0.4 % above the
     /// exact order statistic, and exact when that is the largest error.
     fn p99(&self, points: usize, max: f64) -> f64 {
-        let rank = ((0.99 * points as f64).ceil() as u64).clamp(1, points.max(1) as u64);
+        let rank = p99_index(points) as u64 + 1;
         let mut seen = 0;
         let bins = self
             .by_exponent
@@ -622,7 +623,7 @@ mod tests {
             }
             all.sort_by(f64::total_cmp);
             let max = all[points - 1];
-            let rank = ((0.99 * points as f64).ceil() as usize).clamp(1, points) - 1;
+            let rank = crate::stats::p99_index(points);
             let exact = all[rank];
             let got = h.p99(points, max);
             assert!(

@@ -12,16 +12,7 @@ use crate::error::Result;
 use crate::lut::FilmRgb;
 use crate::optics::lanes::SpectralWeights;
 use crate::optics::{Stack, StackGrid};
-
-/// Which side of the film the light arrives from.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub enum Side {
-    /// From the ambient: the stack as written.
-    Front,
-    /// From the substrate (inside a coated gem): the reversed stack, whose
-    /// denser incidence medium gives total internal reflection.
-    Back,
-}
+pub use crate::sweep::Side;
 
 /// Reflectance and transmittance of a film, as linear-sRGB weights under D65.
 pub trait FilmShading: Sync + Send {

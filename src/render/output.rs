@@ -84,7 +84,7 @@ impl Image {
             .collect();
         de.sort_by(f64::total_cmp);
         let mean = de.iter().sum::<f64>() / de.len().max(1) as f64;
-        let rank = ((de.len() as f64 * 0.99).ceil() as usize).clamp(1, de.len()) - 1;
+        let rank = crate::stats::p99_index(de.len());
         Ok(ColorDifference {
             mean,
             p99: de[rank],

@@ -9,8 +9,8 @@ use super::kernel::{Kernel, Rules};
 use super::{check_roughness, MuGrid, Quadrature};
 use crate::color::{linear_srgb_to_xyz, stack_colors, SpectralIntegrator};
 use crate::error::{Error, Result};
-use crate::lut::{check_film_domain, rgb_at_nodes};
 use crate::optics::{Layer, Stack};
+use crate::sweep::{check_film_domain, rgb_at_nodes};
 
 /// F_eff (linear RGB of the integrator's white) over thickness × cos θ ×
 /// roughness nodes, and the white lobe's directional albedo per cos θ and

@@ -26,7 +26,6 @@
 //! (cos θ, roughness). [`rough_colors`] is `irid color --roughness`.
 
 mod engine;
-pub mod file;
 pub mod ggx;
 mod kernel;
 mod mu_grid;
@@ -36,7 +35,6 @@ pub mod slices;
 mod tests;
 
 pub use engine::{rough_colors, rough_reflectance, RoughColor, RoughTable};
-pub use file::{RoughHeader, RoughLut};
 pub use kernel::Kernel;
 pub use mu_grid::MuGrid;
 pub use quadrature::Quadrature;

@@ -20,8 +20,8 @@
 
 use std::f64::consts::{FRAC_PI_2, FRAC_PI_4};
 
-use crate::lut::{critical_cos, Kind};
 use crate::optics::Stack;
+use crate::sweep::{critical_cos, Kind};
 
 /// Fewest intervals a segment gets (a cubic needs four nodes).
 const MIN_SEGMENT_INTERVALS: usize = 3;

@@ -11,6 +11,7 @@ use crate::error::{Error, Result};
 use crate::lut::sample::Lut;
 use crate::lut::validate::{drawing, validate};
 use crate::lut::{BakeSpec, Kind, Resolution, MAX_AXIS_NODES};
+use crate::sweep::Side;
 
 /// The share of a spectral table's error target its wavelength
 /// interpolation takes; the charts' two axes share the rest.
@@ -57,7 +58,7 @@ pub(super) fn bake_atlas(spec: &BakeSpec, progress: &dyn Fn(&str)) -> Result<Lut
     film.check_lasing(charted, spec.cos_theta)?;
     let sides = [SideRequest {
         film: &film,
-        side: 0,
+        side: Side::Front,
         cos: spec.cos_theta,
         goal,
     }];

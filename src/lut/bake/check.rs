@@ -1,8 +1,8 @@
 //! The bake check: the stored coarse table interpolated at every node of the
 //! grid with each interval halved, against the exact values there.
 
-use super::grid::Grid;
 use super::store::stored;
+use crate::sweep::Grid;
 
 pub(super) struct Check {
     /// Per channel, over every fine point.

@@ -1,98 +1,8 @@
-//! The nodes of a grid as lists of segments, and how the error search
-//! refines them.
+//! The baker's starting grid as lists of segments, and how the error
+//! search refines them.
 
-use super::sweep::Prepared;
-use crate::lut::axis::{segment_nodes, share_intervals, Grading, Segment};
 use crate::lut::{BakeSpec, Kind, Resolution};
-
-/// The nodes of one axis and the segment each interval belongs to.
-#[derive(Clone, Debug)]
-pub(super) struct AxisGrid {
-    pub(super) segments: Vec<Segment>,
-    pub(super) nodes: Vec<f64>,
-    pub(super) segment_of_interval: Vec<usize>,
-}
-
-impl AxisGrid {
-    pub(super) fn new(segments: &[Segment]) -> AxisGrid {
-        let segment_of_interval = segments
-            .iter()
-            .enumerate()
-            .flat_map(|(k, s)| std::iter::repeat_n(k, s.intervals))
-            .collect();
-        AxisGrid {
-            segments: segments.to_vec(),
-            nodes: segment_nodes(segments),
-            segment_of_interval,
-        }
-    }
-}
-
-impl AxisGrid {
-    /// An axis with exactly these nodes (increasing), each interval its own
-    /// segment: evenly spaced runs are still recognised by the sweep, which
-    /// compares the intervals' steps.
-    pub(super) fn from_nodes(nodes: &[f64]) -> AxisGrid {
-        let segments: Vec<Segment> = match nodes {
-            [only] => vec![uniform(*only, *only, 0)],
-            _ => nodes
-                .windows(2)
-                .map(|w| Segment {
-                    start: w[0],
-                    end: w[1],
-                    grading: Grading::Uniform,
-                    intervals: 1,
-                })
-                .collect(),
-        };
-        AxisGrid {
-            segment_of_interval: (0..nodes.len().saturating_sub(1)).collect(),
-            segments,
-            nodes: nodes.to_vec(),
-        }
-    }
-}
-
-/// Node positions of one grid: thickness, cos θ, wavelength (a single
-/// unused node for the rgb kind).
-#[derive(Clone)]
-pub(super) struct Grid {
-    pub(super) axes: [AxisGrid; 3],
-    pub(super) spectral: bool,
-}
-
-impl Grid {
-    /// The rgb grid of these thickness and cos θ nodes.
-    pub(super) fn rgb_of_nodes(thickness_nm: &[f64], cos_theta: &[f64]) -> Grid {
-        Grid {
-            axes: [
-                AxisGrid::from_nodes(thickness_nm),
-                AxisGrid::from_nodes(cos_theta),
-                AxisGrid::from_nodes(&[0.0]),
-            ],
-            spectral: false,
-        }
-    }
-
-    pub(super) fn new(axes: &[Vec<Segment>; 3], kind: Kind) -> Grid {
-        Grid {
-            axes: [
-                AxisGrid::new(&axes[0]),
-                AxisGrid::new(&axes[1]),
-                AxisGrid::new(&axes[2]),
-            ],
-            spectral: kind == Kind::Spectral,
-        }
-    }
-
-    pub(super) fn total(&self) -> usize {
-        self.axes.iter().map(|a| a.nodes.len()).product()
-    }
-
-    pub(super) fn nodes(&self) -> [&[f64]; 3] {
-        self.axes.each_ref().map(|a| &a.nodes[..])
-    }
-}
+use crate::sweep::{share_intervals, uniform, Grading, Prepared, Segment};
 
 pub(super) fn doubled(segments: &[Segment]) -> Vec<Segment> {
     segments
@@ -115,15 +25,6 @@ pub(super) fn refine(seg: &Segment, intervals: usize) -> Vec<Segment> {
         vec![uniform(seg.start, mid, half), uniform(mid, seg.end, half)]
     } else {
         vec![Segment { intervals, ..*seg }]
-    }
-}
-
-pub(super) fn uniform(start: f64, end: f64, intervals: usize) -> Segment {
-    Segment {
-        start,
-        end,
-        grading: Grading::Uniform,
-        intervals: if end > start { intervals.max(1) } else { 0 },
     }
 }
 

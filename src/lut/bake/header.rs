@@ -2,8 +2,6 @@
 //! bake check's figures.
 
 use super::check::Check;
-use super::grid::Grid;
-use super::sweep::Prepared;
 use crate::lut::axis::Axis;
 use crate::lut::header::{
     version_for, BakeCheck, Channel, ColorInfo, ErrorInfo, Header, TableAtlas, ATLAS_AXIS,
@@ -11,6 +9,8 @@ use crate::lut::header::{
 };
 use crate::lut::sample::channel_names;
 use crate::lut::{BakeSpec, Kind};
+use crate::sweep::Grid;
+use crate::sweep::Prepared;
 
 pub(super) fn header(
     spec: &BakeSpec,

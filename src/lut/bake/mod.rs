@@ -1,31 +1,42 @@
 //! The baker: exact responses on a grid via the split-stack form, and the
 //! segment-refining search that meets an error target.
 //!
-//! [`sweep`] evaluates a grid (the split-stack form along the thickness
-//! axis), [`grid`] lays out the nodes and refines segments, [`check`]
-//! measures a grid against its doubled grid and [`store`] rounds values as
-//! the file stores them, [`header`] writes what the table records.
+//! [`crate::sweep`] evaluates a grid (the split-stack form along the
+//! thickness axis), [`grid`] lays out the starting nodes and refines
+//! segments, [`check`] measures a grid against its doubled grid and
+//! [`store`] rounds values as the file stores them, [`header`] writes what
+//! the table records; [`atlas`] bakes the atlas layout through
+//! [`crate::atlas::search`].
 
 mod atlas;
 mod check;
 mod grid;
 mod header;
 mod store;
-mod sweep;
 #[cfg(test)]
 mod tests;
 
-use super::axis::Segment;
 use super::sample::Lut;
 use super::validate::{max_or_nan, validate};
-use super::{BakeSpec, Kind, Resolution, MAX_AXIS_NODES, MAX_NODES};
+use super::{BakeSpec, Resolution, MAX_AXIS_NODES, MAX_NODES};
+use crate::color::SpectralIntegrator;
 use crate::error::{Error, Result};
-use crate::optics::Stack;
+use crate::sweep::{Grid, Prepared, Segment};
 use check::{even_subgrid, measure, Check};
-use grid::{doubled, initial_axes, refine, Grid};
+use grid::{doubled, initial_axes, refine};
 use header::header;
 use store::{representable, stored};
-pub(crate) use sweep::{Prepared, Row};
+
+/// The sweep of `spec`'s stack, kind, colour integration and wavelengths.
+fn prepare(spec: &BakeSpec) -> Result<Prepared> {
+    Prepared::of(
+        &spec.stack,
+        spec.layer,
+        spec.kind,
+        SpectralIntegrator::with_white(spec.sampling, spec.white),
+        spec.wavelength_nm,
+    )
+}
 
 /// Bakes a table (no progress output; see [`bake_with_progress`]).
 pub fn bake(spec: &BakeSpec) -> Result<Lut> {
@@ -65,7 +76,7 @@ pub fn bake_with_progress(spec: &BakeSpec, progress: &(dyn Fn(f64) + Sync)) -> R
     if spec.layout() == super::Layout::Atlas {
         return atlas::bake_atlas(spec, &|line| log::debug!("{line}"));
     }
-    let prep = Prepared::new(spec)?;
+    let prep = prepare(spec)?;
     let mut axes = initial_axes(spec, &prep);
     if !spec.check {
         // Only a fixed resolution gets here (see BakeSpec::validate).
@@ -258,45 +269,5 @@ fn refine_to_share(axes: &mut [Vec<Segment>; 3], coarse: &Grid, check: &Check, e
                 segments[k].intervals *= 2;
             }
         }
-    }
-}
-
-/// The substrate's critical cos θ (where its normal index has a square-root
-/// branch point), when it is lossless and optically thinner than the
-/// ambient, at 550 nm for rgb tables or mid-range for spectral ones.
-/// Exact linear-RGB reflectance and transmittance (`[R; 3]` then `[T; 3]`)
-/// of `stack` with its `layer` (from 1) at every thickness × cos θ node,
-/// row-major with one row per cos θ node, integrated by `integrator`: the
-/// baker's sweep (the stack split once per wavelength and angle) on nodes
-/// the caller chose, as the GPU export lays out its own.
-pub(crate) fn rgb_at_nodes(
-    stack: &Stack,
-    layer: usize,
-    integrator: crate::color::SpectralIntegrator,
-    thickness_nm: &[f64],
-    cos_theta: &[f64],
-) -> Result<Vec<[f64; 6]>> {
-    let prep = Prepared::of(stack, layer, Kind::Rgb, integrator, (380.0, 780.0))?;
-    let grid = Grid::rgb_of_nodes(thickness_nm, cos_theta);
-    let values = prep.eval(&grid, None, &|_| {})?;
-    Ok(values
-        .chunks_exact(6)
-        .map(|v| [v[0], v[1], v[2], v[3], v[4], v[5]])
-        .collect())
-}
-
-pub(crate) fn critical_cos(stack: &Stack, kind: Kind, wavelength_nm: (f64, f64)) -> Option<f64> {
-    let reference_nm = match kind {
-        Kind::Rgb => 550.0,
-        Kind::Spectral => 0.5 * (wavelength_nm.0 + wavelength_nm.1),
-    };
-    match (
-        stack.ambient.index_at(reference_nm),
-        stack.substrate.index_at(reference_nm),
-    ) {
-        (Ok(n0), Ok(ns)) if ns.im == 0.0 && ns.re < n0.re => {
-            Some((1.0 - (ns.re / n0.re).powi(2)).sqrt())
-        }
-        _ => None,
     }
 }

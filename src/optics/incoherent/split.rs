@@ -112,31 +112,16 @@ pub(crate) fn split(
         tau_below: [1.0; 2],
     };
     if s > 0 {
-        let inner = |&m: &usize| (m < s).then_some(m);
-        let down = climb(
-            stack.run(0, s, false),
-            above.iter().filter_map(inner),
+        let thickness_nm = thicknesses_nm[s - 1];
+        above_sums(
+            stack,
+            &above,
             &light,
-            ambient,
-            top[2],
-        )
-        .ok()?;
-        let up = climb(
-            stack.run(0, s, true),
-            above.iter().rev().filter_map(inner).map(|m| s - m),
-            &light,
-            top,
-            ambient[2],
-        )
-        .ok()?;
-        let pass = one_pass(light.k0, top[2], thicknesses_nm[s - 1]);
-        let sums = down.sums.iter().zip(&up.sums).zip(&flux);
-        for (k, ((&(r, t), &(rb, tb)), flux)) in sums.enumerate() {
-            env.r[k] = r;
-            env.tt[k] = t * tb * pass * pass;
-            env.rb[k] = rb * pass * pass;
-            env.t[k] = t * pass * flux;
-        }
+            (ambient, top),
+            s,
+            thickness_nm,
+            &mut env,
+        )?;
     }
     if e < last {
         if opaque_e {
@@ -158,4 +143,47 @@ pub(crate) fn split(
         }
     }
     Some(parts(env))
+}
+
+/// The sums of the stack above the incoherent medium `s` (the last one
+/// above the varying layer, `thickness_nm` thick), climbed down and up
+/// through the incoherent media of `above` over it, with the passes
+/// through `s`, into `env` (whose `t` holds the substrate's flux factors
+/// on entry). `None` when a sum diverges.
+fn above_sums(
+    stack: View,
+    above: &[usize],
+    light: &Light,
+    (ambient, top): ([C64; 3], [C64; 3]),
+    s: usize,
+    thickness_nm: f64,
+    env: &mut Env,
+) -> Option<()> {
+    let inner = |&m: &usize| (m < s).then_some(m);
+    let down = climb(
+        stack.run(0, s, false),
+        above.iter().filter_map(inner),
+        light,
+        ambient,
+        top[2],
+    )
+    .ok()?;
+    let up = climb(
+        stack.run(0, s, true),
+        above.iter().rev().filter_map(inner).map(|m| s - m),
+        light,
+        top,
+        ambient[2],
+    )
+    .ok()?;
+    let pass = one_pass(light.k0, top[2], thickness_nm);
+    let flux = env.t;
+    let sums = down.sums.iter().zip(&up.sums).zip(&flux);
+    for (k, ((&(r, t), &(rb, tb)), flux)) in sums.enumerate() {
+        env.r[k] = r;
+        env.tt[k] = t * tb * pass * pass;
+        env.rb[k] = rb * pass * pass;
+        env.t[k] = t * pass * flux;
+    }
+    Some(())
 }

@@ -85,6 +85,30 @@ fn through_layer<V: Lanes>(
     ((rho, tau), converges)
 }
 
+/// The incoherent medium `m` as the top of a group: its index, the index
+/// squared and its normal index on the branch that carries power forward
+/// (Re q > 0); and the lanes (bits) where it is lossless and evanescent,
+/// so opaque: the point solver's case.
+#[inline(always)]
+fn incoherent_top<V: Lanes>(
+    media: &impl MediaLanes<V>,
+    m: usize,
+    n0_sq: V,
+    q0_sq: V,
+) -> ([Cv<V>; 3], u32) {
+    let zero = V::splat(0.0);
+    let (n, nsq) = media.medium(m);
+    let z = normal_index_sq(nsq, n0_sq, q0_sq);
+    let opaque = V::bits(n.im.eq(zero)) & !V::bits(zero.lt(z.re)) & V::ALL;
+    let q = sqrt_upper(z);
+    let flip = q.re.lt(zero);
+    let q = Cv {
+        re: V::select(flip, q.re.neg(), q.re),
+        im: V::select(flip, q.im.neg(), q.im),
+    };
+    ([n, nsq, q], opaque)
+}
+
 /// Solves one (wavelength, angle) pair of a stack with incoherent layers
 /// per lane; `media`, `k0` and `lane_point` as for the general kernel.
 #[inline(always)]
@@ -127,18 +151,9 @@ fn solve_lanes<'a, V: Lanes>(
         let top = if m == 0 {
             [Cv::real(n0), Cv::real(n0_sq), Cv::real(q0)]
         } else {
-            let (n, nsq) = media.medium(m);
-            let z = normal_index_sq(nsq, n0_sq, q0_sq);
-            // Lossless and evanescent: opaque, the point solver's case.
-            scalar |= V::bits(n.im.eq(zero)) & !V::bits(zero.lt(z.re)) & V::ALL;
-            let q = sqrt_upper(z);
-            // The branch that carries power forward (Re q > 0).
-            let flip = q.re.lt(zero);
-            let q = Cv {
-                re: V::select(flip, q.re.neg(), q.re),
-                im: V::select(flip, q.im.neg(), q.im),
-            };
-            [n, nsq, q]
+            let (top, opaque) = incoherent_top(media, m, n0_sq, q0_sq);
+            scalar |= opaque;
+            top
         };
         let (down, near) = group(
             media,

@@ -14,13 +14,16 @@ use exr::prelude::{
 };
 use serde::{Deserialize, Serialize};
 
-use super::slices::{slice_roughness, RoughSlices, SliceError, GRAZING_COS};
 use crate::atlas::{Atlas, Coords, Image};
 use crate::color::{Sampling, SpectralIntegrator, White};
 use crate::error::{Error, Result};
-use crate::lut::file::{ascii_json, attribute_text, first_header, read_planes, write_layer};
-use crate::lut::ColorInfo;
 use crate::optics::Stack;
+use crate::rough::slices::{self, slice_roughness, RoughSlices, GRAZING_COS};
+use crate::stats::RoughFigures;
+use crate::sweep::Side;
+
+use super::file::{ascii_json, attribute_text, first_header, read_planes, write_layer};
+use super::{BakeSpec, ColorInfo, Kind, Layout};
 
 /// The header's `format`.
 pub const ROUGH_FORMAT: &str = "irid-rough";
@@ -44,9 +47,9 @@ pub struct RoughErrorInfo {
     /// differences.
     pub blend_error: f64,
     /// At random points with cos θ ≥ `grazing_cos`.
-    pub measured: SliceError,
+    pub measured: RoughFigures,
     /// At random points with cos θ < `grazing_cos`.
-    pub grazing: SliceError,
+    pub grazing: RoughFigures,
 }
 
 /// Everything a reader needs besides the pixels.
@@ -146,16 +149,16 @@ impl RoughLut {
 
     /// The table against irid's rough reflectance at random points drawn
     /// from the PCG64 stream of `seed` (see
-    /// [`super::slices::measure_sampler`]): (cos θ ≥ the grazing strip,
+    /// [`slices::measure_sampler`]): (cos θ ≥ the grazing strip,
     /// below it).
-    pub fn validate(&self, seed: u64) -> Result<(SliceError, SliceError)> {
-        super::slices::measure_sampler(
+    pub fn validate(&self, seed: u64) -> Result<(RoughFigures, RoughFigures)> {
+        slices::measure_sampler(
             &self.header.stack,
             self.header.layer,
             &self.integrator()?,
             (
                 self.header.atlas.thickness_nm,
-                super::slices::cos_span(&self.header.atlas),
+                slices::cos_span(&self.header.atlas),
             ),
             seed,
             &|d, c, r| self.sample(d, c, r),
@@ -276,11 +279,11 @@ fn parse_header(json: &str) -> std::result::Result<RoughHeader, String> {
     if header.slice_rule != SLICE_RULE {
         return Err(format!("unknown slice rule '{}'", header.slice_rule));
     }
-    if !(2..=super::slices::MAX_SLICES).contains(&header.slices) {
+    if !(2..=slices::MAX_SLICES).contains(&header.slices) {
         return Err(format!(
             "{} slices (a rough table has 2 to {})",
             header.slices,
-            super::slices::MAX_SLICES
+            slices::MAX_SLICES
         ));
     }
     check_atlas(&header.atlas)?;
@@ -325,7 +328,7 @@ fn check_atlas(atlas: &Atlas) -> std::result::Result<(), String> {
                 scale_nm.is_finite() && scale_nm > 0.0 && radius.is_finite() && radius > 0.0
             }
         };
-        if c.side != 0 || !inside || !finite {
+        if c.side != Side::Front || !inside || !finite {
             return Err(format!(
                 "chart {k} is not a front chart of at least 2x2 texels inside the atlas with finite coordinates"
             ));
@@ -362,36 +365,32 @@ const MAX_ATLAS_SIDE: usize = 8192;
 /// smooth atlas first (its front charts and texels are slice 0), then the
 /// slices for `max_error`, measured against irid's rough reflectance.
 /// `progress` receives one line per stage.
-pub fn bake_rough(
-    spec: &crate::lut::BakeSpec,
-    max_error: f64,
-    progress: &dyn Fn(&str),
-) -> Result<RoughLut> {
+pub fn bake_rough(spec: &BakeSpec, max_error: f64, progress: &dyn Fn(&str)) -> Result<RoughLut> {
     if !(max_error > 0.0 && max_error.is_finite()) {
         return Err(Error::invalid(
             "rough-max-error",
             format!("{max_error} is not a positive number"),
         ));
     }
-    if spec.kind != crate::lut::Kind::Rgb {
+    if spec.kind != Kind::Rgb {
         return Err(Error::invalid(
             "rough",
             "a rough table holds the rgb colour F_eff; a spectral table cannot hold it (bake --kind rgb)",
         ));
     }
-    if spec.layout() != crate::lut::Layout::Atlas {
+    if spec.layout() != Layout::Atlas {
         return Err(Error::invalid(
             "rough",
             "a rough table is built on the atlas: bake with an error target, not --resolution or --layout grid",
         ));
     }
-    let smooth = crate::lut::bake(spec)?;
+    let smooth = super::bake(spec)?;
     let header = smooth.header();
     let table = header
         .atlas
         .as_ref()
         .ok_or_else(|| Error::invalid("rough", "the smooth bake gave no atlas"))?;
-    super::refuse_unsought_band(table.critical_band_cos.map(|[lo, hi]| (lo, hi)))?;
+    crate::rough::refuse_unsought_band(table.critical_band_cos.map(|[lo, hi]| (lo, hi)))?;
     let channels = header.channel_names().len();
     let image = Image {
         width: table.atlas.width,
@@ -401,7 +400,7 @@ pub fn bake_rough(
     };
     let integrator = SpectralIntegrator::with_white(spec.sampling, spec.white);
     let film = crate::atlas::Film::new(&spec.stack, spec.layer, integrator.clone())?;
-    let request = super::slices::SliceRequest {
+    let request = slices::SliceRequest {
         film: &film,
         atlas: &table.atlas,
         image: &image,
@@ -409,7 +408,7 @@ pub fn bake_rough(
         max_side: MAX_ATLAS_SIDE,
         reference: None,
     };
-    let built = super::slices::build(&spec.stack, spec.layer, &integrator, &request, progress)?;
+    let built = slices::build(&spec.stack, spec.layer, &integrator, &request, progress)?;
     Ok(RoughLut::new(
         built,
         &spec.stack,
