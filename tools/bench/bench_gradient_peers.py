@@ -20,8 +20,9 @@ all 20 thicknesses, in float64 on the CPU.
 Peers, each where it imports: tmm_fast (PyTorch), tmmax (JAX). difftmm is
 not timed: its isotropic solver hard-codes complex64 (single precision).
 
-Times are medians of --repeat runs in this process; every implementation
-uses the threads it takes by default on this machine.
+Times are medians of --repeat runs in this process. irid and JAX use all
+the machine's cores (their default); tmm_fast is timed with torch on one
+thread (Debian's torch's default here) and on all cores.
 
 Usage: python tools/bench/bench_gradient_peers.py [--repeat N]
 Prints a Markdown table. Exits non-zero if a peer's gradient differs from
@@ -29,6 +30,7 @@ irid's by more than 1e-6 relative (max over layers / max |gradient|).
 """
 
 import argparse
+import os
 import platform
 import statistics
 import sys
@@ -80,10 +82,13 @@ def irid_forward():
     return irid_stack().solve(WAVELENGTHS_NM, ANGLES_DEG)["R"].sum()
 
 
-def tmm_fast_gradient():
-    """sum(R) and its gradient by tmm_fast's coh_tmm and torch autograd."""
+def tmm_fast_gradient(threads):
+    """sum(R) and its gradient by tmm_fast's coh_tmm and torch autograd,
+    torch running `threads` intra-op threads."""
     import torch
     import tmm_fast
+
+    torch.set_num_threads(threads)
 
     n = np.array([AMBIENT, *layer_indices(), SUBSTRATE], dtype=np.complex128)
     N = torch.from_numpy(np.repeat(n[None, :, None], WAVELENGTHS_NM.size, axis=2))
@@ -180,13 +185,22 @@ def tmmax_gradient():
     return run
 
 
-PEERS = {"tmm_fast": tmm_fast_gradient, "tmmax": tmmax_gradient}
+# Debian's torch starts with one intra-op thread; it is timed with one and
+# with all cores, and the faster counts.
+PEERS = {
+    "tmm_fast": lambda: tmm_fast_gradient(1),
+    f"tmm_fast-{os.cpu_count()}-threads": lambda: tmm_fast_gradient(os.cpu_count()),
+    "tmmax": tmmax_gradient,
+}
 
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--repeat", type=int, default=20)
     parser.add_argument("--peers", default=",".join(PEERS), help="comma-separated, of " + ", ".join(PEERS))
+    # The torch-based and JAX-based peers may need different environments
+    # (Debian's torch wants Debian's numpy 1.24; jax wants numpy >= 2):
+    # a peer that does not import is left out with a note on stderr.
     args = parser.parse_args()
 
     loss, grad = irid_gradient()
