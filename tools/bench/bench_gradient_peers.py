@@ -24,7 +24,9 @@ Times are medians of --repeat runs in this process. irid and JAX use all
 the machine's cores (their default); tmm_fast is timed with torch on one
 thread (Debian's torch's default here) and on all cores.
 
-Usage: python tools/bench/bench_gradient_peers.py [--repeat N]
+Usage: python tools/bench/bench_gradient_peers.py [--repeat N] [--peers tmmax,tmm_fast,...]
+(benches/results/2026-12-07-amd-epyc-2core-gradient/SETUP.md has the two
+virtualenvs and the commands.)
 Prints a Markdown table. Exits non-zero if a peer's gradient differs from
 irid's by more than 1e-6 relative (max over layers / max |gradient|).
 """
