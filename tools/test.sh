@@ -5,7 +5,8 @@
 # pip, and gcc, it installs what the checks need before running them: Python
 # virtualenvs under .venv*/ (from PyPI), and, through apt-get as root, the
 # Debian packages a check needs (the software Vulkan driver, Chromium, the X
-# libraries Blender's Python module links). Each step exits non-zero on a
+# libraries Blender's Python module links, the CPU-only PyTorch the autodiff
+# test uses). Each step exits non-zero on a
 # failure and the script stops at the first one.
 set -euo pipefail
 cd "$(dirname "$0")/.."

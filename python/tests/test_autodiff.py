@@ -2,7 +2,10 @@
 (torch.autograd.Function). Each test runs where its framework is installed
 (jax from PyPI, CPU; torch from Debian's python3-torch): the gradient of a
 loss through the adapter against the loss's own finite difference and
-against irid's dR_dd / dT_dd contracted by hand."""
+against irid's dR_dd / dT_dd contracted by hand. With IRID_REQUIRE_TORCH=1
+(tools/ci/python.sh's torch run) a missing torch fails instead of skipping."""
+
+import os
 
 import numpy as np
 import pytest
@@ -67,7 +70,10 @@ def test_jax():
 
 
 def test_torch():
-    torch = pytest.importorskip("torch")
+    if os.environ.get("IRID_REQUIRE_TORCH") == "1":
+        import torch
+    else:
+        torch = pytest.importorskip("torch")
     d = torch.tensor(D0, dtype=torch.float64, requires_grad=True)
     R, T = irid.autodiff.torch_solve(STACK, d, WAVELENGTHS, ANGLES)
     loss = torch.sum((R - torch.from_numpy(TARGET_R)) ** 2) + 0.1 * torch.sum(T)
