@@ -9,6 +9,7 @@ use pyo3::types::{IntoPyDict, PyComplex, PyDict, PyList, PyString, PyTuple};
 use rayon::prelude::*;
 
 use irid::color::{stack_colors, FilmColor, Sampling, SpectralIntegrator, White};
+use irid::optics::solver::power;
 use irid::optics::spec::{IndexSpec, MediumSpec};
 use irid::optics::{
     library, solve, solve_amplitudes, solve_mixed, Layer, Material, Response, Stack, StackGrid,
@@ -767,8 +768,14 @@ fn solve_points(
                 p.power = [r.rs, r.rp, r.ts, r.tp, r.r(), r.t()];
                 continue;
             }
-            let r = solve(n, &d, wavelengths[i], c);
+            // One recursion gives both: the power from the amplitudes is
+            // what `solve` computes (it differs only at grazing, cos θ = 0).
             let a = solve_amplitudes(n, &d, wavelengths[i], c);
+            let r = if c > 0.0 {
+                power(n, c, &a)
+            } else {
+                solve(n, &d, wavelengths[i], c)
+            };
             p.power = [r.rs, r.rp, r.ts, r.tp, r.r(), r.t()];
             p.amplitudes = [a.rs, a.rp, a.ts, a.tp];
         }
