@@ -271,10 +271,14 @@ fn check_charts(case: &Case) {
             assert!(on_edge, "{}: no band ends at cos θc {cc}", case.name);
         }
         let symmetric = seen.stack == spec.stack;
-        let own = u32::from(side.side == Side::Back && !symmetric);
+        let own = if side.side == Side::Back && !symmetric {
+            Side::Back
+        } else {
+            Side::Front
+        };
         assert!(
             charts.iter().all(|c| c.side == own),
-            "{}: {:?} reads side {own}",
+            "{}: {:?} reads side {own:?}",
             case.name,
             side.side
         );

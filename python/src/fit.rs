@@ -233,6 +233,7 @@ fn results<'py>(
 /// The thicknesses whose reflected colours are closest in ΔE00 to targets.
 #[pyfunction]
 #[pyo3(signature = (stack, vary, angles_deg, target_rgb, white="d65", roughness=None, bounds=None))]
+#[allow(clippy::too_many_arguments)] // Python's keyword arguments, one each
 pub fn fit_color<'py>(
     py: Python<'py>,
     stack: &PyStack,

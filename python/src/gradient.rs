@@ -17,6 +17,12 @@ use crate::budget::Footprint;
 use crate::pool::compute;
 use crate::py_error;
 
+/// One output array of a gradient grid: its value at a point index.
+type GridColumn = dyn Fn(&GradientGrid, usize) -> f64;
+
+/// One output array of the colour gradients: its rows per layer.
+type ColourColumn = fn(&ColorGradient) -> &Vec<[f64; 3]>;
+
 /// Fewest points × layers of a gradient solve that go to the thread pool.
 const PARALLEL_MIN_POINTS: usize = 2048;
 
@@ -82,7 +88,7 @@ pub fn add_solve_gradient(
         }
         out
     };
-    let keys: [(&str, &dyn Fn(&GradientGrid, usize) -> f64); 6] = [
+    let keys: [(&str, &GridColumn); 6] = [
         ("dRs_dd", &|g, i| g.d_rs[i]),
         ("dRp_dd", &|g, i| g.d_rp[i]),
         ("dTs_dd", &|g, i| g.d_ts[i]),
@@ -126,7 +132,7 @@ pub fn add_color_gradient(
     layers: usize,
     colours: &[ColorGradient],
 ) -> PyResult<()> {
-    let keys: [(&str, fn(&ColorGradient) -> &Vec<[f64; 3]>); 4] = [
+    let keys: [(&str, ColourColumn); 4] = [
         ("dreflectance_rgb_dd", |c| &c.d_reflectance_rgb),
         ("dtransmittance_rgb_dd", |c| &c.d_transmittance_rgb),
         ("dreflectance_xyz_dd", |c| &c.d_reflectance_xyz),
