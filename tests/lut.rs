@@ -6,8 +6,9 @@
 #![allow(missing_docs)]
 
 mod common;
+mod tables;
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use common::Scratch;
 #[cfg(feature = "cli")]
@@ -16,32 +17,7 @@ use irid::color::Sampling;
 use irid::lut::{bake, validate, BakeSpec, Kind, Layout, Lut, Resolution};
 use irid::optics::{Layer, Material, Stack};
 use rand::{Rng, SeedableRng};
-
-fn luts_dir() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("luts")
-}
-
-/// A spec small enough for a test: 31 wavelengths instead of 471.
-fn quick_spec(stack: Stack, thickness_nm: (f64, f64), max_error: f64) -> BakeSpec {
-    let mut spec = BakeSpec::new(stack);
-    spec.thickness_nm = thickness_nm;
-    spec.sampling = Sampling::Uniform(31);
-    spec.resolution = Resolution::MaxError(max_error);
-    spec
-}
-
-fn worst(values: &[f64]) -> f64 {
-    values.iter().cloned().fold(0.0, f64::max)
-}
-
-/// The largest error of a validation where the table's target applies:
-/// above an atlas table's aliased strip, everywhere for a grid.
-fn worst_targeted(stats: &irid::lut::ErrorStats) -> f64 {
-    match stats.regions.iter().find(|r| r.name == "resolved") {
-        Some(r) => r.max_abs,
-        None => worst(&stats.max_abs),
-    }
-}
+use tables::{luts_dir, quick_spec, worst, worst_targeted};
 
 /// Bakes, then validates at fresh random points: the table must meet the
 /// bound recorded in its header (the --max-error target, which the bake
