@@ -7,6 +7,7 @@
 mod common;
 mod tables;
 
+#[cfg(feature = "cli")]
 use std::path::Path;
 
 #[cfg(feature = "cli")]
