@@ -134,46 +134,41 @@ fn solve_chunks(
 }
 
 /// Adds the derivative arrays of `chunks` (runs of wavelengths, in order)
-/// to `result`, each of `shape` (layers, wavelengths, angles).
+/// to `result`, each of `shape` (layers, wavelengths, angles). The six are
+/// views of one array: one allocation whose pages the allocator keeps
+/// from call to call, where six fresh ones of this size went back to the
+/// system on every call and page-faulted in again, which cost more than
+/// the solve.
 fn add_derivatives(
     py: Python<'_>,
     result: &Bound<'_, PyDict>,
     chunks: &[GradientGrid],
     shape: [usize; 3],
 ) -> PyResult<()> {
-    let [layers, _, angles] = shape;
-    let size = shape.iter().product();
+    let [layers, wavelengths, angles] = shape;
+    let size = layers * wavelengths * angles;
     // Layer l's rows of a chunk: its wavelengths × angles, contiguous.
     let rows =
         |c: &GradientGrid, l: usize| l * c.wavelengths * angles..(l + 1) * c.wavelengths * angles;
-    let polarized: [(&str, DerivativeColumn); 4] = [
-        ("dRs_dd", |g| &g.d_rs),
-        ("dRp_dd", |g| &g.d_rp),
-        ("dTs_dd", |g| &g.d_ts),
-        ("dTp_dd", |g| &g.d_tp),
-    ];
-    for (key, f) in polarized {
-        let mut out = Vec::with_capacity(size);
+    let polarized: [DerivativeColumn; 4] = [|g| &g.d_rs, |g| &g.d_rp, |g| &g.d_ts, |g| &g.d_tp];
+    let mut all = Vec::with_capacity(6 * size);
+    for f in polarized {
         for l in 0..layers {
             for c in chunks {
-                out.extend_from_slice(&f(c)[rows(c, l)]);
+                all.extend_from_slice(&f(c)[rows(c, l)]);
             }
         }
-        result.set_item(key, array(py, out, &shape)?)?;
     }
-    let unpolarized: [(&str, DerivativeColumn, DerivativeColumn); 2] = [
-        ("dR_dd", |g| &g.d_rs, |g| &g.d_rp),
-        ("dT_dd", |g| &g.d_ts, |g| &g.d_tp),
-    ];
-    for (key, s, p) in unpolarized {
-        let mut out = Vec::with_capacity(size);
-        for l in 0..layers {
-            for c in chunks {
-                let (s, p) = (&s(c)[rows(c, l)], &p(c)[rows(c, l)]);
-                out.extend(s.iter().zip(p).map(|(s, p)| 0.5 * (s + p)));
-            }
+    // dR_dd and dT_dd: the means of the s and p blocks just written.
+    for (s, p) in [(0, 1), (2, 3)] {
+        for i in 0..size {
+            all.push(0.5 * (all[s * size + i] + all[p * size + i]));
         }
-        result.set_item(key, array(py, out, &shape)?)?;
+    }
+    let block = array(py, all, &[6, layers, wavelengths, angles])?;
+    let keys = ["dRs_dd", "dRp_dd", "dTs_dd", "dTp_dd", "dR_dd", "dT_dd"];
+    for (k, key) in keys.into_iter().enumerate() {
+        result.set_item(key, block.get_item(k)?)?;
     }
     Ok(())
 }
