@@ -385,8 +385,9 @@ impl PyStack {
     ///
     /// gradient=True adds the exact derivatives by every layer's thickness
     /// (per nm, layers top down; docs/inverse.md): dRs_dd, dRp_dd, dTs_dd,
-    /// dTp_dd, dR_dd, dT_dd, each of shape (layers, wavelengths, angles).
-    /// Not with a `thickness_nm` sweep.
+    /// dTp_dd, dR_dd, dT_dd, each of shape (layers, wavelengths, angles)
+    /// (views of one array), from the same single solve as R, T and the
+    /// amplitudes. Not with a `thickness_nm` sweep.
     #[pyo3(signature = (wavelengths_nm, angles_deg, thickness_nm=None, layer=None, gradient=false))]
     fn solve<'py>(
         &self,
