@@ -37,6 +37,10 @@ fn quick_bench_writes_a_consistent_report() {
         "| method | ns / eval | vs exact | max abs ΔR | p99 abs ΔR | mean ΔE00 | max ΔE00 |",
         "| method | ns / eval | vs exact | max abs ΔR | p99 abs ΔR | mean ΔE00 | max ΔE00 | bake (s) |",
         "![speed vs error](speed-vs-error.png)",
+        "## Inverse design",
+        "| the same with ∂R, ∂T (s, p) by all 20 thicknesses | ",
+        "| 3-layer fit to one 401-wavelength spectrum (bounds ±50 %) | ",
+        " spectra/s | reported |",
     ] {
         assert!(report.contains(needle), "report.md lacks {needle:?}");
     }
@@ -211,4 +215,26 @@ fn rough_nodes_time_the_rough_engine() {
         "6,4",
     ])
     .assert_one_line_error("both", &[]);
+}
+
+/// `--inverse`: the inverse-design section alone, in inverse.md and on
+/// stdout; not with another mode.
+#[test]
+fn inverse_times_the_gradient_and_the_fits() {
+    let dir = Scratch::new("bench-inverse");
+    let out = irid([
+        "bench",
+        "--inverse",
+        "--repeat",
+        "1",
+        "-o",
+        dir.path().to_str().unwrap(),
+    ]);
+    assert!(out.success(), "{}", out.stderr);
+    let doc = std::fs::read_to_string(dir.path().join("inverse.md")).unwrap();
+    assert_eq!(doc, out.stdout);
+    for needle in ["× the forward | ≤ 3×", "ms | | < 50 ms", " spectra/s | "] {
+        assert!(doc.contains(needle), "inverse.md lacks {needle:?}:\n{doc}");
+    }
+    irid(["bench", "--inverse", "--tables"]).assert_one_line_error("both", &[]);
 }

@@ -129,6 +129,54 @@ fn fits_colours_at_angles() {
     }
 }
 
+/// A 2.0-index film on glass of 92 nm: at 0° alone its third order (near
+/// 358 nm) reflects a colour within 1 ΔE00, which the report says, in text
+/// and JSON; at 0°, 45° and 70° the fit is unique.
+#[test]
+fn says_when_the_colours_cannot_tell_two_thicknesses_apart() {
+    let dir = Scratch::new("fit-color-ambiguous");
+    let film = "ambient = { n = 1.0 }\nsubstrate = { n = 1.52 }\n\
+                [[layers]]\nn = 2.0\nthickness_nm = 92.0\n";
+    dir.write("film.toml", film);
+    let hidden = Stack::from_toml_str(film, &dir, "film").unwrap();
+    let integrator = SpectralIntegrator::new(Sampling::Exact);
+    let run_at = |angles: &[f64], json: bool| {
+        let mut args: Vec<String> = ["fit", "film.toml", "--vary", "1", "--bounds", "60:420"]
+            .map(String::from)
+            .to_vec();
+        for c in &stack_colors(&hidden, &integrator, angles).unwrap() {
+            let [r, g, b] = c.reflectance_rgb;
+            args.push("--color".into());
+            args.push(format!("{r},{g},{b}@{}", c.angle_deg));
+        }
+        if json {
+            args.push("--json".into());
+        }
+        let run = irid_in(&dir, &args);
+        assert!(run.success(), "{}", run.stderr);
+        run.stdout
+    };
+    let text = run_at(&[0.0], false);
+    let line = text
+        .lines()
+        .find(|l| l.starts_with("ambiguous: thicknesses 3"))
+        .unwrap_or_else(|| panic!("{text}"));
+    assert!(line.contains("within 1 of the best"), "{text}");
+    let fit: serde_json::Value = serde_json::from_str(&run_at(&[0.0], true)).unwrap();
+    let third = fit["alternatives"][0]["thickness_nm"][0].as_f64().unwrap();
+    assert!((third - 358.0).abs() < 10.0, "{fit}");
+    assert_eq!(fit["tolerance_de2000"].as_f64(), Some(1.0), "{fit}");
+
+    let text = run_at(&[0.0, 45.0, 70.0], false);
+    assert!(text.contains("unique: no other thickness"), "{text}");
+    let fit: serde_json::Value = serde_json::from_str(&run_at(&[0.0, 45.0, 70.0], true)).unwrap();
+    assert_eq!(
+        fit["alternatives"].as_array().map(Vec::len),
+        Some(0),
+        "{fit}"
+    );
+}
+
 #[test]
 fn bad_input_is_one_line_and_writes_nothing() {
     let dir = Scratch::new("fit-bad");

@@ -17,7 +17,7 @@ use irid::optics::gradient::{
     ResponseGradient,
 };
 use irid::optics::lanes::Path;
-use irid::optics::{Layer, Material, Response, Stack, StackGrid};
+use irid::optics::{solve_amplitudes, Layer, Material, Response, Stack, StackGrid};
 
 fn constant(n: C64) -> Material {
     Material::constant(n.re, n.im)
@@ -287,8 +287,9 @@ fn near_critical_layers() {
 
 /// The grid (the lanes for coherent stacks, each copy of the kernel, the
 /// scalar gradient for the points they leave) against the scalar gradient
-/// point by point, over random stacks of every kind, with grazing and
-/// near-critical points among them, and for a mixed stack.
+/// point by point, and a coherent grid's amplitudes against
+/// `solve_amplitudes`, over random stacks of every kind, with grazing and
+/// near-critical points among them, and for a mixed stack (no amplitudes).
 #[test]
 fn grid_matches_points() {
     let mut rng = Pcg64::seed_from_u64(401);
@@ -333,11 +334,30 @@ fn grid_matches_points() {
                 (got.layers, got.wavelengths, got.angles),
                 (stack.layers.len(), 11, 5)
             );
+            let coherent = stack.is_coherent();
+            assert_eq!(got.amplitudes.len(), if coherent { 55 } else { 0 });
             for (w, &wl) in wavelengths.iter().enumerate() {
                 for (a, &c) in cosines.iter().enumerate() {
                     let (r, g) = solve_with_gradient(stack, wl, c).unwrap();
                     let close =
                         |x: f64, y: f64, scale: f64| (x - y).abs() <= 1e-12 * scale.max(1.0);
+                    if coherent {
+                        let want =
+                            solve_amplitudes(grid.indices_at(w), &stack.thicknesses_nm(), wl, c);
+                        let have = got.amplitudes[w * 5 + a];
+                        let pairs = [
+                            (have.rs, want.rs),
+                            (have.rp, want.rp),
+                            (have.ts, want.ts),
+                            (have.tp, want.tp),
+                        ];
+                        assert!(
+                            pairs
+                                .iter()
+                                .all(|(x, y)| (x - y).norm() <= 1e-12 * y.norm().max(1.0)),
+                            "case {case} {path:?} amplitudes at ({w}, {a}): {have:?} vs {want:?}"
+                        );
+                    }
                     let resp = got.response[w * 5 + a];
                     assert!(
                         parts(&resp)

@@ -83,8 +83,12 @@ class Fit:
 
 class ColorFit:
     """The result of ``fit_color``: ``stack``, ``layers``, ``thickness_nm``,
-    ``angle_deg``, ``delta_e2000`` (per angle) and ``rgb`` (the fitted
-    colours, (angles, 3))."""
+    ``angle_deg``, ``delta_e2000`` (per angle), ``rgb`` (the fitted
+    colours, (angles, 3)), ``ambiguous``, ``tolerance_de2000`` and
+    ``alternatives``: a list of (thicknesses, ΔE00 per angle) of other
+    minima, more than 10 nm away, whose largest ΔE00 over the angles is
+    within ``tolerance_de2000`` of the best's: the colours at these angles
+    cannot tell them apart (add angles to decide)."""
 
     def __init__(self, fields):
         self.__dict__.update(fields)

@@ -226,6 +226,9 @@ class ColorFit:
     angle_deg: npt.NDArray[np.float64]
     delta_e2000: npt.NDArray[np.float64]
     rgb: npt.NDArray[np.float64]  # (angles, 3)
+    ambiguous: bool
+    tolerance_de2000: float
+    alternatives: List[Tuple[List[float], List[float]]]  # (thicknesses, ΔE00 per angle)
 
 def fit(
     stack: Stack,

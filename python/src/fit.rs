@@ -295,5 +295,12 @@ pub fn fit_color<'py>(
         array(py, fit.delta_e2000.clone(), &[angles.len()])?,
     )?;
     out.set_item("rgb", array(py, fit.rgb.concat(), &[angles.len(), 3])?)?;
+    out.set_item("ambiguous", fit.is_ambiguous())?;
+    out.set_item("tolerance_de2000", fit.tolerance_de2000)?;
+    let alternatives = PyList::empty(py);
+    for a in &fit.alternatives {
+        alternatives.append((a.thickness_nm.clone(), a.delta_e2000.clone()))?;
+    }
+    out.set_item("alternatives", alternatives)?;
     Ok(out)
 }

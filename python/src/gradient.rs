@@ -10,15 +10,23 @@ use rayon::prelude::*;
 use irid::color::gradient::{colors_with_gradient, ColorGradient};
 use irid::color::SpectralIntegrator;
 use irid::optics::gradient::{solve_stack_grid_with_gradient, GradientGrid};
-use irid::optics::{Stack, StackGrid};
+use irid::optics::{Amplitudes, Response, Stack, StackGrid};
+use num_complex::Complex64 as C64;
 
 use crate::arrays::array;
 use crate::budget::Footprint;
 use crate::pool::compute;
 use crate::py_error;
 
-/// One output array of a gradient grid: its value at a point index.
-type GridColumn = dyn Fn(&GradientGrid, usize) -> f64;
+/// One power output of `Stack.solve`: its value from a point's R and T.
+type PowerColumn = fn(&Response) -> f64;
+
+/// One amplitude output of `Stack.solve`: its value from a point's r and t.
+type AmplitudeColumn = fn(&Amplitudes) -> C64;
+
+/// One derivative array of a gradient grid, laid out (layer, wavelength,
+/// angle).
+type DerivativeColumn = fn(&GradientGrid) -> &Vec<f64>;
 
 /// One output array of the colour gradients: its rows per layer.
 type ColourColumn = fn(&ColorGradient) -> &Vec<[f64; 3]>;
@@ -26,35 +34,85 @@ type ColourColumn = fn(&ColorGradient) -> &Vec<[f64; 3]>;
 /// Fewest points × layers of a gradient solve that go to the thread pool.
 const PARALLEL_MIN_POINTS: usize = 2048;
 
-/// Wavelengths per task when the pool solves a gradient.
-const CHUNK_WAVELENGTHS: usize = 32;
+/// Tasks a large gradient solve is cut into: a few per core of the pool,
+/// so that a core slowed by other work leaves little for the others to
+/// wait on, while each task still fills whole lanes.
+const CHUNKS: usize = 8;
 
-/// Adds dRs_dd, dRp_dd, dTs_dd, dTp_dd, dR_dd and dT_dd, each of shape
-/// (layers, wavelengths, angles), to `result`, for the grid's stack at its
-/// own thicknesses. Raises ValueError where an incoherent layer lases.
-pub fn add_solve_gradient(
-    py: Python<'_>,
-    result: &Bound<'_, PyDict>,
+/// Fewest wavelengths per task when the pool solves a gradient.
+const MIN_CHUNK_WAVELENGTHS: usize = 16;
+
+/// `Stack.solve(..., gradient=True)` over the grid's stack at its own
+/// thicknesses: one sweep of the gradient lanes gives R and T, the
+/// amplitudes (coherent stacks) and the derivatives, so nothing is solved
+/// twice. The dict holds what `Stack.solve` returns (shape (wavelengths,
+/// angles)) plus dRs_dd, dRp_dd, dTs_dd, dTp_dd, dR_dd and dT_dd, each of
+/// shape (layers, wavelengths, angles). Raises ValueError where an
+/// incoherent layer lases.
+pub fn solve_with_gradient<'py>(
+    py: Python<'py>,
     grid: &StackGrid,
     cos_theta0: &[f64],
-) -> PyResult<()> {
+) -> PyResult<Bound<'py, PyDict>> {
     let layers = grid.thicknesses_nm().len();
     let (wavelengths, angles) = (grid.wavelengths_nm().len(), cos_theta0.len());
     Footprint::new()
-        .items(&[6, layers, wavelengths, angles], 16)
+        .items(&[7, layers + 2, wavelengths, angles], 16)
         .check(&format!(
             "the gradient of {layers} layers × {wavelengths} wavelengths × {angles} angles"
         ))?;
-    let points = wavelengths * angles;
-    let parallel = points * layers.max(1) >= PARALLEL_MIN_POINTS;
-    // Runs of wavelengths, each solved whole (the lanes take a coherent
-    // stack's points four or eight at a time), one run per task.
-    let run = if parallel {
-        CHUNK_WAVELENGTHS
-    } else {
-        wavelengths.max(1)
-    };
-    let chunks = compute(py, parallel, || {
+    let chunks = solve_chunks(py, grid, cos_theta0)?;
+    let result = PyDict::new(py);
+    let shape = [wavelengths, angles];
+    let responses = || chunks.iter().flat_map(|c| c.response.iter());
+    let powers: [(&str, PowerColumn); 6] = [
+        ("Rs", |r| r.rs),
+        ("Rp", |r| r.rp),
+        ("Ts", |r| r.ts),
+        ("Tp", |r| r.tp),
+        ("R", Response::r),
+        ("T", Response::t),
+    ];
+    for (key, f) in powers {
+        result.set_item(key, array(py, responses().map(f).collect(), &shape)?)?;
+    }
+    if grid.coherence().is_coherent() {
+        let amplitudes = || chunks.iter().flat_map(|c| c.amplitudes.iter());
+        let columns: [(&str, AmplitudeColumn); 4] = [
+            ("rs", |a| a.rs),
+            ("rp", |a| a.rp),
+            ("ts", |a| a.ts),
+            ("tp", |a| a.tp),
+        ];
+        for (key, f) in columns {
+            result.set_item(key, array(py, amplitudes().map(f).collect(), &shape)?)?;
+        }
+    }
+    add_derivatives(py, &result, &chunks, [layers, wavelengths, angles])?;
+    Ok(result)
+}
+
+/// The gradient grid of [`solve_with_gradient`] in runs of wavelengths,
+/// each solved whole (the lanes take a coherent stack's points four or
+/// eight at a time): on the thread pool, one run per task, when the grid is
+/// large enough to pay for the handoff, else as one run on this thread.
+fn solve_chunks(
+    py: Python<'_>,
+    grid: &StackGrid,
+    cos_theta0: &[f64],
+) -> PyResult<Vec<GradientGrid>> {
+    let layers = grid.thicknesses_nm().len();
+    let wavelengths = grid.wavelengths_nm().len();
+    let parallel = wavelengths * cos_theta0.len() * layers.max(1) >= PARALLEL_MIN_POINTS;
+    if !parallel {
+        return compute(py, false, || {
+            solve_stack_grid_with_gradient(grid, grid.thicknesses_nm(), cos_theta0)
+        })?
+        .map(|g| vec![g])
+        .map_err(py_error);
+    }
+    let run = wavelengths.div_ceil(CHUNKS).max(MIN_CHUNK_WAVELENGTHS);
+    let chunks = compute(py, true, || {
         let chunk = |w0: usize| -> irid::error::Result<GradientGrid> {
             let w1 = (w0 + run).min(wavelengths);
             let media = layers + 2;
@@ -67,40 +125,54 @@ pub fn add_solve_gradient(
             solve_stack_grid_with_gradient(&part, grid.thicknesses_nm(), cos_theta0)
         };
         let starts: Vec<usize> = (0..wavelengths).step_by(run).collect();
-        if parallel {
-            starts.into_par_iter().map(chunk).collect::<Vec<_>>()
-        } else {
-            starts.into_iter().map(chunk).collect()
-        }
+        starts.into_par_iter().map(chunk).collect::<Vec<_>>()
     })?;
-    let chunks: Vec<GradientGrid> = chunks
+    chunks
         .into_iter()
         .collect::<irid::error::Result<_>>()
-        .map_err(py_error)?;
-    let shape = [layers, wavelengths, angles];
-    let column = |f: &dyn Fn(&GradientGrid, usize) -> f64| -> Vec<f64> {
-        let mut out = Vec::with_capacity(layers * points);
+        .map_err(py_error)
+}
+
+/// Adds the derivative arrays of `chunks` (runs of wavelengths, in order)
+/// to `result`, each of `shape` (layers, wavelengths, angles). The six are
+/// views of one array: one allocation whose pages the allocator keeps
+/// from call to call, where six fresh ones of this size went back to the
+/// system on every call and page-faulted in again, which cost more than
+/// the solve.
+fn add_derivatives(
+    py: Python<'_>,
+    result: &Bound<'_, PyDict>,
+    chunks: &[GradientGrid],
+    shape: [usize; 3],
+) -> PyResult<()> {
+    let [layers, wavelengths, angles] = shape;
+    let size = layers * wavelengths * angles;
+    // Layer l's rows of a chunk: its wavelengths × angles, contiguous.
+    let rows =
+        |c: &GradientGrid, l: usize| l * c.wavelengths * angles..(l + 1) * c.wavelengths * angles;
+    let polarized: [DerivativeColumn; 4] = [|g| &g.d_rs, |g| &g.d_rp, |g| &g.d_ts, |g| &g.d_tp];
+    let mut all = Vec::with_capacity(6 * size);
+    for f in polarized {
         for l in 0..layers {
-            for c in &chunks {
-                let span = l * c.wavelengths * angles..(l + 1) * c.wavelengths * angles;
-                out.extend(span.map(|i| f(c, i)));
+            for c in chunks {
+                all.extend_from_slice(&f(c)[rows(c, l)]);
             }
         }
-        out
-    };
-    let keys: [(&str, &GridColumn); 6] = [
-        ("dRs_dd", &|g, i| g.d_rs[i]),
-        ("dRp_dd", &|g, i| g.d_rp[i]),
-        ("dTs_dd", &|g, i| g.d_ts[i]),
-        ("dTp_dd", &|g, i| g.d_tp[i]),
-        ("dR_dd", &|g, i| 0.5 * (g.d_rs[i] + g.d_rp[i])),
-        ("dT_dd", &|g, i| 0.5 * (g.d_ts[i] + g.d_tp[i])),
-    ];
-    for (key, f) in keys {
-        result.set_item(key, array(py, column(f), &shape)?)?;
+    }
+    // dR_dd and dT_dd: the means of the s and p blocks just written.
+    for (s, p) in [(0, 1), (2, 3)] {
+        for i in 0..size {
+            all.push(0.5 * (all[s * size + i] + all[p * size + i]));
+        }
+    }
+    let block = array(py, all, &[6, layers, wavelengths, angles])?;
+    let keys = ["dRs_dd", "dRp_dd", "dTs_dd", "dTp_dd", "dR_dd", "dT_dd"];
+    for (k, key) in keys.into_iter().enumerate() {
+        result.set_item(key, block.get_item(k)?)?;
     }
     Ok(())
 }
+
 /// The colours of `stack` at `angles` (degrees, checked by the caller) with
 /// their derivatives: the per-angle colours as `Stack.color` reports them,
 /// plus dreflectance_rgb_dd and dtransmittance_rgb_dd of shape

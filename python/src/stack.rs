@@ -385,8 +385,9 @@ impl PyStack {
     ///
     /// gradient=True adds the exact derivatives by every layer's thickness
     /// (per nm, layers top down; docs/inverse.md): dRs_dd, dRp_dd, dTs_dd,
-    /// dTp_dd, dR_dd, dT_dd, each of shape (layers, wavelengths, angles).
-    /// Not with a `thickness_nm` sweep.
+    /// dTp_dd, dR_dd, dT_dd, each of shape (layers, wavelengths, angles)
+    /// (views of one array), from the same single solve as R, T and the
+    /// amplitudes. Not with a `thickness_nm` sweep.
     #[pyo3(signature = (wavelengths_nm, angles_deg, thickness_nm=None, layer=None, gradient=false))]
     fn solve<'py>(
         &self,
@@ -450,6 +451,9 @@ impl PyStack {
             ))?;
         let grid = StackGrid::new(&self.stack, &wavelengths).map_err(py_error)?;
         let cos_theta0: Vec<f64> = angles.iter().map(|a| a.to_radians().cos()).collect();
+        if gradient {
+            return crate::gradient::solve_with_gradient(py, &grid, &cos_theta0);
+        }
         let parallel = shape.iter().product::<usize>() >= SOLVE_PARALLEL_MIN_POINTS;
         let solve =
             |cancel: &Cancel| solve_points(&grid, &cos_theta0, sweep.as_ref(), parallel, cancel);
@@ -465,9 +469,6 @@ impl PyStack {
         for (k, key) in ["Rs", "Rp", "Ts", "Tp", "R", "T"].into_iter().enumerate() {
             let column = points.iter().map(|p| p.power[k]).collect();
             result.set_item(key, array(py, column, &shape)?)?;
-        }
-        if gradient {
-            crate::gradient::add_solve_gradient(py, &result, &grid, &cos_theta0)?;
         }
         if !self.stack.is_coherent() {
             return Ok(result);

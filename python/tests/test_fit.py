@@ -78,6 +78,24 @@ def test_color_fit_reaches_reachable_targets():
     np.testing.assert_allclose(got, fit.rgb, atol=1e-12)
 
 
+def test_color_fit_says_when_one_angle_cannot_tell_orders_apart():
+    # A 2.0-index film on glass: at 0 deg its first order (92 nm) and its
+    # third (near 358 nm) reflect colours within 1 ΔE00; at 0, 45 and 70 deg
+    # they differ by tens.
+    hidden = irid.Stack(1.0, [(2.0, 92.0)], 1.52)
+    guess = irid.Stack(1.0, [(2.0, 200.0)], 1.52)
+    one = irid.fit_color(guess, [1], [0.0], hidden.color([0.0])["reflectance_rgb"], bounds=[(60.0, 420.0)])
+    assert abs(one.thickness_nm[0] - 92.0) < 0.5, one
+    assert one.ambiguous and one.tolerance_de2000 == 1.0
+    thicknesses, delta_e = one.alternatives[0]
+    assert abs(thicknesses[0] - 358.0) < 10.0, one.alternatives
+    assert max(delta_e) <= max(one.delta_e2000) + one.tolerance_de2000
+    angles = [0.0, 45.0, 70.0]
+    three = irid.fit_color(guess, [1], angles, hidden.color(angles)["reflectance_rgb"], bounds=[(60.0, 420.0)])
+    assert abs(three.thickness_nm[0] - 92.0) < 0.5, three
+    assert not three.ambiguous and three.alternatives == []
+
+
 def test_color_fit_of_a_rough_film():
     hidden = irid.Stack(1.0, [(1.33, 380.0)], 1.0)
     angles = [0.0, 45.0]

@@ -4,6 +4,7 @@ use std::path::Path;
 
 use crate::error::{Error, Result};
 
+use super::inverse::InverseFigures;
 use super::machine::Machine;
 use super::plot::{speed_vs_error_png, PlotPoint};
 use super::renders::RenderRow;
@@ -190,7 +191,7 @@ fn fmt_err(v: f64) -> String {
 pub fn markdown(
     rows: &[Row],
     skipped: &[Skipped],
-    renders: &[RenderRow],
+    sections: &Sections<'_>,
     options: &Options,
     machine: &Machine,
     command: &str,
@@ -200,10 +201,23 @@ pub fn markdown(
     for (name, description) in descriptions() {
         s.push_str(&stack_markdown(name, description, rows, skipped));
     }
-    if !renders.is_empty() {
-        s.push_str(&renders_markdown(renders, machine.threads));
+    if !sections.renders.is_empty() {
+        s.push_str(&renders_markdown(sections.renders, machine.threads));
+    }
+    if let Some(inverse) = sections.inverse {
+        s.push_str(&super::inverse::markdown(inverse));
     }
     s
+}
+
+/// The report's sections after the per-stack tables, each left out when
+/// empty.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Sections<'a> {
+    /// Full renders with each table mode.
+    pub renders: &'a [RenderRow],
+    /// Inverse design's speed ([`super::inverse`]).
+    pub inverse: Option<&'a InverseFigures>,
 }
 
 fn is_exact(method: &Method) -> bool {
@@ -358,15 +372,18 @@ pub fn write_all(
     dir: &Path,
     rows: &[Row],
     skipped: &[Skipped],
-    renders: &[RenderRow],
+    sections: &Sections<'_>,
     options: &Options,
     machine: &Machine,
     command: &str,
 ) -> Result<()> {
     std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
     crate::atomic::write(&dir.join("results.csv"), csv(rows).as_bytes())?;
-    if !renders.is_empty() {
-        crate::atomic::write(&dir.join("renders.csv"), renders_csv(renders).as_bytes())?;
+    if !sections.renders.is_empty() {
+        crate::atomic::write(
+            &dir.join("renders.csv"),
+            renders_csv(sections.renders).as_bytes(),
+        )?;
     }
     let points: Vec<PlotPoint> = summarize(rows)
         .iter()
@@ -402,7 +419,7 @@ pub fn write_all(
     )?;
     crate::atomic::write(
         &dir.join("report.md"),
-        markdown(rows, skipped, renders, options, machine, command).as_bytes(),
+        markdown(rows, skipped, sections, options, machine, command).as_bytes(),
     )
 }
 
@@ -424,7 +441,7 @@ mod tests {
         let text = markdown(
             &[],
             &skipped,
-            &[],
+            &Sections::default(),
             &Options::quick(),
             &Machine::current(),
             "irid bench",

@@ -34,12 +34,15 @@ pub struct Options {
     pub render_scenes: Vec<&'static str>,
     /// (width, height) in pixels of each full render.
     pub render_size: (u32, u32),
+    /// Runs of each inverse-design workload (gradient, fits) the report
+    /// gives the fastest of.
+    pub inverse_repeat: usize,
 }
 
 impl Options {
     /// The published benchmark: 10 000 points per stack, four LUT
-    /// resolutions from 16×8 to 1024×64 with f16 copies, and two scenes
-    /// rendered at 160×120.
+    /// resolutions from 16×8 to 1024×64 with f16 copies, two scenes
+    /// rendered at 160×120, and the inverse-design workloads 20 times.
     pub fn full() -> Options {
         Options {
             points: 10_000,
@@ -48,6 +51,7 @@ impl Options {
             lut_half: true,
             render_scenes: vec!["bubbles-noise", "absorbing-sphere"],
             render_size: (160, 120),
+            inverse_repeat: 20,
         }
     }
 
@@ -60,6 +64,7 @@ impl Options {
             lut_half: true,
             render_scenes: vec!["absorbing-sphere"],
             render_size: (32, 24),
+            inverse_repeat: 2,
         }
     }
 }

@@ -69,6 +69,12 @@ pub struct Args {
     /// (no other report).
     #[arg(long, conflicts_with_all = ["grid", "quick", "tables"])]
     pub rough: bool,
+    /// Time only the inverse-design workloads (the gradient against the
+    /// forward solve, a 3-layer fit, the batched fit), each the fastest of
+    /// --repeat runs, and write them to inverse.md in the run directory (the
+    /// full report has the same section).
+    #[arg(long, conflicts_with_all = ["grid", "quick", "tables", "rough"])]
+    pub inverse: bool,
     /// Write R then T as little-endian f64 arrays, [angle][thickness][wavelength],
     /// to this file instead of printing them in the JSON.
     #[arg(long, value_name = "PATH")]
@@ -83,6 +89,11 @@ pub fn run(args: Args) -> Result<ExitCode> {
     }
     if args.tables {
         with_threads(Some(args.threads), || run_tables(&args))??;
+        return Ok(ExitCode::SUCCESS);
+    }
+    if args.inverse {
+        check_count("--repeat", args.repeat, MAX_REPEAT)?;
+        with_threads(Some(args.threads), || run_inverse(&args))??;
         return Ok(ExitCode::SUCCESS);
     }
     match &args.grid {
@@ -151,6 +162,22 @@ fn run_rough_tables(args: &Args) -> Result<()> {
     Ok(())
 }
 
+fn run_inverse(args: &Args) -> Result<()> {
+    let (command, machine, out) = run_setting(args);
+    eprintln!("irid bench --inverse on {}", machine.summary());
+    let figures = irid::bench::inverse::run(args.repeat)?;
+    let doc = format!(
+        "# irid bench --inverse\n\n`{command}` on {}, {} threads.\n{}",
+        machine.summary(),
+        args.threads,
+        irid::bench::inverse::markdown(&figures)
+    );
+    std::fs::create_dir_all(&out).with_context(|| out.display().to_string())?;
+    irid::atomic::write(&out.join("inverse.md"), doc.as_bytes())?;
+    print!("{doc}");
+    Ok(())
+}
+
 fn run_report(args: &Args) -> Result<()> {
     let mut options = if args.quick {
         run::Options::quick()
@@ -174,8 +201,13 @@ fn run_report(args: &Args) -> Result<()> {
     let renders = renders::run(&options.render_scenes, width, height, &cache);
     let _ = std::fs::remove_dir_all(&cache);
     let renders = renders?;
+    let inverse = irid::bench::inverse::run(options.inverse_repeat)?;
+    let sections = report::Sections {
+        renders: &renders,
+        inverse: Some(&inverse),
+    };
     report::write_all(
-        &out, &rows, &skipped, &renders, &options, &machine, &command,
+        &out, &rows, &skipped, &sections, &options, &machine, &command,
     )?;
     irid::atomic::write(
         &out.join("SETUP.md"),
@@ -203,6 +235,12 @@ fn run_report(args: &Args) -> Result<()> {
             r.scene, r.mode, r.render_s, r.mean_de2000
         );
     }
+    eprintln!(
+        "  gradient of 20 layers × 401 × 3: {:.2}× the forward; 3-layer fit {:.1} ms; batched fit {:.0} spectra/s",
+        inverse.gradient_ratio(),
+        inverse.fit_s * 1e3,
+        inverse.spectra_per_second()
+    );
     eprintln!("wrote {}", out.join("report.md").display());
     Ok(())
 }

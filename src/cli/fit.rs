@@ -221,5 +221,21 @@ fn color_report(fit: &ColorFit, json: bool) -> Result<String> {
             rgb[0], rgb[1], rgb[2]
         )?;
     }
+    let tolerance = fit.tolerance_de2000;
+    if fit.alternatives.is_empty() {
+        writeln!(
+            text,
+            "unique: no other thickness matches within ΔE00 {tolerance} of the best"
+        )?;
+    }
+    for alt in &fit.alternatives {
+        let at: Vec<String> = alt.thickness_nm.iter().map(|d| format!("{d:.3}")).collect();
+        let worst = alt.delta_e2000.iter().copied().fold(0.0, f64::max);
+        writeln!(
+            text,
+            "ambiguous: thicknesses {} nm match as well (largest ΔE00 {worst:.3}, within {tolerance} of the best): add angles to tell them apart",
+            at.join(", ")
+        )?;
+    }
     Ok(text)
 }

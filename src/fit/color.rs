@@ -11,6 +11,7 @@
 
 use serde::Serialize;
 
+use super::lm::Minimum;
 use super::search::{self, Library, Loss, Model};
 use super::vary::Vary;
 use super::SCAN_BUDGET;
@@ -43,7 +44,41 @@ pub struct ColorFit {
     pub delta_e2000: Vec<f64>,
     /// The fitted stack's colour at each angle (linear sRGB).
     pub rgb: Vec<[f64; 3]>,
+    /// Other minima whose colours match as well: their largest ΔE00 over
+    /// the angles within [`Self::tolerance_de2000`] of the best's, at
+    /// thicknesses more than a scan step away (another interference order,
+    /// say). The colours at these angles cannot tell them from the best.
+    pub alternatives: Vec<ColorAlternative>,
+    /// The ΔE00 margin of [`Self::alternatives`]: [`AMBIGUITY_DE2000`].
+    pub tolerance_de2000: f64,
 }
+
+/// A colour fit's minimum other than the best.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct ColorAlternative {
+    /// Its thicknesses, nm, in the order of [`ColorFit::layers`].
+    pub thickness_nm: Vec<f64>,
+    /// Its ΔE00 against the target at each angle.
+    pub delta_e2000: Vec<f64>,
+}
+
+impl ColorFit {
+    /// True when another thickness matches the colours as well.
+    pub fn is_ambiguous(&self) -> bool {
+        !self.alternatives.is_empty()
+    }
+}
+
+/// How much worse (largest ΔE00 over the angles) another minimum may match
+/// and still count as matching as well: one ΔE00, about the smallest
+/// colour difference an observer notices side by side.
+pub const AMBIGUITY_DE2000: f64 = 1.0;
+
+/// How far (nm, in some varied layer) another minimum must lie from the
+/// best to be another optimum rather than the same one: a few nm move a
+/// film's colour by several ΔE00, interference orders lie 100 nm or more
+/// apart.
+pub const AMBIGUITY_MIN_NM: f64 = 10.0;
 
 /// Fits `vary`'s layers of `stack` so that its reflected colours under
 /// `white` match `targets`; with `roughness`, the rough film's colours.
@@ -71,6 +106,7 @@ pub fn fit_color(
     let library = Library::new(&model, &vary.bounds_nm, &vary.start(stack), SCAN_BUDGET)?;
     let found = search::search(&model, &loss, &library, &vary.bounds_nm)?;
     let best = &found.minima[0];
+    let alternatives = alternatives(&found.minima);
     let fitted = vary.apply(stack, &best.x);
     let angles: Vec<f64> = targets.iter().map(|t| t.angle_deg).collect();
     let rgb: Vec<[f64; 3]> = match roughness {
@@ -93,7 +129,36 @@ pub fn fit_color(
             .collect(),
         angle_deg: angles,
         rgb,
+        alternatives,
+        tolerance_de2000: AMBIGUITY_DE2000,
     })
+}
+
+/// The minima after the best (`minima` ascending) that match the targets
+/// as well, in [`ColorFit::alternatives`]' sense, each more than
+/// [`AMBIGUITY_MIN_NM`] from the best and from those kept before it (two
+/// refinements that stop a little apart on one optimum are one).
+fn alternatives(minima: &[Minimum]) -> Vec<ColorAlternative> {
+    let worst = |m: &Minimum| m.residuals.iter().copied().fold(0.0, f64::max);
+    let far = |a: &[f64], b: &[f64]| {
+        a.iter()
+            .zip(b)
+            .any(|(a, b)| (a - b).abs() > AMBIGUITY_MIN_NM)
+    };
+    let best = &minima[0];
+    let mut kept: Vec<ColorAlternative> = Vec::new();
+    for m in &minima[1..] {
+        if worst(m) <= worst(best) + AMBIGUITY_DE2000
+            && far(&m.x, &best.x)
+            && kept.iter().all(|k| far(&m.x, &k.thickness_nm))
+        {
+            kept.push(ColorAlternative {
+                thickness_nm: m.x.clone(),
+                delta_e2000: m.residuals.clone(),
+            });
+        }
+    }
+    kept
 }
 
 /// Checks one target: its angle in [0, 90) and its colour one a passive

@@ -18,7 +18,9 @@ mod spectrum;
 mod stack_file;
 mod vary;
 
-pub use color::{check_target, fit_color, ColorFit, ColorTarget};
+pub use color::{
+    check_target, fit_color, ColorAlternative, ColorFit, ColorTarget, AMBIGUITY_DE2000,
+};
 pub use csv::{parse_spectrum_csv, read_spectrum_csv};
 pub use lm::{minimize, Minimum, Options, Residuals};
 pub use spectrum::Measurement;

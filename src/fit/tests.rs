@@ -168,3 +168,46 @@ fn unreachable_colours_are_refused() {
     }];
     assert!(fit_color(&guess, &vary, &grey, crate::color::White::D65, None).is_ok());
 }
+
+/// A 2.0-index film on glass: at normal incidence its first order (92 nm)
+/// and its third (near 358 nm) reflect colours about 1 ΔE apart, so one
+/// angle cannot tell them apart and the fit says so; at 0°, 45° and 70°
+/// their colours differ by tens of ΔE and the fit is unique, at the truth.
+#[test]
+fn colour_fit_says_when_one_angle_cannot_tell_orders_apart() {
+    use crate::color::{stack_colors, Sampling, SpectralIntegrator, White};
+    let integrator = SpectralIntegrator::new(Sampling::Exact);
+    let truth = [92.0];
+    let hidden = hidden_stack(&truth, &[2.0]);
+    let guess = hidden_stack(&[200.0], &[2.0]);
+    let vary = Vary::new(&guess, &[1], Some(&[(60.0, 420.0)]), "vary", "bounds").unwrap();
+    let targets_at = |angles: &[f64]| -> Vec<ColorTarget> {
+        stack_colors(&hidden, &integrator, angles)
+            .unwrap()
+            .iter()
+            .map(|c| ColorTarget {
+                angle_deg: c.angle_deg,
+                rgb: c.reflectance_rgb,
+            })
+            .collect()
+    };
+
+    let one = fit_color(&guess, &vary, &targets_at(&[0.0]), White::D65, None).unwrap();
+    assert!((one.thickness_nm[0] - 92.0).abs() < 0.5, "{one:?}");
+    assert!(one.is_ambiguous(), "{one:?}");
+    assert_eq!(one.tolerance_de2000, AMBIGUITY_DE2000);
+    let third = &one.alternatives[0];
+    assert!((third.thickness_nm[0] - 358.0).abs() < 10.0, "{one:?}");
+    assert!(third.delta_e2000[0] <= one.delta_e2000[0] + AMBIGUITY_DE2000);
+
+    let three = fit_color(
+        &guess,
+        &vary,
+        &targets_at(&[0.0, 45.0, 70.0]),
+        White::D65,
+        None,
+    )
+    .unwrap();
+    assert!((three.thickness_nm[0] - 92.0).abs() < 0.5, "{three:?}");
+    assert!(!three.is_ambiguous(), "{three:?}");
+}

@@ -20,7 +20,7 @@ use num_complex::Complex64 as C64;
 
 use super::incoherent::Coherence;
 use super::lanes;
-use super::solver::{grazing, normal_index, sin_sq, Response};
+use super::solver::{grazing, normal_index, sin_sq, solve_amplitudes, Amplitudes, Response};
 use super::stack::{Stack, StackGrid};
 use crate::error::Result;
 pub use coherent::AmplitudeGradient;
@@ -161,6 +161,10 @@ pub struct GradientGrid {
     pub angles: usize,
     /// R and T of wavelength w, angle a at `[w * angles + a]`.
     pub response: Vec<Response>,
+    /// A coherent stack's r and t, laid out as `response` (the same forward
+    /// sweep's, as [`solve_amplitudes`] gives them); empty for a stack with
+    /// incoherent layers, whose phases are averaged out.
+    pub amplitudes: Vec<Amplitudes>,
     /// ∂R_s/∂d of layer l (top down) at wavelength w, angle a at
     /// `[(l * wavelengths + w) * angles + a]`; likewise the others.
     pub d_rs: Vec<f64>,
@@ -179,13 +183,21 @@ impl GradientGrid {
         (layer * self.wavelengths + wavelength) * self.angles + angle
     }
 
-    fn zeros(layers: usize, wavelengths: usize, angles: usize) -> GradientGrid {
+    fn zeros(layers: usize, wavelengths: usize, angles: usize, coherent: bool) -> GradientGrid {
         let points = wavelengths * angles;
+        let zero = C64::new(0.0, 0.0);
+        let no_amplitudes = Amplitudes {
+            rs: zero,
+            rp: zero,
+            ts: zero,
+            tp: zero,
+        };
         GradientGrid {
             layers,
             wavelengths,
             angles,
             response: vec![Response::default(); points],
+            amplitudes: vec![no_amplitudes; if coherent { points } else { 0 }],
             d_rs: vec![0.0; layers * points],
             d_rp: vec![0.0; layers * points],
             d_ts: vec![0.0; layers * points],
@@ -240,12 +252,14 @@ pub fn solve_stack_grid_with_gradient_on(
         "thicknesses_nm: one per layer"
     );
     let (wavelengths, angles) = (grid.wavelengths_nm().len(), cos_theta0.len());
-    let mut out = GradientGrid::zeros(layers, wavelengths, angles);
+    let coherent = grid.coherence().is_coherent();
+    let mut out = GradientGrid::zeros(layers, wavelengths, angles, coherent);
     let mut work = Workspace::default();
-    let points: Vec<usize> = if grid.coherence().is_coherent() {
+    let points: Vec<usize> = if coherent {
         let mut fallback = Vec::new();
         let GradientGrid {
             response,
+            amplitudes,
             d_rs,
             d_rp,
             d_ts,
@@ -260,6 +274,7 @@ pub fn solve_stack_grid_with_gradient_on(
             cos_theta0,
             &mut lanes::GradientSink {
                 response,
+                amplitudes,
                 d: [d_rs, d_rp, d_ts, d_tp],
                 fallback: &mut fallback,
             },
@@ -273,6 +288,15 @@ pub fn solve_stack_grid_with_gradient_on(
         let (response, gradient) =
             solve_grid_point_with_gradient(grid, w, thicknesses_nm, cos_theta0[a], &mut work)?;
         out.response[point] = response;
+        if coherent {
+            let wavelength_nm = grid.wavelengths_nm()[w];
+            out.amplitudes[point] = solve_amplitudes(
+                grid.indices_at(w),
+                thicknesses_nm,
+                wavelength_nm,
+                cos_theta0[a],
+            );
+        }
         for l in 0..layers {
             let i = out.at(l, w, a);
             out.d_rs[i] = gradient.rs[l];

@@ -14,14 +14,18 @@ use std::f64::consts::TAU;
 use num_complex::Complex64 as C64;
 
 use super::arith::{one_way, sqrt_upper, Cv, Lanes, MAX_LANES};
-use crate::optics::solver::Response;
+use crate::optics::solver::{Amplitudes, Response};
 
-/// Where the lanes write: R and T at `[w * angles + a]`, each derivative at
-/// `[(layer * wavelengths + w) * angles + a]`, and the points (w * angles
-/// + a) they leave to the scalar gradient.
+/// Where the lanes write: R and T (and the amplitudes they come from) at
+/// `[w * angles + a]`, each derivative at `[(layer * wavelengths + w) *
+/// angles + a]`, and the points (w * angles + a) they leave to the scalar
+/// gradient.
 pub struct GradientSink<'a> {
     /// R and T per point.
     pub response: &'a mut [Response],
+    /// r and t per point (the forward sweep's Γ at the top and product of
+    /// the transmission factors, as `solve_amplitudes` gives them).
+    pub amplitudes: &'a mut [Amplitudes],
     /// ∂Rs, ∂Rp, ∂Ts, ∂Tp by each layer's thickness.
     pub d: [&'a mut [f64]; 4],
     /// Points the lanes did not solve (grazing, near-critical layers).
@@ -146,10 +150,12 @@ struct Block<'a> {
     w0: usize,
 }
 
-/// What the forward sweep leaves: Γ at the top and R and T.
+/// What the forward sweep leaves: Γ at the top, t and R and T.
 struct BlockPower<V> {
     gamma_s: Cv<V>,
     gamma_p: Cv<V>,
+    /// t_s, t_p.
+    t: [Cv<V>; 2],
     /// Rs, Rp, Ts, Tp.
     power: [V; 4],
 }
@@ -233,6 +239,7 @@ impl Block<'_> {
         let out = BlockPower {
             gamma_s,
             gamma_p,
+            t: [ts, tp],
             power,
         };
         (out, near_critical)
@@ -264,12 +271,14 @@ fn write_block<V: Lanes>(
         ts: arrays[2][l],
         tp: arrays[3][l],
     });
+    let amplitudes = lane_amplitudes(power);
     for (l, response) in responses[..count].iter().enumerate() {
         let point = (w0 + l) * angles + a;
         if near_critical & (1 << l) != 0 {
             sink.fallback.push(point);
         } else {
             sink.response[point] = *response;
+            sink.amplitudes[point] = amplitudes[l];
         }
     }
     for (layer, d) in d_layers.iter().enumerate() {
@@ -286,6 +295,20 @@ fn write_block<V: Lanes>(
             }
         }
     }
+}
+
+/// The block's r and t, lane by lane.
+#[inline(always)]
+fn lane_amplitudes<V: Lanes>(power: &BlockPower<V>) -> [Amplitudes; MAX_LANES] {
+    let parts = [power.gamma_s, power.gamma_p, power.t[0], power.t[1]]
+        .map(|z| (z.re.to_array(), z.im.to_array()));
+    let at = |k: usize, l: usize| C64::new(parts[k].0[l], parts[k].1[l]);
+    std::array::from_fn(|l| Amplitudes {
+        rs: at(0, l),
+        rp: at(1, l),
+        ts: at(2, l),
+        tp: at(3, l),
+    })
 }
 
 /// The backward sweep: for each layer, Re(conj Γ_top ∂Γ_top) and

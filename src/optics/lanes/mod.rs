@@ -279,6 +279,7 @@ pub fn gradient_grid_on(
         "indices"
     );
     assert_eq!(sink.response.len(), points, "response");
+    assert_eq!(sink.amplitudes.len(), points, "amplitudes");
     for d in &sink.d {
         assert_eq!(d.len(), points * thicknesses_nm.len(), "derivatives");
     }
