@@ -7,14 +7,14 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use rayon::prelude::*;
 
-use irid::color::gradient::{colors_with_gradient, ColorGradient};
+use irid::color::gradient::{colors_with_gradient_cancellable, ColorGradient};
 use irid::color::SpectralIntegrator;
 use irid::optics::gradient::{solve_stack_grid_with_gradient, GradientGrid};
 use irid::optics::{Stack, StackGrid};
 
 use crate::arrays::array;
 use crate::budget::Footprint;
-use crate::pool::compute;
+use crate::pool::compute_cancellable;
 use crate::py_error;
 
 /// One output array of a gradient grid: its value at a point index.
@@ -31,7 +31,8 @@ const CHUNK_WAVELENGTHS: usize = 32;
 
 /// Adds dRs_dd, dRp_dd, dTs_dd, dTp_dd, dR_dd and dT_dd, each of shape
 /// (layers, wavelengths, angles), to `result`, for the grid's stack at its
-/// own thicknesses. Raises ValueError where an incoherent layer lases.
+/// own thicknesses. Raises ValueError where an incoherent layer lases. A
+/// parallel solve runs on the pool, where Ctrl-C stops it between runs.
 pub fn add_solve_gradient(
     py: Python<'_>,
     result: &Bound<'_, PyDict>,
@@ -54,8 +55,9 @@ pub fn add_solve_gradient(
     } else {
         wavelengths.max(1)
     };
-    let chunks = compute(py, parallel, || {
+    let chunks = compute_cancellable(py, parallel, |cancel| {
         let chunk = |w0: usize| -> irid::error::Result<GradientGrid> {
+            cancel.check()?;
             let w1 = (w0 + run).min(wavelengths);
             let media = layers + 2;
             let part = StackGrid::from_indices(
@@ -104,12 +106,14 @@ pub fn add_solve_gradient(
 /// The colours of `stack` at `angles` (degrees, checked by the caller) with
 /// their derivatives: the per-angle colours as `Stack.color` reports them,
 /// plus dreflectance_rgb_dd and dtransmittance_rgb_dd of shape
-/// (layers, angles, 3) added to `result` by [`add_color_gradient`].
+/// (layers, angles, 3) added to `result` by [`add_color_gradient`]. Runs
+/// on the pool, where Ctrl-C stops it, when `on_pool`.
 pub fn colors(
     py: Python<'_>,
     stack: &Stack,
     integrator: &SpectralIntegrator,
     angles: &[f64],
+    on_pool: bool,
 ) -> PyResult<Vec<ColorGradient>> {
     let layers = stack.layers.len();
     Footprint::new()
@@ -119,8 +123,8 @@ pub fn colors(
             "the colour gradient of {layers} layers × {} angles",
             angles.len()
         ))?;
-    compute(py, false, || {
-        colors_with_gradient(stack, integrator, angles)
+    compute_cancellable(py, on_pool, |cancel| {
+        colors_with_gradient_cancellable(stack, integrator, angles, cancel)
     })?
     .map_err(py_error)
 }
