@@ -46,6 +46,11 @@ pub enum Error {
         source: std::io::Error,
     },
 
+    /// The caller set the call's [`crate::cancel::Cancel`]: what it had
+    /// computed is dropped.
+    #[error("cancelled")]
+    Cancelled,
+
     /// A file was read but its content is malformed.
     #[error("{path}: {why}")]
     Malformed {

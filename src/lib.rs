@@ -11,6 +11,7 @@ pub mod atlas;
 pub mod atomic;
 #[cfg(feature = "bench")]
 pub mod bench;
+pub mod cancel;
 pub mod color;
 pub mod error;
 pub mod export;

@@ -23,17 +23,60 @@
       && lo <= pair[0] && pair[0] <= pair[1] && pair[1] <= hi;
   }
 
-  /** The first way `film` breaks the rule, as "field: what", or null. */
-  function violation(film) {
+  // The integer fields, as paths of keys from the top: JSON.parse gives 3
+  // for both `3` and `3.0`, which the rule tells apart (an integer is
+  // written without a fraction or exponent, as Rust's and Python's readers
+  // see it), so their text is read as well.
+  const INTEGER_FIELDS = ['version', 'texture.width', 'texture.height'];
+  const TOKEN = /"(?:[^"\\]|\\.)*"|-?\d+(?:\.\d+)?(?:[eE][+-]?\d+)?|[{}[\]:,]|true|false|null/g;
+
+  /**
+   * The number literals of INTEGER_FIELDS in `text`, a JSON text that
+   * JSON.parse accepted, by field ("texture.width": "64.0"); the last one
+   * where a key repeats, as JSON.parse keeps the last value.
+   */
+  function integerFieldText(text) {
+    const found = {};
+    const open = []; // per open container: whether it is an object, and its current key
+    for (const [token] of text.matchAll(TOKEN)) {
+      const top = open[open.length - 1];
+      if (token === '{' || token === '[') {
+        open.push({ object: token === '{', key: null });
+      } else if (token === '}' || token === ']') {
+        open.pop();
+      } else if (token === ',') {
+        if (top.object) top.key = null;
+      } else if (token === ':') {
+        // The key is set; the value follows.
+      } else if (top && top.object && top.key === null) {
+        top.key = JSON.parse(token);
+      } else if (/^-?\d/.test(token) && open.every((c) => c.object)) {
+        const field = open.map((c) => c.key).join('.');
+        if (INTEGER_FIELDS.includes(field)) found[field] = token;
+      }
+    }
+    return found;
+  }
+
+  /** Whether a field's number was written as an integer (or its text is unknown: a parsed object). */
+  const writtenWhole = (text) => text === undefined || /^-?\d+$/.test(text);
+
+  /**
+   * The first way `film` breaks the rule, as "field: what", or null.
+   * `written`: the text of its integer fields (integerFieldText), when it
+   * was read from text.
+   */
+  function violation(film, written = {}) {
     if (!isObject(film)) return 'not a JSON object';
     if (film.format !== FILM_FORMAT) return `format is ${JSON.stringify(film.format)}, not "${FILM_FORMAT}"`;
-    if (film.version !== FILM_VERSION) {
-      return `version ${JSON.stringify(film.version)}: readers take version ${FILM_VERSION} only; export the film again with this irid`;
+    if (film.version !== FILM_VERSION || !writtenWhole(written.version)) {
+      const shown = written.version ?? JSON.stringify(film.version);
+      return `version ${shown}: readers take version ${FILM_VERSION} only; export the film again with this irid`;
     }
     const tex = film.texture;
     if (!isObject(tex)) return 'texture must be an object';
-    if (!isSize(tex.width)) return 'texture.width must be a positive integer';
-    if (!isSize(tex.height)) return 'texture.height must be a positive integer';
+    if (!isSize(tex.width) || !writtenWhole(written['texture.width'])) return 'texture.width must be a positive integer';
+    if (!isSize(tex.height) || !writtenWhole(written['texture.height'])) return 'texture.height must be a positive integer';
     if (!isObject(tex.row_check)) return 'texture.row_check must be an object (export the film again with this irid)';
     const d = film.domain;
     if (!isObject(d)) return 'domain must be an object';
@@ -52,9 +95,13 @@
     return null;
   }
 
-  /** Checks a parsed film.json by the rule; throws one line naming `where` (the file) and the field. */
-  function checkFilmJson(film, where) {
-    const why = violation(film);
+  /**
+   * Checks a parsed film.json by the rule; throws one line naming `where`
+   * (the file) and the field. `written`: its integer fields' text, when
+   * read from text (readFilmJson).
+   */
+  function checkFilmJson(film, where, written = {}) {
+    const why = violation(film, written);
     if (why !== null) throw new Error(`${where}: ${why}`);
     return film;
   }
@@ -67,7 +114,7 @@
     } catch (e) {
       throw new Error(`${where}: not JSON (${e.message})`);
     }
-    return checkFilmJson(film, where);
+    return checkFilmJson(film, where, integerFieldText(text));
   }
 
   Object.assign(ns, { FILM_VERSION, checkFilmJson, readFilmJson });

@@ -13,7 +13,7 @@ use irid::optics::{
 use crate::arrays::{array, planned_len, real_list, values};
 use crate::budget::{filled, room_for, Footprint};
 use crate::invalid;
-use crate::pool::{compute, compute_interruptible, Cancel};
+use crate::pool::{compute_cancellable, Cancel};
 
 /// Checks everything the solver relies on, naming the entry at fault in
 /// tmm-faster's terms (`n[i, j]`: wavelength i, medium j; `d[j]`).
@@ -368,11 +368,7 @@ impl Grid {
                 out,
             )
         };
-        let values = if parallel {
-            compute_interruptible(py, solve)?
-        } else {
-            compute(py, false, || solve(&Cancel::default()))?
-        };
+        let values = compute_cancellable(py, parallel, solve)?;
         if let Some(k) = values.iter().position(|v| !v.is_finite()) {
             let (a, w) = (k / (KEYS.len() * n_w), k % n_w);
             let row = &self.indices[w * self.media..(w + 1) * self.media];

@@ -3,13 +3,15 @@
 
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
+use rayon::prelude::*;
 
 use irid::color::White;
 use irid::fit::{self as fitting, ColorTarget, Measurement, SpectrumFit, SpectrumFitter, Vary};
 
-use crate::arrays::{array, integer_in, real, reals};
+use crate::arrays::{array, integer_in, planned_len, real, reals};
+use crate::budget::Footprint;
 use crate::coherent::check_wavelengths;
-use crate::pool::compute;
+use crate::pool::{compute, compute_interruptible};
 use crate::stack::PyStack;
 use crate::{invalid, py_error};
 
@@ -98,6 +100,19 @@ pub fn fit<'py>(
     let layers = layers(vary)?;
     let bounds = self::bounds(bounds)?;
     let vary = Vary::new(stack, &layers, bounds.as_deref(), "vary", "bounds").map_err(py_error)?;
+    // From the arguments' sizes before any is copied: per measured value
+    // its copy and its measurement's, with σ, the wavelength and the angle
+    // beside it (eight f64 at most).
+    let measured = [r, t, sigma]
+        .into_iter()
+        .flatten()
+        .map(|a| planned_len(a).unwrap_or(0))
+        .chain([wavelengths_nm, angles_deg].map(|a| planned_len(a).unwrap_or(0)))
+        .max()
+        .unwrap_or(0);
+    Footprint::new()
+        .items(&[measured], 8 * 8)
+        .check(&format!("{measured} measured values"))?;
     let (wavelengths, _) = reals(wavelengths_nm, "wavelengths_nm")?;
     let (angles, _) = reals(angles_deg, "angles_deg")?;
     check_wavelengths(&wavelengths, "wavelengths_nm")?;
@@ -150,9 +165,17 @@ pub fn fit<'py>(
     for m in &measured {
         m.check("", layers.len()).map_err(py_error)?;
     }
-    let fits = compute(py, true, || -> irid::Result<Vec<SpectrumFit>> {
+    // SpectrumFitter::fit_many's loop, with a look at the flag before each
+    // spectrum: Ctrl-C stops a batch between two fits.
+    let fits = compute_interruptible(py, |cancel| -> irid::Result<Vec<SpectrumFit>> {
         let fitter = SpectrumFitter::new(stack, &vary, &measured[0])?;
-        fitter.fit_many(&measured)
+        measured
+            .par_iter()
+            .map(|m| {
+                cancel.check()?;
+                fitter.fit(m)
+            })
+            .collect()
     })?
     .map_err(py_error)?;
     let out = results(py, &fits, &batch, grid)?;
@@ -249,6 +272,15 @@ pub fn fit_color<'py>(
     let bounds = self::bounds(bounds)?;
     let vary = Vary::new(stack, &layers, bounds.as_deref(), "vary", "bounds").map_err(py_error)?;
     let white: White = white.parse().map_err(py_error)?;
+    // From the arguments' sizes before they are copied: per angle its
+    // target colour (three values), the fit's colour and ΔE00, a few dozen
+    // f64 at most.
+    let planned = planned_len(angles_deg)
+        .unwrap_or(0)
+        .max(planned_len(target_rgb).unwrap_or(0).div_ceil(3));
+    Footprint::new()
+        .items(&[planned], 32 * 8)
+        .check(&format!("{planned} angles"))?;
     let (angles, _) = reals(angles_deg, "angles_deg")?;
     check_angles(&angles)?;
     let (rgb, shape) = reals(target_rgb, "target_rgb")?;

@@ -7,7 +7,7 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use rayon::prelude::*;
 
-use irid::color::gradient::{colors_with_gradient, ColorGradient};
+use irid::color::gradient::{colors_with_gradient_cancellable, ColorGradient};
 use irid::color::SpectralIntegrator;
 use irid::optics::gradient::{solve_stack_grid_with_gradient, GradientGrid};
 use irid::optics::{Amplitudes, Response, Stack, StackGrid};
@@ -15,7 +15,7 @@ use num_complex::Complex64 as C64;
 
 use crate::arrays::array;
 use crate::budget::Footprint;
-use crate::pool::compute;
+use crate::pool::compute_cancellable;
 use crate::py_error;
 
 /// One power output of `Stack.solve`: its value from a point's R and T.
@@ -105,15 +105,16 @@ fn solve_chunks(
     let wavelengths = grid.wavelengths_nm().len();
     let parallel = wavelengths * cos_theta0.len() * layers.max(1) >= PARALLEL_MIN_POINTS;
     if !parallel {
-        return compute(py, false, || {
+        return compute_cancellable(py, false, |_| {
             solve_stack_grid_with_gradient(grid, grid.thicknesses_nm(), cos_theta0)
         })?
         .map(|g| vec![g])
         .map_err(py_error);
     }
     let run = wavelengths.div_ceil(CHUNKS).max(MIN_CHUNK_WAVELENGTHS);
-    let chunks = compute(py, true, || {
+    let chunks = compute_cancellable(py, true, |cancel| {
         let chunk = |w0: usize| -> irid::error::Result<GradientGrid> {
+            cancel.check()?;
             let w1 = (w0 + run).min(wavelengths);
             let media = layers + 2;
             let part = StackGrid::from_indices(
@@ -176,12 +177,14 @@ fn add_derivatives(
 /// The colours of `stack` at `angles` (degrees, checked by the caller) with
 /// their derivatives: the per-angle colours as `Stack.color` reports them,
 /// plus dreflectance_rgb_dd and dtransmittance_rgb_dd of shape
-/// (layers, angles, 3) added to `result` by [`add_color_gradient`].
+/// (layers, angles, 3) added to `result` by [`add_color_gradient`]. Runs
+/// on the pool, where Ctrl-C stops it, when `on_pool`.
 pub fn colors(
     py: Python<'_>,
     stack: &Stack,
     integrator: &SpectralIntegrator,
     angles: &[f64],
+    on_pool: bool,
 ) -> PyResult<Vec<ColorGradient>> {
     let layers = stack.layers.len();
     Footprint::new()
@@ -191,8 +194,8 @@ pub fn colors(
             "the colour gradient of {layers} layers × {} angles",
             angles.len()
         ))?;
-    compute(py, false, || {
-        colors_with_gradient(stack, integrator, angles)
+    compute_cancellable(py, on_pool, |cancel| {
+        colors_with_gradient_cancellable(stack, integrator, angles, cancel)
     })?
     .map_err(py_error)
 }

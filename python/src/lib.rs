@@ -29,8 +29,9 @@ mod stack;
 use std::io::ErrorKind;
 
 use pyo3::exceptions::{
-    PyFileExistsError, PyFileNotFoundError, PyInterruptedError, PyIsADirectoryError, PyMemoryError,
-    PyNotADirectoryError, PyOSError, PyPermissionError, PyTypeError, PyValueError,
+    PyFileExistsError, PyFileNotFoundError, PyInterruptedError, PyIsADirectoryError,
+    PyKeyboardInterrupt, PyMemoryError, PyNotADirectoryError, PyOSError, PyPermissionError,
+    PyTypeError, PyValueError,
 };
 use pyo3::prelude::*;
 
@@ -58,6 +59,9 @@ pub(crate) fn py_error(e: irid::Error) -> PyErr {
             error
         }
         irid::Error::OverBudget { .. } => PyMemoryError::new_err(message),
+        // Only an interrupted call sets its flag, and it raises the
+        // interrupt itself; this is for a flag set some other way.
+        irid::Error::Cancelled => PyKeyboardInterrupt::new_err(message),
         _ => PyValueError::new_err(message),
     }
 }

@@ -14,7 +14,7 @@ use irid::lut::{
 
 use crate::arrays::{array, broadcast_reals, count, integer_in, json_to_py, position, real_list};
 use crate::budget::Footprint;
-use crate::pool::compute;
+use crate::pool::{compute, compute_cancellable, Cancel};
 use crate::stack::{layer_number, PyStack};
 use crate::{invalid, py_error, wrong_type};
 
@@ -187,12 +187,13 @@ pub(crate) const SAMPLE_BLOCK: usize = 4096;
 
 /// An rgb table's R and T (three f32 each, interleaved) at every
 /// (thickness, cos θ): in blocks on the current thread pool when
-/// `parallel`, else on this thread.
+/// `parallel` (none once `cancel` is set), else on this thread.
 fn sample_rgb(
     lut: &Lut,
     thickness_nm: &[f64],
     cos_theta: &[f64],
     parallel: bool,
+    cancel: &Cancel,
 ) -> (Vec<f32>, Vec<f32>) {
     let mut r = vec![0f32; 3 * thickness_nm.len()];
     let mut t = vec![0f32; 3 * thickness_nm.len()];
@@ -214,7 +215,11 @@ fn sample_rgb(
                     .par_chunks(SAMPLE_BLOCK)
                     .zip(cos_theta.par_chunks(SAMPLE_BLOCK)),
             )
-            .for_each(|((r, t), (thickness_nm, cos_theta))| fill(r, t, thickness_nm, cos_theta));
+            .for_each(|((r, t), (thickness_nm, cos_theta))| {
+                if !cancel.is_set() {
+                    fill(r, t, thickness_nm, cos_theta)
+                }
+            });
     } else {
         fill(&mut r, &mut t, thickness_nm, cos_theta);
     }
@@ -222,9 +227,14 @@ fn sample_rgb(
 }
 
 /// A spectral table's R and T at every (thickness, cos θ, wavelength) of
-/// `coordinates`: in blocks on the current thread pool when `parallel`,
-/// else on this thread.
-fn sample_spectral(lut: &Lut, coordinates: &[Vec<f64>], parallel: bool) -> (Vec<f32>, Vec<f32>) {
+/// `coordinates`: in blocks on the current thread pool when `parallel`
+/// (none once `cancel` is set), else on this thread.
+fn sample_spectral(
+    lut: &Lut,
+    coordinates: &[Vec<f64>],
+    parallel: bool,
+    cancel: &Cancel,
+) -> (Vec<f32>, Vec<f32>) {
     let [thickness_nm, cos_theta, wavelength_nm] = coordinates else {
         unreachable!("a spectral table is sampled at three coordinates")
     };
@@ -247,7 +257,9 @@ fn sample_spectral(lut: &Lut, coordinates: &[Vec<f64>], parallel: bool) -> (Vec<
                     .zip(wavelength_nm.par_chunks(SAMPLE_BLOCK)),
             )
             .for_each(|((r, t), ((thickness, cos), wavelength))| {
-                fill(r, t, [thickness, cos, wavelength])
+                if !cancel.is_set() {
+                    fill(r, t, [thickness, cos, wavelength])
+                }
             });
     } else {
         fill(&mut r, &mut t, [thickness_nm, cos_theta, wavelength_nm]);
@@ -370,13 +382,13 @@ impl PyLut {
         }
         let parallel = coordinates[0].len() > SAMPLE_BLOCK;
         if spectral {
-            let (r, t) = compute(py, parallel, || {
-                sample_spectral(lut, &coordinates, parallel)
+            let (r, t) = compute_cancellable(py, parallel, |cancel| {
+                sample_spectral(lut, &coordinates, parallel, cancel)
             })?;
             PyTuple::new(py, [array(py, r, &shape)?, array(py, t, &shape)?])
         } else {
-            let (r, t) = compute(py, parallel, || {
-                sample_rgb(lut, &coordinates[0], &coordinates[1], parallel)
+            let (r, t) = compute_cancellable(py, parallel, |cancel| {
+                sample_rgb(lut, &coordinates[0], &coordinates[1], parallel, cancel)
             })?;
             let mut shape3 = shape;
             shape3.push(3);

@@ -12,7 +12,7 @@
 //! without touching rayon.
 
 use std::ptr::null_mut;
-use std::sync::atomic::{AtomicBool, AtomicPtr, Ordering};
+use std::sync::atomic::{AtomicPtr, Ordering};
 use std::sync::mpsc::{self, RecvTimeoutError};
 use std::time::Duration;
 
@@ -85,14 +85,21 @@ pub fn compute<T: Send>(
 const SIGNAL_POLL: Duration = Duration::from_millis(20);
 
 /// Set when the call that passed it is interrupted: its work stops at the
-/// next block that looks ([`Cancel::is_set`]) and its partial result is
-/// thrown away.
-#[derive(Default)]
-pub struct Cancel(AtomicBool);
+/// next block that looks and its partial result is thrown away.
+pub use irid::cancel::Cancel;
 
-impl Cancel {
-    pub fn is_set(&self) -> bool {
-        self.0.load(Ordering::Relaxed)
+/// [`compute_interruptible`] when `on_pool` (work long enough to be worth
+/// the handoff), else `work` on the calling thread with a flag never set:
+/// a call that short ends before a signal could be noticed anyway.
+pub fn compute_cancellable<T: Send>(
+    py: Python<'_>,
+    on_pool: bool,
+    work: impl FnOnce(&Cancel) -> T + Send,
+) -> PyResult<T> {
+    if on_pool {
+        compute_interruptible(py, work)
+    } else {
+        compute(py, false, || work(Cancel::never()))
     }
 }
 
@@ -127,7 +134,7 @@ pub fn compute_interruptible<T: Send>(
                     Err(RecvTimeoutError::Timeout) if interrupt.is_none() => {
                         interrupt = Python::with_gil(|py| py.check_signals()).err();
                         if interrupt.is_some() {
-                            cancel.0.store(true, Ordering::Relaxed);
+                            cancel.set();
                         }
                     }
                     Err(RecvTimeoutError::Timeout) => {}

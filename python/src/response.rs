@@ -11,7 +11,7 @@ use rayon::prelude::*;
 use irid::optics::{LayerThickness, PointSolver, Response, Stack};
 
 use crate::arrays::{array, broadcast_reals};
-use crate::pool::compute;
+use crate::pool::{compute_cancellable, Cancel};
 use crate::stack::layer_number;
 use crate::{invalid, py_error};
 
@@ -64,7 +64,8 @@ fn oriented(stack: &Stack, layer: usize, side: Side) -> PyResult<(Stack, usize)>
 
 /// Unpolarized (R, T) at each point, the thickness of layer `varying` set
 /// per point (or the stack's own where it is None), through `solver` in
-/// tasks on the current thread pool when `parallel`, else on this thread.
+/// tasks on the current thread pool when `parallel`, else on this thread;
+/// each task looks at `cancel` first ([`irid::Error::Cancelled`] once set).
 /// Each task solves its points into a buffer of its own of at most
 /// [`POINTS_PER_TASK`] responses (64 KB), so what grows with the call is
 /// only R and T. Fails on a point whose wavelength a material does not
@@ -76,11 +77,13 @@ fn solve_points(
     cos_theta: &[f64],
     wavelength_nm: &[f64],
     parallel: bool,
+    cancel: &Cancel,
 ) -> irid::Result<(Vec<f64>, Vec<f64>)> {
     let points = cos_theta.len();
     let mut reflectance = vec![0.0; points];
     let mut transmittance = vec![0.0; points];
     let solve_task = |(task, (r_out, t_out)): (usize, (&mut [f64], &mut [f64]))| {
+        cancel.check()?;
         let start = task * POINTS_PER_TASK;
         let range = start..start + r_out.len();
         let varying = varying.map(|v| LayerThickness {
@@ -149,8 +152,8 @@ pub fn response<'py>(
     let solver = PointSolver::new(&seen).map_err(py_error)?;
     solver.check(varying, &columns[0]).map_err(py_error)?;
     let parallel = columns[0].len() > POINTS_PER_TASK;
-    let (r, t) = compute(py, parallel, || {
-        solve_points(&solver, varying, &columns[0], &columns[1], parallel)
+    let (r, t) = compute_cancellable(py, parallel, |cancel| {
+        solve_points(&solver, varying, &columns[0], &columns[1], parallel, cancel)
     })?
     .map_err(py_error)?;
     PyTuple::new(py, [array(py, r, &shape)?, array(py, t, &shape)?])

@@ -11,7 +11,7 @@ use irid::rough::check_roughness;
 
 use crate::arrays::{array, broadcast_reals, json_to_py, position};
 use crate::lut::SAMPLE_BLOCK;
-use crate::pool::compute;
+use crate::pool::{compute, compute_cancellable, Cancel};
 use crate::{invalid, py_error};
 
 /// A rough table: the front side's reflectance F_eff over a layer's
@@ -72,7 +72,9 @@ impl PyRoughLut {
         }
         let lut = &self.lut;
         let parallel = coordinates[0].len() > SAMPLE_BLOCK;
-        let rgb = compute(py, parallel, || sample_rough(lut, &coordinates, parallel))?;
+        let rgb = compute_cancellable(py, parallel, |cancel| {
+            sample_rough(lut, &coordinates, parallel, cancel)
+        })?;
         let mut shape3 = shape;
         shape3.push(3);
         Ok(array(py, rgb, &shape3)?.into_any())
@@ -88,9 +90,14 @@ impl PyRoughLut {
 }
 
 /// F_eff (RGB, f32) at every (thickness, cos θ, roughness) of
-/// `coordinates`: in blocks on the current thread pool when `parallel`,
-/// else on this thread.
-fn sample_rough(lut: &RoughLut, coordinates: &[Vec<f64>], parallel: bool) -> Vec<f32> {
+/// `coordinates`: in blocks on the current thread pool when `parallel`
+/// (none once `cancel` is set), else on this thread.
+fn sample_rough(
+    lut: &RoughLut,
+    coordinates: &[Vec<f64>],
+    parallel: bool,
+    cancel: &Cancel,
+) -> Vec<f32> {
     let [thickness, cos, rough] = coordinates else {
         unreachable!("a rough table is sampled at three coordinates")
     };
@@ -112,7 +119,11 @@ fn sample_rough(lut: &RoughLut, coordinates: &[Vec<f64>], parallel: bool) -> Vec
                     .zip(cos.par_chunks(SAMPLE_BLOCK))
                     .zip(rough.par_chunks(SAMPLE_BLOCK)),
             )
-            .for_each(|(out, ((d, c), r))| fill(out, [d, c, r]));
+            .for_each(|(out, ((d, c), r))| {
+                if !cancel.is_set() {
+                    fill(out, [d, c, r])
+                }
+            });
     } else {
         fill(&mut rgb, [thickness, cos, rough]);
     }

@@ -8,19 +8,19 @@ use pyo3::prelude::*;
 use pyo3::types::{IntoPyDict, PyComplex, PyDict, PyList, PyString, PyTuple};
 use rayon::prelude::*;
 
-use irid::color::{stack_colors, FilmColor, Sampling, SpectralIntegrator, White};
+use irid::color::{stack_colors_cancellable, FilmColor, Sampling, SpectralIntegrator, White};
 use irid::optics::solver::power;
 use irid::optics::spec::{IndexSpec, MediumSpec};
 use irid::optics::{
     library, solve, solve_amplitudes, solve_mixed, Layer, Material, Response, Stack, StackGrid,
     MAX_THICKNESS_NM,
 };
-use irid::rough::{check_roughness, rough_colors, RoughColor};
+use irid::rough::{check_roughness, rough_colors_cancellable, RoughColor};
 
 use crate::arrays::{array, count, integer_in, planned_len, real, real_list, reals};
 use crate::budget::Footprint;
 use crate::coherent::check_wavelengths;
-use crate::pool::{compute, compute_interruptible, Cancel};
+use crate::pool::{compute_cancellable, compute_interruptible, Cancel};
 use crate::{invalid, py_error, wrong_type};
 
 /// A refractive-index model: a constant n + ik, a built-in material, a
@@ -404,6 +404,11 @@ impl PyStack {
                 "is the derivative at the stack's own thicknesses: not with a thickness_nm sweep",
             ));
         }
+        // From the arguments' sizes before they are copied, then from the copies.
+        if let (Some(w), Some(a)) = (planned_len(wavelengths_nm), planned_len(angles_deg)) {
+            let thicknesses = thickness_nm.map(|t| planned_len(t).unwrap_or(0));
+            self.solve_footprint(w, a, thicknesses)?;
+        }
         let wavelengths = real_list(wavelengths_nm, "wavelengths_nm")?;
         let angles = real_list(angles_deg, "angles_deg")?;
         if let Some(a) = angles.iter().find(|a| !(**a >= 0.0 && **a < 90.0)) {
@@ -436,19 +441,11 @@ impl PyStack {
             Some(s) => vec![s.thicknesses_nm.len(), wavelengths.len(), angles.len()],
             None => vec![wavelengths.len(), angles.len()],
         };
-        // The points, then their columns as arrays; the grid's indices.
-        Footprint::new()
-            .items(&shape, 2 * std::mem::size_of::<Point>() as u64)
-            .items(&[wavelengths.len(), self.stack.layers.len() + 2], 64)
-            .check(&format!(
-                "{}{} wavelengths × {} angles",
-                sweep.as_ref().map_or(String::new(), |s| format!(
-                    "{} thicknesses × ",
-                    s.thicknesses_nm.len()
-                )),
-                wavelengths.len(),
-                angles.len()
-            ))?;
+        self.solve_footprint(
+            wavelengths.len(),
+            angles.len(),
+            sweep.as_ref().map(|s| s.thicknesses_nm.len()),
+        )?;
         let grid = StackGrid::new(&self.stack, &wavelengths).map_err(py_error)?;
         let cos_theta0: Vec<f64> = angles.iter().map(|a| a.to_radians().cos()).collect();
         if gradient {
@@ -457,11 +454,7 @@ impl PyStack {
         let parallel = shape.iter().product::<usize>() >= SOLVE_PARALLEL_MIN_POINTS;
         let solve =
             |cancel: &Cancel| solve_points(&grid, &cos_theta0, sweep.as_ref(), parallel, cancel);
-        let points = if parallel {
-            compute_interruptible(py, solve)?
-        } else {
-            compute(py, false, || solve(&Cancel::default()))?
-        };
+        let points = compute_cancellable(py, parallel, solve)?;
         if let Some(k) = points.iter().position(|p| !p.power[0].is_finite()) {
             lasing_at(&grid, &cos_theta0, sweep.as_ref(), k)?;
         }
@@ -535,8 +528,9 @@ impl PyStack {
         if let Some(roughness) = roughness {
             return self.rough_color(py, &integrator, angles, roughness);
         }
-        let colours = compute(py, false, || {
-            stack_colors(&self.stack, &integrator, &angles)
+        let on_pool = self.color_work(&integrator, angles.len()) >= INTERRUPTIBLE_MIN_WORK;
+        let colours = compute_cancellable(py, on_pool, |cancel| {
+            stack_colors_cancellable(&self.stack, &integrator, &angles, cancel)
         })?
         .map_err(py_error)?;
         colour_dict(
@@ -603,7 +597,45 @@ impl PyStack {
     }
 }
 
+/// Work of a `Stack.color` call (wavelengths × angles × media) from which
+/// it runs on the pool, where Ctrl-C stops it: about a millisecond.
+const INTERRUPTIBLE_MIN_WORK: usize = 1 << 16;
+
 impl PyStack {
+    /// Checks what `Stack.solve` allocates for `wavelengths` × `angles`
+    /// points (× `thicknesses`, a sweep's): the points, then their columns
+    /// as arrays; the grid's indices; the arguments' copies.
+    fn solve_footprint(
+        &self,
+        wavelengths: usize,
+        angles: usize,
+        thicknesses: Option<usize>,
+    ) -> PyResult<()> {
+        let shape: Vec<usize> = match thicknesses {
+            Some(t) => vec![t, wavelengths, angles],
+            None => vec![wavelengths, angles],
+        };
+        Footprint::new()
+            .items(&shape, 2 * std::mem::size_of::<Point>() as u64)
+            .items(&[wavelengths, self.stack.layers.len() + 2], 64)
+            .items(&[wavelengths + angles + thicknesses.unwrap_or(0)], 8)
+            .check(&format!(
+                "{}{wavelengths} wavelengths × {angles} angles",
+                thicknesses.map_or(String::new(), |t| format!("{t} thicknesses × "))
+            ))
+    }
+
+    /// The size of `Stack.color`'s solve at `angles` angles: wavelengths ×
+    /// angles × media.
+    fn color_work(&self, integrator: &SpectralIntegrator, angles: usize) -> usize {
+        let media = self.stack.layers.len() + 2;
+        integrator
+            .wavelengths_nm()
+            .len()
+            .saturating_mul(angles)
+            .saturating_mul(media)
+    }
+
     /// Checks what `Stack.color` allocates for `angles` angles. Smooth: the
     /// responses at every (wavelength, angle), the grid's indices, and per
     /// angle its colour and the four (angles, 3) results. Rough: the
@@ -641,8 +673,8 @@ impl PyStack {
     ) -> PyResult<Bound<'py, PyDict>> {
         let roughness = real(roughness, "roughness")?;
         check_roughness("roughness", roughness).map_err(py_error)?;
-        let colours = compute(py, true, || {
-            rough_colors(&self.stack, integrator, &angles, roughness)
+        let colours = compute_interruptible(py, |cancel| {
+            rough_colors_cancellable(&self.stack, integrator, &angles, roughness, cancel)
         })?
         .map_err(py_error)?;
         let albedo = colours.iter().map(|c| c.lobe_albedo).collect();
@@ -669,7 +701,8 @@ impl PyStack {
         integrator: &SpectralIntegrator,
         angles: Vec<f64>,
     ) -> PyResult<Bound<'py, PyDict>> {
-        let colours = crate::gradient::colors(py, &self.stack, integrator, &angles)?;
+        let on_pool = self.color_work(integrator, angles.len()) >= INTERRUPTIBLE_MIN_WORK;
+        let colours = crate::gradient::colors(py, &self.stack, integrator, &angles, on_pool)?;
         let result = colour_dict(
             py,
             angles,

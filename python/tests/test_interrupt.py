@@ -54,12 +54,30 @@ STACK = """
 stack = irid.Stack(layers=[(1.45, 95.0), (2.3, 60.0)] * 60, substrate=1.52)
 """
 
+#: The issue's rough case: one film, 20 000 view angles (27 s before the
+#: colour looked for signals).
+FILM = """
+film = irid.Stack(layers=[(1.45, 300.0)], substrate=1.52)
+"""
+
 #: Each case: (setup, call). Uninterrupted, each takes several seconds on
 #: a two-core machine.
 CASES = {
     "coherent": (MIRROR, "irid.coherent(n, d, angles, w)"),
     "incoherent": (MIRROR, "irid.incoherent(n, d, ['i'] + ['c', 'i'] * (layers // 2) + ['i'], angles, w)"),
     "Stack.solve": (STACK, "stack.solve(np.linspace(400.0, 700.0, 5000), np.linspace(0.0, 89.0, 300))"),
+    "Stack.solve gradient": (
+        STACK,
+        "stack.solve(np.linspace(400.0, 700.0, 5000), np.linspace(0.0, 89.0, 100), gradient=True)",
+    ),
+    # The 9.3 µm mirror's fringes are far narrower than the 1 nm sampling
+    # step: every angle is integrated again at finer steps.
+    "Stack.color": (STACK, "stack.color(np.linspace(0.0, 89.0, 300))"),
+    "Stack.color gradient": (STACK, "stack.color(np.linspace(0.0, 89.0, 300), gradient=True)"),
+    "Stack.color rough": (FILM, "film.color(np.linspace(0.0, 89.0, 20000), roughness=0.3)"),
+    # A few angles, but the smooth sweep under the lobe spans the mirror's
+    # whole cos θ grid.
+    "Stack.color rough, many layers": (STACK, "stack.color(np.linspace(0.0, 89.0, 10), roughness=0.3)"),
 }
 
 

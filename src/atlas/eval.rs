@@ -3,6 +3,7 @@
 use rayon::prelude::*;
 
 use super::chart::{Chart, Coords, Optical};
+use crate::cancel::Cancel;
 use crate::color::SpectralIntegrator;
 use crate::error::{Error, Result};
 use crate::optics::lanes::SpectralWeights;
@@ -57,7 +58,14 @@ impl Film {
             stack.layers.iter().all(|l| l.material.is_lossless()) && stack.substrate.is_lossless();
         let flat = vec![1.0; integrator.wavelengths_nm().len()];
         let lossless_white = lossless.then(|| integrator.rgb(&flat));
-        let prep = Prepared::of(stack, layer, Kind::Rgb, integrator, (380.0, 780.0))?;
+        let prep = Prepared::of(
+            stack,
+            layer,
+            Kind::Rgb,
+            integrator,
+            (380.0, 780.0),
+            Cancel::never(),
+        )?;
         let optical = optical_of(&prep.stack, prep.layer, 550.0)?;
         Ok(Film {
             prep,
@@ -82,7 +90,14 @@ impl Film {
         // Its weights are never read: the nodes hold spectra.
         let integrator = SpectralIntegrator::new(crate::color::Sampling::Rgb3);
         let weights = integrator.rgb_lane_weights();
-        let prep = Prepared::of(stack, layer, Kind::Spectral, integrator, (lo, hi))?;
+        let prep = Prepared::of(
+            stack,
+            layer,
+            Kind::Spectral,
+            integrator,
+            (lo, hi),
+            Cancel::never(),
+        )?;
         let optical = optical_of(&prep.stack, prep.layer, 0.5 * (lo + hi))?;
         Ok(Film {
             prep,

@@ -5,6 +5,7 @@ use serde::Serialize;
 
 use super::refine::Refinement;
 use super::SpectralIntegrator;
+use crate::cancel::Cancel;
 use crate::error::{Error, Result};
 use crate::optics::{Response, Stack, StackGrid};
 
@@ -35,6 +36,23 @@ pub fn stack_colors(
     integrator: &SpectralIntegrator,
     angles_deg: &[f64],
 ) -> Result<Vec<FilmColor>> {
+    stack_colors_cancellable(stack, integrator, angles_deg, Cancel::never())
+}
+
+/// Work of one block of [`stack_colors_cancellable`] between two looks at
+/// its flag, in wavelengths × angles × media: a few milliseconds.
+const BLOCK_WORK: usize = 1 << 20;
+
+/// [`stack_colors`], stopping with [`Error::Cancelled`] once `cancel` is
+/// set: it solves the angles in blocks of a few milliseconds and looks at
+/// the flag before each block and each angle integrated again. Each
+/// angle's colour is the same whatever block it falls in.
+pub fn stack_colors_cancellable(
+    stack: &Stack,
+    integrator: &SpectralIntegrator,
+    angles_deg: &[f64],
+    cancel: &Cancel,
+) -> Result<Vec<FilmColor>> {
     if let Some(a) = angles_deg.iter().find(|a| !(**a >= 0.0 && **a < 90.0)) {
         return Err(Error::invalid(
             "angle",
@@ -42,38 +60,43 @@ pub fn stack_colors(
         ));
     }
     let grid = StackGrid::new(stack, integrator.wavelengths_nm())?;
-    let cos_theta0: Vec<f64> = angles_deg.iter().map(|a| a.to_radians().cos()).collect();
     let samples = integrator.wavelengths_nm().len();
-    // Wavelength-major: the response at wavelength i, angle j is [i × angles + j].
-    let mut responses = vec![Response::default(); samples * angles_deg.len()];
-    grid.solve(&cos_theta0, &mut responses);
-    grid.check_solved(&cos_theta0, &responses)?;
+    let block = (BLOCK_WORK / (samples * (stack.layers.len() + 2)).max(1)).max(1);
     // Angles where some layer's fringes are narrower than the sampling
     // step are integrated again with the points per step they need.
-    let refinement = Refinement::new(stack, None, integrator)?;
-    angles_deg
-        .iter()
-        .enumerate()
-        .map(|(j, &angle_deg)| {
+    let refinement = Refinement::new_cancellable(stack, None, integrator, cancel)?;
+    let mut colours = Vec::with_capacity(angles_deg.len());
+    let mut responses = Vec::new();
+    for angles in angles_deg.chunks(block) {
+        cancel.check()?;
+        let cos_theta0: Vec<f64> = angles.iter().map(|a| a.to_radians().cos()).collect();
+        // Wavelength-major: the response at wavelength i, angle j is [i × angles + j].
+        responses.clear();
+        responses.resize(samples * angles.len(), Response::default());
+        grid.solve(&cos_theta0, &mut responses);
+        grid.check_solved(&cos_theta0, &responses)?;
+        for (j, &angle_deg) in angles.iter().enumerate() {
             let m = refinement.sub_steps(0.0, cos_theta0[j]);
             let ((r, t), by) = if m > 1 {
+                cancel.check()?;
                 let level = refinement.level(m)?;
                 let mut refined = vec![Response::default(); level.grid.wavelengths_nm().len()];
                 level.grid.solve(&cos_theta0[j..=j], &mut refined);
                 level.grid.check_solved(&cos_theta0[j..=j], &refined)?;
                 (powers(&refined, 0, 1), &level.integrator)
             } else {
-                (powers(&responses, j, angles_deg.len()), integrator)
+                (powers(&responses, j, angles.len()), integrator)
             };
-            Ok(FilmColor {
+            colours.push(FilmColor {
                 angle_deg,
                 reflectance_rgb: by.rgb(&r),
                 transmittance_rgb: by.rgb(&t),
                 reflectance_xyz: by.xyz(&r),
                 transmittance_xyz: by.xyz(&t),
-            })
-        })
-        .collect()
+            });
+        }
+    }
+    Ok(colours)
 }
 
 /// R and T spectra of the angle at `offset` among `angles` in

@@ -17,6 +17,7 @@ use super::dual::Dual;
 use super::refine::Refinement;
 use super::space::{mat_vec, srgb};
 use super::{Sampling, SpectralIntegrator, White};
+use crate::cancel::Cancel;
 use crate::error::{Error, Result};
 use crate::optics::gradient::{solve_stack_grid_with_gradient, GradientGrid};
 use crate::optics::{Stack, StackGrid};
@@ -80,7 +81,7 @@ pub fn color_with_gradient(stack: &Stack, cos_theta0: f64, white: White) -> Resu
         ));
     }
     let integrator = SpectralIntegrator::with_white(Sampling::Exact, white);
-    let mut colors = colors_with_gradient_at(stack, &integrator, &[cos_theta0])?;
+    let mut colors = colors_with_gradient_at(stack, &integrator, &[cos_theta0], Cancel::never())?;
     Ok(colors.remove(0))
 }
 
@@ -92,6 +93,17 @@ pub fn colors_with_gradient(
     integrator: &SpectralIntegrator,
     angles_deg: &[f64],
 ) -> Result<Vec<ColorGradient>> {
+    colors_with_gradient_cancellable(stack, integrator, angles_deg, Cancel::never())
+}
+
+/// [`colors_with_gradient`], stopping with [`Error::Cancelled`] once
+/// `cancel` is set: it looks at the flag before each angle.
+pub fn colors_with_gradient_cancellable(
+    stack: &Stack,
+    integrator: &SpectralIntegrator,
+    angles_deg: &[f64],
+    cancel: &Cancel,
+) -> Result<Vec<ColorGradient>> {
     if let Some(a) = angles_deg.iter().find(|a| !(**a >= 0.0 && **a < 90.0)) {
         return Err(Error::invalid(
             "angle",
@@ -99,20 +111,22 @@ pub fn colors_with_gradient(
         ));
     }
     let cos_theta0: Vec<f64> = angles_deg.iter().map(|a| a.to_radians().cos()).collect();
-    colors_with_gradient_at(stack, integrator, &cos_theta0)
+    colors_with_gradient_at(stack, integrator, &cos_theta0, cancel)
 }
 
 fn colors_with_gradient_at(
     stack: &Stack,
     integrator: &SpectralIntegrator,
     cos_theta0: &[f64],
+    cancel: &Cancel,
 ) -> Result<Vec<ColorGradient>> {
     let grid = StackGrid::new(stack, integrator.wavelengths_nm())?;
     let thicknesses = stack.thicknesses_nm();
-    let refinement = Refinement::new(stack, None, integrator)?;
+    let refinement = Refinement::new_cancellable(stack, None, integrator, cancel)?;
     cos_theta0
         .iter()
         .map(|&c| {
+            cancel.check()?;
             let m = refinement.sub_steps(0.0, c);
             let (solved, by) = if m > 1 {
                 let level = refinement.level(m)?;

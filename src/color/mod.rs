@@ -15,7 +15,7 @@ pub mod refine;
 mod sampling;
 mod space;
 
-pub use film::{stack_colors, FilmColor};
+pub use film::{stack_colors, stack_colors_cancellable, FilmColor};
 pub use sampling::{Sampling, SpectralIntegrator, White};
 pub use space::{
     delta_e2000, delta_e2000_rgb, linear_srgb_to_xyz, linear_to_srgb8, white_xyz, xyz_to_lab,

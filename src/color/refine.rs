@@ -34,6 +34,7 @@
 use std::sync::OnceLock;
 
 use super::{Sampling, SpectralIntegrator};
+use crate::cancel::Cancel;
 use crate::error::Result;
 use crate::optics::lanes::{SpectralWeights, WeightedPower};
 use crate::optics::twoport::{Scratch, VaryingLayer};
@@ -108,6 +109,18 @@ impl Refinement {
         layer: Option<usize>,
         integrator: &SpectralIntegrator,
     ) -> Result<Refinement> {
+        Refinement::new_cancellable(stack, layer, integrator, Cancel::never())
+    }
+
+    /// [`Self::new`], stopping with [`Error::Cancelled`] once `cancel` is
+    /// set: examining a stack of hundreds of layers takes seconds, and it
+    /// looks at the flag before each cos θ node.
+    pub fn new_cancellable(
+        stack: &Stack,
+        layer: Option<usize>,
+        integrator: &SpectralIntegrator,
+        cancel: &Cancel,
+    ) -> Result<Refinement> {
         let w = integrator.wavelengths_nm();
         // A stack with incoherent (thick) layers is solved point by point,
         // its coherent parts between them: its fringes are not the splits'
@@ -148,7 +161,7 @@ impl Refinement {
                 .collect(),
         };
         if step_nm > 0.0 {
-            r.examine_cavities()?;
+            r.examine_cavities(cancel)?;
         }
         Ok(r)
     }
@@ -156,7 +169,7 @@ impl Refinement {
     /// Splits every layer at every cos node and probe wavelength: the
     /// varying layer's summarized per node, the others' turned into the
     /// points they need at their own thickness.
-    fn examine_cavities(&mut self) -> Result<()> {
+    fn examine_cavities(&mut self, cancel: &Cancel) -> Result<()> {
         let thicknesses = self.stack.thicknesses_nm();
         let mut indices: Vec<Vec<_>> = Vec::new();
         for &l in &self.probe_nm {
@@ -167,6 +180,7 @@ impl Refinement {
         let mut scratch = Scratch::default();
         let layers = self.stack.layers.len();
         for k in 0..COS_NODES {
+            cancel.check()?;
             let c = self.cos_nodes[k];
             let mut node = CosNode {
                 lossless_width: f64::INFINITY,

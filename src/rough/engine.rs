@@ -7,7 +7,8 @@ use serde::Serialize;
 
 use super::kernel::{Kernel, Rules};
 use super::{check_roughness, MuGrid, Quadrature};
-use crate::color::{linear_srgb_to_xyz, stack_colors, SpectralIntegrator};
+use crate::cancel::Cancel;
+use crate::color::{linear_srgb_to_xyz, stack_colors_cancellable, SpectralIntegrator};
 use crate::error::{Error, Result};
 use crate::optics::{Layer, Stack};
 use crate::sweep::{check_film_domain, rgb_at_nodes};
@@ -63,6 +64,38 @@ pub fn rough_reflectance(
     roughness: &[f64],
     quadrature: &Quadrature,
 ) -> Result<RoughTable> {
+    let nodes = Nodes {
+        thickness_nm,
+        cos_theta,
+        roughness,
+    };
+    rough_table(stack, layer, integrator, nodes, quadrature, Cancel::never())
+}
+
+/// The node axes of a [`RoughTable`].
+#[derive(Clone, Copy)]
+struct Nodes<'a> {
+    thickness_nm: &'a [f64],
+    cos_theta: &'a [f64],
+    roughness: &'a [f64],
+}
+
+/// [`rough_reflectance`], stopping with [`Error::Cancelled`] once `cancel`
+/// is set: the sweep looks at it before each μ node, the weighing before
+/// each (cos θ, roughness) row.
+fn rough_table(
+    stack: &Stack,
+    layer: usize,
+    integrator: &SpectralIntegrator,
+    nodes: Nodes<'_>,
+    quadrature: &Quadrature,
+    cancel: &Cancel,
+) -> Result<RoughTable> {
+    let Nodes {
+        thickness_nm,
+        cos_theta,
+        roughness,
+    } = nodes;
     check_nodes(stack, layer, thickness_nm, cos_theta, roughness)?;
     let grid = MuGrid::for_stack(stack, quadrature.mu_intervals);
     let (n_t, n_c, n_r) = (thickness_nm.len(), cos_theta.len(), roughness.len());
@@ -79,8 +112,14 @@ pub fn rough_reflectance(
         &format!("a rough table of {n_t} x {n_c} x {n_r} nodes"),
         estimate,
     )?;
-    let smooth_on_grid =
-        rgb_at_nodes(stack, layer, integrator.clone(), thickness_nm, grid.nodes())?;
+    let smooth_on_grid = rgb_at_nodes(
+        stack,
+        layer,
+        integrator.clone(),
+        thickness_nm,
+        grid.nodes(),
+        cancel,
+    )?;
     // Reflectance only, one row of thickness × RGB per μ node.
     let on_grid: Vec<f64> = smooth_on_grid
         .iter()
@@ -88,7 +127,14 @@ pub fn rough_reflectance(
         .collect();
     drop(smooth_on_grid);
     let mirror = if roughness.contains(&0.0) {
-        rgb_at_nodes(stack, layer, integrator.clone(), thickness_nm, cos_theta)?
+        rgb_at_nodes(
+            stack,
+            layer,
+            integrator.clone(),
+            thickness_nm,
+            cos_theta,
+            cancel,
+        )?
     } else {
         Vec::new()
     };
@@ -99,19 +145,21 @@ pub fn rough_reflectance(
         .par_chunks_mut(n_t)
         .zip(albedo.par_iter_mut())
         .enumerate()
-        .for_each(|(row, (out, albedo))| {
+        .try_for_each(|(row, (out, albedo))| -> Result<()> {
+            cancel.check()?;
             let (r, c) = (row / n_c, row % n_c);
             if roughness[r] == 0.0 {
                 for (o, v) in out.iter_mut().zip(&mirror[c * n_t..]) {
                     *o = [v[0], v[1], v[2]];
                 }
                 *albedo = 1.0;
-                return;
+                return Ok(());
             }
             let kernel = Kernel::with_rules(&grid, cos_theta[c], roughness[r], &rules);
             *albedo = kernel.albedo();
             weigh_rows(&kernel, &on_grid, 3 * n_t, out.as_flattened_mut());
-        });
+            Ok(())
+        })?;
     Ok(RoughTable {
         thickness_nm: thickness_nm.to_vec(),
         cos_theta: cos_theta.to_vec(),
@@ -208,12 +256,24 @@ pub struct RoughColor {
 
 /// F_eff of `stack` (its layers at their own thicknesses) at each view
 /// angle (degrees, in [0, 90)) for `roughness` ∈ [0, 1]. At roughness 0 it
-/// is the smooth colour of [`stack_colors`], exactly.
+/// is the smooth colour of [`stack_colors`](crate::color::stack_colors), exactly.
 pub fn rough_colors(
     stack: &Stack,
     integrator: &SpectralIntegrator,
     angles_deg: &[f64],
     roughness: f64,
+) -> Result<Vec<RoughColor>> {
+    rough_colors_cancellable(stack, integrator, angles_deg, roughness, Cancel::never())
+}
+
+/// [`rough_colors`], stopping with [`Error::Cancelled`] once `cancel` is
+/// set (it looks between blocks of a few milliseconds).
+pub fn rough_colors_cancellable(
+    stack: &Stack,
+    integrator: &SpectralIntegrator,
+    angles_deg: &[f64],
+    roughness: f64,
+    cancel: &Cancel,
 ) -> Result<Vec<RoughColor>> {
     check_roughness("roughness", roughness)?;
     let color = |angle_deg: f64, rgb: [f64; 3], xyz: [f64; 3], lobe_albedo: f64| RoughColor {
@@ -224,10 +284,12 @@ pub fn rough_colors(
         lobe_albedo,
     };
     if roughness == 0.0 {
-        return Ok(stack_colors(stack, integrator, angles_deg)?
-            .into_iter()
-            .map(|c| color(c.angle_deg, c.reflectance_rgb, c.reflectance_xyz, 1.0))
-            .collect());
+        return Ok(
+            stack_colors_cancellable(stack, integrator, angles_deg, cancel)?
+                .into_iter()
+                .map(|c| color(c.angle_deg, c.reflectance_rgb, c.reflectance_xyz, 1.0))
+                .collect(),
+        );
     }
     if let Some(a) = angles_deg.iter().find(|a| !(**a >= 0.0 && **a < 90.0)) {
         return Err(Error::invalid(
@@ -241,14 +303,18 @@ pub fn rough_colors(
     let cos: Vec<f64> = angles_deg.iter().map(|a| a.to_radians().cos()).collect();
     let (stack, layer) = swept_layer(stack);
     let thickness = stack.layers.get(layer - 1).map_or(0.0, |l| l.thickness_nm);
-    let table = rough_reflectance(
+    let nodes = Nodes {
+        thickness_nm: &[thickness],
+        cos_theta: &cos,
+        roughness: &[roughness],
+    };
+    let table = rough_table(
         &stack,
         layer,
         integrator,
-        &[thickness],
-        &cos,
-        &[roughness],
+        nodes,
         &Quadrature::default(),
+        cancel,
     )?;
     Ok(angles_deg
         .iter()

@@ -34,7 +34,9 @@ pub mod slices;
 #[cfg(test)]
 mod tests;
 
-pub use engine::{rough_colors, rough_reflectance, RoughColor, RoughTable};
+pub use engine::{
+    rough_colors, rough_colors_cancellable, rough_reflectance, RoughColor, RoughTable,
+};
 pub use kernel::Kernel;
 pub use mu_grid::MuGrid;
 pub use quadrature::Quadrature;

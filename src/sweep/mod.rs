@@ -32,6 +32,7 @@ pub(crate) use prepared::{Prepared, Row};
 
 use serde::{Deserialize, Serialize};
 
+use crate::cancel::Cancel;
 use crate::color::SpectralIntegrator;
 use crate::error::{Error, Result};
 use crate::optics::{Stack, MAX_THICKNESS_NM};
@@ -177,17 +178,19 @@ impl TryFrom<u32> for Side {
 /// of `stack` with its `layer` (from 1) at every thickness × cos θ node,
 /// row-major with one row per cos θ node, integrated by `integrator`: the
 /// baker's sweep (the stack split once per wavelength and angle) on nodes
-/// the caller chose, as the GPU export lays out its own.
+/// the caller chose, as the GPU export lays out its own. Stops with
+/// [`Error::Cancelled`] once `cancel` is set (it looks before each cos θ).
 pub(crate) fn rgb_at_nodes(
     stack: &Stack,
     layer: usize,
     integrator: SpectralIntegrator,
     thickness_nm: &[f64],
     cos_theta: &[f64],
+    cancel: &Cancel,
 ) -> Result<Vec<[f64; 6]>> {
-    let prep = Prepared::of(stack, layer, Kind::Rgb, integrator, (380.0, 780.0))?;
+    let prep = Prepared::of(stack, layer, Kind::Rgb, integrator, (380.0, 780.0), cancel)?;
     let grid = Grid::rgb_of_nodes(thickness_nm, cos_theta);
-    let values = prep.eval(&grid, None, &|_| {})?;
+    let values = prep.eval(&grid, None, &|_| {}, cancel)?;
     Ok(values
         .chunks_exact(6)
         .map(|v| [v[0], v[1], v[2], v[3], v[4], v[5]])

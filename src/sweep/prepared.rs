@@ -10,6 +10,7 @@ use super::phases::{
     chunks, padded, phase_factors, previous_rows, reuse_plan, Chunk, Phases, Piece, PAD,
 };
 use super::{critical_cos, Kind};
+use crate::cancel::Cancel;
 use crate::color::refine::{Refinement, MAX_SUB_STEPS};
 use crate::color::{Sampling, SpectralIntegrator};
 use crate::error::{Error, Result};
@@ -76,18 +77,22 @@ impl Refined {
 
 impl Prepared {
     /// The stack with `layer` varying, for a table of `kind` integrated by
-    /// `integrator` (rgb) or over `wavelength_nm` (spectral).
+    /// `integrator` (rgb) or over `wavelength_nm` (spectral). Stops with
+    /// [`Error::Cancelled`] once `cancel` is set (examining where the colour
+    /// needs refining takes seconds on hundreds of layers).
     pub(crate) fn of(
         stack: &Stack,
         layer: usize,
         kind: Kind,
         integrator: SpectralIntegrator,
         wavelength_nm: (f64, f64),
+        cancel: &Cancel,
     ) -> Result<Prepared> {
         let (stack, layer) = with_varying_layer(stack, layer);
         let mut prep = Prepared::plain(stack, layer, kind, &integrator, Some(wavelength_nm))?;
         if kind == Kind::Rgb && integrator.sampling() == Sampling::Exact {
-            let criterion = Refinement::new(&prep.stack, Some(layer), &integrator)?;
+            let criterion =
+                Refinement::new_cancellable(&prep.stack, Some(layer), &integrator, cancel)?;
             prep.refined = Some(Box::new(Refined {
                 criterion,
                 levels: (0..=MAX_SUB_STEPS.trailing_zeros())
@@ -247,11 +252,13 @@ impl Prepared {
     /// and wavelength) that `previous` also has keep the values of its
     /// thickness chunks that are computed the same way (see [`reuse_plan`]),
     /// so the result is the same bit for bit as evaluating everything.
+    /// Each row looks at `cancel` first ([`Error::Cancelled`] once set).
     pub(crate) fn eval(
         &self,
         grid: &Grid,
         previous: Option<&(Grid, Vec<f64>)>,
         progress: &(dyn Fn(f64) + Sync),
+        cancel: &Cancel,
     ) -> Result<Vec<f64>> {
         let [t_axis, c_axis, w_axis] = &grid.axes;
         let ch = self.channels;
@@ -288,6 +295,7 @@ impl Prepared {
         out.par_chunks_mut(row_len).enumerate().try_for_each_init(
             || Worker::new(n, stack_grid.thicknesses_nm()),
             |wk, (row_index, row)| -> Result<()> {
+                cancel.check()?;
                 let (w, c) = (row_index / nc, row_index % nc);
                 let cos = c_axis.nodes[c];
                 let wavelengths = if grid.spectral {

@@ -1,6 +1,7 @@
 //! The sweep against the solver and the integrator: its phase recurrence,
 //! its colour weights, and its values on caller-chosen nodes.
 
+use crate::cancel::Cancel;
 use num_complex::Complex64 as C64;
 
 use super::grid::AxisGrid;
@@ -109,7 +110,7 @@ fn a_film_of_no_thickness_is_no_film_at_grazing_incidence() {
     let integrator = SpectralIntegrator::new(crate::color::Sampling::Exact);
     let white = integrator.rgb(&vec![1.0; integrator.wavelengths_nm().len()]);
     let cos = [1e-9, 1e-7, 1e-3, 0.5, 1.0];
-    let values = rgb_at_nodes(&stack, 1, integrator, &[0.0], &cos).unwrap();
+    let values = rgb_at_nodes(&stack, 1, integrator, &[0.0], &cos, Cancel::never()).unwrap();
     for (v, c) in values.iter().zip(cos) {
         for k in 0..3 {
             assert!(v[k].abs() < 1e-5, "cos θ {c}: R {v:?}");
@@ -146,7 +147,8 @@ fn sweep_on_given_nodes_matches_the_solver() {
     let refinement = crate::color::refine::Refinement::new(&stack, Some(1), &integrator).unwrap();
     let mut refined = 0;
     for axis in [&sqrt_axis, &even_axis, &vec![250.0]] {
-        let values = rgb_at_nodes(&stack, 1, integrator.clone(), axis, &cos).unwrap();
+        let values =
+            rgb_at_nodes(&stack, 1, integrator.clone(), axis, &cos, Cancel::never()).unwrap();
         assert_eq!(values.len(), axis.len() * cos.len());
         let mut worst = 0.0f64;
         for (c_index, &c) in cos.iter().enumerate() {

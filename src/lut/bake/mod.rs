@@ -19,6 +19,7 @@ mod tests;
 use super::sample::Lut;
 use super::validate::{max_or_nan, validate};
 use super::{BakeSpec, Resolution, MAX_AXIS_NODES, MAX_NODES};
+use crate::cancel::Cancel;
 use crate::color::SpectralIntegrator;
 use crate::error::{Error, Result};
 use crate::sweep::{Grid, Prepared, Segment};
@@ -35,6 +36,7 @@ fn prepare(spec: &BakeSpec) -> Result<Prepared> {
         spec.kind,
         SpectralIntegrator::with_white(spec.sampling, spec.white),
         spec.wavelength_nm,
+        Cancel::never(),
     )
 }
 
@@ -81,7 +83,7 @@ pub fn bake_with_progress(spec: &BakeSpec, progress: &(dyn Fn(f64) + Sync)) -> R
     if !spec.check {
         // Only a fixed resolution gets here (see BakeSpec::validate).
         let grid = Grid::new(&axes, spec.kind);
-        let values = prep.eval(&grid, None, progress)?;
+        let values = prep.eval(&grid, None, progress, Cancel::never())?;
         let data: Vec<f32> = values.iter().map(|&v| stored(v, spec.half)).collect();
         representable(&data, &grid.nodes(), spec.kind, spec.half)?;
         return Lut::from_parts(header(spec, &prep, &grid, None, None), data)
@@ -103,7 +105,7 @@ pub fn bake_with_progress(spec: &BakeSpec, progress: &(dyn Fn(f64) + Sync)) -> R
         within_limits(&coarse, &fine, wavelength_work, round, target)?;
         within_budget(&coarse, &fine, prep.channels, target)?;
         let clock = std::time::Instant::now();
-        let values = prep.eval(&fine, previous.as_ref(), progress)?;
+        let values = prep.eval(&fine, previous.as_ref(), progress, Cancel::never())?;
         let eval_s = clock.elapsed().as_secs_f64();
         // The coarse table as it would be stored: the check interpolates it.
         let data = even_subgrid(&fine, &values, prep.channels, spec.half);

@@ -49,8 +49,8 @@ fn unchecked_nodes_match_the_checked_even_subgrid() {
             let even: Vec<f64> = f.nodes.iter().step_by(2).copied().collect();
             assert_eq!(c.nodes, even);
         }
-        let table = prep.eval(&coarse, None, &|_| {}).unwrap();
-        let checked = prep.eval(&fine, None, &|_| {}).unwrap();
+        let table = prep.eval(&coarse, None, &|_| {}, Cancel::never()).unwrap();
+        let checked = prep.eval(&fine, None, &|_| {}, Cancel::never()).unwrap();
         let ch = prep.channels;
         let [nt, nc, _] = fine.axes.clone().map(|a| a.nodes.len());
         let mut worst = 0.0f64;
@@ -88,8 +88,10 @@ fn reusing_the_previous_round_changes_no_bit() {
         let (mut copied_total, mut copied_rows) = (0, 0);
         for round in 0..4 {
             let fine = Grid::new(&axes.clone().map(|a| doubled(&a)), kind);
-            let reused = prep.eval(&fine, previous.as_ref(), &|_| {}).unwrap();
-            let fresh = prep.eval(&fine, None, &|_| {}).unwrap();
+            let reused = prep
+                .eval(&fine, previous.as_ref(), &|_| {}, Cancel::never())
+                .unwrap();
+            let fresh = prep.eval(&fine, None, &|_| {}, Cancel::never()).unwrap();
             let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
             assert!(bits(&reused) == bits(&fresh), "{kind} round {round}");
             if let Some((old, _)) = &previous {
@@ -107,7 +109,9 @@ fn reusing_the_previous_round_changes_no_bit() {
                 // some were, in whole rows' chunks.
                 let (old, values) = previous.as_ref().unwrap();
                 let poisoned = (old.clone(), vec![f64::NAN; values.len()]);
-                let marked = prep.eval(&fine, Some(&poisoned), &|_| {}).unwrap();
+                let marked = prep
+                    .eval(&fine, Some(&poisoned), &|_| {}, Cancel::never())
+                    .unwrap();
                 copied_rows += marked.iter().filter(|v| v.is_nan()).count();
             }
             previous = Some((fine, fresh));

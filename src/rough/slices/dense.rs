@@ -3,6 +3,7 @@
 //! nodes from it.
 
 use super::*;
+use crate::cancel::Cancel;
 
 /// The film's smooth colour on the dense thickness grid × the μ nodes, and
 /// the cubic interpolation in thickness.
@@ -201,10 +202,17 @@ pub(super) fn dense_grid(
         crate::limits::product(&[count as u64, mus as u64], 72),
     )?;
     // μ-major rows of thickness × RGB, as the weighing reads them.
-    let values = rgb_at_nodes(stack, layer, integrator.clone(), &thickness, grid.nodes())?
-        .into_iter()
-        .flat_map(|v| [v[0], v[1], v[2]])
-        .collect();
+    let values = rgb_at_nodes(
+        stack,
+        layer,
+        integrator.clone(),
+        &thickness,
+        grid.nodes(),
+        Cancel::never(),
+    )?
+    .into_iter()
+    .flat_map(|v| [v[0], v[1], v[2]])
+    .collect();
     Ok(Dense {
         lo_nm: lo,
         step,
