@@ -433,10 +433,10 @@ fn table_case(parts: &TableParts, base: &[u8], dir: &Path, rng: &mut Pcg64) -> R
         }
     }
     if let Ok(stats) = irid::lut::validate(&lut, 2, rng.random()) {
-        if !finite_all(&stats.max_abs) {
+        if !finite_all(&stats.figures.max_abs) {
             return Err(format!(
                 "validation succeeded with max_abs {:?}",
-                stats.max_abs
+                stats.figures.max_abs
             ));
         }
     }

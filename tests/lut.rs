@@ -23,7 +23,7 @@ use tables::{luts_dir, quick_spec, worst, worst_targeted};
 /// bound recorded in its header (the --max-error target, which the bake
 /// check and the bake's own 20000-point validation met) wherever it
 /// applies.
-fn bake_and_check(name: &str, spec: &BakeSpec, target: f64) -> irid::lut::ErrorStats {
+fn bake_and_check(name: &str, spec: &BakeSpec, target: f64) -> irid::lut::Validation {
     let lut = bake(spec).unwrap_or_else(|e| panic!("{name}: {e}"));
     let h = lut.header();
     let bound = h.error.target_max_abs.expect("an error target");
@@ -44,8 +44,8 @@ fn bake_and_check(name: &str, spec: &BakeSpec, target: f64) -> irid::lut::ErrorS
     };
     eprintln!(
         "{name}: nodes or texels {sizes:?}, bake check {check:.3e}, validation max {:.3e} mean {:.3e}",
-        worst(&stats.max_abs),
-        stats.mean_abs.iter().sum::<f64>() / stats.mean_abs.len() as f64
+        worst(&stats.figures.max_abs),
+        stats.figures.mean_abs.iter().sum::<f64>() / stats.figures.mean_abs.len() as f64
     );
     for r in &stats.regions {
         eprintln!(
@@ -137,10 +137,10 @@ fn graded_critical_angle_beats_a_uniform_grid_of_the_same_size() {
     let uniform = validate(&bake(&uniform_spec).unwrap(), 4000, 3).unwrap();
     eprintln!(
         "65 angle nodes: graded max {:.3e}, uniform max {:.3e}",
-        worst(&graded.max_abs),
-        worst(&uniform.max_abs)
+        worst(&graded.figures.max_abs),
+        worst(&uniform.figures.max_abs)
     );
-    assert!(worst(&graded.max_abs) * 5.0 < worst(&uniform.max_abs));
+    assert!(worst(&graded.figures.max_abs) * 5.0 < worst(&uniform.figures.max_abs));
 }
 
 #[test]
@@ -342,7 +342,7 @@ fn without_a_range_one_thickness_row() {
     assert_eq!(lut.header().axes[0].nodes.len(), 1);
     let stats = validate(&lut, 500, 2).unwrap();
     assert!(
-        worst(&stats.max_abs)
+        worst(&stats.figures.max_abs)
             <= lut
                 .header()
                 .error
@@ -607,7 +607,7 @@ fn unchecked_bake_matches_the_checked_one() {
         assert_eq!(back.header(), h);
         assert_eq!(back.header().version, irid::lut::FORMAT_VERSION);
         let stats = validate(&back, 300, 3).unwrap();
-        assert!(worst(&stats.max_abs) > 0.0 && worst(&stats.max_abs) < 0.5);
+        assert!(worst(&stats.figures.max_abs) > 0.0 && worst(&stats.figures.max_abs) < 0.5);
     }
     // An error target chooses its grid by the check: it cannot be skipped.
     let stack = Stack::load(&luts_dir().join("soap-film.toml")).unwrap();
@@ -665,8 +665,8 @@ fn version_1_tables_still_load() {
         // The first points of the recorded validation's stream: within its
         // figures, channel by channel.
         let recorded = h.error.validation.as_ref().expect("validation recorded");
-        let stats = validate(&lut, 200, recorded.seed).unwrap();
-        for (now, then) in stats.max_abs.iter().zip(&recorded.max_abs) {
+        let stats = validate(&lut, 200, recorded.figures.seed.unwrap()).unwrap();
+        for (now, then) in stats.figures.max_abs.iter().zip(&recorded.figures.max_abs) {
             assert!(now <= then, "{}: {now} > {then}", path.display());
         }
         let copy = dir.join("copy.exr");

@@ -38,9 +38,9 @@ fn spectral_table_and_trilinear_sampling() {
     assert!((f64::from(r) - direct.r()).abs() < 1e-6);
     assert!((f64::from(tr) - direct.t()).abs() < 1e-6);
     let stats = validate(&lut, 2000, 5).unwrap();
-    assert!(worst(&stats.max_abs) <= 2e-3);
+    assert!(worst(&stats.figures.max_abs) <= 2e-3);
     // The table spans 400–700 nm only: no colour figures.
-    assert!(stats.max_de2000.is_none());
+    assert!(stats.figures.max_delta_e00.is_none());
     assert!(lut.sample_rgb(t as f32, c as f32).reflectance[0].is_nan());
 }
 
@@ -120,7 +120,7 @@ fn spectral_atlas_of_a_dispersive_stack_and_the_grid_beside_it() {
     let grid = bake(&spec).unwrap();
     assert_eq!(grid.header().version, 2);
     assert!(grid.header().atlas.is_none());
-    assert!(worst(&validate(&grid, 4000, 9).unwrap().max_abs) <= 5e-3);
+    assert!(worst(&validate(&grid, 4000, 9).unwrap().figures.max_abs) <= 5e-3);
 }
 
 /// `--wavelengths` outside what the stack's data cover, reversed or not

@@ -99,7 +99,7 @@ pub fn run(
                             .len();
                         let _ = std::fs::remove_file(&path);
                         let stats = validate(&lut, points, seed)?;
-                        let all = stats.max_abs.iter().fold(0.0f64, |a, &b| a.max(b));
+                        let all = stats.figures.max_all();
                         let resolved = stats
                             .regions
                             .iter()

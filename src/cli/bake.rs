@@ -110,8 +110,8 @@ pub fn run(args: Args) -> Result<ExitCode> {
     }
     if let Some(stats) = &lut.header().error.validation {
         println!(
-            "validation: {} random points (seed {}) against the solver:",
-            stats.points, stats.seed
+            "validation: {} against the solver:",
+            super::validate::points_and_seed(stats)
         );
         super::validate::print_stats(stats);
     }

@@ -220,9 +220,8 @@ fn print_with_error(out: &mut String, h: &Header) {
     if let Some(v) = &h.error.validation {
         super::say!(
             out,
-            "  validation            {} random points (seed {}) against the solver (relative above 1):",
-            v.points,
-            v.seed
+            "  validation            {} against the solver (relative above 1):",
+            crate::cli::validate::points_and_seed(v)
         );
         super::print_escaped(out);
         out.clear();

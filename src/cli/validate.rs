@@ -4,7 +4,7 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use anyhow::Result;
-use irid::lut::{validate, ErrorStats, Lut};
+use irid::lut::{validate, Lut, Validation};
 
 #[derive(clap::Args)]
 pub struct Args {
@@ -36,21 +36,16 @@ pub fn run(args: Args) -> Result<ExitCode> {
     if args.json {
         println!("{}", serde_json::to_string_pretty(&stats)?);
     } else {
-        println!(
-            "{}: {} random points (seed {})",
-            args.lut.display(),
-            stats.points,
-            stats.seed
-        );
+        println!("{}: {}", args.lut.display(), points_and_seed(&stats));
         print_stats(&stats);
     }
     // An atlas table's target applies above its aliased strip.
     let worst = match stats.regions.iter().find(|r| r.name == "resolved") {
         Some(r) => r.max_abs,
-        None => stats.max_abs.iter().cloned().fold(0.0, f64::max),
+        None => stats.figures.max_all(),
     };
     match args.max_error {
-        Some(e) if worst > e || stats.max_abs.iter().any(|v| v.is_nan()) => {
+        Some(e) if worst > e || stats.figures.max_abs.iter().any(|v| v.is_nan()) => {
             eprintln!("irid: max abs error {worst:.3e} exceeds --max-error {e:e}");
             Ok(ExitCode::from(1))
         }
@@ -91,8 +86,18 @@ fn run_rough(args: &Args) -> Result<ExitCode> {
     }
 }
 
+/// "N random points (seed S)": how the validation drew its points.
+pub fn points_and_seed(v: &Validation) -> String {
+    let f = &v.figures;
+    match f.seed {
+        Some(seed) => format!("{} random points (seed {seed})", f.points),
+        None => format!("{} random points (seed not recorded)", f.points),
+    }
+}
+
 /// The validation figures as an indented table.
-pub fn print_stats(s: &ErrorStats) {
+pub fn print_stats(s: &Validation) {
+    let f = &s.figures;
     let mut out = String::new();
     super::say!(
         out,
@@ -107,18 +112,18 @@ pub fn print_stats(s: &ErrorStats) {
             out,
             "  {:<16} {:>10.3e} {:>10.3e} {:>10.3e}",
             name,
-            s.max_abs[k],
-            s.mean_abs[k],
-            s.p99_abs[k]
+            f.max_abs[k],
+            f.mean_abs[k],
+            f.p99_abs[k]
         );
     }
-    if let (Some(max), Some(mean)) = (s.max_de2000, s.mean_de2000) {
+    if let (Some(max), Some(mean)) = (f.max_delta_e00, f.mean_delta_e00) {
         super::say!(out,
             "  CIEDE2000        reflectance max {:.4} mean {:.4}; transmittance max {:.4} mean {:.4}",
             max[0], mean[0], max[1], mean[1]
         );
     }
-    let [t, c, w] = s.worst_point;
+    let [t, c, w] = f.worst_point;
     super::say!(
         out,
         "  worst point      thickness {t:.3} nm, cos θ {c:.5} ({:.2}°){}",

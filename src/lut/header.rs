@@ -3,7 +3,7 @@
 use serde::{Deserialize, Serialize};
 
 use super::axis::Axis;
-use super::validate::ErrorStats;
+use super::validate::Validation;
 use super::Kind;
 use crate::color::White;
 use crate::optics::Stack;
@@ -179,7 +179,7 @@ pub struct ErrorInfo {
     /// `None` (null in the file) when the table was baked without the check.
     pub bake_check: Option<BakeCheck>,
     /// Random off-grid points against the direct solver (`irid validate`).
-    pub validation: Option<ErrorStats>,
+    pub validation: Option<Validation>,
 }
 
 /// The baker's own dense error measurement.

@@ -20,7 +20,9 @@ pub use header::{
 };
 pub use rough::{RoughHeader, RoughLut};
 pub use sample::{FilmRgb, Lut};
-pub use validate::{validate, ErrorStats, RegionStats, MAX_POINTS as MAX_VALIDATION_POINTS};
+pub use validate::{validate, RegionFigures, Validation, MAX_POINTS as MAX_VALIDATION_POINTS};
+#[allow(deprecated)]
+pub use validate::{ErrorStats, RegionStats};
 // The sweep's, named here too: a table is of a kind, and covers what the
 // sweep can evaluate.
 pub use crate::sweep::{check_film_domain, Kind};

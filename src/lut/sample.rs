@@ -366,9 +366,9 @@ fn check_error_entries(header: &Header, n: usize) -> Result<(), String> {
     }
     if let Some(v) = &header.error.validation {
         per_channel("error.validation.channels", v.channels.len())?;
-        per_channel("error.validation.max_abs", v.max_abs.len())?;
-        per_channel("error.validation.mean_abs", v.mean_abs.len())?;
-        per_channel("error.validation.p99_abs", v.p99_abs.len())?;
+        per_channel("error.validation.max_abs", v.figures.max_abs.len())?;
+        per_channel("error.validation.mean_abs", v.figures.mean_abs.len())?;
+        per_channel("error.validation.p99_abs", v.figures.p99_abs.len())?;
     }
     Ok(())
 }

@@ -13,52 +13,51 @@ use crate::color::{delta_e2000_rgb, Sampling, SpectralIntegrator};
 use crate::error::{Error, Result};
 use crate::optics::lanes::SpectralWeights;
 use crate::optics::{solve_mixed, StackGrid};
-use crate::stats::p99_index;
+use crate::stats::{P99Histogram, TableFigures};
 use crate::sweep::critical_cos;
 
-/// Error of a table against the solver. Arrays named `*_abs` have one
-/// entry per channel (in `channels` order); `*_de2000` have two entries,
-/// the reflectance colour and the transmittance colour.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct ErrorStats {
-    /// How many random off-grid points were compared with the solver.
-    pub points: usize,
-    /// Seed of the PCG64 stream that drew the points; the same table,
-    /// count and seed reproduce the same figures.
-    pub seed: u64,
-    /// The table's channel names, the order of every `*_abs` array.
-    pub channels: Vec<String>,
-    /// Largest absolute error per channel over all points (relative to
-    /// the exact value where that exceeds 1 in magnitude, as the bake's
-    /// target: [`scaled_error`]).
-    pub max_abs: Vec<f64>,
-    /// Mean absolute error per channel over all points.
-    pub mean_abs: Vec<f64>,
-    /// 99th-percentile absolute error per channel (rank ⌈0.99·n⌉), read
-    /// from a histogram: at most 0.4 % above the exact order statistic and
-    /// never above `max_abs`.
-    pub p99_abs: Vec<f64>,
-    /// CIEDE2000 between the table's and the exact colour. For a spectral
+/// A table's validation against the solver: its figures over every
+/// point, the channel names its per-channel arrays follow, and the same
+/// points split by where tables are hard, so a bad corner is not averaged
+/// away. The header stores it under the field names and in the order it
+/// has had since the first tables ([`Record`]), which old tables are read
+/// by too.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(from = "Record")]
+pub struct Validation {
+    /// Over every point, per channel: the largest, the mean and the
+    /// 99th-percentile absolute error (relative to the exact value where
+    /// that exceeds 1 in magnitude, as the bake's target:
+    /// [`scaled_error`]), the percentile read from a histogram (at most
+    /// 0.4 % above the exact order statistic, never above the largest).
+    /// CIEDE2000 between the table's and the exact colour: for a spectral
     /// table the colour integrates the table's spectrum with the header's
-    /// sampling; absent when its wavelength axis does not span that
-    /// sampling's wavelengths.
-    pub max_de2000: Option<[f64; 2]>,
-    /// Mean CIEDE2000 over the points, (reflectance, transmittance); absent
-    /// exactly when `max_de2000` is.
-    pub mean_de2000: Option<[f64; 2]>,
-    /// Where the largest error (over channels) occurred: thickness (nm),
-    /// cos θ, wavelength (nm; 0 for rgb tables).
-    pub worst_point: [f64; 3],
-    /// The same points split by where tables are hard, so a bad corner is
-    /// not averaged away.
-    pub regions: Vec<RegionStats>,
+    /// sampling, and is absent when its wavelength axis does not span that
+    /// sampling's wavelengths. The seed of the PCG64 stream that drew the
+    /// points (the same table, count and seed reproduce the same figures).
+    /// The worst point is where the largest error over channels was.
+    pub figures: TableFigures,
+    /// The table's channel names, the order of the figures' arrays.
+    pub channels: Vec<String>,
+    /// The figures over the points in each region of the domain that has
+    /// any.
+    pub regions: Vec<RegionFigures>,
 }
 
-/// The validation error over the points that fall in one region of the
-/// table's domain. Regions with no points are left out of
-/// [`ErrorStats::regions`].
+/// The name of [`Validation`] before its figures became a
+/// [`TableFigures`].
+#[deprecated(note = "renamed `lut::Validation`; its figures are `stats::TableFigures`")]
+pub type ErrorStats = Validation;
+
+/// The name of [`RegionFigures`] before it.
+#[deprecated(note = "renamed `lut::RegionFigures`")]
+pub type RegionStats = RegionFigures;
+
+/// The validation over the points that fall in one region of the table's
+/// domain, of each point's largest absolute error over channels (its
+/// worst channel, the figure a table's target bounds).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct RegionStats {
+pub struct RegionFigures {
     /// `grazing` (incidence beyond 80°), `critical` (within ±0.02 in cos θ
     /// of the substrate's critical angle) or `other` (everything else); for
     /// an atlas table with an aliased strip or a dispersive critical band
@@ -70,10 +69,72 @@ pub struct RegionStats {
     pub description: String,
     /// How many of the validation points fell in the region.
     pub points: usize,
-    /// Largest absolute error over all channels.
+    /// The largest worst-channel error.
     pub max_abs: f64,
-    /// Mean over points of the largest absolute error over channels.
+    /// The mean worst-channel error.
     pub mean_abs: f64,
+}
+
+/// [`Validation`] as the header writes it: `points, seed, channels,
+/// max_abs, mean_abs, p99_abs, max_de2000, mean_de2000, worst_point,
+/// regions` (docs/lut-format.md). A rename or reordering here is a format
+/// change.
+#[derive(Serialize, Deserialize)]
+struct Record<V = Vec<f64>, N = Vec<String>, R = Vec<RegionFigures>> {
+    points: usize,
+    /// Always written by irid; absent only from a record built by hand
+    /// without one.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    seed: Option<u64>,
+    channels: N,
+    max_abs: V,
+    mean_abs: V,
+    p99_abs: V,
+    max_de2000: Option<[f64; 2]>,
+    mean_de2000: Option<[f64; 2]>,
+    worst_point: [f64; 3],
+    regions: R,
+}
+
+impl Serialize for Validation {
+    fn serialize<S: serde::Serializer>(
+        &self,
+        serializer: S,
+    ) -> std::result::Result<S::Ok, S::Error> {
+        let f = &self.figures;
+        Record::<&[f64], &[String], &[RegionFigures]> {
+            points: f.points,
+            seed: f.seed,
+            channels: &self.channels,
+            max_abs: &f.max_abs,
+            mean_abs: &f.mean_abs,
+            p99_abs: &f.p99_abs,
+            max_de2000: f.max_delta_e00,
+            mean_de2000: f.mean_delta_e00,
+            worst_point: f.worst_point,
+            regions: &self.regions,
+        }
+        .serialize(serializer)
+    }
+}
+
+impl From<Record> for Validation {
+    fn from(r: Record) -> Self {
+        Validation {
+            figures: TableFigures {
+                points: r.points,
+                max_abs: r.max_abs,
+                p99_abs: r.p99_abs,
+                mean_abs: r.mean_abs,
+                max_delta_e00: r.max_de2000,
+                mean_delta_e00: r.mean_de2000,
+                seed: r.seed,
+                worst_point: r.worst_point,
+            },
+            channels: r.channels,
+            regions: r.regions,
+        }
+    }
 }
 
 /// cos 80°: beyond it the response changes fastest with angle.
@@ -95,7 +156,7 @@ pub const MAX_POINTS: usize = 100_000_000;
 /// Compares the table with the solver at `points` random points spread
 /// uniformly over the table's domain (thickness, cos θ and, for spectral
 /// tables, wavelength), drawn from a PCG64 stream seeded with `seed`.
-pub fn validate(lut: &Lut, points: usize, seed: u64) -> Result<ErrorStats> {
+pub fn validate(lut: &Lut, points: usize, seed: u64) -> Result<Validation> {
     if !(1..=MAX_POINTS).contains(&points) {
         return Err(Error::invalid(
             "points",
@@ -320,7 +381,7 @@ struct Totals {
     critical: Option<f64>,
     max: Vec<f64>,
     sum: Vec<f64>,
-    quantile: Vec<QuantileHistogram>,
+    quantile: Vec<P99Histogram>,
     de_all: bool,
     de_max: [f64; 2],
     de_sum: [f64; 2],
@@ -351,9 +412,7 @@ impl Totals {
             unsought_band,
             max: vec![0.0; channels],
             sum: vec![0.0; channels],
-            quantile: (0..channels)
-                .map(|_| QuantileHistogram::default())
-                .collect(),
+            quantile: (0..channels).map(|_| P99Histogram::default()).collect(),
             de_all: true,
             de_max: [0.0; 2],
             de_sum: [0.0; 2],
@@ -428,12 +487,11 @@ impl Totals {
         seed: u64,
         channels: &[&str],
         critical: Option<f64>,
-    ) -> ErrorStats {
+    ) -> Validation {
         let n = points as f64;
-        let mut stats = ErrorStats {
+        let colour = self.de_all && self.de_count > 0;
+        let figures = TableFigures {
             points,
-            seed,
-            channels: channels.iter().map(|s| s.to_string()).collect(),
             mean_abs: self.sum.iter().map(|s| s / n).collect(),
             p99_abs: self
                 .quantile
@@ -442,15 +500,16 @@ impl Totals {
                 .map(|(q, &max)| q.p99(points, max))
                 .collect(),
             max_abs: self.max,
-            max_de2000: None,
-            mean_de2000: None,
-            regions: Vec::new(),
+            max_delta_e00: colour.then_some(self.de_max),
+            mean_delta_e00: colour.then(|| self.de_sum.map(|s| s / self.de_count as f64)),
+            seed: Some(seed),
             worst_point: self.worst.map_or([0.0; 3], |(_, at)| at),
         };
-        if self.de_all && self.de_count > 0 {
-            stats.max_de2000 = Some(self.de_max);
-            stats.mean_de2000 = Some(self.de_sum.map(|s| s / self.de_count as f64));
-        }
+        let mut stats = Validation {
+            figures,
+            channels: channels.iter().map(|s| s.to_string()).collect(),
+            regions: Vec::new(),
+        };
         let descriptions = [
             (
                 "grazing",
@@ -493,7 +552,7 @@ impl Totals {
         ];
         for ((name, description), (count, max, sum)) in descriptions.into_iter().zip(self.regions) {
             if count > 0 {
-                stats.regions.push(RegionStats {
+                stats.regions.push(RegionFigures {
                     name: name.into(),
                     description,
                     points: count,
@@ -506,81 +565,9 @@ impl Totals {
     }
 }
 
-/// Counts of non-negative errors in bins of their f64 bit pattern (the
-/// exponent and the top [`QUANTILE_BITS`] bits of the mantissa), so a
-/// quantile is found in bounded memory whatever the number of points: a
-/// block of counts per binary exponent that occurs (a few dozen in
-/// practice, 2 kB each). Adding an error is two indexings, which matters
-/// because the errors are added one by one after each parallel chunk.
-struct QuantileHistogram {
-    /// Indexed by the biased exponent; a block holds its mantissa bins.
-    by_exponent: Vec<Option<Box<[u64; 1 << QUANTILE_BITS]>>>,
-    /// NaN errors, above every number.
-    nan: u64,
-}
-
-impl Default for QuantileHistogram {
-    fn default() -> Self {
-        QuantileHistogram {
-            by_exponent: vec![None; 1 << 11],
-            nan: 0,
-        }
-    }
-}
-
-/// Mantissa bits kept per bin: a bin spans at most 2⁻⁸ of its values, so
-/// a quantile read from the histogram is within 0.4 % of the exact one.
-const QUANTILE_BITS: u32 = 8;
-
-impl QuantileHistogram {
-    fn add(&mut self, e: f64) {
-        if e.is_nan() {
-            self.nan += 1;
-        } else {
-            let bin = Self::bin(e);
-            let (exponent, mantissa) = (bin >> QUANTILE_BITS, bin & ((1 << QUANTILE_BITS) - 1));
-            let block = self.by_exponent[exponent as usize]
-                .get_or_insert_with(|| Box::new([0; 1 << QUANTILE_BITS]));
-            block[mantissa as usize] += 1;
-        }
-    }
-
-    fn bin(e: f64) -> u64 {
-        e.abs().to_bits() >> (52 - QUANTILE_BITS)
-    }
-
-    /// The 99th percentile of `points` errors whose largest is `max` (the
-    /// value of rank ⌈0.99·n⌉ in ascending order): the upper edge of the bin
-    /// holding that rank, but never above `max`. Within 0.4 % above the
-    /// exact order statistic, and exact when that is the largest error.
-    fn p99(&self, points: usize, max: f64) -> f64 {
-        let rank = p99_index(points) as u64 + 1;
-        let mut seen = 0;
-        let bins = self
-            .by_exponent
-            .iter()
-            .enumerate()
-            .flat_map(|(exponent, block)| {
-                block.iter().flat_map(move |b| {
-                    b.iter().enumerate().map(move |(m, &count)| {
-                        (((exponent as u64) << QUANTILE_BITS) | m as u64, count)
-                    })
-                })
-            });
-        for (bin, count) in bins {
-            seen += count;
-            if seen >= rank {
-                let edge = f64::from_bits((bin + 1) << (52 - QUANTILE_BITS));
-                return edge.min(max);
-            }
-        }
-        f64::NAN
-    }
-}
-
 impl Lut {
     /// Records validation figures in the header (written with the table).
-    pub fn set_validation(&mut self, stats: ErrorStats) {
+    pub fn set_validation(&mut self, stats: Validation) {
         self.header_mut().error.validation = Some(stats);
     }
 }
@@ -599,44 +586,41 @@ pub(crate) fn max_or_nan(values: &[f64]) -> f64 {
 
 #[cfg(test)]
 mod tests {
-    use super::{max_or_nan, QuantileHistogram};
+    use super::{max_or_nan, Validation};
 
-    /// The histogram's p99 against sorting, over errors spread across many
-    /// decades, with ties, zeros and a NaN.
+    /// A header's validation record as tables have always stored it (an
+    /// rgb table's, and a spectral one's without colour figures) reads
+    /// into the shared figures and writes back byte for byte, fields in
+    /// their order; and the figures land where they belong.
     #[test]
-    fn histogram_p99_is_within_its_bin_of_the_exact_one() {
-        let mut state = 11u64;
-        for points in [1usize, 2, 99, 100, 101, 1000, 12_345] {
-            let mut h = QuantileHistogram::default();
-            let mut all = Vec::new();
-            for k in 0..points {
-                state = state
-                    .wrapping_mul(6364136223846793005)
-                    .wrapping_add(1442695040888963407);
-                let e = if k % 17 == 0 {
-                    0.0
-                } else {
-                    10f64.powf(-12.0 * (state >> 40) as f64 / (1u64 << 24) as f64)
-                };
-                h.add(e);
-                all.push(e);
-            }
-            all.sort_by(f64::total_cmp);
-            let max = all[points - 1];
-            let rank = crate::stats::p99_index(points);
-            let exact = all[rank];
-            let got = h.p99(points, max);
-            assert!(
-                got >= exact && got <= exact * (1.0 + 1.0 / 256.0) + f64::MIN_POSITIVE,
-                "{points} points: p99 {got:e}, exact {exact:e}"
-            );
-            if rank == points - 1 {
-                assert_eq!(got, max);
-            }
+    fn the_header_record_reads_and_writes_back_unchanged() {
+        let rgb = concat!(
+            r#"{"points":3,"seed":7,"channels":["reflectance.R","transmittance.R"],"#,
+            r#""max_abs":[0.5,0.25],"mean_abs":[0.125,0.0625],"p99_abs":[0.5,0.1875],"#,
+            r#""max_de2000":[1.5,2.5],"mean_de2000":[0.75,1.25],"#,
+            r#""worst_point":[305.5,0.03125,0.0],"regions":[{"name":"grazing","#,
+            r#""description":"incidence beyond 80°","points":2,"max_abs":0.5,"mean_abs":0.375}]}"#
+        );
+        let spectral = concat!(
+            r#"{"points":1,"seed":0,"channels":["reflectance","transmittance"],"#,
+            r#""max_abs":[0.00001,0.00002],"mean_abs":[0.00001,0.00002],"p99_abs":[0.00001,0.00002],"#,
+            r#""max_de2000":null,"mean_de2000":null,"worst_point":[1.0,0.5,550.0],"regions":[]}"#
+        );
+        for text in [rgb, spectral] {
+            let v: Validation = serde_json::from_str(text).unwrap();
+            assert_eq!(serde_json::to_string(&v).unwrap(), text);
         }
-        let mut h = QuantileHistogram::default();
-        h.add(f64::NAN);
-        assert!(h.p99(1, f64::NAN).is_nan());
+        let v: Validation = serde_json::from_str(rgb).unwrap();
+        let f = &v.figures;
+        assert_eq!((f.points, f.seed), (3, Some(7)));
+        assert_eq!(f.max_abs, [0.5, 0.25]);
+        assert_eq!(f.mean_abs, [0.125, 0.0625]);
+        assert_eq!(f.p99_abs, [0.5, 0.1875]);
+        assert_eq!(f.max_delta_e00, Some([1.5, 2.5]));
+        assert_eq!(f.mean_delta_e00, Some([0.75, 1.25]));
+        assert_eq!(f.worst_point, [305.5, 0.03125, 0.0]);
+        assert_eq!(v.channels, ["reflectance.R", "transmittance.R"]);
+        assert_eq!((v.regions[0].points, v.regions[0].mean_abs), (2, 0.375));
     }
 
     #[test]

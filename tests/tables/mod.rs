@@ -25,9 +25,9 @@ pub fn worst(values: &[f64]) -> f64 {
 
 /// The largest error of a validation where the table's target applies:
 /// above an atlas table's aliased strip, everywhere for a grid.
-pub fn worst_targeted(stats: &irid::lut::ErrorStats) -> f64 {
+pub fn worst_targeted(stats: &irid::lut::Validation) -> f64 {
     match stats.regions.iter().find(|r| r.name == "resolved") {
         Some(r) => r.max_abs,
-        None => worst(&stats.max_abs),
+        None => worst(&stats.figures.max_abs),
     }
 }

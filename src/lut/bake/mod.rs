@@ -212,13 +212,13 @@ fn validated(
     axes: &mut [Vec<Segment>; 3],
 ) -> Result<Option<Lut>> {
     let stats = validate(&lut, spec.validation_points, VALIDATION_SEED)?;
-    let worst = max_or_nan(&stats.max_abs);
+    let worst = max_or_nan(&stats.figures.max_abs);
     if worst <= target {
         lut.set_validation(stats);
         return Ok(Some(lut));
     }
     for (a, segments) in axes.iter_mut().enumerate() {
-        let x = stats.worst_point[a];
+        let x = stats.figures.worst_point[a];
         if let Some(k) = segments
             .iter()
             .position(|s| s.intervals > 0 && x >= s.start && x <= s.end)
