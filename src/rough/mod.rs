@@ -33,8 +33,12 @@ mod quadrature;
 pub mod slices;
 #[cfg(test)]
 mod tests;
+mod transmission;
 
-pub use engine::{rough_colors, rough_reflectance, RoughColor, RoughTable};
+pub use engine::{
+    relative_index, rough_colors, rough_colors_from, rough_reflectance, rough_response, seen_from,
+    RoughColor, RoughTable, ETA_WAVELENGTH_NM,
+};
 pub use kernel::Kernel;
 pub use mu_grid::MuGrid;
 pub use quadrature::Quadrature;
