@@ -33,6 +33,8 @@ mod quadrature;
 pub mod slices;
 #[cfg(test)]
 mod tests;
+#[cfg(test)]
+mod tests_transmission;
 mod transmission;
 
 pub use engine::{
