@@ -151,17 +151,15 @@ impl Kernel {
     }
 }
 
+/// What [`for_each_panel`] calls per panel.
+pub(crate) type PanelVisit<'a> = dyn FnMut(&Segment, usize, (f64, f64), (f64, f64)) + 'a;
+
 /// Calls `visit(segment, interval, (s_lo, s_hi), (μ_lo, μ_hi))` for every
 /// panel of the outer integral over μ ∈ (`mu_end`, 1]: the grid's
 /// intervals, cut at `cuts` (ascending μ) and at `mu_end`. The μ ends are
 /// the exact cut, node or `mu_end` values, so a caller can tell a panel
 /// that starts or ends at one of its own kinks.
-pub(crate) fn for_each_panel(
-    grid: &MuGrid,
-    mu_end: f64,
-    cuts: &[f64],
-    visit: &mut dyn FnMut(&Segment, usize, (f64, f64), (f64, f64)),
-) {
+pub(crate) fn for_each_panel(grid: &MuGrid, mu_end: f64, cuts: &[f64], visit: &mut PanelVisit) {
     for seg in grid.segments() {
         for k in 0..seg.intervals {
             let (m0, m1) = seg.interval_mu(k);

@@ -24,9 +24,8 @@
 //! α²/π to 0) enter the azimuth range at ψ = π, so that K_T falls like
 //! √(sin θ_v − μ) below it; for η < 1 the critical μ_c, where K_T jumps
 //! from 0 and grows like √(μ − μ_c), and tan β = cos θ_v / (1/η − sin θ_v),
-//! where l_t at ψ = 0 reaches the horizon. Panels at or near the two
-//! square-root kinks are integrated in w = √|μ − μ_kink|, in which K_T is
-//! smooth.
+//! where l_t at ψ = 0 reaches the horizon. The two square-root ends get a
+//! panel in u, s = s_kink ± Δs u², on which K_T is smooth.
 
 use std::f64::consts::PI;
 
@@ -37,11 +36,6 @@ use super::quadrature::{Quadrature, Rule};
 
 /// Panel ends closer than this in μ to a square-root kink are at it.
 const AT_KINK: f64 = 1e-12;
-
-/// A panel whose distance to a square-root kink is less than this many
-/// times its length is integrated in the kink's square root: in μ or s
-/// the kink just outside would slow Gauss–Legendre's convergence.
-const NEAR_KINK: f64 = 4.0;
 
 impl Kernel {
     /// The transmission kernel of view cos θ_v = `cos_view` ∈ [0, 1],
@@ -139,46 +133,46 @@ impl Refraction {
         cuts
     }
 
-    /// One panel of the outer integral (see [`panel`]); near one of K_T's
-    /// square-root kinks μ_k (within [`NEAR_KINK`] panel lengths), in
-    /// w = √|μ − μ_k|, in which K_T is smooth.
+    /// One panel of the outer integral (see [`panel`]), in u at K_T's
+    /// square-root kinks.
     fn panel(
         &self,
         rules: &Rules,
         seg: &Segment,
         k: usize,
-        s: (f64, f64),
+        (s_lo, s_hi): (f64, f64),
         (mu_lo, mu_hi): (f64, f64),
         raw: &mut [f64],
     ) {
         let density = |mu, sin_b, beta| self.density(mu, sin_b, beta, &rules.inner);
-        let length = mu_hi - mu_lo;
-        let kink = if self.mu_critical > 0.0
-            && mu_lo >= self.mu_critical - AT_KINK
-            && mu_lo - self.mu_critical < NEAR_KINK * length
-        {
-            Some((self.mu_critical, 1.0))
-        } else if mu_hi <= self.mu_facing + AT_KINK && self.mu_facing - mu_hi < NEAR_KINK * length
-        {
-            Some((self.mu_facing, -1.0))
+        let from = if self.mu_critical > 0.0 && (mu_lo - self.mu_critical).abs() <= AT_KINK {
+            Some((s_lo, s_hi - s_lo))
+        } else if (mu_hi - self.mu_facing).abs() <= AT_KINK {
+            Some((s_hi, s_lo - s_hi))
         } else {
             None
         };
-        let Some((mu_kink, sign)) = kink else {
-            panel(&self.lobe, &density, &rules.outer, seg, k, s, raw);
+        let Some((s_kink, ds)) = from else {
+            panel(
+                &self.lobe,
+                &density,
+                &rules.outer,
+                seg,
+                k,
+                (s_lo, s_hi),
+                raw,
+            );
             return;
         };
-        // μ = μ_k + sign w², w from √|μ_lo − μ_k| to √|μ_hi − μ_k|.
-        let root = |mu: f64| (sign * (mu - mu_kink)).max(0.0).sqrt();
-        let (w0, w1) = (root(mu_lo), root(mu_hi));
         let rule: &Rule = &rules.outer;
-        for (x, gl) in rule.nodes.iter().zip(&rule.weights) {
-            let w = w0 + (w1 - w0) * x;
-            let mu = mu_kink + sign * w * w;
+        for (x, w) in rule.nodes.iter().zip(&rule.weights) {
+            let s = s_kink + ds * x * x;
+            let mu = seg.mu(s);
             let sin_b = ((1.0 - mu) * (1.0 + mu)).max(0.0).sqrt();
-            // dμ = 2 w dw, in the panel's direction of μ.
-            let weight = gl * (w1 - w0).abs() * 2.0 * w * density(mu, sin_b, sin_b.atan2(mu));
-            let (first, cardinal) = seg.stencil(k, seg.s(mu));
+            // |ds/du| = 2 |Δs| u.
+            let weight =
+                w * 2.0 * ds.abs() * x * seg.dmu_ds(s) * density(mu, sin_b, sin_b.atan2(mu));
+            let (first, cardinal) = seg.stencil(k, s);
             for (i, l) in cardinal.iter().enumerate() {
                 raw[first + i] += weight * l;
             }
