@@ -24,6 +24,12 @@
 //! over a whole thickness × cos θ × roughness grid: the film's smooth colour
 //! on the μ nodes from the baker's split-stack sweep, times a kernel per
 //! (cos θ, roughness). [`rough_colors`] is `irid color --roughness`.
+//!
+//! The transmittance is the same construction with the refraction lobe's
+//! kernel K_T(μ; θ_v, α, η) ([`Kernel::transmission`], Walter et al.
+//! 2007's microfacet refraction in flux form): T_eff and its white lobe's
+//! albedo A_T, from either side of the film ([`rough_response`],
+//! [`rough_colors_from`]; the substrate side is the reversed stack).
 
 mod engine;
 pub mod ggx;
