@@ -355,7 +355,7 @@ def check_interpolation(name, film, pool, rng):
 GRAZING_MU = 1e-4
 SIDE_TOLERANCE = 2e-3  # the bar, per channel
 SIDE_DE_TOLERANCE = 0.2
-SIDE_INTERPOLATION_TOLERANCE = 1e-4  # a twentieth of SIDE_TOLERANCE
+SIDE_INTERPOLATION_TOLERANCE = SIDE_TOLERANCE / 4  # as the Monte Carlo error
 # A_T below this leaves too few Monte Carlo samples for T_eff: A_T itself is checked.
 MIN_TRANSMISSION_ALBEDO = 0.02
 SIDES = ("front", "substrate")
