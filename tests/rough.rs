@@ -184,8 +184,15 @@ mod cli {
                     "lobe_albedo",
                     "reflectance_rgb",
                     "reflectance_xyz",
-                    "roughness"
+                    "roughness",
+                    "transmission_lobe_albedo",
+                    "transmittance_rgb",
+                    "transmittance_xyz"
                 ]
+            );
+            assert_eq!(
+                triple(s, "transmittance_rgb"),
+                triple(z, "transmittance_rgb")
             );
             assert_eq!(triple(s, "reflectance_rgb"), triple(z, "reflectance_rgb"));
             assert_eq!(z["lobe_albedo"].as_f64(), Some(1.0));
@@ -196,6 +203,71 @@ mod cli {
         }
         let text = irid(["color", "luts/soap-film.toml", "--roughness", "0.3"]);
         assert!(text.success() && text.stdout.contains("lobe albedo"));
+        assert!(text.stdout.contains("transmittance"));
+    }
+
+    /// `--side substrate` is the reversed stack seen from its ambient,
+    /// smooth and rough; a lossless film transmits what it does not
+    /// reflect at roughness 0 from either side.
+    #[test]
+    fn the_substrate_side_is_the_reversed_stack() {
+        let dir = tempfile::tempdir().unwrap();
+        let (film, reversed) = (dir.path().join("f.toml"), dir.path().join("r.toml"));
+        std::fs::write(
+            &film,
+            "ambient = { n = 1.0 }\nsubstrate = { n = 1.5 }\n[[layers]]\nn = 2.1\nthickness_nm = 150.0\n[[layers]]\nn = 1.38\nthickness_nm = 90.0\n",
+        )
+        .unwrap();
+        std::fs::write(
+            &reversed,
+            "ambient = { n = 1.5 }\nsubstrate = { n = 1.0 }\n[[layers]]\nn = 1.38\nthickness_nm = 90.0\n[[layers]]\nn = 2.1\nthickness_nm = 150.0\n",
+        )
+        .unwrap();
+        let (film, reversed) = (film.to_str().unwrap(), reversed.to_str().unwrap());
+        for rough in [&[][..], &["--roughness", "0"], &["--roughness", "0.4"]] {
+            let args = |stack, side| {
+                let mut a = vec!["color", stack, "--angles", "0,30,60", "--json"];
+                a.extend_from_slice(rough);
+                a.extend_from_slice(&["--side", side]);
+                a
+            };
+            let back = json(&args(film, "substrate"));
+            let want = json(&args(reversed, "front"));
+            assert_eq!(back, want, "{rough:?}");
+            if rough.len() == 2 && rough[1] == "0" {
+                for row in &back {
+                    let (r, t) = (
+                        triple(row, "reflectance_rgb"),
+                        triple(row, "transmittance_rgb"),
+                    );
+                    for c in 0..3 {
+                        assert!((r[c] + t[c] - 1.0).abs() < 1e-9, "{row:?}");
+                    }
+                }
+                // 60° in the glass is past its critical angle: nothing through.
+                assert_eq!(back[2]["transmission_lobe_albedo"].as_f64(), Some(0.0));
+            }
+        }
+    }
+
+    #[test]
+    fn sides_a_stack_cannot_be_seen_from_are_one_line() {
+        let dir = tempfile::tempdir().unwrap();
+        let on_silver = dir.path().join("on-silver.toml");
+        std::fs::write(
+            &on_silver,
+            "ambient = { n = 1.0 }\nsubstrate = { material = \"silver\" }\n[[layers]]\nn = 1.5\nthickness_nm = 300.0\n",
+        )
+        .unwrap();
+        let on_silver = on_silver.to_str().unwrap();
+        for rough in [&[][..], &["--roughness", "0.3"]] {
+            let mut args = vec!["color", on_silver, "--side", "substrate"];
+            args.extend_from_slice(rough);
+            irid(&args)
+                .assert_one_line_error("absorbing", &[on_silver, "side: the substrate", "absorbs"]);
+        }
+        irid(["color", "luts/soap-film.toml", "--side", "back"])
+            .assert_one_line_error("back", &["--side 'back'", "front or substrate"]);
     }
 
     #[test]

@@ -15,7 +15,8 @@ use irid::optics::{
     library, solve, solve_amplitudes, solve_mixed, Layer, Material, Response, Stack, StackGrid,
     MAX_THICKNESS_NM,
 };
-use irid::rough::{check_roughness, rough_colors_cancellable, RoughColor};
+use irid::rough::{check_roughness, rough_colors_from_cancellable, seen_from, RoughColor};
+use irid::sweep::Side as Seen;
 
 use crate::arrays::{array, count, integer_in, planned_len, real, real_list, reals};
 use crate::budget::Footprint;
@@ -486,17 +487,24 @@ impl PyStack {
     /// Y = 1 for a perfect reflector, (A, 3)).
     ///
     /// roughness (a number in [0, 1], as `irid color --roughness`): the
-    /// reflectance pre-integrated over a GGX lobe of that roughness, F_eff
-    /// (docs/rough.md), per view angle instead. Returns a dict: angle_deg,
-    /// reflectance_rgb, reflectance_xyz (as above) and lobe_albedo (A,), the
-    /// white lobe's directional albedo; no transmittance. Roughness 0 gives
-    /// the smooth reflectance exactly.
+    /// reflectance and transmittance pre-integrated over GGX reflection and
+    /// refraction lobes of that roughness, F_eff and T_eff (docs/rough.md),
+    /// per view angle instead. Returns a dict: angle_deg, reflectance_rgb,
+    /// reflectance_xyz, transmittance_rgb, transmittance_xyz (as above),
+    /// lobe_albedo and transmission_lobe_albedo (A,), the white lobes'
+    /// directional albedos (single scattering). Roughness 0 gives the
+    /// smooth colours exactly.
+    ///
+    /// side: "front" (the view in the ambient, the default; "ambient" says
+    /// the same) or "substrate" (the view in a lossless substrate, angles
+    /// in it), as `irid color --side`.
     ///
     /// gradient=True (smooth films only) adds the exact derivatives of the
     /// colours by every layer's thickness (per nm, layers top down):
     /// dreflectance_rgb_dd, dtransmittance_rgb_dd, dreflectance_xyz_dd and
     /// dtransmittance_xyz_dd, each of shape (layers, angles, 3).
-    #[pyo3(signature = (angles_deg, sampling="exact", white="d65", roughness=None, gradient=false))]
+    #[pyo3(signature = (angles_deg, sampling="exact", white="d65", roughness=None, gradient=false, side="front"))]
+    #[allow(clippy::too_many_arguments)]
     fn color<'py>(
         &self,
         py: Python<'py>,
@@ -505,7 +513,18 @@ impl PyStack {
         white: &str,
         roughness: Option<&Bound<'py, PyAny>>,
         gradient: bool,
+        side: &str,
     ) -> PyResult<Bound<'py, PyDict>> {
+        let side = match side {
+            "front" | "ambient" => Seen::Front,
+            "substrate" => Seen::Back,
+            other => {
+                return Err(invalid(
+                    "side",
+                    format!("expected \"front\" or \"substrate\", got {other:?}"),
+                ))
+            }
+        };
         let sampling: Sampling = sampling.parse().map_err(py_error)?;
         let white: White = white.parse().map_err(py_error)?;
         let integrator = SpectralIntegrator::with_white(sampling, white);
@@ -523,14 +542,21 @@ impl PyStack {
                     "is given for smooth films only: not with roughness",
                 ));
             }
+            if side != Seen::Front {
+                return Err(invalid(
+                    "gradient",
+                    "is given for the front side only: not with side=\"substrate\"",
+                ));
+            }
             return self.color_gradient(py, &integrator, angles);
         }
         if let Some(roughness) = roughness {
-            return self.rough_color(py, &integrator, angles, roughness);
+            return self.rough_color(py, &integrator, angles, roughness, side);
         }
+        let (seen, _) = seen_from(&self.stack, 1, side, &integrator).map_err(py_error)?;
         let on_pool = self.color_work(&integrator, angles.len()) >= INTERRUPTIBLE_MIN_WORK;
         let colours = compute_cancellable(py, on_pool, |cancel| {
-            stack_colors_cancellable(&self.stack, &integrator, &angles, cancel)
+            stack_colors_cancellable(&seen, &integrator, &angles, cancel)
         })?
         .map_err(py_error)?;
         colour_dict(
@@ -639,7 +665,7 @@ impl PyStack {
     /// Checks what `Stack.color` allocates for `angles` angles. Smooth: the
     /// responses at every (wavelength, angle), the grid's indices, and per
     /// angle its colour and the four (angles, 3) results. Rough: the
-    /// colours and the three results (the library checks its own sweep and
+    /// colours and the seven results (the library checks its own sweep and
     /// kernels).
     fn color_footprint(
         &self,
@@ -649,7 +675,7 @@ impl PyStack {
     ) -> PyResult<()> {
         if rough {
             return Footprint::new()
-                .items(&[angles], std::mem::size_of::<RoughColor>() as u64 + 8 * 8)
+                .items(&[angles], std::mem::size_of::<RoughColor>() as u64 + 15 * 8)
                 .check(&format!("{angles} angles"));
         }
         let samples = integrator.wavelengths_nm().len();
@@ -663,21 +689,24 @@ impl PyStack {
             .check(&format!("{angles} angles × {samples} wavelengths"))
     }
 
-    /// `Stack.color(..., roughness=R)`: F_eff per angle (docs/rough.md).
+    /// `Stack.color(..., roughness=R, side=...)`: F_eff and T_eff per angle
+    /// (docs/rough.md).
     fn rough_color<'py>(
         &self,
         py: Python<'py>,
         integrator: &SpectralIntegrator,
         angles: Vec<f64>,
         roughness: &Bound<'py, PyAny>,
+        side: Seen,
     ) -> PyResult<Bound<'py, PyDict>> {
         let roughness = real(roughness, "roughness")?;
         check_roughness("roughness", roughness).map_err(py_error)?;
         let colours = compute_interruptible(py, |cancel| {
-            rough_colors_cancellable(&self.stack, integrator, &angles, roughness, cancel)
+            rough_colors_from_cancellable(&self.stack, integrator, &angles, roughness, side, cancel)
         })?
         .map_err(py_error)?;
         let albedo = colours.iter().map(|c| c.lobe_albedo).collect();
+        let through = colours.iter().map(|c| c.transmission_lobe_albedo).collect();
         let result = colour_dict(
             py,
             angles,
@@ -685,10 +714,13 @@ impl PyStack {
             &[
                 ("reflectance_rgb", |c| c.reflectance_rgb),
                 ("reflectance_xyz", |c| c.reflectance_xyz),
+                ("transmittance_rgb", |c| c.transmittance_rgb),
+                ("transmittance_xyz", |c| c.transmittance_xyz),
             ],
         )?;
         let n = colours.len();
         result.set_item("lobe_albedo", array(py, albedo, &[n])?)?;
+        result.set_item("transmission_lobe_albedo", array(py, through, &[n])?)?;
         Ok(result)
     }
 }

@@ -149,16 +149,35 @@ def test_color_of_a_lossless_film_sums_to_white():
 def test_rough_color_matches_the_cli(luts, irid_cli):
     path = luts / "absorbing-film.toml"
     angles = [0.0, 30.0, 60.0, 85.0]
-    for roughness in (0.0, 0.25, 1.0):
-        mine = irid.Stack.load(path).color(angles, white="e", roughness=roughness)
-        assert sorted(mine) == ["angle_deg", "lobe_albedo", "reflectance_rgb", "reflectance_xyz"]
+    keys = ["reflectance_rgb", "reflectance_xyz", "transmittance_rgb", "transmittance_xyz"]
+    for roughness, side in [(0.0, "front"), (0.25, "front"), (1.0, "front"), (0.0, "substrate"), (0.25, "substrate")]:
+        mine = irid.Stack.load(path).color(angles, white="e", roughness=roughness, side=side)
+        assert sorted(mine) == sorted(["angle_deg", "lobe_albedo", "transmission_lobe_albedo", *keys])
         run = irid_cli("color", path, "--angles", ",".join(map(str, angles)), "--white", "e",
-                       "--roughness", str(roughness), "--json")
+                       "--roughness", str(roughness), "--side", side, "--json")
         assert run.returncode == 0, run.stderr
         for j, c in enumerate(json.loads(run.stdout)):
-            for key in ["reflectance_rgb", "reflectance_xyz"]:
+            for key in keys:
                 np.testing.assert_allclose(mine[key][j], c[key], rtol=0, atol=1e-15)
             assert mine["lobe_albedo"][j] == c["lobe_albedo"]
+            assert mine["transmission_lobe_albedo"][j] == c["transmission_lobe_albedo"]
+
+
+def test_smooth_color_from_the_substrate_is_the_reversed_stacks():
+    stack = irid.Stack(ambient=1.0, layers=[(2.1, 150.0), (1.38, 90.0)], substrate=1.5)
+    reversed_ = irid.Stack(ambient=1.5, layers=[(1.38, 90.0), (2.1, 150.0)], substrate=1.0)
+    back, want = stack.color([0, 30, 60], side="substrate"), reversed_.color([0, 30, 60])
+    for key in want:
+        np.testing.assert_array_equal(back[key], want[key])
+
+
+def test_sides_a_stack_cannot_be_seen_from_are_value_errors():
+    on_silver = irid.Stack(layers=[(1.5, 300.0)], substrate="silver")
+    for roughness in (None, 0.3):
+        with pytest.raises(ValueError, match=r"^side: the substrate [^\n]*absorbs[^\n]*$"):
+            on_silver.color([0.0], roughness=roughness, side="substrate")
+    with pytest.raises(ValueError, match=r'^side: expected "front" or "substrate", got "back"$'):
+        on_silver.color([0.0], side="back")
 
 
 def test_roughness_zero_is_the_smooth_reflectance():

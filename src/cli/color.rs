@@ -1,6 +1,8 @@
 //! `irid color`: a stack's reflected and transmitted colour, per angle, in
-//! linear sRGB with the chosen white (D65 by default); with `--roughness`,
-//! its reflectance pre-integrated over a GGX lobe (docs/rough.md).
+//! linear sRGB with the chosen white (D65 by default), seen from the
+//! ambient or (`--side substrate`) from the substrate; with `--roughness`,
+//! its reflectance and transmittance pre-integrated over GGX lobes
+//! (docs/rough.md).
 
 use std::io::{IsTerminal, Write};
 use std::path::PathBuf;
@@ -9,7 +11,8 @@ use std::process::ExitCode;
 use anyhow::{anyhow, Result};
 use irid::color::{linear_to_srgb8, stack_colors, Sampling, SpectralIntegrator, White};
 use irid::optics::Stack;
-use irid::rough::{check_roughness, rough_colors};
+use irid::rough::{check_roughness, rough_colors_from, seen_from};
+use irid::sweep::Side;
 
 use super::args::{check_angles, check_grid, parse_choice, parse_list};
 
@@ -27,16 +30,23 @@ pub struct Args {
     /// spectrum, as Blender Cycles and glTF viewers); see docs/color.md.
     #[arg(long, default_value = "d65")]
     pub white: String,
-    /// GGX roughness in [0, 1] (α = roughness²): print F_eff, the film's
-    /// reflectance pre-integrated over the microfacet lobe, per view angle,
-    /// and the white lobe's albedo, instead of the mirror's R and T (see
-    /// docs/rough.md). 0 gives the mirror's reflectance exactly.
+    /// GGX roughness in [0, 1] (α = roughness²): print F_eff and T_eff, the
+    /// film's reflectance and transmittance pre-integrated over the
+    /// microfacet reflection and refraction lobes, per view angle, and the
+    /// white lobes' albedos, instead of the mirror's R and T (see
+    /// docs/rough.md). 0 gives the mirror's exactly.
     #[arg(long)]
     pub roughness: Option<String>,
+    /// The side the film is seen from: front (the view in the ambient) or
+    /// substrate (the view in the substrate, which must not absorb; angles
+    /// are then in the substrate).
+    #[arg(long, default_value = "front")]
+    pub side: String,
     /// One JSON array of {angle_deg, reflectance_rgb, transmittance_rgb,
     /// reflectance_xyz, transmittance_xyz} (linear sRGB; XYZ with Y = 1 for
     /// white); with --roughness, of {angle_deg, roughness, reflectance_rgb,
-    /// reflectance_xyz, lobe_albedo}.
+    /// reflectance_xyz, lobe_albedo, transmittance_rgb, transmittance_xyz,
+    /// transmission_lobe_albedo}.
     #[arg(long)]
     pub json: bool,
 }
@@ -47,6 +57,7 @@ pub fn run(args: Args) -> Result<ExitCode> {
     let angles_deg = parse_list("--angles", &args.angles)?;
     check_angles("--angles", &angles_deg)?;
     let roughness = args.roughness.as_deref().map(parse_roughness).transpose()?;
+    let side = parse_side(&args.side)?;
     let stack = Stack::load(&args.stack)?;
     let integrator = SpectralIntegrator::with_white(sampling, white);
     check_grid(
@@ -54,17 +65,27 @@ pub fn run(args: Args) -> Result<ExitCode> {
         &[angles_deg.len(), integrator.wavelengths_nm().len()],
     )?;
     let printer = Printer::new(&args, sampling, white);
+    let in_file = |e: irid::Error| anyhow!("{}: {e}", args.stack.display());
     match roughness {
         Some(r) => {
-            let colors = rough_colors(&stack, &integrator, &angles_deg, r)
-                .map_err(|e| anyhow!("{}: {e}", args.stack.display()))?;
+            let colors =
+                rough_colors_from(&stack, &integrator, &angles_deg, r, side).map_err(in_file)?;
             printer.rough(&colors, r)
         }
         None => {
-            let colors = stack_colors(&stack, &integrator, &angles_deg)
-                .map_err(|e| anyhow!("{}: {e}", args.stack.display()))?;
+            let (seen, _) = seen_from(&stack, 1, side, &integrator).map_err(in_file)?;
+            let colors = stack_colors(&seen, &integrator, &angles_deg).map_err(in_file)?;
             printer.smooth(&colors)
         }
+    }
+}
+
+/// `--side`: front or substrate.
+fn parse_side(text: &str) -> Result<Side> {
+    match text {
+        "front" => Ok(Side::Front),
+        "substrate" => Ok(Side::Back),
+        _ => Err(anyhow!("--side '{text}': expected front or substrate")),
     }
 }
 
@@ -107,12 +128,17 @@ impl Printer<'_> {
         }
     }
 
-    /// The first line: stack, white, observer, sampling, and `what`.
+    /// The first line: stack, side, white, observer, sampling, and `what`.
     fn heading(&self, out: &mut impl Write, what: &str) -> Result<()> {
         writeln!(
             out,
-            "{}: {}, CIE 1931 2°, sampling {}{what}; linear sRGB with the sRGB-encoded hex",
+            "{}{}: {}, CIE 1931 2°, sampling {}{what}; linear sRGB with the sRGB-encoded hex",
             self.args.stack.display(),
+            if self.args.side == "substrate" {
+                " seen from its substrate"
+            } else {
+                ""
+            },
             match self.white {
                 White::D65 => "D65",
                 White::E => "white E (flat spectrum = 1)",
@@ -161,24 +187,27 @@ impl Printer<'_> {
         self.heading(
             &mut out,
             &format!(
-                ", GGX roughness {roughness} (α = {:.4}): the reflectance pre-integrated over the lobe",
+                ", GGX roughness {roughness} (α = {:.4}): reflectance and transmittance pre-integrated over the lobes (single scattering), each lobe's white albedo beside",
                 roughness * roughness
             ),
         )?;
         let width = if self.swatches { 40 } else { 35 };
         writeln!(
             out,
-            "{:>7}  {:<width$}  lobe albedo",
-            "angle", "reflectance"
+            "{:>7}  {:<width$}  lobe albedo  {:<width$}  lobe albedo",
+            "angle", "reflectance", "transmittance"
         )?;
         for c in colors {
             writeln!(
                 out,
-                "{:>6.2}°  {} {:<27}  {:.4}",
+                "{:>6.2}°  {} {:<27}  {:<11.4}  {} {:<27}  {:.4}",
                 c.angle_deg,
                 self.swatch(c.reflectance_rgb),
                 triple(c.reflectance_rgb),
                 c.lobe_albedo,
+                self.swatch(c.transmittance_rgb),
+                triple(c.transmittance_rgb),
+                c.transmission_lobe_albedo,
             )?;
         }
         Ok(ExitCode::SUCCESS)

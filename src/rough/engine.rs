@@ -11,7 +11,7 @@ use crate::cancel::Cancel;
 use crate::color::{linear_srgb_to_xyz, stack_colors_cancellable, SpectralIntegrator};
 use crate::error::{Error, Result};
 use crate::optics::{Layer, Stack};
-use crate::sweep::{check_film_domain, rgb_at_nodes};
+use crate::sweep::{check_film_domain, rgb_at_nodes, Side};
 
 /// F_eff (linear RGB of the integrator's white) over thickness × cos θ ×
 /// roughness nodes, and the white lobe's directional albedo per cos θ and
@@ -30,12 +30,25 @@ pub struct RoughTable {
     /// ∫ D G2 / (4 cos θ_v) dl at cos θ c, roughness r:
     /// `albedo[r * cos_theta.len() + c]` (1 at roughness 0).
     pub albedo: Vec<f64>,
+    /// T_eff, laid out as `reflectance` (empty from [`rough_reflectance`]).
+    pub transmittance: Vec<[f64; 3]>,
+    /// A_T, the white refraction lobe's albedo, laid out as `albedo` (empty
+    /// from [`rough_reflectance`]).
+    pub transmission_albedo: Vec<f64>,
 }
 
 impl RoughTable {
     /// F_eff at node indices (thickness, cos θ, roughness).
     pub fn at(&self, t: usize, c: usize, r: usize) -> [f64; 3] {
         self.reflectance[(r * self.cos_theta.len() + c) * self.thickness_nm.len() + t]
+    }
+
+    /// T_eff at node indices (thickness, cos θ, roughness).
+    ///
+    /// # Panics
+    /// On a table of [`rough_reflectance`], which has no transmittance.
+    pub fn transmittance_at(&self, t: usize, c: usize, r: usize) -> [f64; 3] {
+        self.transmittance[(r * self.cos_theta.len() + c) * self.thickness_nm.len() + t]
     }
 }
 
@@ -69,43 +82,183 @@ pub fn rough_reflectance(
         cos_theta,
         roughness,
     };
-    rough_table(stack, layer, integrator, nodes, quadrature, Cancel::never())
+    rough_table(stack, layer, integrator, &nodes, quadrature, None, Cancel::never())
 }
 
-/// The node axes of a [`RoughTable`].
-#[derive(Clone, Copy)]
+/// F_eff, T_eff and both lobes' albedos of `stack` seen from `side` (the
+/// view in the ambient for [`Side::Front`], in the substrate for
+/// [`Side::Back`]), with layer `layer` counted from the ambient as the
+/// stack is written, at every node as [`rough_reflectance`]. The geometry
+/// of refraction takes η = n_o / n_v, the real parts at
+/// [`ETA_WAVELENGTH_NM`]. A substrate that absorbs cannot be seen from:
+/// an error names it.
+#[allow(clippy::too_many_arguments)]
+pub fn rough_response(
+    stack: &Stack,
+    layer: usize,
+    integrator: &SpectralIntegrator,
+    thickness_nm: &[f64],
+    cos_theta: &[f64],
+    roughness: &[f64],
+    quadrature: &Quadrature,
+    side: Side,
+) -> Result<RoughTable> {
+    let (seen, layer) = seen_from(stack, layer, side, integrator)?;
+    let eta = relative_index(&seen)?;
+    let nodes = Nodes {
+        thickness_nm,
+        cos_theta,
+        roughness,
+    };
+    rough_table(
+        &seen,
+        layer,
+        integrator,
+        &nodes,
+        quadrature,
+        Some(eta),
+        Cancel::never(),
+    )
+}
+
+/// The wavelength whose real indices set η for the geometry of refraction
+/// (Fraunhofer's sodium D line, where n_d is given).
+pub const ETA_WAVELENGTH_NM: f64 = 589.3;
+
+/// η = n_substrate / n_ambient of a stack as seen (real parts at
+/// [`ETA_WAVELENGTH_NM`]).
+pub fn relative_index(seen: &Stack) -> Result<f64> {
+    let n_v = seen.ambient.index_at(ETA_WAVELENGTH_NM)?.re;
+    let n_o = seen.substrate.index_at(ETA_WAVELENGTH_NM)?.re;
+    Ok(n_o / n_v)
+}
+
+/// `stack` and its layer `layer` as seen from `side`: the reversed stack
+/// from the substrate, refused when the substrate absorbs at any of the
+/// integrator's wavelengths.
+pub fn seen_from<'a>(
+    stack: &'a Stack,
+    layer: usize,
+    side: Side,
+    integrator: &SpectralIntegrator,
+) -> Result<(Cow<'a, Stack>, usize)> {
+    if side == Side::Front {
+        return Ok((Cow::Borrowed(stack), layer));
+    }
+    for &nm in integrator.wavelengths_nm() {
+        let k = stack.substrate.index_at(nm)?.im;
+        if k != 0.0 {
+            return Err(Error::invalid(
+                "side",
+                format!(
+                    "the substrate {} absorbs (k = {k} at {nm} nm): no light arrives from it, so the \
+                     film cannot be seen from the substrate side",
+                    stack.substrate.name
+                ),
+            ));
+        }
+    }
+    let n = stack.layers.len();
+    let layer = if n == 0 { layer } else { n + 1 - layer };
+    Ok((Cow::Owned(stack.reversed()), layer))
+}
+
+/// The node axes of a rough table.
 struct Nodes<'a> {
     thickness_nm: &'a [f64],
     cos_theta: &'a [f64],
     roughness: &'a [f64],
 }
 
-/// [`rough_reflectance`], stopping with [`Error::Cancelled`] once `cancel`
-/// is set: the sweep looks at it before each μ node, the weighing before
-/// each (cos θ, roughness) row.
+/// One (cos θ, roughness) row of a rough table: F_eff over thickness and
+/// A_R, and, when asked, T_eff and A_T.
+struct TableRow {
+    reflectance: Vec<[f64; 3]>,
+    albedo: f64,
+    transmission: Option<(Vec<[f64; 3]>, f64)>,
+}
+
+/// The film's smooth colours a rough table weighs: reflectance (and
+/// transmittance) rows of thickness × RGB per μ node of `grid`, and at the
+/// table's own cos θ nodes (`mirror`, for roughness 0).
+struct Smooth<'a> {
+    grid: &'a MuGrid,
+    rules: &'a Rules,
+    on_grid: &'a [f64],
+    on_grid_t: &'a [f64],
+    mirror: &'a [[f64; 6]],
+    n_t: usize,
+}
+
+impl Smooth<'_> {
+    /// The row at cos θ node `c` (value `cv`) and roughness `rough`, with
+    /// T_eff and A_T when `eta` is given.
+    fn row(&self, c: usize, cv: f64, rough: f64, eta: Option<f64>) -> TableRow {
+        let n_t = self.n_t;
+        let mirrored = |out: &mut [[f64; 3]], at: usize| {
+            for (o, v) in out.iter_mut().zip(&self.mirror[c * n_t..]) {
+                *o = [v[at], v[at + 1], v[at + 2]];
+            }
+        };
+        let transmission = eta.map(|eta| {
+            let kernel = Kernel::transmission_with_rules(self.grid, cv, rough, eta, self.rules);
+            let mut out = vec![[0.0; 3]; n_t];
+            if rough == 0.0 {
+                mirrored(&mut out, 3);
+            } else {
+                weigh_rows(&kernel, self.on_grid_t, 3 * n_t, out.as_flattened_mut());
+            }
+            (out, kernel.albedo())
+        });
+        let mut reflectance = vec![[0.0; 3]; n_t];
+        if rough == 0.0 {
+            mirrored(&mut reflectance, 0);
+            return TableRow {
+                reflectance,
+                albedo: 1.0,
+                transmission,
+            };
+        }
+        let kernel = Kernel::with_rules(self.grid, cv, rough, self.rules);
+        weigh_rows(&kernel, self.on_grid, 3 * n_t, reflectance.as_flattened_mut());
+        TableRow {
+            reflectance,
+            albedo: kernel.albedo(),
+            transmission,
+        }
+    }
+}
+
+/// [`rough_reflectance`], and with `eta` (the relative index of
+/// refraction) the transmittance too; stopping with [`Error::Cancelled`]
+/// once `cancel` is set (the sweep looks at it before each μ node, the
+/// weighing before each (cos θ, roughness) row).
 fn rough_table(
     stack: &Stack,
     layer: usize,
     integrator: &SpectralIntegrator,
-    nodes: Nodes<'_>,
+    nodes: &Nodes,
     quadrature: &Quadrature,
+    eta: Option<f64>,
     cancel: &Cancel,
 ) -> Result<RoughTable> {
     let Nodes {
         thickness_nm,
         cos_theta,
         roughness,
-    } = nodes;
+    } = *nodes;
     check_nodes(stack, layer, thickness_nm, cos_theta, roughness)?;
     let grid = MuGrid::for_stack(stack, quadrature.mu_intervals);
     let (n_t, n_c, n_r) = (thickness_nm.len(), cos_theta.len(), roughness.len());
+    // Transmittance doubles the repacked rows and the output.
+    let outputs = if eta.is_some() { 2 } else { 1 };
     let estimate = crate::limits::product(
         &[grid.nodes().len() as u64 + n_c as u64, n_t as u64],
-        BYTES_PER_SWEPT_NODE,
+        BYTES_PER_SWEPT_NODE + (outputs - 1) * BYTES_PER_OUTPUT_NODE,
     )
     .zip(crate::limits::product(
         &[n_r as u64, n_c as u64, n_t as u64],
-        BYTES_PER_OUTPUT_NODE,
+        outputs * BYTES_PER_OUTPUT_NODE,
     ))
     .and_then(|(a, b)| a.checked_add(b));
     crate::limits::check_allocation(
@@ -120,11 +273,15 @@ fn rough_table(
         grid.nodes(),
         cancel,
     )?;
-    // Reflectance only, one row of thickness × RGB per μ node.
-    let on_grid: Vec<f64> = smooth_on_grid
-        .iter()
-        .flat_map(|v| [v[0], v[1], v[2]])
-        .collect();
+    // One row of thickness × RGB per μ node: reflectance, and transmittance.
+    let repack = |at: usize| -> Vec<f64> {
+        smooth_on_grid
+            .iter()
+            .flat_map(|v| [v[at], v[at + 1], v[at + 2]])
+            .collect()
+    };
+    let on_grid = repack(0);
+    let on_grid_t = if eta.is_some() { repack(3) } else { Vec::new() };
     drop(smooth_on_grid);
     let mirror = if roughness.contains(&0.0) {
         rgb_at_nodes(
@@ -139,34 +296,40 @@ fn rough_table(
         Vec::new()
     };
     let rules = Rules::new(quadrature);
-    let mut reflectance = vec![[0.0; 3]; n_r * n_c * n_t];
-    let mut albedo = vec![0.0; n_r * n_c];
-    reflectance
-        .par_chunks_mut(n_t)
-        .zip(albedo.par_iter_mut())
-        .enumerate()
-        .try_for_each(|(row, (out, albedo))| -> Result<()> {
+    let smooth = Smooth {
+        grid: &grid,
+        rules: &rules,
+        on_grid: &on_grid,
+        on_grid_t: &on_grid_t,
+        mirror: &mirror,
+        n_t,
+    };
+    let rows: Vec<TableRow> = (0..n_r * n_c)
+        .into_par_iter()
+        .map(|row| {
             cancel.check()?;
             let (r, c) = (row / n_c, row % n_c);
-            if roughness[r] == 0.0 {
-                for (o, v) in out.iter_mut().zip(&mirror[c * n_t..]) {
-                    *o = [v[0], v[1], v[2]];
-                }
-                *albedo = 1.0;
-                return Ok(());
-            }
-            let kernel = Kernel::with_rules(&grid, cos_theta[c], roughness[r], &rules);
-            *albedo = kernel.albedo();
-            weigh_rows(&kernel, &on_grid, 3 * n_t, out.as_flattened_mut());
-            Ok(())
-        })?;
-    Ok(RoughTable {
+            Ok(smooth.row(c, cos_theta[c], roughness[r], eta))
+        })
+        .collect::<Result<_>>()?;
+    let mut table = RoughTable {
         thickness_nm: thickness_nm.to_vec(),
         cos_theta: cos_theta.to_vec(),
         roughness: roughness.to_vec(),
-        reflectance,
-        albedo,
-    })
+        reflectance: Vec::with_capacity(n_r * n_c * n_t),
+        albedo: Vec::with_capacity(n_r * n_c),
+        transmittance: Vec::new(),
+        transmission_albedo: Vec::new(),
+    };
+    for row in rows {
+        table.reflectance.extend(row.reflectance);
+        table.albedo.push(row.albedo);
+        if let Some((t, a)) = row.transmission {
+            table.transmittance.extend(t);
+            table.transmission_albedo.push(a);
+        }
+    }
+    Ok(table)
 }
 
 /// The stack and the layer [`rough_colors`] sweeps at its own thickness:
@@ -237,11 +400,12 @@ fn check_nodes(
         .try_for_each(|&r| check_roughness("roughness", r))
 }
 
-/// A stack's pre-integrated rough reflectance at one view angle, as
-/// `irid color --roughness` prints it.
+/// A stack's pre-integrated rough reflectance and transmittance at one
+/// view angle, as `irid color --roughness` prints it.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct RoughColor {
-    /// View angle in the ambient, degrees from the macro normal, in [0, 90).
+    /// View angle in the medium seen from (the ambient, or the substrate
+    /// for the substrate side), degrees from the macro normal, in [0, 90).
     pub angle_deg: f64,
     /// GGX roughness (α = roughness²).
     pub roughness: f64,
@@ -252,18 +416,26 @@ pub struct RoughColor {
     /// The directional albedo of a white GGX lobe of this roughness at this
     /// angle (single scattering): the film's own is F_eff times it.
     pub lobe_albedo: f64,
+    /// Linear sRGB of T_eff, the film's transmittance pre-integrated over
+    /// the refraction lobe (single scattering).
+    pub transmittance_rgb: [f64; 3],
+    /// CIE XYZ of T_eff.
+    pub transmittance_xyz: [f64; 3],
+    /// A_T, the albedo of a white GGX refraction lobe (no Fresnel) into the
+    /// other medium: the film's transmitted flux is T_eff times it.
+    pub transmission_lobe_albedo: f64,
 }
 
-/// F_eff of `stack` (its layers at their own thicknesses) at each view
-/// angle (degrees, in [0, 90)) for `roughness` ∈ [0, 1]. At roughness 0 it
-/// is the smooth colour of [`stack_colors`](crate::color::stack_colors), exactly.
+/// F_eff and T_eff of `stack` (its layers at their own thicknesses) seen
+/// from its ambient at each view angle (degrees, in [0, 90)) for
+/// `roughness` ∈ [0, 1]: [`rough_colors_from`] the front.
 pub fn rough_colors(
     stack: &Stack,
     integrator: &SpectralIntegrator,
     angles_deg: &[f64],
     roughness: f64,
 ) -> Result<Vec<RoughColor>> {
-    rough_colors_cancellable(stack, integrator, angles_deg, roughness, Cancel::never())
+    rough_colors_from(stack, integrator, angles_deg, roughness, Side::Front)
 }
 
 /// [`rough_colors`], stopping with [`Error::Cancelled`] once `cancel` is
@@ -275,21 +447,57 @@ pub fn rough_colors_cancellable(
     roughness: f64,
     cancel: &Cancel,
 ) -> Result<Vec<RoughColor>> {
+    rough_colors_from_cancellable(stack, integrator, angles_deg, roughness, Side::Front, cancel)
+}
+
+/// F_eff, T_eff and both lobes' albedos of `stack` (its layers at their own
+/// thicknesses) seen from `side` at each view angle (degrees, in [0, 90),
+/// in the medium seen from) for `roughness` ∈ [0, 1]. At roughness 0 the
+/// colours are the smooth ones of [`stack_colors`](crate::color::stack_colors) (of the reversed stack
+/// from the substrate), exactly.
+pub fn rough_colors_from(
+    stack: &Stack,
+    integrator: &SpectralIntegrator,
+    angles_deg: &[f64],
+    roughness: f64,
+    side: Side,
+) -> Result<Vec<RoughColor>> {
+    rough_colors_from_cancellable(stack, integrator, angles_deg, roughness, side, Cancel::never())
+}
+
+/// [`rough_colors_from`], stopping with [`Error::Cancelled`] once `cancel`
+/// is set (it looks between blocks of a few milliseconds).
+pub fn rough_colors_from_cancellable(
+    stack: &Stack,
+    integrator: &SpectralIntegrator,
+    angles_deg: &[f64],
+    roughness: f64,
+    side: Side,
+    cancel: &Cancel,
+) -> Result<Vec<RoughColor>> {
     check_roughness("roughness", roughness)?;
-    let color = |angle_deg: f64, rgb: [f64; 3], xyz: [f64; 3], lobe_albedo: f64| RoughColor {
-        angle_deg,
-        roughness,
-        reflectance_rgb: rgb,
-        reflectance_xyz: xyz,
-        lobe_albedo,
-    };
+    let (seen, _) = seen_from(stack, 1, side, integrator)?;
+    let eta = relative_index(&seen)?;
     if roughness == 0.0 {
-        return Ok(
-            stack_colors_cancellable(stack, integrator, angles_deg, cancel)?
-                .into_iter()
-                .map(|c| color(c.angle_deg, c.reflectance_rgb, c.reflectance_xyz, 1.0))
-                .collect(),
-        );
+        let grid = MuGrid::new(Quadrature::default().mu_intervals, None);
+        let quadrature = Quadrature::default();
+        return Ok(stack_colors_cancellable(&seen, integrator, angles_deg, cancel)?
+            .into_iter()
+            .map(|c| {
+                let cos = c.angle_deg.to_radians().cos();
+                let through = Kernel::transmission(&grid, cos, 0.0, eta, &quadrature).albedo();
+                RoughColor {
+                    angle_deg: c.angle_deg,
+                    roughness,
+                    reflectance_rgb: c.reflectance_rgb,
+                    reflectance_xyz: c.reflectance_xyz,
+                    lobe_albedo: 1.0,
+                    transmittance_rgb: c.transmittance_rgb,
+                    transmittance_xyz: c.transmittance_xyz,
+                    transmission_lobe_albedo: through,
+                }
+            })
+            .collect());
     }
     if let Some(a) = angles_deg.iter().find(|a| !(**a >= 0.0 && **a < 90.0)) {
         return Err(Error::invalid(
@@ -301,27 +509,37 @@ pub fn rough_colors_cancellable(
         return Ok(Vec::new());
     }
     let cos: Vec<f64> = angles_deg.iter().map(|a| a.to_radians().cos()).collect();
-    let (stack, layer) = swept_layer(stack);
-    let thickness = stack.layers.get(layer - 1).map_or(0.0, |l| l.thickness_nm);
+    let (swept, layer) = swept_layer(&seen);
+    let thickness = swept.layers.get(layer - 1).map_or(0.0, |l| l.thickness_nm);
     let nodes = Nodes {
         thickness_nm: &[thickness],
         cos_theta: &cos,
         roughness: &[roughness],
     };
     let table = rough_table(
-        &stack,
+        &swept,
         layer,
         integrator,
-        nodes,
+        &nodes,
         &Quadrature::default(),
+        Some(eta),
         cancel,
     )?;
     Ok(angles_deg
         .iter()
         .enumerate()
         .map(|(c, &angle)| {
-            let rgb = table.at(0, c, 0);
-            color(angle, rgb, linear_srgb_to_xyz(rgb), table.albedo[c])
+            let (rgb, t_rgb) = (table.at(0, c, 0), table.transmittance_at(0, c, 0));
+            RoughColor {
+                angle_deg: angle,
+                roughness,
+                reflectance_rgb: rgb,
+                reflectance_xyz: linear_srgb_to_xyz(rgb),
+                lobe_albedo: table.albedo[c],
+                transmittance_rgb: t_rgb,
+                transmittance_xyz: linear_srgb_to_xyz(t_rgb),
+                transmission_lobe_albedo: table.transmission_albedo[c],
+            }
         })
         .collect())
 }

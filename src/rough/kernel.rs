@@ -45,8 +45,8 @@ pub struct Kernel {
 /// The Gauss–Legendre rules of one [`Quadrature`], made once and shared by
 /// its kernels.
 pub(crate) struct Rules {
-    outer: Rule,
-    inner: Rule,
+    pub(super) outer: Rule,
+    pub(super) inner: Rule,
 }
 
 impl Rules {
@@ -75,49 +75,44 @@ impl Kernel {
         let cv = cos_view.clamp(MIN_COS_VIEW, 1.0);
         let alpha = ggx::alpha(roughness);
         if alpha == 0.0 {
-            let (first, w) = grid.interpolation(cv);
-            return Kernel {
-                first,
-                weights: w.to_vec(),
-                albedo: 1.0,
-            };
+            return Kernel::mirror(grid, cv);
         }
         let lobe = Lobe::new(cv, alpha);
         let mut raw = vec![0.0; grid.nodes().len()];
-        let cuts = lobe.cuts();
-        let mu_end = lobe.beta_end.cos();
-        for seg in grid.segments() {
-            for k in 0..seg.intervals {
-                let (m0, m1) = seg.interval_mu(k);
-                if m1 <= mu_end {
-                    continue;
-                }
-                let n = seg.intervals as f64;
-                let mut s_lo = if m0 < mu_end {
-                    seg.s(mu_end)
-                } else {
-                    k as f64 / n
-                };
-                let inside = cuts.partition_point(|&c| c <= m0.max(mu_end))
-                    ..cuts.partition_point(|&c| c < m1);
-                let ends = cuts[inside]
-                    .iter()
-                    .map(|&c| seg.s(c))
-                    .chain(std::iter::once((k + 1) as f64 / n));
-                for s_hi in ends {
-                    if s_hi > s_lo {
-                        self::panel(&lobe, rules, seg, k, (s_lo, s_hi), &mut raw);
-                    }
-                    s_lo = s_hi;
-                }
-            }
-        }
+        for_each_panel(
+            grid,
+            lobe.beta_end.cos(),
+            &lobe.cuts(),
+            &mut |seg, k, s, _| {
+                let density = |mu, sin_b, beta| lobe.density(mu, sin_b, beta, &rules.inner);
+                self::panel(&lobe, &density, &rules.outer, seg, k, s, &mut raw);
+            },
+        );
         Kernel::from_raw(raw)
     }
 
-    /// Normalizes accumulated weights, keeping the span that has any.
-    fn from_raw(raw: Vec<f64>) -> Kernel {
+    /// The mirror's kernel: the interpolation of the grid at μ = `cv`, of
+    /// albedo 1.
+    pub(crate) fn mirror(grid: &MuGrid, cv: f64) -> Kernel {
+        let (first, w) = grid.interpolation(cv);
+        Kernel {
+            first,
+            weights: w.to_vec(),
+            albedo: 1.0,
+        }
+    }
+
+    /// Normalizes accumulated weights, keeping the span that has any (none
+    /// when the lobe has no albedo at all: then F_eff is 0).
+    pub(crate) fn from_raw(raw: Vec<f64>) -> Kernel {
         let albedo: f64 = raw.iter().sum();
+        if albedo == 0.0 {
+            return Kernel {
+                first: 0,
+                weights: Vec::new(),
+                albedo,
+            };
+        }
         let first = raw.iter().position(|&w| w != 0.0).unwrap_or(0);
         let last = raw.iter().rposition(|&w| w != 0.0).unwrap_or(0);
         let weights = raw[first..=last].iter().map(|w| w / albedo).collect();
@@ -156,14 +151,53 @@ impl Kernel {
     }
 }
 
+/// What [`for_each_panel`] calls per panel.
+pub(crate) type PanelVisit<'a> = dyn FnMut(&Segment, usize, (f64, f64), (f64, f64)) + 'a;
+
+/// Calls `visit(segment, interval, (s_lo, s_hi), (μ_lo, μ_hi))` for every
+/// panel of the outer integral over μ ∈ (`mu_end`, 1]: the grid's
+/// intervals, cut at `cuts` (ascending μ) and at `mu_end`. The μ ends are
+/// the exact cut, node or `mu_end` values, so a caller can tell a panel
+/// that starts or ends at one of its own kinks.
+pub(crate) fn for_each_panel(grid: &MuGrid, mu_end: f64, cuts: &[f64], visit: &mut PanelVisit) {
+    for seg in grid.segments() {
+        for k in 0..seg.intervals {
+            let (m0, m1) = seg.interval_mu(k);
+            if m1 <= mu_end {
+                continue;
+            }
+            let n = seg.intervals as f64;
+            let (mut s_lo, mut mu_lo) = if m0 < mu_end {
+                (seg.s(mu_end), mu_end)
+            } else {
+                (k as f64 / n, m0)
+            };
+            let inside =
+                cuts.partition_point(|&c| c <= m0.max(mu_end))..cuts.partition_point(|&c| c < m1);
+            let ends = cuts[inside]
+                .iter()
+                .map(|&c| (seg.s(c), c))
+                .chain(std::iter::once(((k + 1) as f64 / n, m1)));
+            for (s_hi, mu_hi) in ends {
+                if s_hi > s_lo {
+                    visit(seg, k, (s_lo, s_hi), (mu_lo, mu_hi));
+                }
+                s_lo = s_hi;
+                mu_lo = mu_hi;
+            }
+        }
+    }
+}
+
 /// One panel of the outer integral, the parameter range `s` of interval `k`
-/// of `seg`: adds w K(μ) dμ times the interpolation weights of each point
+/// of `seg`: adds w K(μ) dμ (K from `density(μ, sin β, β)`) times the interpolation weights of each point
 /// to `raw`. Gauss–Legendre in τ = atan((β − θ_v)/α), in which K's peak at
 /// β = θ_v is a smooth bump; beside a kink, in s, in which the
 /// interpolated F is a polynomial while it has a square root in τ.
-fn panel(
+pub(super) fn panel(
     lobe: &Lobe,
-    rules: &Rules,
+    density: &dyn Fn(f64, f64, f64) -> f64,
+    rule: &Rule,
     seg: &Segment,
     k: usize,
     (s_lo, s_hi): (f64, f64),
@@ -175,15 +209,16 @@ fn panel(
             raw[first + i] += weight * l;
         }
     };
-    let rule = &rules.outer;
     if (s_lo == 0.0 && seg.kink_at_start()) || (s_hi == 1.0 && seg.kink_at_end()) {
         let span = s_hi - s_lo;
         for (x, w) in rule.nodes.iter().zip(&rule.weights) {
             let s = s_lo + span * x;
             let mu = seg.mu(s);
             let sin_b = ((1.0 - mu) * (1.0 + mu)).max(0.0).sqrt();
-            let density = lobe.density(mu, sin_b, sin_b.atan2(mu), &rules.inner);
-            add(s, w * span * seg.dmu_ds(s) * density);
+            add(
+                s,
+                w * span * seg.dmu_ds(s) * density(mu, sin_b, sin_b.atan2(mu)),
+            );
         }
         return;
     }
@@ -196,30 +231,32 @@ fn panel(
         let beta = lobe.theta_v + lobe.alpha * t;
         let (sin_b, mu) = beta.sin_cos();
         let dbeta = lobe.alpha * (1.0 + t * t);
-        let density = lobe.density(mu, sin_b, beta, &rules.inner);
-        add(seg.s(mu), w * span * dbeta * sin_b * density);
+        add(
+            seg.s(mu),
+            w * span * dbeta * sin_b * density(mu, sin_b, beta),
+        );
     }
 }
 
 /// A GGX lobe seen at one view angle, with what its density K(μ) needs.
-struct Lobe {
-    cv: f64,
-    sv: f64,
-    theta_v: f64,
-    alpha: f64,
-    alpha2: f64,
+pub(super) struct Lobe {
+    pub(super) cv: f64,
+    pub(super) sv: f64,
+    pub(super) theta_v: f64,
+    pub(super) alpha: f64,
+    pub(super) alpha2: f64,
     /// Λ(v) cos θ_v.
-    lambda_cos_v: f64,
+    pub(super) lambda_cos_v: f64,
     /// Past this β = arccos μ, l is below the horizon for every azimuth.
     beta_end: f64,
     /// How far from the horizon, in cos θ_l, G2 has its nearest
     /// singularity: G2 changes on this scale as l sets (about cos θ_v at
     /// grazing view, α otherwise).
-    horizon_scale: f64,
+    pub(super) horizon_scale: f64,
 }
 
 impl Lobe {
-    fn new(cv: f64, alpha: f64) -> Lobe {
+    pub(super) fn new(cv: f64, alpha: f64) -> Lobe {
         let alpha2 = alpha * alpha;
         let theta_v = cv.acos();
         let lambda_cos_v = ggx::lambda_cos(cv, alpha2);
@@ -325,7 +362,7 @@ impl Lobe {
 
 /// ∫ f over `range` by `rule`.
 #[inline]
-fn integrate(rule: &Rule, (lo, hi): (f64, f64), f: &dyn Fn(f64) -> f64) -> f64 {
+pub(super) fn integrate(rule: &Rule, (lo, hi): (f64, f64), f: &dyn Fn(f64) -> f64) -> f64 {
     let span = hi - lo;
     span * rule
         .nodes

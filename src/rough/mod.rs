@@ -24,6 +24,12 @@
 //! over a whole thickness × cos θ × roughness grid: the film's smooth colour
 //! on the μ nodes from the baker's split-stack sweep, times a kernel per
 //! (cos θ, roughness). [`rough_colors`] is `irid color --roughness`.
+//!
+//! The transmittance is the same construction with the refraction lobe's
+//! kernel K_T(μ; θ_v, α, η) ([`Kernel::transmission`], Walter et al.
+//! 2007's microfacet refraction in flux form): T_eff and its white lobe's
+//! albedo A_T, from either side of the film ([`rough_response`],
+//! [`rough_colors_from`]; the substrate side is the reversed stack).
 
 mod engine;
 pub mod ggx;
@@ -33,9 +39,14 @@ mod quadrature;
 pub mod slices;
 #[cfg(test)]
 mod tests;
+#[cfg(test)]
+mod tests_transmission;
+mod transmission;
 
 pub use engine::{
-    rough_colors, rough_colors_cancellable, rough_reflectance, RoughColor, RoughTable,
+    relative_index, rough_colors, rough_colors_cancellable, rough_colors_from,
+    rough_colors_from_cancellable, rough_reflectance, rough_response, seen_from,
+    RoughColor, RoughTable, ETA_WAVELENGTH_NM,
 };
 pub use kernel::Kernel;
 pub use mu_grid::MuGrid;

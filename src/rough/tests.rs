@@ -106,7 +106,7 @@ fn film(ambient: Material, layers: &[(Material, f64)], substrate: Material) -> S
 /// The films the convergence is measured on: a soap film, an absorbing film
 /// on silver, a film on glass seen from the glass (the square-root kink at
 /// the critical angle, inside the lobe), and a three-layer stack on gold.
-fn test_films() -> Vec<(&'static str, Stack, (f64, f64))> {
+pub(super) fn test_films() -> Vec<(&'static str, Stack, (f64, f64))> {
     let lib = |name: &str| crate::optics::library::builtin(name).unwrap();
     vec![
         (

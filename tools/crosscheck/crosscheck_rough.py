@@ -35,9 +35,23 @@ Pass: every channel within 2e-4 of the Monte Carlo and CIEDE2000 <= 0.05
 estimate below a quarter of the tolerance. Also checks that irid's
 `lobe_albedo` matches the Monte Carlo's directional albedo to 2e-4.
 
-By default (as CI runs it) the view angles are 0, 40 and 70 degrees: 24
-cases, about 40 s on two shared cores. `--full` checks every angle of
-ANGLES_DEG (64 cases; the figures of docs/rough.md come from it).
+Transmission and the substrate side (docs/rough.md): microfacet normals
+drawn from the distribution of visible normals D_v (Heitz 2018's sampling,
+jittered), each reflecting into l_r and refracting by Snell about h (the
+relative index of the real parts at 589.3 nm) into l_t, weighted by
+G2(v, l)/G1(v) where l leaves on its own side; the film's R and T at v.h
+by tmm from the side seen from (the reversed stack from the substrate).
+F_eff, T_eff, A_R and A_T against `irid color --roughness R --side S
+--json` on a dielectric film, a 15 nm metal film and three layers (one
+dispersive), all on glass, from both sides. Pass: within the issue's bar,
+2e-3 per channel and CIEDE2000 0.2; T_eff is compared where A_T > 0.02
+(below, too few samples transmit), A_T and A_R everywhere.
+
+By default (as CI runs it) the reflection's view angles are 0, 40 and 70
+degrees (24 cases) and the transmission part checks the film on glass seen
+from the glass at 0 and 35 degrees (4 cases). `--full` checks every angle
+of ANGLES_DEG and every stack from both sides (the figures of
+docs/rough.md come from it); `--sides` skips the reflection part.
 
 Env: IRID_BIN (default target/release/irid). Exits non-zero on failure.
 """
@@ -156,20 +170,28 @@ def colour_weights():
 
 
 def film_spectrum(indices, thicknesses, mu):
-    """Unpolarized R at every wavelength for incidence cos = mu in the ambient."""
+    """Unpolarized R and T at every wavelength for incidence cos = mu in the
+    first medium of indices(wl)."""
     d = [np.inf, *thicknesses, np.inf]
-    out = np.empty(len(WAVELENGTHS))
+    out = np.empty((2, len(WAVELENGTHS)))
+    theta = math.acos(min(max(mu, 0.0), 1.0))
     for i, wl in enumerate(WAVELENGTHS):
         n = indices(wl)
-        theta = math.acos(min(max(mu, 0.0), 1.0))
-        out[i] = 0.5 * sum(tmm.coh_tmm(p, n, d, theta, wl)["R"] for p in "sp")
+        solved = [tmm.coh_tmm(p, n, d, theta, wl) for p in "sp"]
+        out[0, i] = 0.5 * sum(r["R"] for r in solved)
+        out[1, i] = 0.5 * sum(np.real(r["T"]) for r in solved)
     return out
 
 
 def film_xyz(args):
+    """XYZ of R (and, for a stack seen from a side, of T after it) at mu."""
     name, mu = args
+    if isinstance(name, tuple):
+        indices, thicknesses = seen_stack(*name)
+        r, t = film_spectrum(indices, thicknesses, mu)
+        return np.concatenate([COLOUR[0](r), COLOUR[0](t)])
     _, indices, thicknesses = STACKS[name]
-    return COLOUR[0](film_spectrum(indices, thicknesses, mu))
+    return COLOUR[0](film_spectrum(indices, thicknesses, mu)[0])
 
 
 COLOUR = None
@@ -206,28 +228,34 @@ class FilmColour:
     """F(mu) as XYZ, by Chebyshev interpolation of tmm colours on [MU_MIN, 1]
     (two pieces meeting at a critical angle, in sqrt(|mu - mu_c|))."""
 
-    MU_MIN = 0.15  # below every mu a view of at most 70 degrees reaches
+    MU_MIN = 0.15  # below every mu a view of at most 70 degrees reaches by reflection
 
-    def __init__(self, name, pool):
-        n0, n_sub = STACKS[name][1](550.0)[0], STACKS[name][1](550.0)[-1]
+    def __init__(self, name, pool, grazing=False):
+        indices = seen_stack(*name)[0] if isinstance(name, tuple) else STACKS[name][1]
+        n0, n_sub = indices(550.0)[0], indices(550.0)[-1]
         self.crit = None
-        if np.isreal(n_sub) and np.real(n_sub) < np.real(n0):
+        if np.imag(n_sub) == 0 and np.real(n_sub) < np.real(n0):
             self.crit = math.sqrt(1.0 - (np.real(n_sub) / np.real(n0)) ** 2)
         lo = self.MU_MIN
         if self.crit is None:
             self.pieces = [(lo, 1.0, "linear")]
         else:
             self.pieces = [(lo, self.crit, "below"), (self.crit, 1.0, "above")]
+        if grazing:  # a refraction lobe reaches every mu > 0
+            self.pieces.insert(0, (GRAZING_MU, lo, "linear"))
+            self.MU_MIN = GRAZING_MU
         self.interps = []
         jobs = []
         for a, b, kind in self.pieces:
-            interp = Chebyshev(lambda s, a=a, b=b, kind=kind: self.mu_of(s, a, b, kind), CHEBYSHEV_NODES)
+            nodes = GRAZING_NODES if a == GRAZING_MU else CHEBYSHEV_NODES
+            interp = Chebyshev(lambda s, a=a, b=b, kind=kind: self.mu_of(s, a, b, kind), nodes)
             self.interps.append(interp)
             jobs += [(name, m) for m in interp.mu]
         xyz = np.array(list(pool.map(film_xyz, jobs)))
+        self.channels = xyz.shape[1]
         # Tabulated densely in s once; the samples then read it linearly.
         self.dense_s = np.linspace(0.0, 1.0, DENSE)
-        self.dense = [interp(self.dense_s, v) for interp, v in zip(self.interps, np.split(xyz, len(self.pieces)))]
+        self.dense = [interp(self.dense_s, v) for interp, v in zip(self.interps, np.split(xyz, np.cumsum([len(i.mu) for i in self.interps])[:-1]))]
 
     @staticmethod
     def mu_of(s, a, b, kind):
@@ -248,12 +276,15 @@ class FilmColour:
 
     def __call__(self, mu):
         mu = np.asarray(mu, float)
-        out = np.zeros((len(mu), 3))
+        out = np.zeros((len(mu), self.channels))
+        if self.MU_MIN == GRAZING_MU:
+            mu = np.maximum(mu, GRAZING_MU)  # below it, within 1e-7 in weight (D_v is ~ mu)
         for (a, b, kind), dense in zip(self.pieces, self.dense):
             inside = (mu >= a) & (mu <= b)
             if inside.any():
                 s = self.s_of(mu[inside], a, b, kind)
-                out[inside] = np.stack([np.interp(s, self.dense_s, dense[:, c]) for c in range(3)], -1)
+                out[inside] = np.stack([np.interp(s, self.dense_s, dense[:, c])
+                                        for c in range(self.channels)], -1)
         if (mu < self.MU_MIN).any():
             raise ValueError("mu below the interpolated range")
         return out
@@ -319,11 +350,184 @@ def check_interpolation(name, film, pool, rng):
     return np.abs(film(mus) - exact).max()
 
 
+# ---------------------------------------------------------------- transmission and the substrate side
+
+GRAZING_MU = 1e-4
+SIDE_TOLERANCE = 2e-3  # the issue's bar, per channel
+SIDE_DE_TOLERANCE = 0.2
+SIDE_INTERPOLATION_TOLERANCE = SIDE_TOLERANCE / 4  # as the Monte Carlo error
+# A_T below this leaves too few Monte Carlo samples for T_eff: A_T itself is checked.
+MIN_TRANSMISSION_ALBEDO = 0.02
+SIDES = ("front", "substrate")
+# CI checks the film on glass seen from the glass (its transmission below,
+# its total internal reflection inside the lobe) at these angles.
+CI_SIDE_ANGLES_DEG = (0.0, 35.0)
+CI_SIDE_CASES = (("dielectric film on glass", "substrate"),)
+GRAZING_NODES = 20  # Chebyshev nodes on [GRAZING_MU, MU_MIN]
+
+# name: (stack file text, indices(wl) ambient to substrate, thicknesses); all on
+# lossless substrates, so that each is seen from both sides.
+TRANSMISSIVE = {
+    "dielectric film on glass": STACKS["dielectric film on glass"],
+    "metal film on glass": (
+        """
+ambient = { n = 1.0 }
+substrate = { n = 1.52 }
+[[layers]]
+n = [0.13, 3.6]
+thickness_nm = 15.0
+""",
+        lambda wl: [1.0, 0.13 + 3.6j, 1.52],
+        [15.0],
+    ),
+    "three layers on glass (one dispersive)": (
+        """
+ambient = { n = 1.0 }
+substrate = { n = 1.52 }
+[[layers]]
+cauchy = [2.2, 0.03]
+thickness_nm = 90.0
+[[layers]]
+n = [1.38, 0.01]
+thickness_nm = 120.0
+[[layers]]
+n = 1.6
+thickness_nm = 60.0
+""",
+        lambda wl: [1.0, cauchy(2.2, 0.03, wl), 1.38 + 0.01j, 1.6, 1.52],
+        [90.0, 120.0, 60.0],
+    ),
+}
+
+
+def seen_stack(name, side):
+    """indices(wl) and thicknesses of a TRANSMISSIVE stack as seen from side."""
+    _, indices, thicknesses = TRANSMISSIVE[name]
+    if side == "front":
+        return indices, thicknesses
+    return (lambda wl: indices(wl)[::-1]), thicknesses[::-1]
+
+
+def visible_normals(roughness, cos_v, seed):
+    """One jittered replica of normals drawn from the distribution of visible
+    normals D_v(h) = G1(v) max(0, v.h) D(h) / (n.v) (Heitz 2018's sampling
+    of the stretched hemisphere), for the view in the x-z plane."""
+    alpha = roughness * roughness
+    rng = np.random.default_rng(seed)
+    i, j = np.meshgrid(np.arange(GRID), np.arange(GRID), indexing="ij")
+    u1 = ((i + rng.random(i.shape)) / GRID).ravel()
+    u2 = ((j + rng.random(j.shape)) / GRID).ravel()
+    v = np.array([alpha * math.sqrt(1.0 - cos_v * cos_v), 0.0, cos_v])
+    v /= np.linalg.norm(v)
+    t1 = np.array([0.0, 1.0, 0.0]) if v[0] > 0 else np.array([1.0, 0.0, 0.0])
+    t2 = np.cross(v, t1)
+    r, phi = np.sqrt(u1), 2.0 * np.pi * u2
+    p1, p2 = r * np.cos(phi), r * np.sin(phi)
+    s = 0.5 * (1.0 + v[2])
+    p2 = (1.0 - s) * np.sqrt(np.maximum(0.0, 1.0 - p1 * p1)) + s * p2
+    p3 = np.sqrt(np.maximum(0.0, 1.0 - p1 * p1 - p2 * p2))
+    nh = p1[:, None] * t1 + p2[:, None] * t2 + p3[:, None] * v
+    h = np.stack([alpha * nh[:, 0], alpha * nh[:, 1], np.maximum(1e-300, nh[:, 2])], -1)
+    return h / np.linalg.norm(h, axis=1)[:, None]
+
+
+def side_estimate(film, cos_v, roughness, eta, h):
+    """(F_eff, T_eff as XYZ, A_R, A_T) from one replica of visible normals:
+    each h reflects into l_r and refracts (Snell about h, relative index eta)
+    into l_t, weighted by G2(v, l)/G1(v) where l leaves on its own side."""
+    alpha = roughness * roughness
+    v = np.array([math.sqrt(1.0 - cos_v * cos_v), 0.0, cos_v])
+    mu = np.maximum(h @ v, 0.0)
+
+    def smith_lambda(c):
+        c = np.clip(np.abs(c), 1e-300, 1.0)
+        return 0.5 * (-1.0 + np.sqrt(1.0 + alpha * alpha * (1.0 - c * c) / (c * c)))
+
+    g1 = 1.0 / (1.0 + smith_lambda(cos_v))
+    cos_r = 2.0 * mu * h[:, 2] - cos_v
+    w_r = np.where(cos_r > 0.0, 1.0 / (1.0 + smith_lambda(cos_v) + smith_lambda(cos_r)) / g1, 0.0)
+    cos_t2 = eta * eta - 1.0 + mu * mu
+    exists = cos_t2 > 0.0
+    m = (mu - np.sqrt(np.maximum(cos_t2, 0.0))) / eta
+    cos_lt = -cos_v / eta + m * h[:, 2]
+    w_t = np.where(exists & (cos_lt < 0.0),
+                   1.0 / (1.0 + smith_lambda(cos_v) + smith_lambda(cos_lt)) / g1, 0.0)
+    f = film(mu)
+    a_r, a_t = w_r.mean(), w_t.mean()
+    f_eff = (w_r[:, None] * f[:, :3]).mean(0) / a_r
+    t_eff = (w_t[:, None] * f[:, 3:]).mean(0) / a_t if a_t > 0 else np.zeros(3)
+    return f_eff, t_eff, a_r, a_t
+
+
+def check_sides(irid, cases, angles_deg, pool, rng, tmp, xyz_to_rgb):
+    """T_eff, A_T and F_eff of (TRANSMISSIVE stack, side) cases against the
+    Monte Carlo of visible normals; returns (worst figures, failures)."""
+    worst = {"rgb": 0.0, "de": 0.0, "mc": 0.0, "albedo": 0.0, "interp": 0.0}
+    failures = []
+    for name, side in cases:
+        text = TRANSMISSIVE[name][0]
+        path = Path(tmp) / "transmissive.toml"
+        path.write_text(text)
+        film = FilmColour((name, side), pool, grazing=True)
+        mus = rng.uniform(GRAZING_MU, 1.0, 4)
+        exact = np.array(list(pool.map(film_xyz, [((name, side), m) for m in mus])))
+        worst["interp"] = max(worst["interp"], np.abs(film(mus) - exact).max())
+        seen = seen_stack(name, side)[0](589.3)
+        eta = float(np.real(seen[-1]) / np.real(seen[0]))
+        for roughness in ROUGHNESS:
+            got = run_json([irid, "color", str(path), "--roughness", str(roughness), "--side", side,
+                            "--angles", ",".join(f"{a:g}" for a in angles_deg), "--json"])
+            for row, angle in zip(got, angles_deg):
+                cos_v = math.cos(math.radians(angle))
+                reps = [side_estimate(film, cos_v, roughness, eta,
+                                      visible_normals(roughness, cos_v, 1000 + seed))
+                        for seed in range(REPLICAS)]
+                where = f"{name} from the {side}, roughness {roughness}, {angle:g} deg"
+                a_r, a_t = np.mean([r[2] for r in reps]), np.mean([r[3] for r in reps])
+                da = max(abs(a_r - row["lobe_albedo"]), abs(a_t - row["transmission_lobe_albedo"]))
+                worst["albedo"] = max(worst["albedo"], da)
+                if da > SIDE_TOLERANCE / 4:
+                    failures.append(f"{where}: albedos {row['lobe_albedo']:.5f}, "
+                                    f"{row['transmission_lobe_albedo']:.5f} vs {a_r:.5f}, {a_t:.5f}")
+                keys = [("reflectance_rgb", 0)] + ([("transmittance_rgb", 1)] if a_t > MIN_TRANSMISSION_ALBEDO else [])
+                for key, at in keys:
+                    rgb = xyz_to_rgb @ np.mean([r[at] for r in reps], 0)
+                    spread = np.std([xyz_to_rgb @ r[at] for r in reps], 0).max() / math.sqrt(REPLICAS)
+                    d = np.abs(rgb - np.array(row[key])).max()
+                    de = float(colour.delta_E(lab(rgb), lab(row[key]), method="CIE 2000"))
+                    if d > worst["rgb"]:
+                        worst["where"] = f"{where}, {key}"
+                    for k, value in (("rgb", d), ("de", de), ("mc", spread)):
+                        worst[k] = max(worst[k], value)
+                    if d > SIDE_TOLERANCE or de > SIDE_DE_TOLERANCE:
+                        failures.append(f"{where}: {key} irid {row[key]} vs Monte Carlo {rgb.tolist()} "
+                                        f"(|d| {d:.1e}, dE00 {de:.3f})")
+    return worst, failures
+
+
+def report_sides(worst, failures, cases, angles_deg, seconds):
+    count = len(cases) * len(ROUGHNESS) * len(angles_deg)
+    print(f"crosscheck_rough, transmission and sides: {count} cases ({len(cases)} stack-sides x "
+          f"roughness {ROUGHNESS} x angles {angles_deg} deg), visible normals {REPLICAS} x "
+          f"{GRID}^2, {seconds:.1f} s")
+    print(f"  max |d linear sRGB| = {worst['rgb']:.1e} (tolerance {SIDE_TOLERANCE:g}; worst at "
+          f"{worst.get('where')}), max dE00 = {worst['de']:.4f} (tolerance {SIDE_DE_TOLERANCE})")
+    print(f"  max |d albedo| (A_R, A_T) = {worst['albedo']:.1e}; Monte Carlo error estimate <= "
+          f"{worst['mc']:.1e}; film colour interpolation within {worst['interp']:.1e} of tmm")
+    if worst["mc"] > SIDE_TOLERANCE / 4:
+        failures.append(f"Monte Carlo error estimate {worst['mc']:.1e} is too large to check {SIDE_TOLERANCE:g}")
+    if worst["interp"] > SIDE_INTERPOLATION_TOLERANCE:
+        failures.append(f"film colour interpolation error {worst['interp']:.1e} > {SIDE_INTERPOLATION_TOLERANCE:g}")
+    return failures
+
+
 def main():
-    full = "--full" in sys.argv[1:]
-    unknown = [a for a in sys.argv[1:] if a != "--full"]
+    args = sys.argv[1:]
+    full = "--full" in args
+    only_sides = "--sides" in args
+    unknown = [a for a in args if a not in ("--full", "--sides")]
     if unknown:
-        sys.exit(f"crosscheck_rough.py: unknown arguments {unknown} (only --full)")
+        sys.exit(f"crosscheck_rough.py: unknown arguments {unknown} (only --full, --sides)")
     angles_deg = ANGLES_DEG if full else CI_ANGLES_DEG
     irid = os.environ.get("IRID_BIN", "target/release/irid")
     xyz_to_rgb = colour_weights()[1]
@@ -333,7 +537,12 @@ def main():
     rng = np.random.default_rng(29)
     normals = {(r, seed): microfacet_normals(r, seed) for r in ROUGHNESS for seed in range(REPLICAS)}
     with tempfile.TemporaryDirectory() as tmp, ProcessPoolExecutor(2, initializer=init_worker) as pool:
-        for name, (text, _, _) in STACKS.items():
+        side_angles = ANGLES_DEG if full else CI_SIDE_ANGLES_DEG
+        side_cases = [(n, s) for n in TRANSMISSIVE for s in SIDES] if full else CI_SIDE_CASES
+        side_worst, side_failures = check_sides(irid, side_cases, side_angles, pool, rng, tmp, xyz_to_rgb)
+        failures += report_sides(side_worst, side_failures, side_cases, side_angles, time.time() - start)
+        start = time.time()
+        for name, (text, _, _) in ({} if only_sides else STACKS).items():
             path = Path(tmp) / "stack.toml"
             path.write_text(text)
             film = FilmColour(name, pool)
@@ -360,7 +569,7 @@ def main():
                     if d > TOLERANCE or de > DE_TOLERANCE or da > TOLERANCE:
                         failures.append(f"{where}: irid {row['reflectance_rgb']} vs Monte Carlo "
                                         f"{rgb.tolist()} (|d| {d:.1e}, dE00 {de:.3f}, albedo {da:.1e})")
-    cases = len(STACKS) * len(ROUGHNESS) * len(angles_deg)
+    cases = 0 if only_sides else len(STACKS) * len(ROUGHNESS) * len(angles_deg)
     print(f"crosscheck_rough: {cases} cases ({len(STACKS)} stacks x roughness {ROUGHNESS} x "
           f"angles {angles_deg} deg), Monte Carlo of {REPLICAS} x {GRID}^2 jittered samples, "
           f"film colours by tmm and colour-science {colour.__version__}, {time.time() - start:.1f} s")
