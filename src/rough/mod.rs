@@ -26,6 +26,7 @@
 //! (cos θ, roughness). [`rough_colors`] is `irid color --roughness`.
 
 mod engine;
+pub mod energy;
 pub mod ggx;
 mod kernel;
 mod mu_grid;
