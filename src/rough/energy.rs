@@ -30,11 +30,11 @@
 //! ρ from the outputs: F_eff and T_eff average the film over different
 //! microfacets (the ones whose reflection, resp. refraction, leaves), so
 //! F_eff + T_eff of a lossless film is not exactly 1 — past the critical
-//! angle it is well above. [`EnergyTable`] tabulates that bias for the
-//! bare interface (Fresnel's reflectance per microfacet), and ρ =
-//! F_eff + T_eff − bias, clamped to [S, 1].
+//! angle it is well above. [`EnergyTable`] tabulates how far below 1 it
+//! falls for the bare interface (Fresnel's reflectance per microfacet), and
+//! ρ = F_eff + T_eff − that, clamped to [S, 1].
 
-use std::f64::consts::{FRAC_PI_2, PI};
+use std::f64::consts::{FRAC_PI_2, FRAC_PI_4, PI};
 
 use super::ggx;
 use super::quadrature::Rule;
@@ -62,14 +62,18 @@ impl Albedos {
         self.reflect + self.transmit
     }
 
-    /// F_eff + T_eff − 1 of the bare lossless interface: how far the sum of
-    /// the two lobe-averaged colours of a lossless film is from 1 (0 with
-    /// no transmission).
+    /// How far F_eff + T_eff of the bare lossless interface falls below 1,
+    /// as a negative number (0 where it does not, or with no
+    /// transmission): the two lobe-averaged colours of a lossless film need
+    /// not sum to 1. Above 1 (past the critical angle the reflection
+    /// averages over microfacets that reflect totally) the compensation's
+    /// clamp of ρ to 1 takes care of it, so only the part below is kept —
+    /// the part above has a feature as narrow as α at the critical angle.
     pub fn keep_bias(&self) -> f64 {
         if self.transmit_white <= 0.0 || self.reflect_white <= 0.0 {
             return 0.0;
         }
-        self.reflect / self.reflect_white + self.transmit / self.transmit_white - 1.0
+        (self.reflect / self.reflect_white + self.transmit / self.transmit_white - 1.0).min(0.0)
     }
 }
 
@@ -145,54 +149,83 @@ pub fn film_albedos(
     let g1_v = cv / (cv + lambda_cos_v);
     let rule = Rule::gauss_legendre(q.points);
     let mut sum = [0.0f64; 4];
-    // Past τ_full the view sees only part of the azimuths: a kink in τ.
-    let tau_full = if sv * alpha > 0.0 {
-        (cv / (sv * alpha)).atan()
-    } else {
-        FRAC_PI_2
-    };
-    let cuts = [0.0, tau_full.min(FRAC_PI_2), FRAC_PI_2];
-    for pair in cuts.windows(2) {
-        let (lo, hi) = (pair[0], pair[1]);
-        if hi <= lo {
-            continue;
-        }
-        let panel_width = (hi - lo) / q.panels as f64;
-        for p in 0..q.panels {
-            for (x, w) in rule.nodes.iter().zip(&rule.weights) {
-                let tau = lo + panel_width * (p as f64 + x);
-                let (st, ct) = tau.sin_cos();
-                // Azimuths where v·h > 0.
-                let across = sv * alpha * st;
-                let phi_max = if across <= cv * ct {
-                    PI
-                } else {
-                    (-cv * ct / across).acos()
-                };
-                let norm = (ct * ct + a2 * st * st).sqrt();
-                let (cos_h, sin_h) = (ct / norm, alpha * st / norm);
-                let phi_width = phi_max / q.panels as f64;
-                for pp in 0..q.panels {
-                    for (y, wy) in rule.nodes.iter().zip(&rule.weights) {
-                        let phi = phi_width * (pp as f64 + y);
-                        let (sp, cp) = phi.sin_cos();
-                        let weight = w * panel_width * wy * phi_width
-                            * visible_weight(st, ct, cp, cv, sv, alpha, lambda_cos_v);
-                        let h = [sin_h * cp, sin_h * sp, cos_h];
-                        let escapes = escapes(h, cv, sv, eta, a2, lambda_cos_v, g1_v, &film);
-                        for (s, e) in sum.iter_mut().zip(escapes) {
-                            *s += weight * e;
-                        }
-                    }
-                }
-            }
-        }
+    // cos θ of the critical angle, where a microfacet stops refracting.
+    let mu_c = eta.filter(|&e| e > 0.0 && e < 1.0).map(|e| (1.0 - e * e).sqrt());
+    let theta_v = cv.acos();
+    // θ_h where a kink of the integrand enters or leaves the azimuths:
+    // the critical angle and the reflection's horizon, at φ = 0 and π.
+    let mut thetas = vec![FRAC_PI_4 + 0.5 * theta_v, FRAC_PI_4 - 0.5 * theta_v];
+    if let Some(m) = mu_c {
+        let tc = m.acos();
+        thetas.extend([tc + theta_v, tc - theta_v, theta_v - tc]);
     }
+    let mut tau_cuts: Vec<f64> = thetas
+        .into_iter()
+        .filter(|&t| t > 0.0 && t < FRAC_PI_2)
+        .map(|t| (t.tan() / alpha).atan())
+        .collect();
+    // Past τ_full the view sees only part of the azimuths.
+    if sv * alpha > 0.0 {
+        tau_cuts.push((cv / (sv * alpha)).atan());
+    }
+    panels(&rule, (0.0, FRAC_PI_2), &tau_cuts, q.panels, |tau, w| {
+        let (st, ct) = tau.sin_cos();
+        // Azimuths where v·h > 0.
+        let across = sv * alpha * st;
+        let phi_max = if across <= cv * ct {
+            PI
+        } else {
+            (-cv * ct / across).acos()
+        };
+        let norm = (ct * ct + a2 * st * st).sqrt();
+        let (cos_h, sin_h) = (ct / norm, alpha * st / norm);
+        // φ where μ = v·h crosses μ_c, and where the reflection sets.
+        let cos_phi_at = |mu: f64| (mu - cv * cos_h) / (sv * sin_h);
+        let mut phi_cuts = vec![cos_phi_at(cv / (2.0 * cos_h))];
+        phi_cuts.extend(mu_c.map(cos_phi_at));
+        let phi_cuts: Vec<f64> = phi_cuts
+            .into_iter()
+            .filter(|c| c.abs() < 1.0)
+            .map(f64::acos)
+            .collect();
+        panels(&rule, (0.0, phi_max), &phi_cuts, q.panels, |phi, wy| {
+            let (sp, cp) = phi.sin_cos();
+            let weight = w * wy * visible_weight(st, ct, cp, cv, sv, alpha, lambda_cos_v);
+            let h = [sin_h * cp, sin_h * sp, cos_h];
+            let escapes = escapes(h, cv, sv, eta, a2, lambda_cos_v, g1_v, &film);
+            for (s, e) in sum.iter_mut().zip(escapes) {
+                *s += weight * e;
+            }
+        });
+    });
     Albedos {
         reflect_white: sum[0],
         transmit_white: sum[1],
         reflect: sum[2],
         transmit: sum[3],
+    }
+}
+
+/// Composite Gauss–Legendre over `range` cut at `cuts` (those inside it):
+/// each piece gets its share of `count` panels (at least one); calls
+/// `f(x, weight)` at every node.
+fn panels(rule: &Rule, (lo, hi): (f64, f64), cuts: &[f64], count: usize, mut f: impl FnMut(f64, f64)) {
+    let mut ends: Vec<f64> = cuts.iter().copied().filter(|&c| c > lo && c < hi).collect();
+    ends.push(hi);
+    ends.sort_by(f64::total_cmp);
+    let mut start = lo;
+    for end in ends {
+        if end <= start {
+            continue;
+        }
+        let n = ((count as f64 * (end - start) / (hi - lo)).ceil() as usize).max(1);
+        let width = (end - start) / n as f64;
+        for p in 0..n {
+            for (x, w) in rule.nodes.iter().zip(&rule.weights) {
+                f(start + width * (p as f64 + x), w * width);
+            }
+        }
+        start = end;
     }
 }
 
@@ -355,7 +388,9 @@ fn stencil(x: f64, n: usize) -> (usize, [f64; 4]) {
 }
 
 /// The white-lobe tables of one interface (one η, or opaque) over view
-/// cos θ and roughness, for compensating tables of F_eff and T_eff.
+/// cos θ and roughness, for compensating tables of F_eff and T_eff. The
+/// nodes are even in √cos θ_v (the albedos steepen towards grazing view)
+/// and in roughness, Catmull–Rom interpolated.
 #[derive(Clone, Debug)]
 pub struct EnergyTable {
     eta: Option<f64>,
@@ -366,7 +401,7 @@ pub struct EnergyTable {
 
 impl EnergyTable {
     /// Nodes per coordinate that keep the interpolation within 1e-3.
-    pub const DEFAULT_NODES: usize = 33;
+    pub const DEFAULT_NODES: usize = 49;
 
     /// The tables for relative index `eta` = n_other / n_view (`None`:
     /// opaque), `nodes` per coordinate (at least 4), by [`albedos`].
@@ -376,7 +411,7 @@ impl EnergyTable {
         let mut at = |x: f64, r: f64| -> Albedos {
             let i = (x * (nodes - 1) as f64).round() as usize;
             let j = (r * (nodes - 1) as f64).round() as usize;
-            *cache[i * nodes + j].get_or_insert_with(|| albedos(x, r, eta, q))
+            *cache[i * nodes + j].get_or_insert_with(|| albedos(x * x, r, eta, q))
         };
         let reflect_white = Grid2::from_fn(nodes, nodes, |x, r| at(x, r).reflect_white);
         let energy = Grid2::from_fn(nodes, nodes, |x, r| at(x, r).energy());
@@ -396,18 +431,18 @@ impl EnergyTable {
 
     /// E_R: the white reflection lobe's albedo (A_R).
     pub fn reflect_white(&self, cos_view: f64, roughness: f64) -> f64 {
-        self.reflect_white.at(cos_view, roughness)
+        self.reflect_white.at(cos_view.max(0.0).sqrt(), roughness)
     }
 
     /// E: the bare interface's single-scattering energy (reflection plus
     /// transmission with its Fresnel; E_R when opaque).
     pub fn energy(&self, cos_view: f64, roughness: f64) -> f64 {
-        self.energy.at(cos_view, roughness)
+        self.energy.at(cos_view.max(0.0).sqrt(), roughness)
     }
 
     /// [`Albedos::keep_bias`], interpolated.
     pub fn keep_bias(&self, cos_view: f64, roughness: f64) -> f64 {
-        self.keep_bias.at(cos_view, roughness)
+        self.keep_bias.at(cos_view.max(0.0).sqrt(), roughness)
     }
 
     /// E_avg: [`Self::energy`] averaged over views with cos-weight.
