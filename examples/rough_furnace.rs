@@ -83,36 +83,38 @@ fn main() {
     let opts = RenderOptions::new(FilmMode::lut(cache));
     let mask = render::render(&scene("", 0.0, false, size, spp, depth), &opts).unwrap();
     let covered: f64 = mask.pixels.iter().map(|p| 1.0 - f64::from(p[1])).sum();
-    println!("white furnace, {size}×{size} pixels, {spp} spp, depth {depth}: mean R G B over the sphere");
+    println!(
+        "white furnace, {size}×{size} pixels, {spp} spp, depth {depth}: mean R G B over the sphere"
+    );
     for (name, material) in MATERIALS {
         for roughness in [0.0f32, 0.2, 0.4, 0.6, 0.8, 1.0] {
-          for compensated in [false, true] {
-            let mut scene = scene(material, roughness, true, size, spp, depth);
-            if !compensated {
-                for m in &mut scene.materials {
-                    if let Material::Film(f) = m {
-                        f.compensation = Compensation::default();
+            for compensated in [false, true] {
+                let mut scene = scene(material, roughness, true, size, spp, depth);
+                if !compensated {
+                    for m in &mut scene.materials {
+                        if let Material::Film(f) = m {
+                            f.compensation = Compensation::default();
+                        }
                     }
                 }
+                let image = render::render(&scene, &opts).unwrap();
+                let mean: Vec<f64> = (0..3)
+                    .map(|c| {
+                        let sum: f64 = image
+                            .pixels
+                            .iter()
+                            .zip(&mask.pixels)
+                            .map(|(p, m)| f64::from(p[c]) - f64::from(m[c]))
+                            .sum();
+                        sum / covered
+                    })
+                    .collect();
+                let which = if compensated { "compensated" } else { "single" };
+                println!(
+                    "{name:15} roughness {roughness:.1} {which:11}: {:.4} {:.4} {:.4}",
+                    mean[0], mean[1], mean[2]
+                );
             }
-            let image = render::render(&scene, &opts).unwrap();
-            let mean: Vec<f64> = (0..3)
-                .map(|c| {
-                    let sum: f64 = image
-                        .pixels
-                        .iter()
-                        .zip(&mask.pixels)
-                        .map(|(p, m)| f64::from(p[c]) - f64::from(m[c]))
-                        .sum();
-                    sum / covered
-                })
-                .collect();
-            let which = if compensated { "compensated" } else { "single" };
-            println!(
-                "{name:15} roughness {roughness:.1} {which:11}: {:.4} {:.4} {:.4}",
-                mean[0], mean[1], mean[2]
-            );
-          }
         }
     }
 }

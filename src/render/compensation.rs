@@ -78,10 +78,16 @@ mod tests {
             for (front, eta) in [(true, 1.5), (false, 1.0 / 1.5)] {
                 let e = albedos(cv, 0.6, Some(eta), &q).energy();
                 let k = c.scale(cv as f32, front, Vec3::ONE).x;
-                assert!((f64::from(k) * e - 1.0).abs() < 2e-3, "{cv} {front}: {k} {e}");
+                assert!(
+                    (f64::from(k) * e - 1.0).abs() < 2e-3,
+                    "{cv} {front}: {k} {e}"
+                );
             }
         }
-        assert_eq!(Compensation::new(0.0, Some(1.5)).scale(0.5, true, Vec3::ONE), Vec3::ONE);
+        assert_eq!(
+            Compensation::new(0.0, Some(1.5)).scale(0.5, true, Vec3::ONE),
+            Vec3::ONE
+        );
         let opaque = Compensation::new(0.8, None);
         assert_eq!(opaque.scale(0.5, false, Vec3::ONE), Vec3::ONE);
         let e = albedos(0.5, 0.8, None, &q).reflect_white;

@@ -150,7 +150,9 @@ pub fn film_albedos(
     let rule = Rule::gauss_legendre(q.points);
     let mut sum = [0.0f64; 4];
     // cos θ of the critical angle, where a microfacet stops refracting.
-    let mu_c = eta.filter(|&e| e > 0.0 && e < 1.0).map(|e| (1.0 - e * e).sqrt());
+    let mu_c = eta
+        .filter(|&e| e > 0.0 && e < 1.0)
+        .map(|e| (1.0 - e * e).sqrt());
     let theta_v = cv.acos();
     // θ_h where a kink of the integrand enters or leaves the azimuths:
     // the critical angle and the reflection's horizon, at φ = 0 and π.
@@ -209,7 +211,13 @@ pub fn film_albedos(
 /// Composite Gauss–Legendre over `range` cut at `cuts` (those inside it):
 /// each piece gets its share of `count` panels (at least one); calls
 /// `f(x, weight)` at every node.
-fn panels(rule: &Rule, (lo, hi): (f64, f64), cuts: &[f64], count: usize, mut f: impl FnMut(f64, f64)) {
+fn panels(
+    rule: &Rule,
+    (lo, hi): (f64, f64),
+    cuts: &[f64],
+    count: usize,
+    mut f: impl FnMut(f64, f64),
+) {
     let mut ends: Vec<f64> = cuts.iter().copied().filter(|&c| c > lo && c < hi).collect();
     ends.push(hi);
     ends.sort_by(f64::total_cmp);

@@ -13,7 +13,10 @@ const ETAS: [Option<f64>; 4] = [None, Some(1.5), Some(1.0 / 1.5), Some(1.0 / 1.3
 
 #[test]
 fn quadrature_converges() {
-    let (q, fine) = (AlbedoQuadrature::default(), AlbedoQuadrature::default().finer());
+    let (q, fine) = (
+        AlbedoQuadrature::default(),
+        AlbedoQuadrature::default().finer(),
+    );
     let mut worst = 0.0f64;
     for eta in ETAS {
         for &cv in &[0.02, 0.3, 0.7, 1.0] {
@@ -65,7 +68,10 @@ fn closed_forms() {
             let lambda = ggx::lambda_cos(cv, a2) / cv;
             let m = albedos(cv, r, Some(1.0), &q);
             let want = (1.0 + lambda) / (1.0 + 2.0 * lambda);
-            assert!((m.transmit - want).abs() < 2e-5, "{cv} {r}: {m:?} vs {want}");
+            assert!(
+                (m.transmit - want).abs() < 2e-5,
+                "{cv} {r}: {m:?} vs {want}"
+            );
             assert!(m.reflect.abs() < 1e-12);
         }
     }
@@ -140,7 +146,11 @@ fn lossless_film_is_returned_to_one() {
     let q = AlbedoQuadrature::default();
     for front in [true, false] {
         let (n_view, n_other) = if front { (1.0, 1.5) } else { (1.5, 1.0) };
-        let indices = [C64::new(n_view, 0.0), C64::new(1.33, 0.0), C64::new(n_other, 0.0)];
+        let indices = [
+            C64::new(n_view, 0.0),
+            C64::new(1.33, 0.0),
+            C64::new(n_other, 0.0),
+        ];
         let film = |mu: f64, _: f64, _: f64| {
             let s = crate::optics::solve(&indices, &[500.0], 550.0, mu);
             (s.r(), s.t())
@@ -236,7 +246,11 @@ impl Walk {
             let wi = [-w[0], -w[1], -w[2]];
             let m = self.visible_normal(wi, u(), u());
             let mu = dot(wi, m);
-            let reflect = [2.0 * mu * m[0] - wi[0], 2.0 * mu * m[1] - wi[1], 2.0 * mu * m[2] - wi[2]];
+            let reflect = [
+                2.0 * mu * m[0] - wi[0],
+                2.0 * mu * m[1] - wi[1],
+                2.0 * mu * m[2] - wi[2],
+            ];
             match eta {
                 None => {
                     weight *= self.grey;
@@ -253,7 +267,8 @@ impl Walk {
                         w = reflect;
                     } else {
                         let ct = (1.0 - sin2_t).sqrt();
-                        let t: [f64; 3] = std::array::from_fn(|i| -wi[i] / e + (mu / e - ct) * m[i]);
+                        let t: [f64; 3] =
+                            std::array::from_fn(|i| -wi[i] / e + (mu / e - ct) * m[i]);
                         // The other side's frame: z and heights flipped.
                         w = [t[0], t[1], -t[2]];
                         c1 = 1.0 - c1;
@@ -306,7 +321,10 @@ fn random_walk_agrees() {
         for eta in [1.5, 1.0 / 1.5] {
             let a = albedos(cv, r, Some(eta), &q);
             let [r1, t1, r_all, t_all] = walk(cv, r, Some(eta), 1.0, paths);
-            assert!((r1 - a.reflect).abs() < noise, "{cv} {r} {eta}: {r1} vs {a:?}");
+            assert!(
+                (r1 - a.reflect).abs() < noise,
+                "{cv} {r} {eta}: {r1} vs {a:?}"
+            );
             // The walk's transmission is masked by the microsurface's own
             // height correlation across the interface, B(1 + Λv, 1 + Λl)
             // (Heitz 2014), below the definition's 1 / (1 + Λv + Λl).
@@ -322,16 +340,25 @@ fn random_walk_agrees() {
             // reflection, the compensation puts too much into transmission
             // (printed; docs/rough.md states it).
             if eta > 1.0 {
-                assert!((compensated - r_all).abs() < 0.015, "{compensated} vs {r_all}");
+                assert!(
+                    (compensated - r_all).abs() < 0.015,
+                    "{compensated} vs {r_all}"
+                );
             }
         }
         let white = albedos(cv, r, None, &q).reflect_white;
         let [r1, _, r_all, _] = walk(cv, r, None, 1.0, paths);
-        assert!((r1 - white).abs() < noise && (r_all - 1.0).abs() < 1e-3, "{r1} {white}");
+        assert!(
+            (r1 - white).abs() < noise && (r_all - 1.0).abs() < 1e-3,
+            "{r1} {white}"
+        );
         let grey = 0.6;
         let [_, _, g_all, _] = walk(cv, r, None, grey, paths);
         let turquin = grey * white * (1.0 + grey * (1.0 - white) / white);
-        println!("cos {cv} r {r} grey {grey}: walk {g_all:.4}, single {:.4}, Turquin {turquin:.4}", grey * white);
+        println!(
+            "cos {cv} r {r} grey {grey}: walk {g_all:.4}, single {:.4}, Turquin {turquin:.4}",
+            grey * white
+        );
         assert!((turquin - g_all).abs() < 0.02, "{turquin} vs {g_all}");
     }
 }

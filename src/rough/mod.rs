@@ -25,8 +25,8 @@
 //! on the μ nodes from the baker's split-stack sweep, times a kernel per
 //! (cos θ, roughness). [`rough_colors`] is `irid color --roughness`.
 
-mod engine;
 pub mod energy;
+mod engine;
 pub mod ggx;
 mod kernel;
 mod mu_grid;

@@ -14,8 +14,8 @@ use super::sections::{
 use super::{MAX_DEPTH, MAX_IMAGE_SIDE, MAX_SPP, METAL_TABLE_NODES};
 use crate::error::{Error, Result};
 use crate::optics::{Stack, MAX_THICKNESS_NM};
-use crate::render::environment::{Environment, EquirectMap, Sky, SkyParams};
 use crate::render::compensation::Compensation;
+use crate::render::environment::{Environment, EquirectMap, Sky, SkyParams};
 use crate::render::film::bare_reflectance;
 use crate::render::geometry::{Plane, Sphere};
 use crate::render::material::{Checker, FilmMaterial, Interior, Material};
