@@ -147,6 +147,13 @@ pub fn film_albedos(
     let sv = ((1.0 - cv) * (1.0 + cv)).sqrt();
     let lambda_cos_v = ggx::lambda_cos(cv, a2);
     let g1_v = cv / (cv + lambda_cos_v);
+    let view = View {
+        cv,
+        sv,
+        a2,
+        lambda_cos_v,
+        g1_v,
+    };
     let rule = Rule::gauss_legendre(q.points);
     let mut sum = [0.0f64; 4];
     // cos θ of the critical angle, where a microfacet stops refracting.
@@ -194,7 +201,7 @@ pub fn film_albedos(
             let (sp, cp) = phi.sin_cos();
             let weight = w * wy * visible_weight(st, ct, cp, cv, sv, alpha, lambda_cos_v);
             let h = [sin_h * cp, sin_h * sp, cos_h];
-            let escapes = escapes(h, cv, sv, eta, a2, lambda_cos_v, g1_v, &film);
+            let escapes = escapes(h, &view, eta, &film);
             for (s, e) in sum.iter_mut().zip(escapes) {
                 *s += weight * e;
             }
@@ -245,20 +252,34 @@ fn visible_weight(st: f64, ct: f64, cp: f64, cv: f64, sv: f64, alpha: f64, lcv: 
     (2.0 * (st * ct * cv + sv * alpha * st * st * cp) / (PI * (cv + lcv))).max(0.0)
 }
 
+/// The view as [`escapes`] needs it: cos and sin θ_v, α², Λ(v) cos θ_v
+/// and G1(v).
+#[derive(Clone, Copy)]
+struct View {
+    cv: f64,
+    sv: f64,
+    a2: f64,
+    lambda_cos_v: f64,
+    g1_v: f64,
+}
+
 /// For microfacet normal `h` (macro frame, view in the x–z plane): the
 /// escape weights of its reflection and refraction, white and with the
 /// bare interface's Fresnel: [e_R, e_T, F e_R, (1 − F) e_T].
 #[inline]
 fn escapes(
     h: [f64; 3],
-    cv: f64,
-    sv: f64,
+    view: &View,
     eta: Option<f64>,
-    a2: f64,
-    lambda_cos_v: f64,
-    g1_v: f64,
     film: &impl Fn(f64, f64, f64) -> (f64, f64),
 ) -> [f64; 4] {
+    let View {
+        cv,
+        sv,
+        a2,
+        lambda_cos_v,
+        g1_v,
+    } = *view;
     let mu = (sv * h[0] + cv * h[2]).max(0.0);
     let cos_l = 2.0 * mu * h[2] - cv;
     let e_r = ggx::g2(cv, lambda_cos_v, cos_l, a2) / g1_v;

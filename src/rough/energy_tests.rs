@@ -159,7 +159,7 @@ fn lossless_film_is_returned_to_one() {
         let table = EnergyTable::new(Some(eta), 17, &q);
         for &cv in &[0.05, 0.3, 0.7, 1.0] {
             for &r in &[0.2, 0.4, 0.6, 0.8, 1.0] {
-                let a = film_albedos(cv, r, Some(eta), &q, &film);
+                let a = film_albedos(cv, r, Some(eta), &q, film);
                 let ss = SingleScattering {
                     reflectance: [a.reflect / a.reflect_white; 3],
                     transmittance: [a.transmit / a.transmit_white; 3],
