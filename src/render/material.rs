@@ -63,6 +63,9 @@ pub struct FilmMaterial {
     /// GGX α = roughness² of the surface under the film (docs/rough.md);
     /// 0 for a mirror-smooth film.
     pub alpha: f32,
+    /// The rough lobe's multiple-scattering compensation (empty when
+    /// smooth).
+    pub compensation: super::compensation::Compensation,
 }
 
 /// The medium inside a film-coated object that light can enter.

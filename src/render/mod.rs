@@ -12,6 +12,7 @@
 //! ```
 
 pub mod camera;
+pub mod compensation;
 pub mod environment;
 pub mod film;
 pub mod geometry;

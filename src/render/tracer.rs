@@ -183,7 +183,8 @@ impl<F: FilmShading, const ROUGH: bool> Tracer<'_, F, ROUGH> {
     /// drawn from GGX's visible normals, the rays reflected and refracted
     /// about it, each weighted by G2 / G1 and by the film's reflectance or
     /// transmittance at v·h. Averaged over a pixel's samples this is the
-    /// single-scattering GGX lobe with the film's Fresnel per microfacet.
+    /// single-scattering GGX lobe with the film's Fresnel per microfacet,
+    /// scaled for multiple scattering ([`super::compensation`]).
     /// Never inlined: inside [`Self::trace`] its code lengthened every
     /// call's prologue, smooth scenes' too.
     #[inline(never)]
@@ -218,7 +219,10 @@ impl<F: FilmShading, const ROUGH: bool> Tracer<'_, F, ROUGH> {
         };
         let cos_vh = v.dot(h).clamp(1e-6, 1.0);
         let rgb = self.films[hit.film.film].shade(hit.thickness_nm, cos_vh, hit.side());
-        Vec3::from(rgb.reflectance) * reflected + Vec3::from(rgb.transmittance) * refracted
+        let (r, t) = (Vec3::from(rgb.reflectance), Vec3::from(rgb.transmittance));
+        // What the lobe's single scattering loses to further bounces.
+        let scale = hit.film.compensation.scale(cos_v, hit.front, r + t);
+        scale * (r * reflected + t * refracted)
     }
 
     /// Radiance along the mirror direction: traced below the depth limit,

@@ -31,6 +31,7 @@
 //! albedo A_T, from either side of the film ([`rough_response`],
 //! [`rough_colors_from`]; the substrate side is the reversed stack).
 
+pub mod energy;
 mod engine;
 pub mod ggx;
 mod kernel;

@@ -14,6 +14,7 @@ use super::sections::{
 use super::{MAX_DEPTH, MAX_IMAGE_SIDE, MAX_SPP, METAL_TABLE_NODES};
 use crate::error::{Error, Result};
 use crate::optics::{Stack, MAX_THICKNESS_NM};
+use crate::render::compensation::Compensation;
 use crate::render::environment::{Environment, EquirectMap, Sky, SkyParams};
 use crate::render::film::bare_reflectance;
 use crate::render::geometry::{Plane, Sphere};
@@ -276,6 +277,8 @@ fn material(
             let mut material = film(name, stack, *layer, field, *absorption, origin, films)?;
             if let Material::Film(f) = &mut material {
                 f.alpha = roughness * roughness;
+                let eta = f.inside.map(|i| f64::from(i.ior / f.outside_ior));
+                f.compensation = Compensation::new(f64::from(*roughness), eta);
             }
             material
         }
@@ -429,6 +432,7 @@ fn film(
         outside_ior,
         inside,
         alpha: 0.0,
+        compensation: Compensation::default(),
     }))
 }
 
