@@ -82,7 +82,15 @@ pub fn rough_reflectance(
         cos_theta,
         roughness,
     };
-    rough_table(stack, layer, integrator, &nodes, quadrature, None, Cancel::never())
+    rough_table(
+        stack,
+        layer,
+        integrator,
+        &nodes,
+        quadrature,
+        None,
+        Cancel::never(),
+    )
 }
 
 /// F_eff, T_eff and both lobes' albedos of `stack` seen from `side` (the
@@ -220,7 +228,12 @@ impl Smooth<'_> {
             };
         }
         let kernel = Kernel::with_rules(self.grid, cv, rough, self.rules);
-        weigh_rows(&kernel, self.on_grid, 3 * n_t, reflectance.as_flattened_mut());
+        weigh_rows(
+            &kernel,
+            self.on_grid,
+            3 * n_t,
+            reflectance.as_flattened_mut(),
+        );
         TableRow {
             reflectance,
             albedo: kernel.albedo(),
@@ -447,7 +460,14 @@ pub fn rough_colors_cancellable(
     roughness: f64,
     cancel: &Cancel,
 ) -> Result<Vec<RoughColor>> {
-    rough_colors_from_cancellable(stack, integrator, angles_deg, roughness, Side::Front, cancel)
+    rough_colors_from_cancellable(
+        stack,
+        integrator,
+        angles_deg,
+        roughness,
+        Side::Front,
+        cancel,
+    )
 }
 
 /// F_eff, T_eff and both lobes' albedos of `stack` (its layers at their own
@@ -462,7 +482,14 @@ pub fn rough_colors_from(
     roughness: f64,
     side: Side,
 ) -> Result<Vec<RoughColor>> {
-    rough_colors_from_cancellable(stack, integrator, angles_deg, roughness, side, Cancel::never())
+    rough_colors_from_cancellable(
+        stack,
+        integrator,
+        angles_deg,
+        roughness,
+        side,
+        Cancel::never(),
+    )
 }
 
 /// [`rough_colors_from`], stopping with [`Error::Cancelled`] once `cancel`
@@ -481,23 +508,25 @@ pub fn rough_colors_from_cancellable(
     if roughness == 0.0 {
         let grid = MuGrid::new(Quadrature::default().mu_intervals, None);
         let quadrature = Quadrature::default();
-        return Ok(stack_colors_cancellable(&seen, integrator, angles_deg, cancel)?
-            .into_iter()
-            .map(|c| {
-                let cos = c.angle_deg.to_radians().cos();
-                let through = Kernel::transmission(&grid, cos, 0.0, eta, &quadrature).albedo();
-                RoughColor {
-                    angle_deg: c.angle_deg,
-                    roughness,
-                    reflectance_rgb: c.reflectance_rgb,
-                    reflectance_xyz: c.reflectance_xyz,
-                    lobe_albedo: 1.0,
-                    transmittance_rgb: c.transmittance_rgb,
-                    transmittance_xyz: c.transmittance_xyz,
-                    transmission_lobe_albedo: through,
-                }
-            })
-            .collect());
+        return Ok(
+            stack_colors_cancellable(&seen, integrator, angles_deg, cancel)?
+                .into_iter()
+                .map(|c| {
+                    let cos = c.angle_deg.to_radians().cos();
+                    let through = Kernel::transmission(&grid, cos, 0.0, eta, &quadrature).albedo();
+                    RoughColor {
+                        angle_deg: c.angle_deg,
+                        roughness,
+                        reflectance_rgb: c.reflectance_rgb,
+                        reflectance_xyz: c.reflectance_xyz,
+                        lobe_albedo: 1.0,
+                        transmittance_rgb: c.transmittance_rgb,
+                        transmittance_xyz: c.transmittance_xyz,
+                        transmission_lobe_albedo: through,
+                    }
+                })
+                .collect(),
+        );
     }
     if let Some(a) = angles_deg.iter().find(|a| !(**a >= 0.0 && **a < 90.0)) {
         return Err(Error::invalid(
