@@ -42,6 +42,11 @@ const CHUNKS: usize = 8;
 /// Fewest wavelengths per task when the pool solves a gradient.
 const MIN_CHUNK_WAVELENGTHS: usize = 16;
 
+/// Most points × layers per task (a few milliseconds of the lanes): Ctrl-C
+/// is looked for between tasks, so a large solve is cut finer than
+/// [`CHUNKS`].
+const MAX_TASK_POINTS: usize = 1 << 18;
+
 /// `Stack.solve(..., gradient=True)` over the grid's stack at its own
 /// thicknesses: one sweep of the gradient lanes gives R and T, the
 /// amplitudes (coherent stacks) and the derivatives, so nothing is solved
@@ -111,7 +116,11 @@ fn solve_chunks(
         .map(|g| vec![g])
         .map_err(py_error);
     }
-    let run = wavelengths.div_ceil(CHUNKS).max(MIN_CHUNK_WAVELENGTHS);
+    let per_wavelength = cos_theta0.len() * layers.max(1);
+    let run = wavelengths
+        .div_ceil(CHUNKS)
+        .min((MAX_TASK_POINTS / per_wavelength).max(1))
+        .max(MIN_CHUNK_WAVELENGTHS);
     let chunks = compute_cancellable(py, true, |cancel| {
         let chunk = |w0: usize| -> irid::error::Result<GradientGrid> {
             cancel.check()?;
