@@ -4,7 +4,9 @@
 //! CPU has), and the same grid with the derivative of R and T (s, p) by
 //! all 20 thicknesses (`optics::gradient::solve_stack_grid_with_gradient`).
 //! Each is also timed as the fastest of several runs in one process, and
-//! the ratio printed: docs/inverse.md quotes it.
+//! the ratio printed: docs/inverse.md quotes it. The same stack with two
+//! incoherent layers (mixed) is timed through the lanes and point by point
+//! on the scalar gradient, and that ratio printed too.
 
 // Not an API: criterion's macros generate undocumented public functions.
 #![allow(missing_docs)]
@@ -13,7 +15,9 @@ use std::time::{Duration, Instant};
 
 use criterion::{black_box, criterion_group, criterion_main, Criterion};
 
-use irid::optics::gradient::solve_stack_grid_with_gradient;
+use irid::optics::gradient::{
+    solve_grid_point_with_gradient, solve_stack_grid_with_gradient, Workspace,
+};
 use irid::optics::{Layer, Material, Response, Stack, StackGrid};
 
 /// Air, 20 films alternating lossless (1.5) and absorbing (2.3 + 0.05i),
@@ -67,7 +71,48 @@ fn gradient(c: &mut Criterion) {
         with_gradient.as_secs_f64() / forward.as_secs_f64()
     );
 
+    let mut mixed = stack.clone();
+    for l in [5, 14] {
+        mixed.layers[l].coherent = false;
+        mixed.layers[l].thickness_nm = 2000.0;
+    }
+    let mixed_grid = StackGrid::new(&mixed, &wavelengths).expect("grid");
+    let dm = mixed.thicknesses_nm();
+    let scalar_mixed = || {
+        let mut work = Workspace::default();
+        for w in 0..wavelengths.len() {
+            for &c in &cos {
+                black_box(
+                    solve_grid_point_with_gradient(&mixed_grid, w, &dm, c, &mut work)
+                        .expect("solve"),
+                );
+            }
+        }
+    };
+    let lanes_mixed = || {
+        black_box(solve_stack_grid_with_gradient(&mixed_grid, black_box(&dm), &cos).expect("solve"))
+    };
+    let (scalar_time, lanes_time) = (
+        fastest(scalar_mixed),
+        fastest(|| {
+            lanes_mixed();
+        }),
+    );
+    println!(
+        "20 layers (2 incoherent), 401 wavelengths × 3 angles, all 20 derivatives: \
+         scalar {scalar_time:?}, lanes {lanes_time:?}: scalar/lanes {:.2}",
+        scalar_time.as_secs_f64() / lanes_time.as_secs_f64()
+    );
+
     let mut g = c.benchmark_group("gradient");
+    g.bench_function(
+        "mixed 20 layers, 401 wavelengths x 3 angles, gradient, scalar",
+        |b| b.iter(scalar_mixed),
+    );
+    g.bench_function(
+        "mixed 20 layers, 401 wavelengths x 3 angles, gradient, lanes",
+        |b| b.iter(lanes_mixed),
+    );
     g.bench_function("20 layers, 401 wavelengths x 3 angles, forward", |b| {
         b.iter(|| {
             grid.solve(black_box(&cos), &mut out);

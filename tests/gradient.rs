@@ -514,3 +514,132 @@ mod color {
         assert_eq!((de, grad), (0.0, [0.0; 3]));
     }
 }
+
+/// Every point of a mixed stack's grid (the lanes, each copy of the kernel,
+/// and the scalar gradient for the points they leave) against the scalar
+/// gradient point by point: random mixed stacks, a thick absorbing
+/// incoherent layer, total internal reflection at an incoherent gap (opaque)
+/// and in an absorbing one (evanescent), gain below the lasing threshold.
+#[test]
+fn mixed_grid_matches_points() {
+    let mut rng = Pcg64::seed_from_u64(3839);
+    let mut stacks: Vec<Stack> = Vec::new();
+    for case in 0..40 {
+        let layers = rng.random_range(1..9);
+        let (n, _) = random_stack(&mut rng, KINDS[case % KINDS.len()], layers, 300.0);
+        let d: Vec<f64> = (0..layers).map(|_| rng.random_range(0.0..300.0)).collect();
+        let mut stack = stack_of(&n, &d);
+        let first = rng.random_range(0..layers);
+        for (l, layer) in stack.layers.iter_mut().enumerate() {
+            if l == first || rng.random_bool(0.3) {
+                layer.coherent = false;
+                layer.thickness_nm = rng.random_range(0.0..3000.0);
+            }
+        }
+        stacks.push(stack);
+    }
+    let incoherent = |mut stack: Stack, which: &[usize]| {
+        for &l in which {
+            stack.layers[l].coherent = false;
+        }
+        stack
+    };
+    let thick_absorber = stack_of(
+        &[
+            c64(1.0, 0.0),
+            c64(1.45, 0.0),
+            c64(2.0, 0.3),
+            c64(1.6, 0.0),
+            c64(1.5, 0.0),
+        ],
+        &[120.0, 5e4, 90.0],
+    );
+    stacks.push(incoherent(thick_absorber, &[1]));
+    // From glass at sin θ0 = 0.8: the 1.0 gap is lossless beyond its
+    // critical angle (opaque), the 1.1 + 1e-3i one evanescent and absorbing.
+    let tir = stack_of(
+        &[
+            c64(1.5, 0.0),
+            c64(1.7, 0.0),
+            c64(1.0, 0.0),
+            c64(1.3, 0.0),
+            c64(1.5, 0.0),
+        ],
+        &[140.0, 600.0, 90.0],
+    );
+    stacks.push(incoherent(tir, &[1]));
+    let evanescent = stack_of(
+        &[
+            c64(1.5, 0.0),
+            c64(1.7, 0.0),
+            c64(1.1, 1e-3),
+            c64(1.3, 0.0),
+            c64(1.5, 0.0),
+        ],
+        &[140.0, 400.0, 90.0],
+    );
+    stacks.push(incoherent(evanescent, &[1]));
+    let gain = stack_of(
+        &[
+            c64(1.0, 0.0),
+            c64(1.8, -0.01),
+            c64(1.5, -5e-4),
+            c64(2.2, 0.0),
+            c64(1.5, 0.0),
+        ],
+        &[120.0, 2000.0, 80.0],
+    );
+    stacks.push(incoherent(gain, &[1]));
+    let wavelengths: Vec<f64> = (0..11).map(|i| 400.0 + 37.0 * i as f64).collect();
+    let cosines = [1.0, 0.6, 0.3, 1e-6, 0.0];
+    let mut checked = 0;
+    for (case, stack) in stacks.iter().enumerate() {
+        let grid = StackGrid::new(stack, &wavelengths).unwrap();
+        let d = stack.thicknesses_nm();
+        let Ok(best) = solve_stack_grid_with_gradient_on(Path::Best, &grid, &d, &cosines) else {
+            // A gain layer that lases somewhere: the points say so too.
+            assert!(wavelengths.iter().any(|&wl| cosines
+                .iter()
+                .any(|&c| solve_with_gradient(stack, wl, c).is_err())));
+            continue;
+        };
+        for path in [Path::Best, Path::Avx2, Path::Portable] {
+            let got = solve_stack_grid_with_gradient_on(path, &grid, &d, &cosines).unwrap();
+            assert_eq!(got, best, "case {case} {path:?} against the widest lanes");
+            assert!(got.amplitudes.is_empty());
+            for (w, &wl) in wavelengths.iter().enumerate() {
+                for (a, &c) in cosines.iter().enumerate() {
+                    let (r, g) = solve_with_gradient(stack, wl, c).unwrap();
+                    let close =
+                        |x: f64, y: f64, scale: f64| (x - y).abs() <= 1e-12 * scale.max(1.0);
+                    let resp = got.response[w * 5 + a];
+                    assert!(
+                        parts(&resp)
+                            .iter()
+                            .zip(parts(&r))
+                            .all(|(x, y)| close(*x, y, y.abs())),
+                        "case {case} {path:?}: {resp:?} vs {r:?}"
+                    );
+                    for l in 0..stack.layers.len() {
+                        let i = got.at(l, w, a);
+                        let lanes = [got.d_rs[i], got.d_rp[i], got.d_ts[i], got.d_tp[i]];
+                        let scalar = gradient_parts(&g, l);
+                        for q in 0..4 {
+                            let scale = (0..stack.layers.len())
+                                .map(|m| gradient_parts(&g, m)[q].abs())
+                                .fold(0.0, f64::max);
+                            assert!(
+                                close(lanes[q], scalar[q], scale * 1e3),
+                                "case {case} {path:?} layer {l} at ({w}, {a}), quantity {q}: {} vs {}",
+                                lanes[q],
+                                scalar[q]
+                            );
+                        }
+                    }
+                }
+            }
+        }
+        checked += 1;
+    }
+    assert!(checked >= 35, "only {checked} mixed grids checked");
+}

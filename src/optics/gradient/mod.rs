@@ -233,9 +233,9 @@ pub fn solve_stack_grid_with_gradient(
 }
 
 /// [`solve_stack_grid_with_gradient`] on a chosen copy of the lane kernel
-/// (a coherent stack's points go through the lanes, but for those at
-/// grazing incidence or with a near-critical layer; a mixed stack's through
-/// the scalar gradient).
+/// (every point goes through the lanes, but for those at grazing incidence
+/// or with a near-critical layer, and, in a mixed stack, those with an
+/// opaque or lasing incoherent layer: these through the scalar gradient).
 ///
 /// # Panics
 /// If `thicknesses_nm` does not have one thickness per layer of the grid.
@@ -255,8 +255,8 @@ pub fn solve_stack_grid_with_gradient_on(
     let coherent = grid.coherence().is_coherent();
     let mut out = GradientGrid::zeros(layers, wavelengths, angles, coherent);
     let mut work = Workspace::default();
-    let points: Vec<usize> = if coherent {
-        let mut fallback = Vec::new();
+    let mut points = Vec::new();
+    {
         let GradientGrid {
             response,
             amplitudes,
@@ -266,23 +266,22 @@ pub fn solve_stack_grid_with_gradient_on(
             d_tp,
             ..
         } = &mut out;
-        lanes::gradient_grid_on(
-            path,
-            grid.indices(),
-            thicknesses_nm,
-            grid.wavelengths_nm(),
-            cos_theta0,
-            &mut lanes::GradientSink {
-                response,
-                amplitudes,
-                d: [d_rs, d_rp, d_ts, d_tp],
-                fallback: &mut fallback,
-            },
-        );
-        fallback
-    } else {
-        (0..wavelengths * angles).collect()
-    };
+        let mut sink = lanes::GradientSink {
+            response,
+            amplitudes,
+            d: [d_rs, d_rp, d_ts, d_tp],
+            fallback: &mut points,
+        };
+        let args = (grid.indices(), thicknesses_nm, grid.wavelengths_nm());
+        if coherent {
+            lanes::gradient_grid_on(path, args.0, args.1, args.2, cos_theta0, &mut sink);
+        } else {
+            let coherence = grid.coherence();
+            lanes::mixed_gradient_grid_on(
+                path, args.0, args.1, coherence, args.2, cos_theta0, &mut sink,
+            );
+        }
+    }
     for point in points {
         let (w, a) = (point / angles, point % angles);
         let (response, gradient) =

@@ -179,50 +179,24 @@ impl Block<'_> {
         cos: V,
         tape: &mut [Cv<V>],
     ) -> (BlockPower<V>, u32) {
-        let (one, two) = (V::splat(1.0), V::splat(2.0));
+        let one = V::splat(1.0);
         let last = self.media - 1;
         let n0 = gather::<V>(self.indices, self.media, self.wavelengths, self.w0, 0).re;
         let beta_sq = n0.mul(n0).mul(one.sub(cos).mul(one.add(cos)));
         let (n_sub, nsq_sub, q_sub) = self.medium(last, beta_sq);
-        let (mut n_below, mut nsq_below, mut q_below) = (n_sub, nsq_sub, q_sub);
-        let (mut gamma_s, mut gamma_p) = (Cv::real(V::splat(0.0)), Cv::real(V::splat(0.0)));
-        let (mut ts, mut tp) = (Cv::real(one), Cv::real(one));
-        let mut near_critical = 0u32;
-        for j in (0..last).rev() {
-            let (n_above, nsq_above, q_above) = if j == 0 {
-                (Cv::real(n0), Cv::real(n0.mul(n0)), Cv::real(n0.mul(cos)))
-            } else {
-                self.medium(j, beta_sq)
-            };
-            let slot = &mut tape[8 * j..8 * j + 8];
-            if j + 1 < last {
-                let one_way = one_way(q_below.scale(k0.mul(V::splat(thicknesses_nm[j]))));
-                let round_trip = one_way.mul(one_way);
-                gamma_s = gamma_s.mul(round_trip);
-                gamma_p = gamma_p.mul(round_trip);
-                ts = ts.mul(one_way);
-                tp = tp.mul(one_way);
-                slot[..4].copy_from_slice(&[
-                    round_trip,
-                    times_i(q_below.scale(k0)),
-                    gamma_s,
-                    gamma_p,
-                ]);
-            }
-            if j > 0 {
-                let q2 = q_above.norm_sqr();
-                near_critical |= V::bits(q2.mul(q2).lt(V::splat(1e-8).mul(nsq_above.norm_sqr())));
-            }
-            let [g, inv_s, js, ks] = interface(gamma_s, q_above, q_below);
-            gamma_s = g;
-            ts = ts.mul(q_above.scale(two).mul(inv_s));
-            let [g, inv_p, jp, kp] =
-                interface(gamma_p, nsq_below.mul(q_above), nsq_above.mul(q_below));
-            gamma_p = g;
-            tp = tp.mul(n_above.scale(two).mul(n_below).mul(q_above).mul(inv_p));
-            slot[4..].copy_from_slice(&[js, ks, jp, kp]);
-            (n_below, nsq_below, q_below) = (n_above, nsq_above, q_above);
-        }
+        let top = [Cv::real(n0), Cv::real(n0.mul(n0)), Cv::real(n0.mul(cos))];
+        let run = sweep(
+            self.media,
+            |j| {
+                let (n, nsq, q) = self.medium(j, beta_sq);
+                [n, nsq, q]
+            },
+            |j| thicknesses_nm[j],
+            k0,
+            (top, [n_sub, nsq_sub, q_sub]),
+            tape,
+        );
+        let (gamma_s, gamma_p, [ts, tp], near_critical) = run;
         // Power, as the scalar solver's `to_power`.
         let inv_q0 = one.div(n0.mul(cos));
         let conj_q = Cv {
@@ -244,6 +218,54 @@ impl Block<'_> {
         };
         (out, near_critical)
     }
+}
+
+/// One coherent run of `media` media in Γ form, the scalar recursion's
+/// forward sweep, recording the tape for [`backward`]: `inner(j)` gives the
+/// (n, n², q) of medium j strictly between the two ends (`ends`: the top's
+/// and the bottom's), `thickness(j)` that of medium j + 1. Returns Γs, Γp
+/// at the top, t_s, t_p, and the lanes with a near-critical inner medium.
+#[inline(always)]
+pub(super) fn sweep<V: Lanes>(
+    media: usize,
+    inner: impl Fn(usize) -> [Cv<V>; 3],
+    thickness: impl Fn(usize) -> f64,
+    k0: V,
+    (top, bottom): ([Cv<V>; 3], [Cv<V>; 3]),
+    tape: &mut [Cv<V>],
+) -> (Cv<V>, Cv<V>, [Cv<V>; 2], u32) {
+    let (one, two) = (V::splat(1.0), V::splat(2.0));
+    let last = media - 1;
+    let [mut n_below, mut nsq_below, mut q_below] = bottom;
+    let (mut gamma_s, mut gamma_p) = (Cv::real(V::splat(0.0)), Cv::real(V::splat(0.0)));
+    let (mut ts, mut tp) = (Cv::real(one), Cv::real(one));
+    let mut near_critical = 0u32;
+    for j in (0..last).rev() {
+        let [n_above, nsq_above, q_above] = if j == 0 { top } else { inner(j) };
+        let slot = &mut tape[8 * j..8 * j + 8];
+        if j + 1 < last {
+            let one_way = one_way(q_below.scale(k0.mul(V::splat(thickness(j)))));
+            let round_trip = one_way.mul(one_way);
+            gamma_s = gamma_s.mul(round_trip);
+            gamma_p = gamma_p.mul(round_trip);
+            ts = ts.mul(one_way);
+            tp = tp.mul(one_way);
+            slot[..4].copy_from_slice(&[round_trip, times_i(q_below.scale(k0)), gamma_s, gamma_p]);
+        }
+        if j > 0 {
+            let q2 = q_above.norm_sqr();
+            near_critical |= V::bits(q2.mul(q2).lt(V::splat(1e-8).mul(nsq_above.norm_sqr())));
+        }
+        let [g, inv_s, js, ks] = interface(gamma_s, q_above, q_below);
+        gamma_s = g;
+        ts = ts.mul(q_above.scale(two).mul(inv_s));
+        let [g, inv_p, jp, kp] = interface(gamma_p, nsq_below.mul(q_above), nsq_above.mul(q_below));
+        gamma_p = g;
+        tp = tp.mul(n_above.scale(two).mul(n_below).mul(q_above).mul(inv_p));
+        slot[4..].copy_from_slice(&[js, ks, jp, kp]);
+        (n_below, nsq_below, q_below) = (n_above, nsq_above, q_above);
+    }
+    (gamma_s, gamma_p, [ts, tp], near_critical)
 }
 
 /// Writes one block's R, T and derivatives (∂R = 2 Re(conj Γ ∂Γ),
@@ -314,7 +336,7 @@ fn lane_amplitudes<V: Lanes>(power: &BlockPower<V>) -> [Amplitudes; MAX_LANES] {
 /// The backward sweep: for each layer, Re(conj Γ_top ∂Γ_top) and
 /// Re(∂log t) by its thickness, s and p, into `out[layer]`.
 #[inline(always)]
-fn backward<V: Lanes>(tape: &[Cv<V>], last: usize, top: [Cv<V>; 2], out: &mut [[V; 4]]) {
+pub(super) fn backward<V: Lanes>(tape: &[Cv<V>], last: usize, top: [Cv<V>; 2], out: &mut [[V; 4]]) {
     let zero = Cv::real(V::splat(0.0));
     let one = Cv::real(V::splat(1.0));
     let (mut g_s, mut h_s, mut g_p, mut h_p) = (one, zero, one, zero);

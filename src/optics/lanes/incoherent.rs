@@ -44,7 +44,7 @@ impl<V: Lanes, M: MediaLanes<V>> MediaLanes<V> for Run<'_, M> {
 /// n² − β² as the point solver forms it for the substrate and incoherent
 /// media: (n² − n0²) + q0².
 #[inline(always)]
-fn normal_index_sq<V: Lanes>(nsq: Cv<V>, n0_sq: V, q0_sq: V) -> Cv<V> {
+pub(super) fn normal_index_sq<V: Lanes>(nsq: Cv<V>, n0_sq: V, q0_sq: V) -> Cv<V> {
     Cv {
         re: nsq.re.sub(n0_sq).add(q0_sq),
         im: nsq.im,
@@ -66,7 +66,7 @@ type Sums<V> = [(V, V); 2];
 /// group's r, t from above, `up` its r', t' from below, `pass` the layer's
 /// P. Returns the new (ρ, τ) and the lanes where the sum converges.
 #[inline(always)]
-fn through_layer<V: Lanes>(
+pub(super) fn through_layer<V: Lanes>(
     (rho, tau): (V, V),
     (down_r, down_t): (Cv<V>, Cv<V>),
     (up_r, up_t): (Cv<V>, Cv<V>),
@@ -90,7 +90,7 @@ fn through_layer<V: Lanes>(
 /// (Re q > 0); and the lanes (bits) where it is lossless and evanescent,
 /// so opaque: the point solver's case.
 #[inline(always)]
-fn incoherent_top<V: Lanes>(
+pub(super) fn incoherent_top<V: Lanes>(
     media: &impl MediaLanes<V>,
     m: usize,
     n0_sq: V,

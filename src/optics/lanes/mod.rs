@@ -45,6 +45,7 @@ mod constant;
 mod general;
 mod gradient;
 mod incoherent;
+mod mixed_gradient;
 mod sink;
 mod spectrum;
 #[cfg(target_arch = "x86_64")]
@@ -290,6 +291,62 @@ pub fn gradient_grid_on(
         path,
         indices,
         thicknesses_nm,
+        wavelengths_nm,
+        cos_theta0,
+        sink,
+    )
+}
+
+kernel_copies! {
+    fn mixed_gradient_copies<V>(
+        indices: &[C64],
+        thicknesses_nm: &[f64],
+        coherence: &Coherence,
+        wavelengths_nm: &[f64],
+        cos_theta0: &[f64],
+        sink: &mut GradientSink<'_>,
+    ) -> () {
+        mixed_gradient::mixed_gradient_body::<V>(
+            indices, thicknesses_nm, coherence, wavelengths_nm, cos_theta0, sink,
+        )
+    }
+}
+
+/// [`gradient_grid_on`] for a stack with incoherent layers (`coherence`):
+/// the same layout, `sink.amplitudes` left alone (a mixed stack has none).
+/// Points at grazing incidence, with a near-critical layer inside a
+/// coherent group, an opaque incoherent layer, or where an incoherent layer
+/// lases are listed in `sink.fallback` for the scalar gradient.
+///
+/// # Panics
+/// If the lengths disagree.
+pub fn mixed_gradient_grid_on(
+    path: Path,
+    indices: &[C64],
+    thicknesses_nm: &[f64],
+    coherence: &Coherence,
+    wavelengths_nm: &[f64],
+    cos_theta0: &[f64],
+    sink: &mut GradientSink<'_>,
+) {
+    let points = wavelengths_nm.len() * cos_theta0.len();
+    assert_eq!(
+        indices.len(),
+        (thicknesses_nm.len() + 2) * wavelengths_nm.len(),
+        "indices"
+    );
+    assert_eq!(sink.response.len(), points, "response");
+    for d in &sink.d {
+        assert_eq!(d.len(), points * thicknesses_nm.len(), "derivatives");
+    }
+    if points == 0 {
+        return;
+    }
+    mixed_gradient_copies(
+        path,
+        indices,
+        thicknesses_nm,
+        coherence,
         wavelengths_nm,
         cos_theta0,
         sink,
