@@ -189,14 +189,28 @@ mod cli {
                 [
                     "angle_deg",
                     "lobe_albedo",
+                    "reflectance_ms_rgb",
+                    "reflectance_ms_xyz",
                     "reflectance_rgb",
                     "reflectance_xyz",
                     "roughness",
                     "transmission_lobe_albedo",
+                    "transmittance_ms_rgb",
+                    "transmittance_ms_xyz",
                     "transmittance_rgb",
                     "transmittance_xyz"
                 ]
             );
+            // Roughness 0 scatters once: the compensated outputs are the
+            // single-scattering ones, to the bit.
+            for (ms, single) in [
+                ("reflectance_ms_rgb", "reflectance_rgb"),
+                ("reflectance_ms_xyz", "reflectance_xyz"),
+                ("transmittance_ms_rgb", "transmittance_rgb"),
+                ("transmittance_ms_xyz", "transmittance_xyz"),
+            ] {
+                assert_eq!(triple(z, ms), triple(z, single), "{ms}");
+            }
             assert_eq!(
                 triple(s, "transmittance_rgb"),
                 triple(z, "transmittance_rgb")
@@ -275,6 +289,113 @@ mod cli {
         }
         irid(["color", "luts/soap-film.toml", "--side", "back"])
             .assert_one_line_error("back", &["--side 'back'", "front or substrate"]);
+    }
+
+    /// A_R F_ms + A_T T_ms per channel of every row of `rows`.
+    fn furnace(row: &serde_json::Map<String, serde_json::Value>) -> [f64; 3] {
+        let (a_r, a_t) = (
+            row["lobe_albedo"].as_f64().unwrap(),
+            row["transmission_lobe_albedo"].as_f64().unwrap(),
+        );
+        let (f, t) = (
+            triple(row, "reflectance_ms_rgb"),
+            triple(row, "transmittance_ms_rgb"),
+        );
+        std::array::from_fn(|c| a_r * f[c] + a_t * t[c])
+    }
+
+    /// A lossless coated dielectric (n = 1.33 on glass 1.5), seen from
+    /// either side, returns the white furnace to 1 within 1 % per channel
+    /// once compensated for multiple scattering (the fluxes being the white
+    /// lobes' albedos times the compensated outputs), where single
+    /// scattering loses more than 5 % somewhere.
+    #[test]
+    fn compensated_coated_glass_passes_the_furnace() {
+        let dir = tempfile::tempdir().unwrap();
+        let coated = dir.path().join("coated.toml");
+        std::fs::write(
+            &coated,
+            "ambient = { n = 1.0 }\nsubstrate = { n = 1.5 }\n[[layers]]\nn = 1.33\nthickness_nm = 300.0\n",
+        )
+        .unwrap();
+        let coated = coated.to_str().unwrap();
+        let mut worst_single = 1.0f64;
+        for side in ["front", "substrate"] {
+            for r in ["0.2", "0.4", "0.6", "0.8", "1"] {
+                let rows = json(&[
+                    "color",
+                    coated,
+                    "--side",
+                    side,
+                    "--roughness",
+                    r,
+                    "--angles",
+                    "0,10,20,30,40,50,60,70,80",
+                    "--json",
+                ]);
+                for row in &rows {
+                    let sum = furnace(row);
+                    assert!(
+                        sum.iter().all(|s| (s - 1.0).abs() < 0.01),
+                        "{side} r {r} at {}: {sum:?}",
+                        row["angle_deg"]
+                    );
+                    let (a_r, a_t) = (
+                        row["lobe_albedo"].as_f64().unwrap(),
+                        row["transmission_lobe_albedo"].as_f64().unwrap(),
+                    );
+                    let (f, t) = (
+                        triple(row, "reflectance_rgb"),
+                        triple(row, "transmittance_rgb"),
+                    );
+                    worst_single = worst_single.min(a_r * f[1] + a_t * t[1]);
+                }
+            }
+        }
+        assert!(worst_single < 0.95, "{worst_single}");
+    }
+
+    /// A film on a metal (opaque) and a thin metal film on glass: the
+    /// compensated reflectance is at least the single-scattering one,
+    /// strictly above it at roughness 1, and the compensated flux (the
+    /// lobes' albedos times the outputs) at most 1. F_ms itself may pass 1
+    /// where A_R is small: Turquin's white reflector has F_ms = 1 / A_R.
+    #[test]
+    fn metal_films_gain_what_multiple_scattering_keeps() {
+        let dir = tempfile::tempdir().unwrap();
+        let gold_film = dir.path().join("gold-film.toml");
+        std::fs::write(
+            &gold_film,
+            "ambient = { n = 1.0 }\nsubstrate = { n = 1.5 }\n[[layers]]\nmaterial = \"gold\"\nthickness_nm = 20.0\n",
+        )
+        .unwrap();
+        for stack in ["luts/two-layer.toml", gold_film.to_str().unwrap()] {
+            for r in ["0.3", "1"] {
+                let rows = json(&[
+                    "color",
+                    stack,
+                    "--roughness",
+                    r,
+                    "--angles",
+                    "0,40,80",
+                    "--json",
+                ]);
+                for row in &rows {
+                    let (f, f_ms) = (
+                        triple(row, "reflectance_rgb"),
+                        triple(row, "reflectance_ms_rgb"),
+                    );
+                    for c in 0..3 {
+                        assert!(f_ms[c] >= f[c], "{stack} {r}: {f:?} {f_ms:?}");
+                    }
+                    if r == "1" {
+                        assert!(f_ms[1] > f[1] * 1.01, "{stack}: {f:?} {f_ms:?}");
+                    }
+                    let sum = furnace(row);
+                    assert!(sum.iter().all(|s| *s <= 1.0 + 1e-9), "{stack} {r}: {sum:?}");
+                }
+            }
+        }
     }
 
     #[test]

@@ -135,7 +135,10 @@ class Stack:
         reflectance_xyz, transmittance_xyz, each (angles, 3) but angle_deg.
         With roughness in [0, 1]: angle_deg, reflectance_rgb and
         reflectance_xyz of F_eff (the reflectance pre-integrated over a GGX
-        lobe, docs/rough.md) and lobe_albedo (angles,). gradient=True (not
+        lobe, docs/rough.md) and lobe_albedo (angles,), single scattering,
+        and reflectance_ms_rgb, reflectance_ms_xyz, transmittance_ms_rgb,
+        transmittance_ms_xyz (angles, 3): compensated for multiple
+        scattering, to be multiplied by the same lobe albedos. gradient=True (not
         with roughness) adds dreflectance_rgb_dd, dtransmittance_rgb_dd,
         dreflectance_xyz_dd, dtransmittance_xyz_dd, each (layers, angles, 3):
         the exact derivatives per nm of each layer's thickness."""

@@ -492,8 +492,12 @@ impl PyStack {
     /// per view angle instead. Returns a dict: angle_deg, reflectance_rgb,
     /// reflectance_xyz, transmittance_rgb, transmittance_xyz (as above),
     /// lobe_albedo and transmission_lobe_albedo (A,), the white lobes'
-    /// directional albedos (single scattering). Roughness 0 gives the
-    /// smooth colours exactly.
+    /// directional albedos (single scattering), and reflectance_ms_rgb,
+    /// reflectance_ms_xyz, transmittance_ms_rgb, transmittance_ms_xyz
+    /// ((A, 3)): F_eff and T_eff compensated for multiple scattering, to be
+    /// multiplied by the same lobe albedos (a lossless film's
+    /// lobe_albedo × reflectance_ms + transmission_lobe_albedo ×
+    /// transmittance_ms is 1). Roughness 0 gives the smooth colours exactly.
     ///
     /// side: "front" (the view in the ambient, the default; "ambient" says
     /// the same) or "substrate" (the view in a lossless substrate, angles
@@ -716,6 +720,10 @@ impl PyStack {
                 ("reflectance_xyz", |c| c.reflectance_xyz),
                 ("transmittance_rgb", |c| c.transmittance_rgb),
                 ("transmittance_xyz", |c| c.transmittance_xyz),
+                ("reflectance_ms_rgb", |c| c.reflectance_ms_rgb),
+                ("reflectance_ms_xyz", |c| c.reflectance_ms_xyz),
+                ("transmittance_ms_rgb", |c| c.transmittance_ms_rgb),
+                ("transmittance_ms_xyz", |c| c.transmittance_ms_xyz),
             ],
         )?;
         let n = colours.len();

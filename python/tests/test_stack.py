@@ -150,17 +150,37 @@ def test_rough_color_matches_the_cli(luts, irid_cli):
     path = luts / "absorbing-film.toml"
     angles = [0.0, 30.0, 60.0, 85.0]
     keys = ["reflectance_rgb", "reflectance_xyz", "transmittance_rgb", "transmittance_xyz"]
+    ms = ["reflectance_ms_rgb", "reflectance_ms_xyz", "transmittance_ms_rgb", "transmittance_ms_xyz"]
     for roughness, side in [(0.0, "front"), (0.25, "front"), (1.0, "front"), (0.0, "substrate"), (0.25, "substrate")]:
         mine = irid.Stack.load(path).color(angles, white="e", roughness=roughness, side=side)
-        assert sorted(mine) == sorted(["angle_deg", "lobe_albedo", "transmission_lobe_albedo", *keys])
+        assert sorted(mine) == sorted(["angle_deg", "lobe_albedo", "transmission_lobe_albedo", *keys, *ms])
         run = irid_cli("color", path, "--angles", ",".join(map(str, angles)), "--white", "e",
                        "--roughness", str(roughness), "--side", side, "--json")
         assert run.returncode == 0, run.stderr
         for j, c in enumerate(json.loads(run.stdout)):
-            for key in keys:
+            for key in keys + ms:
                 np.testing.assert_allclose(mine[key][j], c[key], rtol=0, atol=1e-15)
             assert mine["lobe_albedo"][j] == c["lobe_albedo"]
             assert mine["transmission_lobe_albedo"][j] == c["transmission_lobe_albedo"]
+
+
+@pytest.mark.parametrize("side", ["front", "substrate"])
+def test_compensated_coated_glass_passes_the_furnace(side):
+    """A lossless film (1.33 on glass 1.5): lobe_albedo x reflectance_ms +
+    transmission_lobe_albedo x transmittance_ms is 1 within 1 % per channel
+    at roughness 0.2-1, views 0-80 degrees; single scattering is not."""
+    stack = irid.Stack(ambient=1.0, layers=[(1.33, 300.0)], substrate=1.5)
+    angles = np.arange(0.0, 81.0, 10.0)
+    worst = 1.0
+    for roughness in (0.2, 0.4, 0.6, 0.8, 1.0):
+        out = stack.color(angles, roughness=roughness, side=side)
+        a_r, a_t = out["lobe_albedo"][:, None], out["transmission_lobe_albedo"][:, None]
+        np.testing.assert_allclose(a_r * out["reflectance_ms_rgb"] + a_t * out["transmittance_ms_rgb"], 1.0, atol=0.01)
+        worst = min(worst, float(np.min(a_r * out["reflectance_rgb"] + a_t * out["transmittance_rgb"])))
+    zero = stack.color(angles, roughness=0.0, side=side)
+    np.testing.assert_array_equal(zero["reflectance_ms_rgb"], zero["reflectance_rgb"])
+    np.testing.assert_array_equal(zero["transmittance_ms_rgb"], zero["transmittance_rgb"])
+    assert worst < 0.97
 
 
 def test_smooth_color_from_the_substrate_is_the_reversed_stacks():

@@ -46,7 +46,10 @@ pub struct Args {
     /// reflectance_xyz, transmittance_xyz} (linear sRGB; XYZ with Y = 1 for
     /// white); with --roughness, of {angle_deg, roughness, reflectance_rgb,
     /// reflectance_xyz, lobe_albedo, transmittance_rgb, transmittance_xyz,
-    /// transmission_lobe_albedo}.
+    /// transmission_lobe_albedo} (single scattering: F_eff, T_eff, A_R, A_T)
+    /// and {reflectance_ms_rgb, reflectance_ms_xyz, transmittance_ms_rgb,
+    /// transmittance_ms_xyz} (F_eff and T_eff compensated for multiple
+    /// scattering; the fluxes are A_R and A_T times them).
     #[arg(long)]
     pub json: bool,
 }
@@ -208,6 +211,26 @@ impl Printer<'_> {
                 self.swatch(c.transmittance_rgb),
                 triple(c.transmittance_rgb),
                 c.transmission_lobe_albedo,
+            )?;
+        }
+        writeln!(
+            out,
+            "\ncompensated for multiple scattering (times the same white lobes' albedos):"
+        )?;
+        writeln!(
+            out,
+            "{:>7}  {:<width$}  transmittance",
+            "angle", "reflectance"
+        )?;
+        for c in colors {
+            writeln!(
+                out,
+                "{:>6.2}°  {} {:<27}  {} {}",
+                c.angle_deg,
+                self.swatch(c.reflectance_ms_rgb),
+                triple(c.reflectance_ms_rgb),
+                self.swatch(c.transmittance_ms_rgb),
+                triple(c.transmittance_ms_rgb),
             )?;
         }
         Ok(ExitCode::SUCCESS)

@@ -340,14 +340,31 @@ pub struct SingleScattering {
 /// roughness ([`Albedos::keep_bias`], 0 for an opaque substrate).
 pub fn compensation(ss: &SingleScattering, keep_bias: f64) -> [f64; 3] {
     let transmits = ss.transmit_albedo > 0.0;
+    let keep = std::array::from_fn(|c| {
+        let (f, t) = (ss.reflectance[c], ss.transmittance[c]);
+        if transmits {
+            f + t - keep_bias
+        } else {
+            f
+        }
+    });
+    compensation_keeping(ss, keep)
+}
+
+/// Turquin's scale k given ρ per channel directly (`keep`, clamped to
+/// [S, 1]), for a caller that knows what the film's microfacets keep (as
+/// the rough colours do: F_eff plus the transmittance over the same
+/// reflection lobe, exactly 1 for a lossless film).
+pub fn compensation_keeping(ss: &SingleScattering, keep: [f64; 3]) -> [f64; 3] {
     std::array::from_fn(|c| {
         let (f, t) = (ss.reflectance[c], ss.transmittance[c]);
         let energy = ss.reflect_albedo * f + ss.transmit_albedo * t;
-        if energy <= 1e-12 {
+        // Nothing lost (a film with gain can give more than it gets): no
+        // compensation, and no clamp to an empty range.
+        if energy <= 1e-12 || energy >= 1.0 {
             return 1.0;
         }
-        let keep = if transmits { f + t - keep_bias } else { f };
-        let keep = keep.clamp(energy, 1.0);
+        let keep = keep[c].clamp(energy, 1.0);
         // 1 + ρ (1 − E_w) / E_w with E_w = S / ρ.
         1.0 + keep * (keep - energy) / energy
     })

@@ -5,6 +5,7 @@ use std::borrow::Cow;
 use rayon::prelude::*;
 use serde::Serialize;
 
+use super::energy::{compensation_keeping, SingleScattering};
 use super::kernel::{Kernel, Rules};
 use super::{check_roughness, MuGrid, Quadrature};
 use crate::cancel::Cancel;
@@ -35,6 +36,12 @@ pub struct RoughTable {
     /// A_T, the white refraction lobe's albedo, laid out as `albedo` (empty
     /// from [`rough_reflectance`]).
     pub transmission_albedo: Vec<f64>,
+    /// What the reflection lobe's microfacets keep rather than absorb, F_eff
+    /// plus the film's transmittance weighted by the same (reflection)
+    /// kernel, laid out as `reflectance` (empty from
+    /// [`rough_reflectance`]): exactly 1 for a lossless film, the ρ of
+    /// the multiple-scattering compensation ([`energy`](super::energy)).
+    pub kept: Vec<[f64; 3]>,
 }
 
 impl RoughTable {
@@ -184,6 +191,7 @@ struct TableRow {
     reflectance: Vec<[f64; 3]>,
     albedo: f64,
     transmission: Option<(Vec<[f64; 3]>, f64)>,
+    kept: Option<Vec<[f64; 3]>>,
 }
 
 /// The film's smooth colours a rough table weighs: reflectance (and
@@ -219,12 +227,18 @@ impl Smooth<'_> {
             (out, kernel.albedo())
         });
         let mut reflectance = vec![[0.0; 3]; n_t];
+        let keeps = |reflectance: &[[f64; 3]], through: &[[f64; 3]]| -> Vec<[f64; 3]> {
+            let add = |(f, t): (&[f64; 3], &[f64; 3])| std::array::from_fn(|c| f[c] + t[c]);
+            reflectance.iter().zip(through).map(add).collect()
+        };
         if rough == 0.0 {
             mirrored(&mut reflectance, 0);
+            let kept = transmission.as_ref().map(|(t, _)| keeps(&reflectance, t));
             return TableRow {
                 reflectance,
                 albedo: 1.0,
                 transmission,
+                kept,
             };
         }
         let kernel = Kernel::with_rules(self.grid, cv, rough, self.rules);
@@ -234,10 +248,16 @@ impl Smooth<'_> {
             3 * n_t,
             reflectance.as_flattened_mut(),
         );
+        let kept = eta.map(|_| {
+            let mut through = vec![[0.0; 3]; n_t];
+            weigh_rows(&kernel, self.on_grid_t, 3 * n_t, through.as_flattened_mut());
+            keeps(&reflectance, &through)
+        });
         TableRow {
             reflectance,
             albedo: kernel.albedo(),
             transmission,
+            kept,
         }
     }
 }
@@ -263,11 +283,12 @@ fn rough_table(
     check_nodes(stack, layer, thickness_nm, cos_theta, roughness)?;
     let grid = MuGrid::for_stack(stack, quadrature.mu_intervals);
     let (n_t, n_c, n_r) = (thickness_nm.len(), cos_theta.len(), roughness.len());
-    // Transmittance doubles the repacked rows and the output.
-    let outputs = if eta.is_some() { 2 } else { 1 };
+    // Transmittance doubles the repacked rows and adds two outputs (T_eff
+    // and what the reflection lobe keeps).
+    let outputs: u64 = if eta.is_some() { 3 } else { 1 };
     let estimate = crate::limits::product(
         &[grid.nodes().len() as u64 + n_c as u64, n_t as u64],
-        BYTES_PER_SWEPT_NODE + (outputs - 1) * BYTES_PER_OUTPUT_NODE,
+        BYTES_PER_SWEPT_NODE + outputs.min(2).saturating_sub(1) * BYTES_PER_OUTPUT_NODE,
     )
     .zip(crate::limits::product(
         &[n_r as u64, n_c as u64, n_t as u64],
@@ -333,6 +354,7 @@ fn rough_table(
         albedo: Vec::with_capacity(n_r * n_c),
         transmittance: Vec::new(),
         transmission_albedo: Vec::new(),
+        kept: Vec::new(),
     };
     for row in rows {
         table.reflectance.extend(row.reflectance);
@@ -340,6 +362,9 @@ fn rough_table(
         if let Some((t, a)) = row.transmission {
             table.transmittance.extend(t);
             table.transmission_albedo.push(a);
+        }
+        if let Some(k) = row.kept {
+            table.kept.extend(k);
         }
     }
     Ok(table)
@@ -437,6 +462,71 @@ pub struct RoughColor {
     /// A_T, the albedo of a white GGX refraction lobe (no Fresnel) into the
     /// other medium: the film's transmitted flux is T_eff times it.
     pub transmission_lobe_albedo: f64,
+    /// Linear sRGB of F_ms, F_eff compensated for multiple scattering
+    /// ([`energy`](super::energy), Turquin's scale): it multiplies the same
+    /// white reflection lobe, so the reflected flux is A_R F_ms
+    /// (`lobe_albedo` times it). F_eff itself at roughness 0.
+    pub reflectance_ms_rgb: [f64; 3],
+    /// CIE XYZ of F_ms.
+    pub reflectance_ms_xyz: [f64; 3],
+    /// Linear sRGB of T_ms, T_eff compensated likewise: the transmitted flux
+    /// is A_T T_ms. A lossless film returns A_R F_ms + A_T T_ms = 1.
+    pub transmittance_ms_rgb: [f64; 3],
+    /// CIE XYZ of T_ms.
+    pub transmittance_ms_xyz: [f64; 3],
+}
+
+/// The multiple-scattering-compensated F_ms and T_ms of a single-scattering
+/// `ss` whose microfacets keep `kept` (ρ per channel; F_eff on an opaque
+/// substrate): Turquin's scale ([`compensation_keeping`]). Roughness 0
+/// scatters once: `ss` itself.
+fn multiple_scattering(
+    roughness: f64,
+    ss: &SingleScattering,
+    kept: [f64; 3],
+) -> ([f64; 3], [f64; 3]) {
+    if roughness == 0.0 {
+        return (ss.reflectance, ss.transmittance);
+    }
+    let k = compensation_keeping(ss, kept);
+    (
+        std::array::from_fn(|c| ss.reflectance[c] * k[c]),
+        std::array::from_fn(|c| ss.transmittance[c] * k[c]),
+    )
+}
+
+/// `color` with its multiple-scattering fields filled in, its microfacets
+/// keeping `kept`; `opaque` for a substrate that absorbs (no refraction
+/// lobe: Turquin's conductor form, ρ = F_eff).
+fn with_multiple_scattering(mut color: RoughColor, kept: [f64; 3], opaque: bool) -> RoughColor {
+    let ss = SingleScattering {
+        reflectance: color.reflectance_rgb,
+        transmittance: color.transmittance_rgb,
+        reflect_albedo: color.lobe_albedo,
+        transmit_albedo: if opaque {
+            0.0
+        } else {
+            color.transmission_lobe_albedo
+        },
+    };
+    let kept = if opaque { ss.reflectance } else { kept };
+    let (r, t) = multiple_scattering(color.roughness, &ss, kept);
+    color.reflectance_ms_rgb = r;
+    color.reflectance_ms_xyz = linear_srgb_to_xyz(r);
+    color.transmittance_ms_rgb = t;
+    color.transmittance_ms_xyz = linear_srgb_to_xyz(t);
+    color
+}
+
+/// Whether the substrate of `seen` absorbs at any of the integrator's
+/// wavelengths (opaque: no light goes through it).
+fn opaque_substrate(seen: &Stack, integrator: &SpectralIntegrator) -> Result<bool> {
+    for &nm in integrator.wavelengths_nm() {
+        if seen.substrate.index_at(nm)?.im != 0.0 {
+            return Ok(true);
+        }
+    }
+    Ok(false)
 }
 
 /// F_eff and T_eff of `stack` (its layers at their own thicknesses) seen
@@ -523,6 +613,10 @@ pub fn rough_colors_from_cancellable(
                         transmittance_rgb: c.transmittance_rgb,
                         transmittance_xyz: c.transmittance_xyz,
                         transmission_lobe_albedo: through,
+                        reflectance_ms_rgb: c.reflectance_rgb,
+                        reflectance_ms_xyz: c.reflectance_xyz,
+                        transmittance_ms_rgb: c.transmittance_rgb,
+                        transmittance_ms_xyz: c.transmittance_xyz,
                     }
                 })
                 .collect(),
@@ -538,6 +632,7 @@ pub fn rough_colors_from_cancellable(
         return Ok(Vec::new());
     }
     let cos: Vec<f64> = angles_deg.iter().map(|a| a.to_radians().cos()).collect();
+    let opaque = opaque_substrate(&seen, integrator)?;
     let (swept, layer) = swept_layer(&seen);
     let thickness = swept.layers.get(layer - 1).map_or(0.0, |l| l.thickness_nm);
     let nodes = Nodes {
@@ -555,7 +650,7 @@ pub fn rough_colors_from_cancellable(
         cancel,
     )?;
     Ok(angles_deg
-        .iter()
+        .par_iter()
         .enumerate()
         .map(|(c, &angle)| {
             let (rgb, t_rgb) = (table.at(0, c, 0), table.transmittance_at(0, c, 0));
@@ -568,7 +663,13 @@ pub fn rough_colors_from_cancellable(
                 transmittance_rgb: t_rgb,
                 transmittance_xyz: linear_srgb_to_xyz(t_rgb),
                 transmission_lobe_albedo: table.transmission_albedo[c],
+                reflectance_ms_rgb: [0.0; 3],
+                reflectance_ms_xyz: [0.0; 3],
+                transmittance_ms_rgb: [0.0; 3],
+                transmittance_ms_xyz: [0.0; 3],
             }
         })
+        .enumerate()
+        .map(|(c, color)| with_multiple_scattering(color, table.kept[c], opaque))
         .collect())
 }
