@@ -161,23 +161,38 @@ impl Printer<'_> {
         self.heading(&mut out, "")?;
         // Visible width of a swatch, a space and a padded triple.
         let width = if self.swatches { 40 } else { 35 };
+        let rows = colors
+            .iter()
+            .map(|c| (c.angle_deg, c.reflectance_rgb, c.transmittance_rgb));
+        self.reflectance_and_transmittance(&mut out, width, rows)?;
+        Ok(ExitCode::SUCCESS)
+    }
+
+    /// A table of angle, reflectance and transmittance, each colour with
+    /// its swatch; `width` is the reflectance column's visible width.
+    fn reflectance_and_transmittance(
+        &self,
+        out: &mut impl Write,
+        width: usize,
+        rows: impl Iterator<Item = (f64, [f64; 3], [f64; 3])>,
+    ) -> Result<()> {
         writeln!(
             out,
             "{:>7}  {:<width$}  transmittance",
             "angle", "reflectance"
         )?;
-        for c in colors {
+        for (angle_deg, reflectance, transmittance) in rows {
             writeln!(
                 out,
                 "{:>6.2}°  {} {:<27}  {} {}",
-                c.angle_deg,
-                self.swatch(c.reflectance_rgb),
-                triple(c.reflectance_rgb),
-                self.swatch(c.transmittance_rgb),
-                triple(c.transmittance_rgb),
+                angle_deg,
+                self.swatch(reflectance),
+                triple(reflectance),
+                self.swatch(transmittance),
+                triple(transmittance),
             )?;
         }
-        Ok(ExitCode::SUCCESS)
+        Ok(())
     }
 
     fn rough(&self, colors: &[irid::rough::RoughColor], roughness: f64) -> Result<ExitCode> {
@@ -217,22 +232,10 @@ impl Printer<'_> {
             out,
             "\ncompensated for multiple scattering (times the same white lobes' albedos):"
         )?;
-        writeln!(
-            out,
-            "{:>7}  {:<width$}  transmittance",
-            "angle", "reflectance"
-        )?;
-        for c in colors {
-            writeln!(
-                out,
-                "{:>6.2}°  {} {:<27}  {} {}",
-                c.angle_deg,
-                self.swatch(c.reflectance_ms_rgb),
-                triple(c.reflectance_ms_rgb),
-                self.swatch(c.transmittance_ms_rgb),
-                triple(c.transmittance_ms_rgb),
-            )?;
-        }
+        let rows = colors
+            .iter()
+            .map(|c| (c.angle_deg, c.reflectance_ms_rgb, c.transmittance_ms_rgb));
+        self.reflectance_and_transmittance(&mut out, width, rows)?;
         Ok(ExitCode::SUCCESS)
     }
 }
