@@ -212,6 +212,18 @@ pub(crate) fn solve_mixed_with_gradient(
         });
         return Err(diverged);
     }
+    let (gradient, by_index) = split_parameters(&s, &p, layers, [flux_s, flux_p]);
+    Ok((response, gradient, by_index))
+}
+
+/// The per-parameter derivatives of the top sums as R and T derivatives:
+/// the thickness block, and the n and k blocks, τ's times the flux factors.
+fn split_parameters(
+    s: &Sums,
+    p: &Sums,
+    layers: usize,
+    [flux_s, flux_p]: [f64; 2],
+) -> (ResponseGradient, IndexGradient) {
     let block = |v: &[f64], b: usize, scale: f64| -> Vec<f64> {
         v[b * layers..(b + 1) * layers]
             .iter()
@@ -228,7 +240,7 @@ pub(crate) fn solve_mixed_with_gradient(
         n: gradient_of(1),
         k: gradient_of(2),
     };
-    Ok((response, gradient_of(0), by_index))
+    (gradient_of(0), by_index)
 }
 
 /// ρ and τ seen from the incoherent medium above the lowest group (the
