@@ -60,6 +60,7 @@ fn group(
     light: &Light,
     (top_medium, bottom_medium): ([C64; 3], [C64; 3]),
     tape: &mut Vec<Step>,
+    with_index: bool,
 ) -> Group {
     let media = bottom - top + 1;
     let layers = thicknesses_nm.len();
@@ -98,7 +99,7 @@ fn group(
     // no parameters.
     for (j, (d, u)) in n_down.iter().zip(&n_up).enumerate() {
         let medium = top + j;
-        if medium == 0 || medium > layers {
+        if !with_index || medium == 0 || medium > layers {
             continue;
         }
         own.push((layers + medium - 1, *d, *u));
@@ -108,7 +109,9 @@ fn group(
 }
 
 /// [`solve_incoherent`](super::super::solve_incoherent) with the
-/// derivative of R and T (s and p) by each layer's thickness, n and k.
+/// derivative of R and T (s and p) by each layer's thickness, and by its
+/// n and k when `with_index` (else those come back zero, and the sums
+/// carry a third of the parameters).
 pub(crate) fn solve_mixed_with_gradient(
     indices: &[C64],
     thicknesses_nm: &[f64],
@@ -116,6 +119,7 @@ pub(crate) fn solve_mixed_with_gradient(
     wavelength_nm: f64,
     cos_theta0: f64,
     tape: &mut Vec<Step>,
+    with_index: bool,
 ) -> Result<(Response, ResponseGradient, IndexGradient), Diverged> {
     let layers = thicknesses_nm.len();
     if cos_theta0 <= 0.0 {
@@ -158,9 +162,10 @@ pub(crate) fn solve_mixed_with_gradient(
             &light,
             (top, [n_below, n_below * n_below, q_below]),
             tape,
+            with_index,
         );
         state = Some(match state {
-            None => first_sums(&g, layers),
+            None => first_sums(&g, if with_index { 3 * layers } else { layers }),
             Some([s, p]) => {
                 let d = thicknesses_nm[below - 1];
                 let pass = one_pass(light.k0, q_below, d);
@@ -168,13 +173,19 @@ pub(crate) fn solve_mixed_with_gradient(
                 let dq = n_below / q_below;
                 let decay = -2.0 * light.k0 * pass;
                 let l = below - 1;
+                // No parameter has index usize::MAX: P's n and k terms unused.
+                let (n_at, k_at) = if with_index {
+                    (layers + l, 2 * layers + l)
+                } else {
+                    (usize::MAX, usize::MAX)
+                };
                 let cross = Crossing {
                     group: &g,
                     pass,
                     d_pass: [
                         (l, decay * q_below.im),
-                        (layers + l, decay * d * dq.im),
-                        (2 * layers + l, decay * d * dq.re),
+                        (n_at, decay * d * dq.im),
+                        (k_at, decay * d * dq.re),
                     ],
                     layer: below,
                 };
@@ -225,10 +236,10 @@ fn split_parameters(
     [flux_s, flux_p]: [f64; 2],
 ) -> (ResponseGradient, IndexGradient) {
     let block = |v: &[f64], b: usize, scale: f64| -> Vec<f64> {
-        v[b * layers..(b + 1) * layers]
-            .iter()
-            .map(|d| d * scale)
-            .collect()
+        match v.get(b * layers..(b + 1) * layers) {
+            Some(part) => part.iter().map(|d| d * scale).collect(),
+            None => vec![0.0; layers],
+        }
     };
     let gradient_of = |b: usize| ResponseGradient {
         rs: block(&s.d_rho, b, 1.0),
@@ -244,13 +255,14 @@ fn split_parameters(
 }
 
 /// ρ and τ seen from the incoherent medium above the lowest group (the
-/// group's own |r|² and |t|²), with their derivatives by its parameters.
-fn first_sums(g: &Group, layers: usize) -> [Sums; 2] {
+/// group's own |r|² and |t|²), with their derivatives by its parameters
+/// (`params` of them).
+fn first_sums(g: &Group, params: usize) -> [Sums; 2] {
     let start = |r: C64, t: C64| Sums {
         rho: r.norm_sqr(),
         tau: t.norm_sqr(),
-        d_rho: vec![0.0; 3 * layers],
-        d_tau: vec![0.0; 3 * layers],
+        d_rho: vec![0.0; params],
+        d_tau: vec![0.0; params],
     };
     let mut sums = [start(g.down.rs, g.down.ts), start(g.down.rp, g.down.tp)];
     for (l, d, _) in &g.own {

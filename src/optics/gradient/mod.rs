@@ -106,6 +106,18 @@ pub(crate) fn solve_indices_with_gradient(
     cos_theta0: f64,
     work: &mut Workspace,
 ) -> std::result::Result<(Response, ResponseGradient), super::Diverged> {
+    if !coherence.is_coherent() {
+        return mixed::solve_mixed_with_gradient(
+            indices,
+            thicknesses_nm,
+            coherence,
+            wavelength_nm,
+            cos_theta0,
+            &mut work.tape,
+            false,
+        )
+        .map(|(response, gradient, _)| (response, gradient));
+    }
     solve_indices_with_index_gradient(
         indices,
         thicknesses_nm,
@@ -135,6 +147,7 @@ pub(crate) fn solve_indices_with_index_gradient(
             wavelength_nm,
             cos_theta0,
             &mut work.tape,
+            true,
         );
     }
     let layers = thicknesses_nm.len();
