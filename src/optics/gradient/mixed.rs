@@ -167,26 +167,16 @@ pub(crate) fn solve_mixed_with_gradient(
         state = Some(match state {
             None => first_sums(&g, if with_index { 3 * layers } else { layers }),
             Some([s, p]) => {
-                let d = thicknesses_nm[below - 1];
-                let pass = one_pass(light.k0, q_below, d);
-                // P = e^{−2 k0 d Im q}; dq/dN = N/q, and ∂/∂k = i ∂/∂N.
-                let dq = n_below / q_below;
-                let decay = -2.0 * light.k0 * pass;
-                let l = below - 1;
-                // No parameter has index usize::MAX: P's n and k terms unused.
-                let (n_at, k_at) = if with_index {
-                    (layers + l, 2 * layers + l)
-                } else {
-                    (usize::MAX, usize::MAX)
-                };
+                let (pass, d_pass) = pass_with_derivatives(
+                    light.k0,
+                    (n_below, q_below),
+                    (below - 1, thicknesses_nm[below - 1]),
+                    if with_index { layers } else { 0 },
+                );
                 let cross = Crossing {
                     group: &g,
                     pass,
-                    d_pass: [
-                        (l, decay * q_below.im),
-                        (n_at, decay * d * dq.im),
-                        (k_at, decay * d * dq.re),
-                    ],
+                    d_pass,
                     layer: below,
                 };
                 [cross.sums(s, Pol::S)?, cross.sums(p, Pol::P)?]
@@ -225,6 +215,34 @@ pub(crate) fn solve_mixed_with_gradient(
     }
     let (gradient, by_index) = split_parameters(&s, &p, layers, [flux_s, flux_p]);
     Ok((response, gradient, by_index))
+}
+
+/// An incoherent layer's pass P = e^{−2 k0 d Im q} (layer `l`, thickness
+/// `d`, index N and q) and its derivatives by the layer's thickness, and by
+/// its n and k when `layers` (the stack's count) is not 0: dq/dN = N/q and
+/// ∂/∂k = i ∂/∂N. Unused entries name parameter usize::MAX, which is none.
+fn pass_with_derivatives(
+    k0: f64,
+    (n, q): (C64, C64),
+    (l, d): (usize, f64),
+    layers: usize,
+) -> (f64, [(usize, f64); 3]) {
+    let pass = one_pass(k0, q, d);
+    let dq = n / q;
+    let decay = -2.0 * k0 * pass;
+    let (n_at, k_at) = if layers > 0 {
+        (layers + l, 2 * layers + l)
+    } else {
+        (usize::MAX, usize::MAX)
+    };
+    (
+        pass,
+        [
+            (l, decay * q.im),
+            (n_at, decay * d * dq.im),
+            (k_at, decay * d * dq.re),
+        ],
+    )
 }
 
 /// The per-parameter derivatives of the top sums as R and T derivatives:
