@@ -3,8 +3,8 @@ derivatives of Rs, Rp, Ts, Tp (and R, T) by each layer's n and k against
 the independent 50-digit oracle (mp_tmm.index_derivative, a characteristic-
 matrix solver differenced at 50 digits), within 1e-7 relative or 1e-10
 absolute, on random coherent and mixed stacks and the hard cases (thick
-absorber, evanescent gap, total internal reflection, gain); keys, shapes and
-bad input."""
+absorber, evanescent gap, total internal reflection, gain, 100 layers); keys,
+shapes and bad input."""
 
 import math
 import random
@@ -115,3 +115,16 @@ def test_opt_in_and_bad_input():
         stack.solve([500.0], [0.0], thickness_nm=[100.0], gradient=True, index_gradient=True)
     bare = stack_of([1.0, 1.5], [])
     assert bare.solve([500.0, 600.0], [0.0], gradient=True, index_gradient=True)["dT_dk"].shape == (0, 2, 1)
+
+
+def test_hundred_layers():
+    rng = random.Random(11)
+    indices = [1.0] + [2.3 + 0.01j if i % 2 == 0 else 1.38 for i in range(100)] + [1.52]
+    thicknesses = [(60.0 if i % 2 == 0 else 100.0) + rng.uniform(-5, 5) for i in range(100)]
+    out = stack_of(indices, thicknesses).solve([700.0], [20.0], gradient=True, index_gradient=True)
+    for layer in (0, 57, 99):
+        for part in ("n", "k"):
+            d = mp_tmm.index_derivative(indices, thicknesses, [True] * 100, 700.0, 20.0, layer, part)
+            for power in POWERS:
+                got, exact = out[f"d{power}_d{part}"][layer, 0, 0], float(d[power])
+                assert abs(got - exact) <= max(1e-7 * abs(exact), 1e-10), (power, part, layer, got, exact)
