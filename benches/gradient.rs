@@ -6,7 +6,10 @@
 //! Each is also timed as the fastest of several runs in one process, and
 //! the ratio printed: docs/inverse.md quotes it. The same stack with two
 //! incoherent layers (mixed) is timed through the lanes and point by point
-//! on the scalar gradient, and that ratio printed too.
+//! on the scalar gradient, and that ratio printed too; and the coherent
+//! grid with the n and k derivatives as well
+//! (`solve_stack_grid_with_index_gradient`, scalar path) against the
+//! thickness gradient and the forward solve.
 
 // Not an API: criterion's macros generate undocumented public functions.
 #![allow(missing_docs)]
@@ -16,7 +19,8 @@ use std::time::{Duration, Instant};
 use criterion::{black_box, criterion_group, criterion_main, Criterion};
 
 use irid::optics::gradient::{
-    solve_grid_point_with_gradient, solve_stack_grid_with_gradient, Workspace,
+    solve_grid_point_with_gradient, solve_stack_grid_with_gradient,
+    solve_stack_grid_with_index_gradient, Workspace,
 };
 use irid::optics::{Layer, Material, Response, Stack, StackGrid};
 
@@ -69,6 +73,16 @@ fn gradient(c: &mut Criterion) {
         "20 layers, 401 wavelengths × 3 angles: forward {forward:?}, with all 20 \
          derivatives {with_gradient:?}: {:.2}× the forward solve",
         with_gradient.as_secs_f64() / forward.as_secs_f64()
+    );
+    let with_index = fastest(|| {
+        black_box(solve_stack_grid_with_index_gradient(&grid, black_box(&d), &cos).expect("solve"));
+    });
+    println!(
+        "20 layers, 401 wavelengths × 3 angles: with the 20 thickness, 20 n and 20 k \
+         derivatives (scalar path) {with_index:?}: {:.2}× the thickness gradient (lanes), \
+         {:.2}× the forward solve",
+        with_index.as_secs_f64() / with_gradient.as_secs_f64(),
+        with_index.as_secs_f64() / forward.as_secs_f64()
     );
 
     let mut mixed = stack.clone();

@@ -100,3 +100,27 @@ def derivative(indices, thicknesses, coherent, wavelength_nm, angle_deg, layer, 
 
     up, down = at(h), at(-h)
     return {k: (up[k] - down[k]) / (2 * h) for k in up}
+
+
+def index_derivative(indices, thicknesses, coherent, wavelength_nm, angle_deg, layer, part, h="1e-15"):
+    """The central difference of `solve` by layer `layer`'s (0-based) n
+    (`part` "n") or k ("k"): its index shifted by ±h or ±ih everywhere it
+    enters (both interfaces, the phase, an incoherent layer's pass).
+
+    At k = 0 the difference is one-sided from the absorbing side (second
+    order, f'(0) ≈ (4 f(h) − f(2h) − 3 f(0)) / 2h): `_q`'s branch Im q ≥ 0
+    flips a propagating q's sign under the slightest gain, which a coherent
+    layer's matrix does not see but an incoherent layer's pass and the power
+    matrices at its interfaces do."""
+    step = mp.mpf(h) * (1 if part == "n" else 1j)
+
+    def at(delta):
+        shifted = [mp.mpc(n) for n in indices]
+        shifted[layer + 1] += delta
+        return solve(shifted, thicknesses, coherent, wavelength_nm, angle_deg)
+
+    if part == "k" and complex(indices[layer + 1]).imag == 0:
+        f0, f1, f2 = at(0), at(step), at(2 * step)
+        return {k: (4 * f1[k] - f2[k] - 3 * f0[k]) / (2 * mp.mpf(h)) for k in f0}
+    up, down = at(step), at(-step)
+    return {k: (up[k] - down[k]) / (2 * mp.mpf(h)) for k in up}

@@ -70,6 +70,10 @@ CASES = {
         STACK,
         "stack.solve(np.linspace(400.0, 700.0, 5000), np.linspace(0.0, 89.0, 100), gradient=True)",
     ),
+    "Stack.solve index gradient": (
+        STACK,
+        "stack.solve(np.linspace(400.0, 700.0, 2000), np.linspace(0.0, 89.0, 100), gradient=True, index_gradient=True)",
+    ),
     # The 9.3 µm mirror's fringes are far narrower than the 1 nm sampling
     # step: every angle is integrated again at finer steps.
     "Stack.color": (STACK, "stack.color(np.linspace(0.0, 89.0, 300))"),

@@ -251,6 +251,11 @@ MANY = "np.broadcast_to({}, (2 * 10**8,))"
             f"irid.Stack(layers=[(1.5, 300.0)]).color({MANY.format(30.0)}, gradient=True)",
             "200000000 angles",
         ),
+        (
+            "Stack.solve index gradient",
+            f"irid.Stack(layers=[(1.5, 300.0)]).solve([500.0], {MANY.format(0.0)}, gradient=True, index_gradient=True)",
+            "200000000 angles",
+        ),
         ("Stack.solve angles", f"irid.Stack(layers=[(1.5, 300.0)]).solve([500.0], {MANY.format(0.0)})", "200000000 angles"),
         (
             "Stack.solve wavelengths",
@@ -285,3 +290,14 @@ def test_the_budget_is_checked_before_the_arguments_are_copied(name, call, count
     outcome, grown = run_child(call, env={"IRID_MEMORY_LIMIT": "2G"})
     assert outcome.startswith("MemoryError: ") and counted in outcome, outcome
     assert grown < 200, f"{name}: the peak memory grew by {grown} MB before the MemoryError"
+
+
+def test_the_index_gradient_counts_its_arrays(limit):
+    # 20 layers × 10^5 points: the thickness gradient's arrays fit in
+    # 400 MB, the 20 more per layer by n and k (solved and returned) do not.
+    stack = irid.Stack(layers=[(1.45, 95.0), (2.3, 60.0)] * 10, substrate=1.52)
+    wavelengths, angles = np.linspace(400.0, 700.0, 1000), np.linspace(0.0, 80.0, 100)
+    limit("400M")
+    assert stack.solve(wavelengths, angles, gradient=True)["dR_dd"].shape == (20, 1000, 100)
+    with pytest.raises(MemoryError, match=r"the gradient of 20 layers × 1000 wavelengths × 100 angles: needs about 566"):
+        stack.solve(wavelengths, angles, gradient=True, index_gradient=True)

@@ -49,13 +49,21 @@ struct Local {
     /// ∂w_new/∂d and ∂ℓ_new/∂d (layer steps only).
     dw: [C64; 2],
     dl: C64,
+    /// ∂w_new/∂N and ∂ℓ_new/∂N at fixed old w, by the complex index N of
+    /// the step's media: `[0]` the medium below the interface (a layer
+    /// step's own medium), `[1]` the medium above it (interfaces only).
+    dw_index: [[C64; 2]; 2],
+    dl_index: [C64; 2],
 }
 
 /// One recorded step of the recursion: a layer crossed (`layer` is its
-/// number among the view's finite media, 0-based) or an interface.
+/// number among the view's finite media, 0-based) or an interface;
+/// `medium` is the medium below the interface, or the layer's own (view
+/// numbering: the medium above an interface is `medium − 1`).
 #[derive(Clone, Copy, Debug, Default)]
 pub(crate) struct Step {
     layer: Option<usize>,
+    medium: usize,
     s: Local,
     p: Local,
 }
@@ -68,6 +76,43 @@ struct Wave {
     t: C64,
 }
 
+/// dq/dN = N/q of a medium crossed in Γ form (q ≠ 0 there but for a
+/// grazing half-space, whose own derivative is never asked for).
+#[inline]
+fn dq_dn(n: C64, q: C64) -> C64 {
+    if q == ZERO {
+        ZERO
+    } else {
+        n / q
+    }
+}
+
+/// A medium as the recursion sees it: N, N², q and dq/dN.
+#[derive(Clone, Copy)]
+struct Medium {
+    n: C64,
+    nsq: C64,
+    q: C64,
+    dq: C64,
+}
+
+impl Medium {
+    fn new(n: C64, nsq: C64, q: C64) -> Medium {
+        Medium {
+            n,
+            nsq,
+            q,
+            dq: dq_dn(n, q),
+        }
+    }
+
+    /// The p admittance q/N² and its derivative by N.
+    fn eta_p(&self) -> (C64, C64) {
+        let eta = self.q / self.nsq;
+        (eta, self.dq / self.nsq - 2.0 * eta / self.n)
+    }
+}
+
 impl Wave {
     fn start() -> Wave {
         Wave {
@@ -76,59 +121,94 @@ impl Wave {
         }
     }
 
-    /// Crosses a layer in Γ form: Γ e^{2iδ}, t e^{iδ}.
-    fn cross_gamma(&mut self, one_way: C64, k0q: C64) -> Local {
+    /// Crosses a layer in Γ form: Γ e^{2iδ}, t e^{iδ}, δ = k0 q d.
+    fn cross_gamma(&mut self, one_way: C64, k0q: C64, k0_d: f64, dq: C64) -> Local {
         let round_trip = one_way * one_way;
         self.w[0] *= round_trip;
         self.t *= one_way;
-        Local {
+        let mut local = Local {
             jac: [round_trip, ZERO, ZERO, ZERO],
             dw: [2.0 * I * k0q * self.w[0], ZERO],
             dl: I * k0q,
             ..Local::default()
-        }
+        };
+        local.dw_index[0] = [2.0 * I * k0_d * dq * self.w[0], ZERO];
+        local.dl_index[0] = I * k0_d * dq;
+        local
     }
 
     /// An interface in Γ form: Γ' = (x − y)/(x + y), t' = t c/(x + y) with
-    /// x = a(1 + Γ), y = b(1 − Γ).
-    fn interface(&mut self, a: C64, b: C64, c: C64) -> Local {
+    /// x = a(1 + Γ), y = b(1 − Γ); `da`, `db`, `dlog_c` the derivatives of
+    /// a, b and log c by the index of the medium below (`[0]`) and above.
+    fn interface(
+        &mut self,
+        (a, b, c): (C64, C64, C64),
+        da: [C64; 2],
+        db: [C64; 2],
+        dlog_c: [C64; 2],
+    ) -> Local {
         let g = self.w[0];
         let inv = (a * (ONE + g) + b * (ONE - g)).inv();
         let x = a * (ONE + g);
         let y = b * (ONE - g);
         self.w[0] = (x - y) * inv;
         self.t *= c * inv;
-        Local {
+        let (gamma_a, gamma_b) = (
+            2.0 * y * (ONE + g) * inv * inv,
+            -2.0 * x * (ONE - g) * inv * inv,
+        );
+        let (log_a, log_b) = (-(ONE + g) * inv, -(ONE - g) * inv);
+        let mut local = Local {
             jac: [4.0 * a * b * inv * inv, ZERO, ZERO, ZERO],
             log_t: [-(a - b) * inv, ZERO],
             ..Local::default()
+        };
+        for m in 0..2 {
+            local.dw_index[m] = [gamma_a * da[m] + gamma_b * db[m], ZERO];
+            local.dl_index[m] = log_a * da[m] + log_b * db[m] + dlog_c[m];
         }
+        local
     }
 
-    /// Γ form to field form at admittance η: u = 1 + Γ, v = η(1 − Γ).
-    fn enter_fields(&mut self, eta: C64) -> Local {
+    /// Γ form to field form at admittance η (`d_eta` its derivative by the
+    /// index of the medium below): u = 1 + Γ, v = η(1 − Γ).
+    fn enter_fields(&mut self, eta: C64, d_eta: C64) -> Local {
         let g = self.w[0];
         self.w = [ONE + g, eta * (ONE - g)];
-        Local {
+        let mut local = Local {
             jac: [ONE, ZERO, -eta, ZERO],
             ..Local::default()
-        }
+        };
+        local.dw_index[0] = [ZERO, d_eta * (ONE - g)];
+        local
     }
 
-    /// Field form back to Γ form into a medium of admittance η:
-    /// Γ = (ηu − v)/(ηu + v), t gains 2η/(ηu + v).
-    fn leave_fields(&mut self, eta: C64) -> Local {
+    /// Field form back to Γ form into a medium of admittance η (`d_eta` its
+    /// derivative by that medium's index): Γ = (ηu − v)/(ηu + v), t gains
+    /// 2η/(ηu + v).
+    fn leave_fields(&mut self, eta: C64, d_eta: C64) -> Local {
         let [u, v] = self.w;
         let inv = (eta * u + v).inv();
         self.w = [(eta * u - v) * inv, ZERO];
         self.t *= 2.0 * eta * inv;
         let inv2 = inv * inv;
-        Local {
+        let mut local = Local {
             jac: [2.0 * eta * v * inv2, -2.0 * eta * u * inv2, ZERO, ZERO],
             log_t: [-eta * inv, -inv],
             ..Local::default()
-        }
+        };
+        local.dw_index[1] = [2.0 * u * v * inv2 * d_eta, ZERO];
+        local.dl_index[1] = (eta.inv() - u * inv) * d_eta;
+        local
     }
+}
+
+/// Adds the p transmission's factor N_above/N_below, which the field-form
+/// steps carry, to a p step's index derivatives.
+fn with_index_ratio(mut local: Local, above: &Medium, below: &Medium) -> Local {
+    local.dl_index[0] -= below.n.inv();
+    local.dl_index[1] += above.n.inv();
+    local
 }
 
 /// One near-critical layer's matrix in field form (see
@@ -144,6 +224,12 @@ struct FieldLayer {
     /// e^{iδ} when the matrix is scaled by it, else 1.
     scale: C64,
     scaled: bool,
+    /// The derivatives of cos δ, sin δ/q and q sin δ by z = q² (scaled
+    /// like them), and of log of the scale (i dδ/dz when scaled, else 0).
+    d_cos: C64,
+    d_sin_over_q: C64,
+    d_q_sin: C64,
+    d_log_scale: C64,
 }
 
 impl FieldLayer {
@@ -163,13 +249,34 @@ impl FieldLayer {
             };
             (delta.cos(), delta.sin(), sinc_d, ONE, false)
         };
+        // sinc'(δ)/δ = (δ cos δ − sin δ)/δ³, even and finite at δ = 0: by
+        // its series where the difference would cancel.
+        let sinc_slope = if !scaled && delta.norm_sqr() < 1e-2 {
+            let d2 = delta * delta;
+            C64::new(-1.0 / 3.0, 0.0) + d2 * (1.0 / 30.0 - d2 * (1.0 / 840.0 - d2 / 45360.0))
+        } else {
+            (delta * cos_d - sin_d) / (delta * delta * delta)
+        };
+        let z = q * q;
+        let sin_over_q = k0_d * sinc_d;
+        // d(sin δ/q)/dz = (k0 d)³ sinc'(δ)/(2δ); dδ/dz = k0 d/(2q).
+        let d_sin_over_q_unscaled = 0.5 * k0_d * k0_d * k0_d * sinc_slope;
+        let d_cos_unscaled = -0.5 * k0_d * sin_over_q;
+        let d_log_scale = if scaled { I * k0_d / (2.0 * q) } else { ZERO };
+        let d_sin_over_q = d_sin_over_q_unscaled + d_log_scale * sin_over_q;
+        let q_sin = k0_d * z * sinc_d;
         FieldLayer {
             cos_d,
             sin_d,
-            sin_over_q: k0_d * sinc_d,
-            q_sin: k0_d * q * q * sinc_d,
+            sin_over_q,
+            q_sin,
             scale,
             scaled,
+            d_cos: d_cos_unscaled + d_log_scale * cos_d,
+            d_sin_over_q,
+            // q sin δ = z (sin δ/q).
+            d_q_sin: sin_over_q + z * d_sin_over_q,
+            d_log_scale,
         }
     }
 
@@ -177,7 +284,8 @@ impl FieldLayer {
     /// (m = 1 for s, n² for p): u' = cos δ u − i (m sin δ/q) v,
     /// v' = −i (q/m) sin δ u + cos δ v, and records the derivative
     /// (δ = k0 q d: ∂δ/∂d = k0 q, and e^{iδ} adds i k0 q to ℓ when scaled).
-    fn cross(&self, wave: &mut Wave, k0: f64, q: C64, m: C64) -> Local {
+    /// `dm` is dm/dN (0 for s): N enters through z = q² = N² − β² and m.
+    fn cross(&self, wave: &mut Wave, k0: f64, q: C64, (m, dm): (C64, C64), n: C64) -> Local {
         let [u, v] = wave.w;
         let m01 = -I * m * self.sin_over_q;
         let m10 = -I * (q / m) * self.sin_d;
@@ -196,19 +304,30 @@ impl FieldLayer {
             dw[1] += I * k0q * wave.w[1];
             dl = I * k0q;
         }
-        Local {
+        // ∂M/∂N = 2N ∂M/∂z + ∂M/∂m dm/dN, the scale's derivative inside.
+        let dz = 2.0 * n;
+        let n00 = dz * self.d_cos;
+        let n01 = -I * (dz * m * self.d_sin_over_q + dm * self.sin_over_q);
+        let n10 = -I * (dz * self.d_q_sin / m - dm * self.q_sin / (m * m));
+        let mut local = Local {
             jac,
             log_t: [ZERO, ZERO],
             dw,
             dl,
-        }
+            ..Local::default()
+        };
+        local.dw_index[0] = [n00 * u + n01 * v, n10 * u + n00 * v];
+        local.dl_index[0] = dz * self.d_log_scale;
+        local
     }
 }
 
 /// [`recurse_media`](super::super::solver::recurse_media) with the
 /// derivative of its amplitudes with respect to the thickness of each of
 /// its `media − 2` finite media, written into `out` (medium j + 1's at
-/// `out[j]`). `tape` is scratch, reused across calls.
+/// `out[j]`), and with respect to the complex index N of each of its
+/// media, half-spaces included (at fixed β), into `out_index` (medium j's
+/// at `out_index[j]`). `tape` is scratch, reused across calls.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn recurse_media_gradient(
     media: usize,
@@ -219,97 +338,115 @@ pub(crate) fn recurse_media_gradient(
     top: [C64; 3],
     q_sub: C64,
     tape: &mut Vec<Step>,
-    out: &mut [AmplitudeGradient],
+    (out, out_index): (&mut [AmplitudeGradient], &mut [AmplitudeGradient]),
 ) -> Amplitudes {
     debug_assert_eq!(out.len(), media - 2);
+    debug_assert_eq!(out_index.len(), media);
     let k0 = std::f64::consts::TAU / wavelength_nm;
     tape.clear();
     let last = media - 1;
-    let mut n_below = index(last);
-    let mut nsq_below = n_below * n_below;
-    let mut q_below = q_sub;
+    let n_sub = index(last);
+    let mut below = Medium::new(n_sub, n_sub * n_sub, q_sub);
     let (mut s, mut p) = (Wave::start(), Wave::start());
     let mut in_fields = false;
 
     for j in (0..last).rev() {
-        let (n_above, nsq_above, q_above) = if j == 0 {
-            (top[0], top[1], top[2])
+        let above = if j == 0 {
+            Medium::new(top[0], top[1], top[2])
         } else {
             let n = index(j);
             let nsq = n * n;
-            (n, nsq, sqrt_upper(nsq - beta_sq))
+            Medium::new(n, nsq, sqrt_upper(nsq - beta_sq))
         };
         if j + 1 < last {
             let k0_d = k0 * thickness(j);
-            let step = if in_fields {
-                let layer = FieldLayer::new(k0_d, q_below);
-                Step {
-                    layer: Some(j),
-                    s: layer.cross(&mut s, k0, q_below, ONE),
-                    p: layer.cross(&mut p, k0, q_below, nsq_below),
-                }
+            let (q, n) = (below.q, below.n);
+            let (s_local, p_local) = if in_fields {
+                let layer = FieldLayer::new(k0_d, q);
+                (
+                    layer.cross(&mut s, k0, q, (ONE, ZERO), n),
+                    layer.cross(&mut p, k0, q, (below.nsq, 2.0 * n), n),
+                )
             } else {
-                let one_way = one_way(k0_d * q_below);
-                let k0q = k0 * q_below;
-                Step {
-                    layer: Some(j),
-                    s: s.cross_gamma(one_way, k0q),
-                    p: p.cross_gamma(one_way, k0q),
-                }
+                let one_way = one_way(k0_d * q);
+                let k0q = k0 * q;
+                (
+                    s.cross_gamma(one_way, k0q, k0_d, below.dq),
+                    p.cross_gamma(one_way, k0q, k0_d, below.dq),
+                )
             };
-            tape.push(step);
+            tape.push(Step {
+                layer: Some(j),
+                medium: j + 1,
+                s: s_local,
+                p: p_local,
+            });
         }
-        let above_near_critical = j > 0 && near_critical(q_above, nsq_above);
-        let ratio = n_above / n_below;
-        let step = match (in_fields, above_near_critical) {
-            (false, false) => Step {
-                layer: None,
-                s: s.interface(q_above, q_below, 2.0 * q_above),
-                p: p.interface(
-                    nsq_below * q_above,
-                    nsq_above * q_below,
-                    2.0 * n_above * n_below * q_above,
-                ),
-            },
+        let above_near_critical = j > 0 && near_critical(above.q, above.nsq);
+        let (s_local, p_local) = match (in_fields, above_near_critical) {
+            (false, false) => interface(&mut s, &mut p, &above, &below),
             (false, true) => {
-                p.t *= ratio;
+                p.t *= above.n / below.n;
                 in_fields = true;
-                Step {
-                    layer: None,
-                    s: s.enter_fields(q_below),
-                    p: p.enter_fields(q_below / nsq_below),
-                }
+                let p_local = p.enter_fields(below.q / below.nsq, below.eta_p().1);
+                (
+                    s.enter_fields(below.q, below.dq),
+                    with_index_ratio(p_local, &above, &below),
+                )
             }
             (true, true) => {
-                p.t *= ratio;
-                Step {
-                    layer: None,
-                    s: identity(),
-                    p: identity(),
-                }
+                p.t *= above.n / below.n;
+                (identity(), with_index_ratio(identity(), &above, &below))
             }
             (true, false) => {
-                p.t *= ratio;
+                p.t *= above.n / below.n;
                 in_fields = false;
-                Step {
-                    layer: None,
-                    s: s.leave_fields(q_above),
-                    p: p.leave_fields(q_above / nsq_above),
-                }
+                let (eta_p, d_eta_p) = above.eta_p();
+                let p_local = p.leave_fields(eta_p, d_eta_p);
+                (
+                    s.leave_fields(above.q, above.dq),
+                    with_index_ratio(p_local, &above, &below),
+                )
             }
         };
-        tape.push(step);
-        n_below = n_above;
-        nsq_below = nsq_above;
-        q_below = q_above;
+        tape.push(Step {
+            layer: None,
+            medium: j + 1,
+            s: s_local,
+            p: p_local,
+        });
+        below = above;
     }
-    backward(tape, out);
+    backward(tape, out, out_index);
     Amplitudes {
         rs: s.w[0],
         rp: p.w[0],
         ts: s.t,
         tp: p.t,
     }
+}
+
+/// A Γ-form interface for both polarizations: s has a = q_above,
+/// b = q_below, c = 2 q_above; p has a = N²_below q_above,
+/// b = N²_above q_below, c = 2 N_above N_below q_above.
+fn interface(s: &mut Wave, p: &mut Wave, above: &Medium, below: &Medium) -> (Local, Local) {
+    let s_local = s.interface(
+        (above.q, below.q, 2.0 * above.q),
+        [ZERO, above.dq],
+        [below.dq, ZERO],
+        [ZERO, dq_dn(above.dq, above.q)],
+    );
+    let p_local = p.interface(
+        (
+            below.nsq * above.q,
+            above.nsq * below.q,
+            2.0 * above.n * below.n * above.q,
+        ),
+        [2.0 * below.n * above.q, below.nsq * above.dq],
+        [above.nsq * below.dq, 2.0 * above.n * below.q],
+        [below.n.inv(), above.n.inv() + dq_dn(above.dq, above.q)],
+    );
+    (s_local, p_local)
 }
 
 fn identity() -> Local {
@@ -337,6 +474,17 @@ impl Adjoint {
         )
     }
 
+    /// ∂Γ_top/∂N and ∂ℓ_top/∂N of a step through the index of its
+    /// medium below (`slot` 0) or above (1).
+    #[inline]
+    fn index(&self, local: &Local, slot: usize) -> (C64, C64) {
+        let [dw0, dw1] = local.dw_index[slot];
+        (
+            self.g[0] * dw0 + self.g[1] * dw1,
+            self.h[0] * dw0 + self.h[1] * dw1 + local.dl_index[slot],
+        )
+    }
+
     /// Moves the adjoints below a step.
     #[inline]
     fn pull(&mut self, local: &Local) {
@@ -351,13 +499,23 @@ impl Adjoint {
     }
 }
 
-fn backward(tape: &[Step], out: &mut [AmplitudeGradient]) {
+fn backward(tape: &[Step], out: &mut [AmplitudeGradient], out_index: &mut [AmplitudeGradient]) {
+    out_index.fill(AmplitudeGradient::default());
     let top = Adjoint {
         g: [ONE, ZERO],
         h: [ZERO, ZERO],
     };
     let (mut s, mut p) = (top, top);
     for step in tape.iter().rev() {
+        for (slot, medium) in [(0, step.medium), (1, step.medium - 1)] {
+            let (rs, log_ts) = s.index(&step.s, slot);
+            let (rp, log_tp) = p.index(&step.p, slot);
+            let d = &mut out_index[medium];
+            d.rs += rs;
+            d.rp += rp;
+            d.log_ts += log_ts;
+            d.log_tp += log_tp;
+        }
         if let Some(layer) = step.layer {
             let (rs, log_ts) = s.layer(&step.s);
             let (rp, log_tp) = p.layer(&step.p);

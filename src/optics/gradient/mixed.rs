@@ -17,9 +17,10 @@ use super::super::incoherent::{
 };
 use super::super::solver::{grazing, sqrt_upper, Amplitudes, Response};
 use super::coherent::{recurse_media_gradient, AmplitudeGradient, Step};
-use super::ResponseGradient;
+use super::{IndexGradient, ResponseGradient};
 
-/// ρ and τ of one polarization and their derivatives, one per layer.
+/// ρ and τ of one polarization and their derivatives by every parameter:
+/// each layer's thickness (`0..N`), n (`N..2N`) and k (`2N..3N`).
 struct Sums {
     rho: f64,
     tau: f64,
@@ -33,13 +34,23 @@ fn d_norm_sqr(r: C64, dr: C64) -> f64 {
 }
 
 /// One coherent group (stack media `top..=bottom`) from above and from
-/// below, with the derivatives of both by the thickness of each of its
-/// layers (`top + 1 + i` at `[i]`).
+/// below, with the derivatives of both by each parameter it depends on:
+/// (parameter, from above, from below).
 struct Group {
     down: Amplitudes,
     up: Amplitudes,
-    d_down: Vec<AmplitudeGradient>,
-    d_up: Vec<AmplitudeGradient>,
+    own: Vec<(usize, AmplitudeGradient, AmplitudeGradient)>,
+}
+
+/// `d` turned by i: the derivative by k from the one by N.
+fn times_i(d: &AmplitudeGradient) -> AmplitudeGradient {
+    let i = C64::new(0.0, 1.0);
+    AmplitudeGradient {
+        rs: i * d.rs,
+        rp: i * d.rp,
+        log_ts: i * d.log_ts,
+        log_tp: i * d.log_tp,
+    }
 }
 
 fn group(
@@ -49,10 +60,14 @@ fn group(
     light: &Light,
     (top_medium, bottom_medium): ([C64; 3], [C64; 3]),
     tape: &mut Vec<Step>,
+    with_index: bool,
 ) -> Group {
     let media = bottom - top + 1;
+    let layers = thicknesses_nm.len();
     let mut d_down = vec![AmplitudeGradient::default(); media - 2];
     let mut d_up = d_down.clone();
+    let mut n_down = vec![AmplitudeGradient::default(); media];
+    let mut n_up = n_down.clone();
     let down = recurse_media_gradient(
         media,
         |j| indices[top + j],
@@ -62,7 +77,7 @@ fn group(
         top_medium,
         bottom_medium[2],
         tape,
-        &mut d_down,
+        (&mut d_down, &mut n_down),
     );
     let up = recurse_media_gradient(
         media,
@@ -73,19 +88,30 @@ fn group(
         bottom_medium,
         top_medium[2],
         tape,
-        &mut d_up,
+        (&mut d_up, &mut n_up),
     );
     d_up.reverse();
-    Group {
-        down,
-        up,
-        d_down,
-        d_up,
+    n_up.reverse();
+    let mut own: Vec<_> = (d_down.into_iter().zip(d_up).enumerate())
+        .map(|(i, (d, u))| (top + i, d, u))
+        .collect();
+    // Medium top + j is layer top + j − 1; the ambient and substrate have
+    // no parameters.
+    for (j, (d, u)) in n_down.iter().zip(&n_up).enumerate() {
+        let medium = top + j;
+        if !with_index || medium == 0 || medium > layers {
+            continue;
+        }
+        own.push((layers + medium - 1, *d, *u));
+        own.push((2 * layers + medium - 1, times_i(d), times_i(u)));
     }
+    Group { down, up, own }
 }
 
 /// [`solve_incoherent`](super::super::solve_incoherent) with the
-/// derivative of R and T (s and p) by each layer's thickness.
+/// derivative of R and T (s and p) by each layer's thickness, and by its
+/// n and k when `with_index` (else those come back zero, and the sums
+/// carry a third of the parameters).
 pub(crate) fn solve_mixed_with_gradient(
     indices: &[C64],
     thicknesses_nm: &[f64],
@@ -93,10 +119,15 @@ pub(crate) fn solve_mixed_with_gradient(
     wavelength_nm: f64,
     cos_theta0: f64,
     tape: &mut Vec<Step>,
-) -> Result<(Response, ResponseGradient), Diverged> {
+    with_index: bool,
+) -> Result<(Response, ResponseGradient, IndexGradient), Diverged> {
     let layers = thicknesses_nm.len();
     if cos_theta0 <= 0.0 {
-        return Ok((grazing(indices), ResponseGradient::zeros(layers)));
+        return Ok((
+            grazing(indices),
+            ResponseGradient::zeros(layers),
+            IndexGradient::zeros(layers),
+        ));
     }
     let light = Light::new(wavelength_nm, indices[0].re, cos_theta0.min(1.0));
     let n_sub = indices[layers + 1];
@@ -131,19 +162,21 @@ pub(crate) fn solve_mixed_with_gradient(
             &light,
             (top, [n_below, n_below * n_below, q_below]),
             tape,
+            with_index,
         );
-        let first_layer = m; // layer index (0-based) of the group's first finite medium
         state = Some(match state {
-            None => first_sums(&g, first_layer, layers),
+            None => first_sums(&g, if with_index { 3 * layers } else { layers }),
             Some([s, p]) => {
-                let pass = one_pass(light.k0, q_below, thicknesses_nm[below - 1]);
-                let d_pass = -2.0 * light.k0 * q_below.im * pass;
+                let (pass, d_pass) = pass_with_derivatives(
+                    light.k0,
+                    (n_below, q_below),
+                    (below - 1, thicknesses_nm[below - 1]),
+                    if with_index { layers } else { 0 },
+                );
                 let cross = Crossing {
                     group: &g,
                     pass,
                     d_pass,
-                    layer_index: below - 1,
-                    first_layer,
                     layer: below,
                 };
                 [cross.sums(s, Pol::S)?, cross.sums(p, Pol::P)?]
@@ -180,31 +213,81 @@ pub(crate) fn solve_mixed_with_gradient(
         });
         return Err(diverged);
     }
-    let gradient = ResponseGradient {
-        rs: s.d_rho,
-        rp: p.d_rho,
-        ts: s.d_tau.iter().map(|d| d * flux_s).collect(),
-        tp: p.d_tau.iter().map(|d| d * flux_p).collect(),
+    let (gradient, by_index) = split_parameters(&s, &p, layers, [flux_s, flux_p]);
+    Ok((response, gradient, by_index))
+}
+
+/// An incoherent layer's pass P = e^{−2 k0 d Im q} (layer `l`, thickness
+/// `d`, index N and q) and its derivatives by the layer's thickness, and by
+/// its n and k when `layers` (the stack's count) is not 0: dq/dN = N/q and
+/// ∂/∂k = i ∂/∂N. Unused entries name parameter usize::MAX, which is none.
+fn pass_with_derivatives(
+    k0: f64,
+    (n, q): (C64, C64),
+    (l, d): (usize, f64),
+    layers: usize,
+) -> (f64, [(usize, f64); 3]) {
+    let pass = one_pass(k0, q, d);
+    let dq = n / q;
+    let decay = -2.0 * k0 * pass;
+    let (n_at, k_at) = if layers > 0 {
+        (layers + l, 2 * layers + l)
+    } else {
+        (usize::MAX, usize::MAX)
     };
-    Ok((response, gradient))
+    (
+        pass,
+        [
+            (l, decay * q.im),
+            (n_at, decay * d * dq.im),
+            (k_at, decay * d * dq.re),
+        ],
+    )
+}
+
+/// The per-parameter derivatives of the top sums as R and T derivatives:
+/// the thickness block, and the n and k blocks, τ's times the flux factors.
+fn split_parameters(
+    s: &Sums,
+    p: &Sums,
+    layers: usize,
+    [flux_s, flux_p]: [f64; 2],
+) -> (ResponseGradient, IndexGradient) {
+    let block = |v: &[f64], b: usize, scale: f64| -> Vec<f64> {
+        match v.get(b * layers..(b + 1) * layers) {
+            Some(part) => part.iter().map(|d| d * scale).collect(),
+            None => vec![0.0; layers],
+        }
+    };
+    let gradient_of = |b: usize| ResponseGradient {
+        rs: block(&s.d_rho, b, 1.0),
+        rp: block(&p.d_rho, b, 1.0),
+        ts: block(&s.d_tau, b, flux_s),
+        tp: block(&p.d_tau, b, flux_p),
+    };
+    let by_index = IndexGradient {
+        n: gradient_of(1),
+        k: gradient_of(2),
+    };
+    (gradient_of(0), by_index)
 }
 
 /// ρ and τ seen from the incoherent medium above the lowest group (the
-/// group's own |r|² and |t|²), with their derivatives by its layers.
-fn first_sums(g: &Group, first_layer: usize, layers: usize) -> [Sums; 2] {
+/// group's own |r|² and |t|²), with their derivatives by its parameters
+/// (`params` of them).
+fn first_sums(g: &Group, params: usize) -> [Sums; 2] {
     let start = |r: C64, t: C64| Sums {
         rho: r.norm_sqr(),
         tau: t.norm_sqr(),
-        d_rho: vec![0.0; layers],
-        d_tau: vec![0.0; layers],
+        d_rho: vec![0.0; params],
+        d_tau: vec![0.0; params],
     };
     let mut sums = [start(g.down.rs, g.down.ts), start(g.down.rp, g.down.tp)];
-    for (i, d) in g.d_down.iter().enumerate() {
-        let l = first_layer + i;
-        sums[0].d_rho[l] = d_norm_sqr(g.down.rs, d.rs);
-        sums[0].d_tau[l] = 2.0 * sums[0].tau * d.log_ts.re;
-        sums[1].d_rho[l] = d_norm_sqr(g.down.rp, d.rp);
-        sums[1].d_tau[l] = 2.0 * sums[1].tau * d.log_tp.re;
+    for (l, d, _) in &g.own {
+        sums[0].d_rho[*l] += d_norm_sqr(g.down.rs, d.rs);
+        sums[0].d_tau[*l] += 2.0 * sums[0].tau * d.log_ts.re;
+        sums[1].d_rho[*l] += d_norm_sqr(g.down.rp, d.rp);
+        sums[1].d_tau[*l] += 2.0 * sums[1].tau * d.log_tp.re;
     }
     sums
 }
@@ -219,11 +302,9 @@ enum Pol {
 struct Crossing<'a> {
     group: &'a Group,
     pass: f64,
-    d_pass: f64,
-    /// The incoherent layer's index among the layers (0-based).
-    layer_index: usize,
-    /// The layer index of the group's first finite medium.
-    first_layer: usize,
+    /// The derivatives of P by the parameters it depends on: the layer's
+    /// thickness, n and k.
+    d_pass: [(usize, f64); 3],
     /// The incoherent layer's number (1-based), for [`Diverged`].
     layer: usize,
 }
@@ -254,34 +335,32 @@ impl Crossing<'_> {
         let (p, rho0, tau0) = (self.pass, sums.rho, sums.tau);
         let returned = p * p * rho0;
         let inv = 1.0 / (1.0 - c * returned);
-        // Derivatives through ρ, τ below and through P: every layer below
-        // the group, and the incoherent layer itself.
+        // Derivatives through ρ, τ below and through P.
         let mut d_rho = sums.d_rho;
         let mut d_tau = sums.d_tau;
         for l in 0..d_rho.len() {
-            let mut d_returned = p * p * d_rho[l];
-            let mut d_p = 0.0;
-            if l == self.layer_index {
-                d_p = self.d_pass;
-                d_returned += 2.0 * p * d_p * rho0;
-            }
+            let d_p = self
+                .d_pass
+                .iter()
+                .find(|(k, _)| *k == l)
+                .map_or(0.0, |(_, d)| *d);
+            let d_returned = p * p * d_rho[l] + 2.0 * p * d_p * rho0;
             let dr = b * d_returned * inv * inv;
             let dt = (e * d_p * tau0 + e * p * d_tau[l]) * inv
                 + e * p * tau0 * inv * inv * c * d_returned;
             d_rho[l] = dr;
             d_tau[l] = dt;
         }
-        // Derivatives through the group's own layers.
-        for (i, (dd, du)) in g.d_down.iter().zip(&g.d_up).enumerate() {
-            let l = self.first_layer + i;
+        // Derivatives through the group's own amplitudes.
+        for (l, dd, du) in &g.own {
             let (dr, dlt) = pick_d(dd);
             let (dr_up, dlt_up) = pick_d(du);
             let da = d_norm_sqr(r, dr);
             let db = 2.0 * b * (dlt + dlt_up).re;
             let dc = d_norm_sqr(r_up, dr_up);
             let de = 2.0 * e * dlt.re;
-            d_rho[l] = da + db * returned * inv + b * returned * returned * dc * inv * inv;
-            d_tau[l] = de * p * tau0 * inv + e * p * tau0 * inv * inv * dc * returned;
+            d_rho[*l] += da + db * returned * inv + b * returned * returned * dc * inv * inv;
+            d_tau[*l] += de * p * tau0 * inv + e * p * tau0 * inv * inv * dc * returned;
         }
         Ok(Sums {
             rho,

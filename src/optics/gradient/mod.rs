@@ -26,7 +26,9 @@ use crate::error::Result;
 pub use coherent::AmplitudeGradient;
 use coherent::{recurse_media_gradient, Step};
 
-/// d/d(thickness in nm) of each layer (top layer first) of one [`Response`].
+/// The derivatives of one [`Response`] by one parameter of each layer (top
+/// layer first): its thickness in nm where [`solve_with_gradient`] returns
+/// it, its n or k in an [`IndexGradient`].
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct ResponseGradient {
     /// ∂R_s/∂d_j.
@@ -61,12 +63,35 @@ impl ResponseGradient {
     }
 }
 
+/// The derivatives of one [`Response`] by a uniform shift of each layer's
+/// complex refractive index N = n + ik (k > 0 absorbs): ∂/∂n and ∂/∂k at
+/// fixed thicknesses, angle and wavelength. For a dispersive layer this is
+/// the derivative by a shift of its whole n or k curve.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct IndexGradient {
+    /// ∂/∂n_j.
+    pub n: ResponseGradient,
+    /// ∂/∂k_j.
+    pub k: ResponseGradient,
+}
+
+impl IndexGradient {
+    /// All derivatives zero, for `layers` layers.
+    pub fn zeros(layers: usize) -> IndexGradient {
+        IndexGradient {
+            n: ResponseGradient::zeros(layers),
+            k: ResponseGradient::zeros(layers),
+        }
+    }
+}
+
 /// Scratch reused across the points of a grid
 /// ([`solve_grid_point_with_gradient`]); `Workspace::default()` makes one.
 #[derive(Default)]
 pub struct Workspace {
     tape: Vec<Step>,
     amplitudes: Vec<AmplitudeGradient>,
+    by_index: Vec<AmplitudeGradient>,
 }
 
 /// R and T of a coherent or mixed stack given as `indices` (ambient, N
@@ -89,11 +114,49 @@ pub(crate) fn solve_indices_with_gradient(
             wavelength_nm,
             cos_theta0,
             &mut work.tape,
+            false,
+        )
+        .map(|(response, gradient, _)| (response, gradient));
+    }
+    solve_indices_with_index_gradient(
+        indices,
+        thicknesses_nm,
+        coherence,
+        wavelength_nm,
+        cos_theta0,
+        work,
+    )
+    .map(|(response, gradient, _)| (response, gradient))
+}
+
+/// [`solve_indices_with_gradient`] with the derivatives by each layer's
+/// n and k as well, from the same sweep.
+pub(crate) fn solve_indices_with_index_gradient(
+    indices: &[C64],
+    thicknesses_nm: &[f64],
+    coherence: &Coherence,
+    wavelength_nm: f64,
+    cos_theta0: f64,
+    work: &mut Workspace,
+) -> std::result::Result<(Response, ResponseGradient, IndexGradient), super::Diverged> {
+    if !coherence.is_coherent() {
+        return mixed::solve_mixed_with_gradient(
+            indices,
+            thicknesses_nm,
+            coherence,
+            wavelength_nm,
+            cos_theta0,
+            &mut work.tape,
+            true,
         );
     }
     let layers = thicknesses_nm.len();
     if cos_theta0 <= 0.0 {
-        return Ok((grazing(indices), ResponseGradient::zeros(layers)));
+        return Ok((
+            grazing(indices),
+            ResponseGradient::zeros(layers),
+            IndexGradient::zeros(layers),
+        ));
     }
     let cos_theta0 = cos_theta0.min(1.0);
     let n0 = indices[0].re;
@@ -106,6 +169,9 @@ pub(crate) fn solve_indices_with_gradient(
     let q_sub = normal_index(indices[layers + 1], beta_sq);
     work.amplitudes.clear();
     work.amplitudes.resize(layers, AmplitudeGradient::default());
+    work.by_index.clear();
+    work.by_index
+        .resize(layers + 2, AmplitudeGradient::default());
     let amp = recurse_media_gradient(
         layers + 2,
         |j| indices[j],
@@ -115,7 +181,7 @@ pub(crate) fn solve_indices_with_gradient(
         top,
         q_sub,
         &mut work.tape,
-        &mut work.amplitudes,
+        (&mut work.amplitudes, &mut work.by_index),
     );
     let response = super::solver::power(indices, cos_theta0, &amp);
     let mut gradient = ResponseGradient::zeros(layers);
@@ -125,8 +191,21 @@ pub(crate) fn solve_indices_with_gradient(
         gradient.ts[l] = 2.0 * response.ts * d.log_ts.re;
         gradient.tp[l] = 2.0 * response.tp * d.log_tp.re;
     }
-    Ok((response, gradient))
+    // R and log t are holomorphic in N, so ∂/∂n = d/dN and ∂/∂k = i d/dN.
+    let mut by_index = IndexGradient::zeros(layers);
+    for (l, d) in work.by_index[1..=layers].iter().enumerate() {
+        for (out, turn) in [(&mut by_index.n, ONE), (&mut by_index.k, I)] {
+            out.rs[l] = 2.0 * (amp.rs.conj() * turn * d.rs).re;
+            out.rp[l] = 2.0 * (amp.rp.conj() * turn * d.rp).re;
+            out.ts[l] = 2.0 * response.ts * (turn * d.log_ts).re;
+            out.tp[l] = 2.0 * response.tp * (turn * d.log_tp).re;
+        }
+    }
+    Ok((response, gradient, by_index))
 }
+
+const ONE: C64 = C64::new(1.0, 0.0);
+const I: C64 = C64::new(0.0, 1.0);
 
 /// One stack (coherent or mixed/incoherent layers) at one wavelength and
 /// cos θ0: R and T, and their derivatives by each layer's thickness in nm.
@@ -174,6 +253,11 @@ pub struct GradientGrid {
     pub d_ts: Vec<f64>,
     /// ∂T_p/∂d, laid out as `d_rs`.
     pub d_tp: Vec<f64>,
+    /// ∂R_s, ∂R_p, ∂T_s, ∂T_p by each layer's n, each laid out as `d_rs`:
+    /// filled by [`solve_stack_grid_with_index_gradient`], empty otherwise.
+    pub by_n: [Vec<f64>; 4],
+    /// The same by each layer's k.
+    pub by_k: [Vec<f64>; 4],
 }
 
 impl GradientGrid {
@@ -202,6 +286,8 @@ impl GradientGrid {
             d_rp: vec![0.0; layers * points],
             d_ts: vec![0.0; layers * points],
             d_tp: vec![0.0; layers * points],
+            by_n: Default::default(),
+            by_k: Default::default(),
         }
     }
 }
@@ -305,6 +391,89 @@ pub fn solve_stack_grid_with_gradient_on(
         }
     }
     Ok(out)
+}
+
+/// [`solve_stack_grid_with_gradient`] with the derivatives by every
+/// layer's n and k as well ([`GradientGrid::by_n`], [`GradientGrid::by_k`]),
+/// all from one reverse sweep per point on the scalar path (the lanes
+/// differentiate thicknesses only).
+///
+/// # Panics
+/// If `thicknesses_nm` does not have one thickness per layer of the grid.
+pub fn solve_stack_grid_with_index_gradient(
+    grid: &StackGrid,
+    thicknesses_nm: &[f64],
+    cos_theta0: &[f64],
+) -> Result<GradientGrid> {
+    let layers = grid.thicknesses_nm().len();
+    assert_eq!(
+        thicknesses_nm.len(),
+        layers,
+        "thicknesses_nm: one per layer"
+    );
+    let (wavelengths, angles) = (grid.wavelengths_nm().len(), cos_theta0.len());
+    let coherent = grid.coherence().is_coherent();
+    let mut out = GradientGrid::zeros(layers, wavelengths, angles, coherent);
+    let size = out.d_rs.len();
+    out.by_n = std::array::from_fn(|_| vec![0.0; size]);
+    out.by_k = std::array::from_fn(|_| vec![0.0; size]);
+    let mut work = Workspace::default();
+    for w in 0..wavelengths {
+        let wavelength_nm = grid.wavelengths_nm()[w];
+        let indices = grid.indices_at(w);
+        for (a, &c) in cos_theta0.iter().enumerate() {
+            let (response, gradient, by_index) = solve_indices_with_index_gradient(
+                indices,
+                thicknesses_nm,
+                grid.coherence(),
+                wavelength_nm,
+                c,
+                &mut work,
+            )
+            .map_err(|d| d.error(wavelength_nm, c))?;
+            let point = w * angles + a;
+            out.response[point] = response;
+            if coherent {
+                out.amplitudes[point] = solve_amplitudes(indices, thicknesses_nm, wavelength_nm, c);
+            }
+            for l in 0..layers {
+                let i = out.at(l, w, a);
+                let parts = |g: &ResponseGradient| [g.rs[l], g.rp[l], g.ts[l], g.tp[l]];
+                let [rs, rp, ts, tp] = parts(&gradient);
+                (out.d_rs[i], out.d_rp[i], out.d_ts[i], out.d_tp[i]) = (rs, rp, ts, tp);
+                for (q, (dn, dk)) in parts(&by_index.n)
+                    .into_iter()
+                    .zip(parts(&by_index.k))
+                    .enumerate()
+                {
+                    out.by_n[q][i] = dn;
+                    out.by_k[q][i] = dk;
+                }
+            }
+        }
+    }
+    Ok(out)
+}
+
+/// [`solve_with_gradient`] with the derivatives by each layer's n and k
+/// ([`IndexGradient`]) from the same sweep.
+pub fn solve_with_index_gradient(
+    stack: &Stack,
+    wavelength_nm: f64,
+    cos_theta0: f64,
+) -> Result<(Response, ResponseGradient, IndexGradient)> {
+    stack.validate()?;
+    let mut indices = Vec::with_capacity(stack.layers.len() + 2);
+    stack.indices_at(wavelength_nm, &mut indices)?;
+    solve_indices_with_index_gradient(
+        &indices,
+        &stack.thicknesses_nm(),
+        &stack.coherence(),
+        wavelength_nm,
+        cos_theta0,
+        &mut Workspace::default(),
+    )
+    .map_err(|d| d.error(wavelength_nm, cos_theta0))
 }
 
 /// R, T and their derivatives at the `w`-th wavelength of `grid` and cos θ0

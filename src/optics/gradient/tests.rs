@@ -38,6 +38,7 @@ fn taped_recursion_is_the_solver() {
         let q_sub = normal_index(indices[indices.len() - 1], beta_sq);
         let mut tape = Vec::new();
         let mut out = vec![AmplitudeGradient::default(); thicknesses.len()];
+        let mut by_index = vec![AmplitudeGradient::default(); indices.len()];
         let got: Amplitudes = recurse_media_gradient(
             indices.len(),
             |j| indices[j],
@@ -47,7 +48,7 @@ fn taped_recursion_is_the_solver() {
             top,
             q_sub,
             &mut tape,
-            &mut out,
+            (&mut out, &mut by_index),
         );
         let want = solve_amplitudes(indices, thicknesses, 550.0, cos);
         for (g, w) in [
