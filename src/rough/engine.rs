@@ -622,33 +622,12 @@ pub fn rough_colors_from_cancellable(
                 .collect(),
         );
     }
-    if let Some(a) = angles_deg.iter().find(|a| !(**a >= 0.0 && **a < 90.0)) {
-        return Err(Error::invalid(
-            "angle",
-            format!("{a} is outside [0, 90) degrees"),
-        ));
-    }
+    check_angles(angles_deg)?;
     if angles_deg.is_empty() {
         return Ok(Vec::new());
     }
-    let cos: Vec<f64> = angles_deg.iter().map(|a| a.to_radians().cos()).collect();
     let opaque = opaque_substrate(&seen, integrator)?;
-    let (swept, layer) = swept_layer(&seen);
-    let thickness = swept.layers.get(layer - 1).map_or(0.0, |l| l.thickness_nm);
-    let nodes = Nodes {
-        thickness_nm: &[thickness],
-        cos_theta: &cos,
-        roughness: &[roughness],
-    };
-    let table = rough_table(
-        &swept,
-        layer,
-        integrator,
-        &nodes,
-        &Quadrature::default(),
-        Some(eta),
-        cancel,
-    )?;
+    let table = table_at_angles(&seen, integrator, angles_deg, roughness, Some(eta), cancel)?;
     Ok(angles_deg
         .par_iter()
         .enumerate()
@@ -672,4 +651,79 @@ pub fn rough_colors_from_cancellable(
         .enumerate()
         .map(|(c, color)| with_multiple_scattering(color, table.kept[c], opaque))
         .collect())
+}
+
+/// F_eff alone of `stack` (its layers at their own thicknesses) seen from
+/// its ambient at each view angle (degrees, in [0, 90)) for `roughness` ∈
+/// [0, 1]: the `reflectance_rgb` of [`rough_colors`] bit for bit, without
+/// the transmission kernel's work (what a colour fit compares).
+pub fn rough_reflectance_colors(
+    stack: &Stack,
+    integrator: &SpectralIntegrator,
+    angles_deg: &[f64],
+    roughness: f64,
+) -> Result<Vec<[f64; 3]>> {
+    check_roughness("roughness", roughness)?;
+    if roughness == 0.0 {
+        return Ok(
+            stack_colors_cancellable(stack, integrator, angles_deg, Cancel::never())?
+                .into_iter()
+                .map(|c| c.reflectance_rgb)
+                .collect(),
+        );
+    }
+    check_angles(angles_deg)?;
+    if angles_deg.is_empty() {
+        return Ok(Vec::new());
+    }
+    let table = table_at_angles(
+        stack,
+        integrator,
+        angles_deg,
+        roughness,
+        None,
+        Cancel::never(),
+    )?;
+    Ok((0..angles_deg.len()).map(|c| table.at(0, c, 0)).collect())
+}
+
+/// Refuses a view angle outside [0, 90) degrees.
+fn check_angles(angles_deg: &[f64]) -> Result<()> {
+    match angles_deg.iter().find(|a| !(**a >= 0.0 && **a < 90.0)) {
+        Some(a) => Err(Error::invalid(
+            "angle",
+            format!("{a} is outside [0, 90) degrees"),
+        )),
+        None => Ok(()),
+    }
+}
+
+/// The rough table of `seen` at its own thicknesses, one row per view
+/// angle (degrees, checked, not empty) at `roughness` > 0, with the
+/// transmittance when `eta` is given.
+fn table_at_angles(
+    seen: &Stack,
+    integrator: &SpectralIntegrator,
+    angles_deg: &[f64],
+    roughness: f64,
+    eta: Option<f64>,
+    cancel: &Cancel,
+) -> Result<RoughTable> {
+    let cos: Vec<f64> = angles_deg.iter().map(|a| a.to_radians().cos()).collect();
+    let (swept, layer) = swept_layer(seen);
+    let thickness = swept.layers.get(layer - 1).map_or(0.0, |l| l.thickness_nm);
+    let nodes = Nodes {
+        thickness_nm: &[thickness],
+        cos_theta: &cos,
+        roughness: &[roughness],
+    };
+    rough_table(
+        &swept,
+        layer,
+        integrator,
+        &nodes,
+        &Quadrature::default(),
+        eta,
+        cancel,
+    )
 }

@@ -306,3 +306,35 @@ fn stacks_with_incoherent_layers_sweep_a_coherent_one() {
         }
     }
 }
+
+/// The colour fits' reflection-only path skips the transmission kernel and
+/// gives `rough_colors`' F_eff bit for bit: on the test films (lossless,
+/// absorbing, metal substrates, seen from the dense side), behind an
+/// incoherent sheet, at roughness 0, small and large, and it refuses what
+/// `rough_colors` refuses.
+#[test]
+fn reflection_only_colours_are_rough_colours_reflectance() {
+    let integrator = SpectralIntegrator::new(Sampling::Exact);
+    let mut stacks: Vec<Stack> = test_films().into_iter().map(|(_, s, _)| s).collect();
+    let mut sheet = stacks[0].clone();
+    sheet.layers[0].coherent = false;
+    sheet.layers[0].thickness_nm = 1e6;
+    stacks.push(sheet);
+    let angles = [0.0, 25.0, 50.0, 75.0, 89.0];
+    for stack in &stacks {
+        for roughness in [0.0, 0.05, 0.4, 1.0] {
+            let full = rough_colors(stack, &integrator, &angles, roughness).unwrap();
+            let only = rough_reflectance_colors(stack, &integrator, &angles, roughness).unwrap();
+            let want: Vec<[f64; 3]> = full.iter().map(|c| c.reflectance_rgb).collect();
+            assert_eq!(only, want, "roughness {roughness}");
+        }
+    }
+    let stack = &stacks[0];
+    assert!(rough_reflectance_colors(stack, &integrator, &[], 0.5)
+        .unwrap()
+        .is_empty());
+    for (angle, r) in [(90.0, 0.5), (-1.0, 0.5), (10.0, 1.5), (10.0, f64::NAN)] {
+        assert!(rough_colors(stack, &integrator, &[angle], r).is_err());
+        assert!(rough_reflectance_colors(stack, &integrator, &[angle], r).is_err());
+    }
+}
