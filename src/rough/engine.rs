@@ -5,7 +5,7 @@ use std::borrow::Cow;
 use rayon::prelude::*;
 use serde::Serialize;
 
-use super::energy::{compensation_keeping, SingleScattering};
+use super::energy::{compensate, kept_share, SingleScattering};
 use super::kernel::{Kernel, Rules};
 use super::{check_roughness, MuGrid, Quadrature};
 use crate::cancel::Cancel;
@@ -227,9 +227,13 @@ impl Smooth<'_> {
             (out, kernel.albedo())
         });
         let mut reflectance = vec![[0.0; 3]; n_t];
+        // ρ over the reflection lobe: kept_share is linear, so it takes the
+        // lobe's means.
         let keeps = |reflectance: &[[f64; 3]], through: &[[f64; 3]]| -> Vec<[f64; 3]> {
-            let add = |(f, t): (&[f64; 3], &[f64; 3])| std::array::from_fn(|c| f[c] + t[c]);
-            reflectance.iter().zip(through).map(add).collect()
+            let keep = |(f, t): (&[f64; 3], &[f64; 3])| {
+                std::array::from_fn(|c| kept_share(f[c], Some(t[c])))
+            };
+            reflectance.iter().zip(through).map(keep).collect()
         };
         if rough == 0.0 {
             mirrored(&mut reflectance, 0);
@@ -476,25 +480,6 @@ pub struct RoughColor {
     pub transmittance_ms_xyz: [f64; 3],
 }
 
-/// The multiple-scattering-compensated F_ms and T_ms of a single-scattering
-/// `ss` whose microfacets keep `kept` (ρ per channel; F_eff on an opaque
-/// substrate): Turquin's scale ([`compensation_keeping`]). Roughness 0
-/// scatters once: `ss` itself.
-fn multiple_scattering(
-    roughness: f64,
-    ss: &SingleScattering,
-    kept: [f64; 3],
-) -> ([f64; 3], [f64; 3]) {
-    if roughness == 0.0 {
-        return (ss.reflectance, ss.transmittance);
-    }
-    let k = compensation_keeping(ss, kept);
-    (
-        std::array::from_fn(|c| ss.reflectance[c] * k[c]),
-        std::array::from_fn(|c| ss.transmittance[c] * k[c]),
-    )
-}
-
 /// `color` with its multiple-scattering fields filled in, its microfacets
 /// keeping `kept`; `opaque` for a substrate that absorbs (no refraction
 /// lobe: Turquin's conductor form, ρ = F_eff).
@@ -509,8 +494,12 @@ fn with_multiple_scattering(mut color: RoughColor, kept: [f64; 3], opaque: bool)
             color.transmission_lobe_albedo
         },
     };
-    let kept = if opaque { ss.reflectance } else { kept };
-    let (r, t) = multiple_scattering(color.roughness, &ss, kept);
+    let kept = if opaque {
+        ss.reflectance.map(|f| kept_share(f, None))
+    } else {
+        kept
+    };
+    let (r, t) = compensate(color.roughness, &ss, kept);
     color.reflectance_ms_rgb = r;
     color.reflectance_ms_xyz = linear_srgb_to_xyz(r);
     color.transmittance_ms_rgb = t;
