@@ -18,30 +18,12 @@ use std::time::{Duration, Instant};
 
 use criterion::{black_box, criterion_group, criterion_main, Criterion};
 
+use irid::bench::inverse::gradient_stack;
 use irid::optics::gradient::{
     solve_grid_point_with_gradient, solve_stack_grid_with_gradient,
     solve_stack_grid_with_index_gradient, Workspace,
 };
-use irid::optics::{Layer, Material, Response, Stack, StackGrid};
-
-/// Air, 20 films alternating lossless (1.5) and absorbing (2.3 + 0.05i),
-/// 100, 107, 114, ... nm, on a gold-like substrate: `benches/tmm.rs`'s stacks.
-fn stack(layers: usize) -> Stack {
-    Stack {
-        ambient: Material::constant(1.0, 0.0),
-        layers: (0..layers)
-            .map(|i| {
-                let m = if i % 2 == 0 {
-                    Material::constant(1.5, 0.0)
-                } else {
-                    Material::constant(2.3, 0.05)
-                };
-                Layer::new(m, 100.0 + 7.0 * i as f64)
-            })
-            .collect(),
-        substrate: Material::constant(0.27, 2.9),
-    }
-}
+use irid::optics::{Response, StackGrid};
 
 fn fastest(mut run: impl FnMut()) -> Duration {
     (0..30)
@@ -60,7 +42,7 @@ fn gradient(c: &mut Criterion) {
         .iter()
         .map(|a| a.to_radians().cos())
         .collect();
-    let stack = stack(20);
+    let stack = gradient_stack(20);
     let grid = StackGrid::new(&stack, &wavelengths).expect("grid");
     let d = stack.thicknesses_nm();
     let mut out = vec![Response::default(); wavelengths.len() * cos.len()];

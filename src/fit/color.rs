@@ -5,7 +5,8 @@
 //!
 //! The smooth film's Jacobian is exact ([`colors_with_gradient`], chained
 //! through [`delta_e00_with_gradient`]). A rough film's colour (the
-//! reflectance pre-integrated over a GGX lobe, [`crate::rough::rough_colors`])
+//! reflectance pre-integrated over a GGX lobe,
+//! [`crate::rough::rough_reflectance_colors`])
 //! has no thickness derivative: its Jacobian is taken by central
 //! differences of that colour.
 
@@ -20,7 +21,7 @@ use crate::color::{delta_e2000_rgb, stack_colors, Sampling, SpectralIntegrator, 
 use crate::error::{Error, Result};
 use crate::optics::lanes::SpectralWeights;
 use crate::optics::{Stack, StackGrid};
-use crate::rough::{check_roughness, rough_colors};
+use crate::rough::{check_roughness, rough_reflectance_colors};
 
 /// A colour to match: linear sRGB of the reflectance seen at an angle.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
@@ -110,10 +111,7 @@ pub fn fit_color(
     let fitted = vary.apply(stack, &best.x);
     let angles: Vec<f64> = targets.iter().map(|t| t.angle_deg).collect();
     let rgb: Vec<[f64; 3]> = match roughness {
-        Some(r) => rough_colors(&fitted, &integrator, &angles, r)?
-            .iter()
-            .map(|c| c.reflectance_rgb)
-            .collect(),
+        Some(r) => rough_reflectance_colors(&fitted, &integrator, &angles, r)?,
         None => stack_colors(&fitted, &integrator, &angles)?
             .iter()
             .map(|c| c.reflectance_rgb)
@@ -295,14 +293,14 @@ impl Model for ColorModel {
 
     fn predict(&self, x: &[f64], out: &mut [f64]) -> Result<()> {
         if let Some(r) = self.roughness {
-            let colors = rough_colors(
+            let colors = rough_reflectance_colors(
                 &self.vary.apply(&self.stack, x),
                 &self.integrator,
                 &self.angles_deg,
                 r,
             )?;
             for (j, c) in colors.iter().enumerate() {
-                out[3 * j..3 * j + 3].copy_from_slice(&c.reflectance_rgb);
+                out[3 * j..3 * j + 3].copy_from_slice(c);
             }
             return Ok(());
         }

@@ -6,14 +6,15 @@
 //! At a rough hit the renderer draws one microfacet and weights its
 //! reflected and refracted rays by the film's R and T there; the lobe's
 //! single scattering keeps, on average, E(θ_v) of the light a lossless
-//! microsurface would keep. Scaling the hit by k = 1 + ρ (1 − E) / E, ρ =
-//! R + T of the drawn microfacet (the share it does not absorb), returns a
-//! lossless surface to 1 and gives a film on a metal Turquin's conductor
-//! form with the film's own reflectance.
+//! microsurface would keep. Scaling the hit by k = 1 + ρ (1 − E) / E, ρ
+//! the library's [`kept_share`] of the drawn microfacet (R + T on a
+//! transparent substrate, R on an opaque one), returns a lossless surface
+//! to 1 and gives a film on a metal Turquin's conductor form with the
+//! film's own reflectance.
 
 use glam::Vec3;
 
-use crate::rough::energy::{albedos, AlbedoQuadrature};
+use crate::rough::energy::{albedos, kept_share, AlbedoQuadrature};
 
 /// View-angle nodes of the escape tables, evenly over cos θ ∈ [0, 1].
 const NODES: usize = 65;
@@ -50,14 +51,19 @@ impl Compensation {
     }
 
     /// The scale of a rough hit seen at cos θ_v from the `front` (ambient)
-    /// side or the back, whose drawn microfacet keeps `keep` = R + T per
-    /// channel; 1 where no table is.
+    /// side or the back, whose drawn microfacet reflects `r` and transmits
+    /// `t` per channel (`t` ignored on an opaque substrate, which absorbs
+    /// it); 1 where no table is.
     #[inline]
-    pub fn scale(&self, cos_view: f32, front: bool, keep: Vec3) -> Vec3 {
+    pub fn scale(&self, cos_view: f32, front: bool, r: Vec3, t: Vec3) -> Vec3 {
         let table = if front { &self.front } else { &self.back };
         if table.is_empty() {
             return Vec3::ONE;
         }
+        let transmits = !self.back.is_empty();
+        let share =
+            |r: f32, t: f32| kept_share(f64::from(r), transmits.then_some(f64::from(t))) as f32;
+        let keep = Vec3::new(share(r.x, t.x), share(r.y, t.y), share(r.z, t.z));
         let x = cos_view.clamp(0.0, 1.0) * (NODES - 1) as f32;
         let i = (x as usize).min(NODES - 2);
         let f = x - i as f32;
@@ -77,7 +83,9 @@ mod tests {
         for &cv in &[0.03f64, 0.37, 0.81] {
             for (front, eta) in [(true, 1.5), (false, 1.0 / 1.5)] {
                 let e = albedos(cv, 0.6, Some(eta), &q).energy();
-                let k = c.scale(cv as f32, front, Vec3::ONE).x;
+                let k = c
+                    .scale(cv as f32, front, Vec3::splat(0.3), Vec3::splat(0.7))
+                    .x;
                 assert!(
                     (f64::from(k) * e - 1.0).abs() < 2e-3,
                     "{cv} {front}: {k} {e}"
@@ -85,13 +93,16 @@ mod tests {
             }
         }
         assert_eq!(
-            Compensation::new(0.0, Some(1.5)).scale(0.5, true, Vec3::ONE),
+            Compensation::new(0.0, Some(1.5)).scale(0.5, true, Vec3::ONE, Vec3::ZERO),
             Vec3::ONE
         );
         let opaque = Compensation::new(0.8, None);
-        assert_eq!(opaque.scale(0.5, false, Vec3::ONE), Vec3::ONE);
+        assert_eq!(opaque.scale(0.5, false, Vec3::ONE, Vec3::ZERO), Vec3::ONE);
         let e = albedos(0.5, 0.8, None, &q).reflect_white;
-        let k = opaque.scale(0.5, true, Vec3::splat(0.5)).x;
+        // What enters an opaque substrate is absorbed: ρ = R.
+        let k = opaque
+            .scale(0.5, true, Vec3::splat(0.5), Vec3::splat(0.3))
+            .x;
         assert!((f64::from(k) - (1.0 + 0.5 * (1.0 - e) / e)).abs() < 1e-3);
     }
 }

@@ -221,7 +221,7 @@ impl<F: FilmShading, const ROUGH: bool> Tracer<'_, F, ROUGH> {
         let rgb = self.films[hit.film.film].shade(hit.thickness_nm, cos_vh, hit.side());
         let (r, t) = (Vec3::from(rgb.reflectance), Vec3::from(rgb.transmittance));
         // What the lobe's single scattering loses to further bounces.
-        let scale = hit.film.compensation.scale(cos_v, hit.front, r + t);
+        let scale = hit.film.compensation.scale(cos_v, hit.front, r, t);
         scale * (r * reflected + t * refracted)
     }
 

@@ -27,12 +27,12 @@
 //! metal (no transmission), ρ = F_eff and E_w = A_R, and k is Turquin's
 //! conductor form 1 + F (1 − E) / E with F the film's own F_eff.
 //!
-//! ρ from the outputs: F_eff and T_eff average the film over different
-//! microfacets (the ones whose reflection, resp. refraction, leaves), so
-//! F_eff + T_eff of a lossless film is not exactly 1 — past the critical
-//! angle it is well above. [`EnergyTable`] tabulates how far below 1 it
-//! falls for the bare interface (Fresnel's reflectance per microfacet), and
-//! ρ = F_eff + T_eff − that, clamped to [S, 1].
+//! ρ has one definition, [`kept_share`]: at a microfacet, the film's R + T
+//! (R alone on an opaque substrate, where what enters is absorbed); over a
+//! lobe, its mean under the reflection lobe's weights (the rough table's
+//! `kept`, the albedos' [`Albedos::kept`]), exactly 1 for a lossless film.
+//! F_eff + T_eff is not it: the two average the film over different
+//! microfacets (the ones whose reflection, resp. refraction, leaves).
 
 use std::f64::consts::{FRAC_PI_2, FRAC_PI_4, PI};
 
@@ -53,6 +53,9 @@ pub struct Albedos {
     pub reflect: f64,
     /// The bare interface's transmission, ∫ D_v (1 − F) e_T.
     pub transmit: f64,
+    /// ρ over the reflection lobe: ∫ D_v e_R [`kept_share`] ÷ A_R (1 for a
+    /// lossless interface or film, the film's F_eff when opaque).
+    pub kept: f64,
 }
 
 impl Albedos {
@@ -61,20 +64,18 @@ impl Albedos {
     pub fn energy(&self) -> f64 {
         self.reflect + self.transmit
     }
+}
 
-    /// How far F_eff + T_eff of the bare lossless interface falls below 1,
-    /// as a negative number (0 where it does not, or with no
-    /// transmission): the two lobe-averaged colours of a lossless film need
-    /// not sum to 1. Above 1 (past the critical angle the reflection
-    /// averages over microfacets that reflect totally) the compensation's
-    /// clamp of ρ to 1 takes care of it, so only the part below is kept —
-    /// the part above has a feature as narrow as α at the critical angle.
-    pub fn keep_bias(&self) -> f64 {
-        if self.transmit_white <= 0.0 || self.reflect_white <= 0.0 {
-            return 0.0;
-        }
-        (self.reflect / self.reflect_white + self.transmit / self.transmit_white - 1.0).min(0.0)
-    }
+/// ρ, the share of the light a microfacet keeps (reflects, or transmits
+/// into a substrate that lets it on) rather than absorbs: the film's
+/// `reflectance` plus its `transmittance`, or the reflectance alone with
+/// no transmittance (`None`: an opaque substrate absorbs what enters it).
+/// The one definition every compensation uses: the renderer at its drawn
+/// microfacet, the rough tables and albedos averaged over the reflection
+/// lobe (it is linear, so the mean of ρ is ρ of the means).
+#[inline]
+pub fn kept_share(reflectance: f64, transmittance: Option<f64>) -> f64 {
+    reflectance + transmittance.unwrap_or(0.0)
 }
 
 /// Deterministic quadrature of [`Albedos`]: `panels` panels of `points`
@@ -155,7 +156,7 @@ pub fn film_albedos(
         g1_v,
     };
     let rule = Rule::gauss_legendre(q.points);
-    let mut sum = [0.0f64; 4];
+    let mut sum = [0.0f64; 5];
     // cos θ of the critical angle, where a microfacet stops refracting.
     let mu_c = eta
         .filter(|&e| e > 0.0 && e < 1.0)
@@ -212,6 +213,7 @@ pub fn film_albedos(
         transmit_white: sum[1],
         reflect: sum[2],
         transmit: sum[3],
+        kept: if sum[0] > 0.0 { sum[4] / sum[0] } else { 1.0 },
     }
 }
 
@@ -265,14 +267,16 @@ struct View {
 
 /// For microfacet normal `h` (macro frame, view in the x–z plane): the
 /// escape weights of its reflection and refraction, white and with the
-/// bare interface's Fresnel: [e_R, e_T, F e_R, (1 − F) e_T].
+/// bare interface's Fresnel (or the film's R, T), and what the microfacet
+/// keeps under the reflection's escape: [e_R, e_T, F e_R, (1 − F) e_T,
+/// ρ e_R].
 #[inline]
 fn escapes(
     h: [f64; 3],
     view: &View,
     eta: Option<f64>,
     film: &impl Fn(f64, f64, f64) -> (f64, f64),
-) -> [f64; 4] {
+) -> [f64; 5] {
     let View {
         cv,
         sv,
@@ -284,19 +288,20 @@ fn escapes(
     let cos_l = 2.0 * mu * h[2] - cv;
     let e_r = ggx::g2(cv, lambda_cos_v, cos_l, a2) / g1_v;
     let Some(eta) = eta else {
-        return [e_r, 0.0, film(mu, 0.0, 0.0).0 * e_r, 0.0];
+        let r = film(mu, 0.0, 0.0).0;
+        return [e_r, 0.0, r * e_r, 0.0, kept_share(r, None) * e_r];
     };
     let sin2_t = (1.0 - mu * mu) / (eta * eta);
     if sin2_t >= 1.0 {
         // Total internal reflection at this microfacet.
-        return [e_r, 0.0, e_r, 0.0];
+        return [e_r, 0.0, e_r, 0.0, kept_share(1.0, Some(0.0)) * e_r];
     }
     let cos_t = (1.0 - sin2_t).sqrt();
     let (r, t) = film(mu, cos_t, eta);
     // t = −v/η + (μ/η − cos θ_t) h; its z, negated, is |cos θ_l|.
     let cos_lt = -(-cv / eta + (mu / eta - cos_t) * h[2]);
     let e_t = ggx::g2(cv, lambda_cos_v, cos_lt, a2) / g1_v;
-    [e_r, e_t, r * e_r, t * e_t]
+    [e_r, e_t, r * e_r, t * e_t, kept_share(r, Some(t)) * e_r]
 }
 
 /// Unpolarized Fresnel reflectance at incidence cos `mu`, refraction cos
@@ -335,27 +340,27 @@ pub struct SingleScattering {
     pub transmit_albedo: f64,
 }
 
-/// Turquin's scale k of a film's single-scattering lobe (see the module's
-/// doc) per channel, given the bare interface's keep bias at this view and
-/// roughness ([`Albedos::keep_bias`], 0 for an opaque substrate).
-pub fn compensation(ss: &SingleScattering, keep_bias: f64) -> [f64; 3] {
-    let transmits = ss.transmit_albedo > 0.0;
-    let keep = std::array::from_fn(|c| {
-        let (f, t) = (ss.reflectance[c], ss.transmittance[c]);
-        if transmits {
-            f + t - keep_bias
-        } else {
-            f
-        }
-    });
-    compensation_keeping(ss, keep)
+/// The compensated outputs of a film at `roughness`: F_eff and T_eff of
+/// `ss` scaled by Turquin's k ([`compensation`]), its microfacets keeping
+/// `kept` per channel ([`kept_share`] over the reflection lobe: a rough
+/// table's `kept`, or F_eff on an opaque substrate). A host draws the
+/// white lobes (albedos A_R, A_T) times these. Roughness 0 scatters once:
+/// `ss`'s own.
+pub fn compensate(roughness: f64, ss: &SingleScattering, kept: [f64; 3]) -> ([f64; 3], [f64; 3]) {
+    if roughness == 0.0 {
+        return (ss.reflectance, ss.transmittance);
+    }
+    let k = compensation(ss, kept);
+    (
+        std::array::from_fn(|c| ss.reflectance[c] * k[c]),
+        std::array::from_fn(|c| ss.transmittance[c] * k[c]),
+    )
 }
 
-/// Turquin's scale k given ρ per channel directly (`keep`, clamped to
-/// [S, 1]), for a caller that knows what the film's microfacets keep (as
-/// the rough colours do: F_eff plus the transmittance over the same
-/// reflection lobe, exactly 1 for a lossless film).
-pub fn compensation_keeping(ss: &SingleScattering, keep: [f64; 3]) -> [f64; 3] {
+/// Turquin's scale k of a film's single-scattering lobe (see the module's
+/// doc) per channel, its microfacets keeping `keep` (ρ, [`kept_share`]
+/// over the reflection lobe; clamped to [S, 1]).
+pub fn compensation(ss: &SingleScattering, keep: [f64; 3]) -> [f64; 3] {
     std::array::from_fn(|c| {
         let (f, t) = (ss.reflectance[c], ss.transmittance[c]);
         let energy = ss.reflect_albedo * f + ss.transmit_albedo * t;
@@ -434,15 +439,15 @@ fn stencil(x: f64, n: usize) -> (usize, [f64; 4]) {
 }
 
 /// The white-lobe tables of one interface (one η, or opaque) over view
-/// cos θ and roughness, for compensating tables of F_eff and T_eff. The
-/// nodes are even in √cos θ_v (the albedos steepen towards grazing view)
-/// and in roughness, Catmull–Rom interpolated.
+/// cos θ and roughness, for a host that compensates without the film's own
+/// single scattering (as the renderer does, with the bare interface's E).
+/// The nodes are even in √cos θ_v (the albedos steepen towards grazing
+/// view) and in roughness, Catmull–Rom interpolated.
 #[derive(Clone, Debug)]
 pub struct EnergyTable {
     eta: Option<f64>,
     reflect_white: Grid2,
     energy: Grid2,
-    keep_bias: Grid2,
 }
 
 impl EnergyTable {
@@ -461,12 +466,10 @@ impl EnergyTable {
         };
         let reflect_white = Grid2::from_fn(nodes, nodes, |x, r| at(x, r).reflect_white);
         let energy = Grid2::from_fn(nodes, nodes, |x, r| at(x, r).energy());
-        let keep_bias = Grid2::from_fn(nodes, nodes, |x, r| at(x, r).keep_bias());
         EnergyTable {
             eta,
             reflect_white,
             energy,
-            keep_bias,
         }
     }
 
@@ -486,35 +489,9 @@ impl EnergyTable {
         self.energy.at(cos_view.max(0.0).sqrt(), roughness)
     }
 
-    /// [`Albedos::keep_bias`], interpolated.
-    pub fn keep_bias(&self, cos_view: f64, roughness: f64) -> f64 {
-        self.keep_bias.at(cos_view.max(0.0).sqrt(), roughness)
-    }
-
     /// E_avg: [`Self::energy`] averaged over views with cos-weight.
     pub fn energy_average(&self, roughness: f64) -> f64 {
         average(32, |mu| self.energy(mu, roughness))
-    }
-
-    /// The compensated outputs: F_eff and T_eff scaled by Turquin's k
-    /// ([`compensation`]). A host draws the white lobes (albedos A_R, A_T)
-    /// times these.
-    pub fn compensate(
-        &self,
-        cos_view: f64,
-        roughness: f64,
-        ss: &SingleScattering,
-    ) -> ([f64; 3], [f64; 3]) {
-        let bias = if self.eta.is_some() {
-            self.keep_bias(cos_view, roughness)
-        } else {
-            0.0
-        };
-        let k = compensation(ss, bias);
-        (
-            std::array::from_fn(|c| ss.reflectance[c] * k[c]),
-            std::array::from_fn(|c| ss.transmittance[c] * k[c]),
-        )
     }
 }
 

@@ -5,7 +5,7 @@ use std::borrow::Cow;
 use rayon::prelude::*;
 use serde::Serialize;
 
-use super::energy::{compensation_keeping, SingleScattering};
+use super::energy::{compensate, kept_share, SingleScattering};
 use super::kernel::{Kernel, Rules};
 use super::{check_roughness, MuGrid, Quadrature};
 use crate::cancel::Cancel;
@@ -227,9 +227,13 @@ impl Smooth<'_> {
             (out, kernel.albedo())
         });
         let mut reflectance = vec![[0.0; 3]; n_t];
+        // ρ over the reflection lobe: kept_share is linear, so it takes the
+        // lobe's means.
         let keeps = |reflectance: &[[f64; 3]], through: &[[f64; 3]]| -> Vec<[f64; 3]> {
-            let add = |(f, t): (&[f64; 3], &[f64; 3])| std::array::from_fn(|c| f[c] + t[c]);
-            reflectance.iter().zip(through).map(add).collect()
+            let keep = |(f, t): (&[f64; 3], &[f64; 3])| {
+                std::array::from_fn(|c| kept_share(f[c], Some(t[c])))
+            };
+            reflectance.iter().zip(through).map(keep).collect()
         };
         if rough == 0.0 {
             mirrored(&mut reflectance, 0);
@@ -476,25 +480,6 @@ pub struct RoughColor {
     pub transmittance_ms_xyz: [f64; 3],
 }
 
-/// The multiple-scattering-compensated F_ms and T_ms of a single-scattering
-/// `ss` whose microfacets keep `kept` (ρ per channel; F_eff on an opaque
-/// substrate): Turquin's scale ([`compensation_keeping`]). Roughness 0
-/// scatters once: `ss` itself.
-fn multiple_scattering(
-    roughness: f64,
-    ss: &SingleScattering,
-    kept: [f64; 3],
-) -> ([f64; 3], [f64; 3]) {
-    if roughness == 0.0 {
-        return (ss.reflectance, ss.transmittance);
-    }
-    let k = compensation_keeping(ss, kept);
-    (
-        std::array::from_fn(|c| ss.reflectance[c] * k[c]),
-        std::array::from_fn(|c| ss.transmittance[c] * k[c]),
-    )
-}
-
 /// `color` with its multiple-scattering fields filled in, its microfacets
 /// keeping `kept`; `opaque` for a substrate that absorbs (no refraction
 /// lobe: Turquin's conductor form, ρ = F_eff).
@@ -509,8 +494,12 @@ fn with_multiple_scattering(mut color: RoughColor, kept: [f64; 3], opaque: bool)
             color.transmission_lobe_albedo
         },
     };
-    let kept = if opaque { ss.reflectance } else { kept };
-    let (r, t) = multiple_scattering(color.roughness, &ss, kept);
+    let kept = if opaque {
+        ss.reflectance.map(|f| kept_share(f, None))
+    } else {
+        kept
+    };
+    let (r, t) = compensate(color.roughness, &ss, kept);
     color.reflectance_ms_rgb = r;
     color.reflectance_ms_xyz = linear_srgb_to_xyz(r);
     color.transmittance_ms_rgb = t;
@@ -622,33 +611,12 @@ pub fn rough_colors_from_cancellable(
                 .collect(),
         );
     }
-    if let Some(a) = angles_deg.iter().find(|a| !(**a >= 0.0 && **a < 90.0)) {
-        return Err(Error::invalid(
-            "angle",
-            format!("{a} is outside [0, 90) degrees"),
-        ));
-    }
+    check_angles(angles_deg)?;
     if angles_deg.is_empty() {
         return Ok(Vec::new());
     }
-    let cos: Vec<f64> = angles_deg.iter().map(|a| a.to_radians().cos()).collect();
     let opaque = opaque_substrate(&seen, integrator)?;
-    let (swept, layer) = swept_layer(&seen);
-    let thickness = swept.layers.get(layer - 1).map_or(0.0, |l| l.thickness_nm);
-    let nodes = Nodes {
-        thickness_nm: &[thickness],
-        cos_theta: &cos,
-        roughness: &[roughness],
-    };
-    let table = rough_table(
-        &swept,
-        layer,
-        integrator,
-        &nodes,
-        &Quadrature::default(),
-        Some(eta),
-        cancel,
-    )?;
+    let table = table_at_angles(&seen, integrator, angles_deg, roughness, Some(eta), cancel)?;
     Ok(angles_deg
         .par_iter()
         .enumerate()
@@ -672,4 +640,79 @@ pub fn rough_colors_from_cancellable(
         .enumerate()
         .map(|(c, color)| with_multiple_scattering(color, table.kept[c], opaque))
         .collect())
+}
+
+/// F_eff alone of `stack` (its layers at their own thicknesses) seen from
+/// its ambient at each view angle (degrees, in [0, 90)) for `roughness` ∈
+/// [0, 1]: the `reflectance_rgb` of [`rough_colors`] bit for bit, without
+/// the transmission kernel's work (what a colour fit compares).
+pub fn rough_reflectance_colors(
+    stack: &Stack,
+    integrator: &SpectralIntegrator,
+    angles_deg: &[f64],
+    roughness: f64,
+) -> Result<Vec<[f64; 3]>> {
+    check_roughness("roughness", roughness)?;
+    if roughness == 0.0 {
+        return Ok(
+            stack_colors_cancellable(stack, integrator, angles_deg, Cancel::never())?
+                .into_iter()
+                .map(|c| c.reflectance_rgb)
+                .collect(),
+        );
+    }
+    check_angles(angles_deg)?;
+    if angles_deg.is_empty() {
+        return Ok(Vec::new());
+    }
+    let table = table_at_angles(
+        stack,
+        integrator,
+        angles_deg,
+        roughness,
+        None,
+        Cancel::never(),
+    )?;
+    Ok((0..angles_deg.len()).map(|c| table.at(0, c, 0)).collect())
+}
+
+/// Refuses a view angle outside [0, 90) degrees.
+fn check_angles(angles_deg: &[f64]) -> Result<()> {
+    match angles_deg.iter().find(|a| !(**a >= 0.0 && **a < 90.0)) {
+        Some(a) => Err(Error::invalid(
+            "angle",
+            format!("{a} is outside [0, 90) degrees"),
+        )),
+        None => Ok(()),
+    }
+}
+
+/// The rough table of `seen` at its own thicknesses, one row per view
+/// angle (degrees, checked, not empty) at `roughness` > 0, with the
+/// transmittance when `eta` is given.
+fn table_at_angles(
+    seen: &Stack,
+    integrator: &SpectralIntegrator,
+    angles_deg: &[f64],
+    roughness: f64,
+    eta: Option<f64>,
+    cancel: &Cancel,
+) -> Result<RoughTable> {
+    let cos: Vec<f64> = angles_deg.iter().map(|a| a.to_radians().cos()).collect();
+    let (swept, layer) = swept_layer(seen);
+    let thickness = swept.layers.get(layer - 1).map_or(0.0, |l| l.thickness_nm);
+    let nodes = Nodes {
+        thickness_nm: &[thickness],
+        cos_theta: &cos,
+        roughness: &[roughness],
+    };
+    rough_table(
+        &swept,
+        layer,
+        integrator,
+        &nodes,
+        &Quadrature::default(),
+        eta,
+        cancel,
+    )
 }

@@ -46,8 +46,8 @@ mod transmission;
 
 pub use engine::{
     relative_index, rough_colors, rough_colors_cancellable, rough_colors_from,
-    rough_colors_from_cancellable, rough_reflectance, rough_response, seen_from, RoughColor,
-    RoughTable, ETA_WAVELENGTH_NM,
+    rough_colors_from_cancellable, rough_reflectance, rough_reflectance_colors, rough_response,
+    seen_from, RoughColor, RoughTable, ETA_WAVELENGTH_NM,
 };
 pub use kernel::Kernel;
 pub use mu_grid::MuGrid;

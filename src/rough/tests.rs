@@ -152,6 +152,27 @@ pub(super) fn test_films() -> Vec<(&'static str, Stack, (f64, f64))> {
     ]
 }
 
+/// The view cosines (0–89°) and roughness (0.02–1) the doubled-quadrature
+/// checks run over, and a film's 9 thickness nodes over `(t0, t1)`.
+pub(super) fn convergence_nodes((t0, t1): (f64, f64)) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
+    let cos = [0.0, 10.0, 30.0, 45.0, 60.0, 70.0, 80.0, 89.0]
+        .iter()
+        .map(|a: &f64| a.to_radians().cos())
+        .collect();
+    let roughness = vec![0.02, 0.1, 0.2, 0.35, 0.5, 0.7, 1.0];
+    let thickness = (0..9).map(|i| t0 + (t1 - t0) * i as f64 / 8.0).collect();
+    (thickness, cos, roughness)
+}
+
+/// The largest difference between two equally long lists of values (a
+/// table's RGB flattened, or its albedos).
+pub(super) fn largest_gap(a: &[f64], b: &[f64]) -> f64 {
+    a.iter()
+        .zip(b)
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0, f64::max)
+}
+
 /// The default quadrature against one with every count doubled, on real
 /// films over their thickness range, view angles 0–89° and roughness
 /// 0.02–1: the largest difference in any channel. This is the error
@@ -159,31 +180,19 @@ pub(super) fn test_films() -> Vec<(&'static str, Stack, (f64, f64))> {
 #[test]
 fn default_quadrature_converges_on_real_films() {
     let integrator = SpectralIntegrator::new(Sampling::Exact);
-    let cos: Vec<f64> = [0.0, 10.0, 30.0, 45.0, 60.0, 70.0, 80.0, 89.0]
-        .iter()
-        .map(|a: &f64| a.to_radians().cos())
-        .collect();
-    let roughness = [0.02, 0.1, 0.2, 0.35, 0.5, 0.7, 1.0];
     let q = Quadrature::default();
     let mut overall = 0.0f64;
-    for (name, stack, (t0, t1)) in test_films() {
-        let thickness: Vec<f64> = (0..9).map(|i| t0 + (t1 - t0) * i as f64 / 8.0).collect();
+    for (name, stack, range) in test_films() {
+        let (thickness, cos, roughness) = convergence_nodes(range);
         let run = |q: &Quadrature| {
             rough_reflectance(&stack, 1, &integrator, &thickness, &cos, &roughness, q).unwrap()
         };
         let (coarse, fine) = (run(&q), run(&q.finer()));
-        let worst = coarse
-            .reflectance
-            .iter()
-            .zip(&fine.reflectance)
-            .flat_map(|(a, b)| (0..3).map(move |c| (a[c] - b[c]).abs()))
-            .fold(0.0, f64::max);
-        let albedo = coarse
-            .albedo
-            .iter()
-            .zip(&fine.albedo)
-            .map(|(a, b)| (a - b).abs())
-            .fold(0.0, f64::max);
+        let worst = largest_gap(
+            coarse.reflectance.as_flattened(),
+            fine.reflectance.as_flattened(),
+        );
+        let albedo = largest_gap(&coarse.albedo, &fine.albedo);
         println!("{name}: F_eff {worst:.1e}, albedo {albedo:.1e}");
         assert!(
             worst < 1e-5 && albedo < 1e-5,
@@ -304,5 +313,37 @@ fn stacks_with_incoherent_layers_sweep_a_coherent_one() {
                 }
             }
         }
+    }
+}
+
+/// The colour fits' reflection-only path skips the transmission kernel and
+/// gives `rough_colors`' F_eff bit for bit: on the test films (lossless,
+/// absorbing, metal substrates, seen from the dense side), behind an
+/// incoherent sheet, at roughness 0, small and large, and it refuses what
+/// `rough_colors` refuses.
+#[test]
+fn reflection_only_colours_are_rough_colours_reflectance() {
+    let integrator = SpectralIntegrator::new(Sampling::Exact);
+    let mut stacks: Vec<Stack> = test_films().into_iter().map(|(_, s, _)| s).collect();
+    let mut sheet = stacks[0].clone();
+    sheet.layers[0].coherent = false;
+    sheet.layers[0].thickness_nm = 1e6;
+    stacks.push(sheet);
+    let angles = [0.0, 25.0, 50.0, 75.0, 89.0];
+    for stack in &stacks {
+        for roughness in [0.0, 0.05, 0.4, 1.0] {
+            let full = rough_colors(stack, &integrator, &angles, roughness).unwrap();
+            let only = rough_reflectance_colors(stack, &integrator, &angles, roughness).unwrap();
+            let want: Vec<[f64; 3]> = full.iter().map(|c| c.reflectance_rgb).collect();
+            assert_eq!(only, want, "roughness {roughness}");
+        }
+    }
+    let stack = &stacks[0];
+    assert!(rough_reflectance_colors(stack, &integrator, &[], 0.5)
+        .unwrap()
+        .is_empty());
+    for (angle, r) in [(90.0, 0.5), (-1.0, 0.5), (10.0, 1.5), (10.0, f64::NAN)] {
+        assert!(rough_colors(stack, &integrator, &[angle], r).is_err());
+        assert!(rough_reflectance_colors(stack, &integrator, &[angle], r).is_err());
     }
 }

@@ -4,7 +4,7 @@
 
 use std::f64::consts::PI;
 
-use super::tests::test_films;
+use super::tests::{convergence_nodes, largest_gap, test_films};
 use super::*;
 use crate::color::{stack_colors, Sampling, SpectralIntegrator};
 use crate::optics::{Material, Stack};
@@ -201,15 +201,10 @@ fn transmission_invariants_over_random_lobes() {
 #[test]
 fn default_quadrature_converges_for_transmission_and_sides() {
     let integrator = SpectralIntegrator::new(Sampling::Exact);
-    let cos: Vec<f64> = [0.0, 10.0, 30.0, 45.0, 60.0, 70.0, 80.0, 89.0]
-        .iter()
-        .map(|a: &f64| a.to_radians().cos())
-        .collect();
-    let roughness = [0.02, 0.1, 0.2, 0.35, 0.5, 0.7, 1.0];
     let q = Quadrature::default();
     let mut overall = [0.0f64; 3];
-    for (name, stack, (t0, t1)) in test_films() {
-        let thickness: Vec<f64> = (0..9).map(|i| t0 + (t1 - t0) * i as f64 / 8.0).collect();
+    for (name, stack, range) in test_films() {
+        let (thickness, cos, roughness) = convergence_nodes(range);
         for side in [Side::Front, Side::Back] {
             let run = |q: &Quadrature| {
                 rough_response(
@@ -227,22 +222,13 @@ fn default_quadrature_converges_for_transmission_and_sides() {
                 continue;
             };
             let fine = run(&q.finer()).unwrap();
-            let worst = |a: &[[f64; 3]], b: &[[f64; 3]]| {
-                a.iter()
-                    .zip(b)
-                    .flat_map(|(a, b)| (0..3).map(move |c| (a[c] - b[c]).abs()))
-                    .fold(0.0, f64::max)
-            };
+            let worst =
+                |a: &[[f64; 3]], b: &[[f64; 3]]| largest_gap(a.as_flattened(), b.as_flattened());
             let [r, t] = [
                 worst(&coarse.reflectance, &fine.reflectance),
                 worst(&coarse.transmittance, &fine.transmittance),
             ];
-            let albedo = coarse
-                .transmission_albedo
-                .iter()
-                .zip(&fine.transmission_albedo)
-                .map(|(a, b)| (a - b).abs())
-                .fold(0.0, f64::max);
+            let albedo = largest_gap(&coarse.transmission_albedo, &fine.transmission_albedo);
             println!("{name}, {side:?}: F_eff {r:.1e}, T_eff {t:.1e}, A_T {albedo:.1e}");
             // Into a metal, η (the real parts) is far below 1: the
             // refraction lobe is a sliver past a critical angle near the

@@ -1,9 +1,11 @@
 //! What the integration tests share: one way to run the `irid` binary and
-//! capture what it did, and one way to make a scratch folder.
+//! capture what it did, one way to make a scratch folder, random stacks
+//! and the renderer's white furnace.
 
 // Each test binary compiles its own copy and uses only part of it.
 #![allow(dead_code)]
 
+pub mod furnace;
 pub mod random_stack;
 
 #[cfg(feature = "cli")]

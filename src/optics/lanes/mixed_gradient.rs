@@ -21,15 +21,13 @@ use super::incoherent::{incoherent_top, normal_index_sq, through_layer};
 use crate::optics::incoherent::Coherence;
 use crate::optics::solver::Response;
 
-/// Per layer: ∂ρs, ∂ρp, ∂τs, ∂τp.
-type Derivatives<V> = Vec<[V; 4]>;
-
 /// One group's r, t (s and p), from above or below, and per layer of the
-/// group (top down) Re(conj r ∂r) and Re ∂log t, s and p.
-struct GroupSide<V> {
+/// group (top down) Re(conj r ∂r) and Re ∂log t, s and p (in a buffer the
+/// caller keeps across blocks: no allocation per point).
+struct GroupSide<'d, V> {
     r: [Cv<V>; 2],
     t: [Cv<V>; 2],
-    d: Derivatives<V>,
+    d: &'d [[V; 4]],
 }
 
 /// The lanes' wavelengths at one angle.
@@ -43,14 +41,15 @@ struct Block<'a, V> {
 impl<V: Lanes> Block<'_, V> {
     /// The group between media `top` and `bottom` (`top` < `bottom`), read
     /// top down or, `reversed`, bottom up, with the (n, n², q) of the media
-    /// the recursion starts and ends at.
+    /// the recursion starts and ends at; its derivatives go into `d`.
     #[inline(always)]
-    fn side(
+    fn side<'d>(
         &self,
         (top, bottom, reversed): (usize, usize, bool),
         (first, end): ([Cv<V>; 3], [Cv<V>; 3]),
         tape: &mut [Cv<V>],
-    ) -> (GroupSide<V>, u32) {
+        d: &'d mut Vec<[V; 4]>,
+    ) -> (GroupSide<'d, V>, u32) {
         let media = bottom - top + 1;
         let inner = |j: usize| {
             let (n, nsq) = self
@@ -61,8 +60,9 @@ impl<V: Lanes> Block<'_, V> {
         let thickness =
             |j: usize| self.thicknesses_nm[if reversed { bottom - j - 2 } else { top + j }];
         let (gs, gp, t, near) = sweep(media, inner, thickness, self.k0, (first, end), tape);
-        let mut d = vec![[V::splat(0.0); 4]; media - 2];
-        backward(tape, media - 1, [gs, gp], &mut d);
+        d.clear();
+        d.resize(media - 2, [V::splat(0.0); 4]);
+        backward(tape, media - 1, [gs, gp], d);
         if reversed {
             d.reverse();
         }
@@ -72,8 +72,8 @@ impl<V: Lanes> Block<'_, V> {
 
 /// Crossing an incoherent layer and the group above it, one polarization.
 struct Crossing<'a, V> {
-    down: &'a GroupSide<V>,
-    up: &'a GroupSide<V>,
+    down: &'a GroupSide<'a, V>,
+    up: &'a GroupSide<'a, V>,
     pass: V,
     d_pass: V,
     /// The incoherent layer's index among the layers (0-based).
@@ -118,7 +118,7 @@ impl<V: Lanes> Crossing<'_, V> {
             dl[pol] = dr;
             dl[2 + pol] = dt;
         }
-        for (i, (dd, du)) in g.d.iter().zip(&u.d).enumerate() {
+        for (i, (dd, du)) in g.d.iter().zip(u.d).enumerate() {
             let dl = &mut d[self.first_layer + i];
             let da = two.mul(dd[pol]);
             let db = two.mul(b).mul(dd[2 + pol].add(du[2 + pol]));
@@ -137,16 +137,32 @@ impl<V: Lanes> Crossing<'_, V> {
     }
 }
 
-/// R, T and their derivatives (per layer: ∂Rs, ∂Rp, ∂Ts, ∂Tp) of one
-/// block of lanes, and the lanes to leave to the scalar gradient.
+/// The buffers a block of lanes works in, kept across blocks: the tape,
+/// the groups' derivatives seen from above and from below, and the
+/// block's own per layer.
+struct Scratch<V> {
+    tape: Vec<Cv<V>>,
+    down: Vec<[V; 4]>,
+    up: Vec<[V; 4]>,
+    d: Vec<[V; 4]>,
+}
+
+/// R, T and their derivatives (per layer: ∂Rs, ∂Rp, ∂Ts, ∂Tp, into
+/// `scratch.d`) of one block of lanes, and the lanes to leave to the
+/// scalar gradient.
 #[inline(always)]
 fn solve_block<V: Lanes>(
     block: &Block<'_, V>,
     coherence: &Coherence,
     cos: V,
-    tape: &mut [Cv<V>],
-    d: &mut [[V; 4]],
+    scratch: &mut Scratch<V>,
 ) -> ([V; 4], u32) {
+    let Scratch {
+        tape,
+        down: down_d,
+        up: up_d,
+        d,
+    } = scratch;
     let layers = block.thicknesses_nm.len();
     let last = layers + 1;
     let zero = V::splat(0.0);
@@ -168,7 +184,7 @@ fn solve_block<V: Lanes>(
             scalar |= opaque;
             top
         };
-        let (down, near) = block.side((m, below, false), (top, bottom), tape);
+        let (down, near) = block.side((m, below, false), (top, bottom), tape, down_d);
         scalar |= near;
         state = Some(match state {
             None => {
@@ -183,7 +199,7 @@ fn solve_block<V: Lanes>(
                 [0, 1].map(|pol| (down.r[pol].norm_sqr(), down.t[pol].norm_sqr()))
             }
             Some(sums) => {
-                let (up, near) = block.side((m, below, true), (bottom, top), tape);
+                let (up, near) = block.side((m, below, true), (bottom, top), tape, up_d);
                 let k0d = block.k0.mul(V::splat(block.thicknesses_nm[below - 1]));
                 let pass = exp_any(V::splat(-2.0).mul(k0d).mul(bottom[2].im));
                 let d_pass = V::splat(-2.0).mul(block.k0).mul(bottom[2].im).mul(pass);
@@ -237,8 +253,12 @@ pub(super) fn mixed_gradient_body<V: Lanes>(
     let layers = thicknesses_nm.len();
     let media = layers + 2;
     let (wavelengths, angles) = (wavelengths_nm.len(), cos_theta0.len());
-    let mut tape = vec![Cv::real(V::splat(0.0)); 8 * (layers + 1)];
-    let mut d = vec![[V::splat(0.0); 4]; layers];
+    let mut scratch = Scratch {
+        tape: vec![Cv::real(V::splat(0.0)); 8 * (layers + 1)],
+        down: Vec::with_capacity(layers),
+        up: Vec::with_capacity(layers),
+        d: vec![[V::splat(0.0); 4]; layers],
+    };
     for (a, &c) in cos_theta0.iter().enumerate() {
         if c.is_nan() || c <= 0.0 {
             sink.fallback
@@ -264,9 +284,9 @@ pub(super) fn mixed_gradient_body<V: Lanes>(
                 k0,
                 beta_sq: n0.mul(n0).mul(one.sub(cos).mul(one.add(cos))),
             };
-            let (power, scalar) = solve_block(&block, coherence, cos, &mut tape, &mut d);
+            let (power, scalar) = solve_block(&block, coherence, cos, &mut scratch);
             let count = V::WIDTH.min(wavelengths - w0);
-            write_block(sink, (w0, count, a, angles), power, scalar, &d);
+            write_block(sink, (w0, count, a, angles), power, scalar, &scratch.d);
         }
     }
 }
