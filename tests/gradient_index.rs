@@ -14,40 +14,16 @@ use num_complex::Complex64 as C64;
 use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg64;
 
+use common::gradient::{constant, gradient_parts, parts, stack_of};
 use common::random_stack::{random_stack, KINDS};
 use irid::optics::gradient::{
     solve_stack_grid_with_index_gradient, solve_with_gradient, solve_with_index_gradient,
-    IndexGradient, ResponseGradient,
+    IndexGradient,
 };
-use irid::optics::{Layer, Material, Response, Stack, StackGrid};
+use irid::optics::{Stack, StackGrid};
 
 fn c64(re: f64, im: f64) -> C64 {
     C64::new(re, im)
-}
-
-fn constant(n: C64) -> Material {
-    Material::constant(n.re, n.im)
-}
-
-/// A stack of constant indices (ambient, layers, substrate) and thicknesses.
-fn stack_of(indices: &[C64], thicknesses_nm: &[f64]) -> Stack {
-    Stack {
-        ambient: constant(indices[0]),
-        layers: thicknesses_nm
-            .iter()
-            .zip(&indices[1..])
-            .map(|(&d, &n)| Layer::new(constant(n), d))
-            .collect(),
-        substrate: constant(indices[indices.len() - 1]),
-    }
-}
-
-fn parts(r: &Response) -> [f64; 4] {
-    [r.rs, r.rp, r.ts, r.tp]
-}
-
-fn gradient_parts(g: &ResponseGradient, layer: usize) -> [f64; 4] {
-    [g.rs[layer], g.rp[layer], g.ts[layer], g.tp[layer]]
 }
 
 /// The layer's index at `wavelength_nm` with `shift` added, as a constant.

@@ -55,33 +55,42 @@ def random_index(rng, gain=False):
     return complex(rng.uniform(1.0, 2.8), k)
 
 
-@pytest.mark.parametrize("seed", range(12))
-def test_random_coherent_stacks(seed):
-    rng = random.Random(seed)
-    layers = rng.randint(1, 6)
+def random_coherent_case(rng, max_layers, gain):
+    """A random coherent stack (its layers with gain if `gain`) and where to solve it: the
+    arguments of check()."""
+    layers = rng.randint(1, max_layers)
     indices = [complex(rng.uniform(1.0, 1.8), 0)]
-    indices += [random_index(rng, gain=seed % 4 == 3) for _ in range(layers)]
+    indices += [random_index(rng, gain=gain) for _ in range(layers)]
     indices.append(complex(rng.uniform(1.0, 2.5), rng.choice([0.0, rng.uniform(0, 4)])))
     thicknesses = [rng.uniform(0.0, 400.0) for _ in range(layers)]
-    check(indices, thicknesses, [rng.uniform(380, 800)], [rng.uniform(0, 85), rng.uniform(0, 85)])
+    return indices, thicknesses, [rng.uniform(380, 800)], [rng.uniform(0, 85), rng.uniform(0, 85)]
 
 
-@pytest.mark.parametrize("seed", range(8))
-def test_random_mixed_stacks(seed):
-    rng = random.Random(100 + seed)
-    layers = rng.randint(2, 6)
+def random_mixed_case(rng, max_layers):
+    """A random stack with one or two incoherent layers, propagating (index
+    above the ambient's, so no incoherent layer is evanescent) and at most
+    weakly absorbing, and where to solve it: the arguments of check()."""
+    layers = rng.randint(2, max_layers)
     indices = [complex(rng.uniform(1.0, 1.5), 0)]
     indices += [random_index(rng) for _ in range(layers)]
     indices.append(complex(rng.uniform(1.0, 2.5), rng.uniform(0, 0.3)))
     thicknesses = [rng.uniform(0.0, 300.0) for _ in range(layers)]
     coherent = [True] * layers
-    # One or two incoherent layers, propagating (index above the ambient's,
-    # so no incoherent layer is evanescent) and at most weakly absorbing.
     for i in rng.sample(range(layers), rng.randint(1, min(2, layers))):
         coherent[i] = False
         indices[i + 1] = complex(rng.uniform(1.5, 2.0), rng.choice([0.0, 1e-4]))
         thicknesses[i] = rng.uniform(500.0, 5000.0)
-    check(indices, thicknesses, [rng.uniform(380, 800)], [rng.uniform(0, 80)], coherent)
+    return indices, thicknesses, [rng.uniform(380, 800)], [rng.uniform(0, 80)], coherent
+
+
+@pytest.mark.parametrize("seed", range(12))
+def test_random_coherent_stacks(seed):
+    check(*random_coherent_case(random.Random(seed), 6, gain=seed % 4 == 3))
+
+
+@pytest.mark.parametrize("seed", range(8))
+def test_random_mixed_stacks(seed):
+    check(*random_mixed_case(random.Random(100 + seed), 6))
 
 
 def test_thick_absorber():

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 import mp_tmm  # needs mpmath, which tools/ci/python.sh installs
-from test_gradient import random_index, stack_of
+from test_gradient import random_coherent_case, random_mixed_case, stack_of
 
 POWERS = ("Rs", "Rp", "Ts", "Tp")
 
@@ -48,31 +48,12 @@ def check(indices, thicknesses, wavelengths, angles, coherent=None):
 
 @pytest.mark.parametrize("seed", range(8))
 def test_random_coherent_stacks(seed):
-    rng = random.Random(200 + seed)
-    layers = rng.randint(1, 5)
-    indices = [complex(rng.uniform(1.0, 1.8), 0)]
-    indices += [random_index(rng, gain=seed % 4 == 3) for _ in range(layers)]
-    indices.append(complex(rng.uniform(1.0, 2.5), rng.choice([0.0, rng.uniform(0, 4)])))
-    thicknesses = [rng.uniform(0.0, 400.0) for _ in range(layers)]
-    check(indices, thicknesses, [rng.uniform(380, 800)], [rng.uniform(0, 85), rng.uniform(0, 85)])
+    check(*random_coherent_case(random.Random(200 + seed), 5, gain=seed % 4 == 3))
 
 
 @pytest.mark.parametrize("seed", range(6))
 def test_random_mixed_stacks(seed):
-    rng = random.Random(300 + seed)
-    layers = rng.randint(2, 5)
-    indices = [complex(rng.uniform(1.0, 1.5), 0)]
-    indices += [random_index(rng) for _ in range(layers)]
-    indices.append(complex(rng.uniform(1.0, 2.5), rng.uniform(0, 0.3)))
-    thicknesses = [rng.uniform(0.0, 300.0) for _ in range(layers)]
-    coherent = [True] * layers
-    # One or two incoherent layers, propagating and at most weakly
-    # absorbing, as in test_gradient.py.
-    for i in rng.sample(range(layers), rng.randint(1, min(2, layers))):
-        coherent[i] = False
-        indices[i + 1] = complex(rng.uniform(1.5, 2.0), rng.choice([0.0, 1e-4]))
-        thicknesses[i] = rng.uniform(500.0, 5000.0)
-    check(indices, thicknesses, [rng.uniform(380, 800)], [rng.uniform(0, 80)], coherent)
+    check(*random_mixed_case(random.Random(300 + seed), 5))
 
 
 def test_thick_absorber():

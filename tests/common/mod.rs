@@ -6,6 +6,7 @@
 #![allow(dead_code)]
 
 pub mod furnace;
+pub mod gradient;
 pub mod random_stack;
 
 #[cfg(feature = "cli")]
